@@ -1,0 +1,360 @@
+"""Inverse and forward mechanics of the Orthoglide: the package's math API.
+
+Plain numpy, no ROS. Every function takes a validated :class:`Robot` first.
+
+- :func:`solve`: one sample (a control tick) -> joint states, forces, powers.
+- :func:`solve_batch`: N samples as arrays, vectorised, the same numbers.
+- :func:`elements`: position, velocity and acceleration of every body.
+- :func:`forward_kinematics`: actuator displacements -> platform centre.
+- :func:`workspace_status`: reachability and distance to singularity.
+
+Units: m, m/s, m/s^2, N, W; vectors in the base frame 0. An input that is
+not finite, not reachable or nearer a singularity than the margin raises
+:class:`WorkspaceError` (whose ``reason`` a caller can test); no result ever
+holds a NaN or an infinity.
+
+>>> from orthoglide_ros.robot import Robot
+>>> s = solve(Robot(), (0.0, 0.0, 0.0))
+>>> [round(f, 3) for f in s.force]
+[0.0, 0.0, 256.532]
+"""
+
+from collections import namedtuple
+import math
+
+import numpy as np
+
+from orthoglide_ros import kernel
+
+# Smallest accepted singularity distance (see workspace_status): below it a
+# point is refused as too near a singularity of J1 or J2.
+DEFAULT_SINGULARITY_MARGIN = 0.2
+
+# Why an input was refused: the values of WorkspaceError.reason.
+REASONS = ('non_finite', 'unreachable', 'singular', 'overflow')
+
+ZERO = (0.0, 0.0, 0.0)
+
+# Samples per kernel call in solve_batch: arrays of this size stay in the
+# processor's cache (measured: 4096 is about 1.3x faster than 10,000).
+BATCH_CHUNK = 4096
+
+Solution = namedtuple('Solution', (
+    'lambda_', 'lambdadot', 'lambdaddot', 'force', 'power',
+    'alpha_ratio', 'conditioning', 'singularity_distance'))
+Solution.__doc__ = """Inverse kinematics and dynamics of one sample or a batch.
+
+Per actuator (A, B, C): ``lambda_`` (m), ``lambdadot`` (m/s),
+``lambdaddot`` (m/s^2), ``force`` (N, on the slider along +lambda) and
+``power = lambdadot * force`` (W); ``alpha_ratio`` = ``alpha_i / l3``
+(eq. 17; 1 at home, 0 at a singularity of J1); ``conditioning`` =
+``1 / kappa_F(J_lambda)`` (1 at home, 0 at a singularity of J2);
+``singularity_distance`` = the smallest of the four. A single sample holds
+3-tuples of floats and floats; a batch holds (N, 3) and (N,) arrays.
+"""
+
+WorkspaceStatus = namedtuple('WorkspaceStatus', (
+    'reachable', 'alpha_ratio', 'conditioning', 'singularity_distance',
+    'ok'))
+WorkspaceStatus.__doc__ = """Where a platform position stands.
+
+``reachable``: eq. (9) has a real solution on the home branch for every
+leg (``y^2 + z^2 < l3^2`` for leg A, cyclically). ``alpha_ratio``,
+``conditioning`` and ``singularity_distance`` as in :class:`Solution` (0
+where unreachable). ``ok``: reachable and ``singularity_distance >=
+margin``.
+"""
+
+
+class WorkspaceError(ValueError):
+    """An input the mechanics refuse: ``reason`` is one of REASONS.
+
+    ``row`` is the 0-based sample index for batch calls, else None.
+    """
+
+    def __init__(self, reason, message, row=None):
+        where = '' if row is None else f'sample {row}: '
+        super().__init__(where + message)
+        self.reason = reason
+        self.row = row
+
+
+def solve(robot, position, velocity=ZERO, acceleration=ZERO,
+          margin=DEFAULT_SINGULARITY_MARGIN, record=None):
+    """Solve one sample: eqs. (9), (13), (18) and (25) on Python floats.
+
+    ``position``, ``velocity``, ``acceleration``: the platform centre G and
+    its derivatives in frame 0 (m, m/s, m/s^2), each a 3-sequence. Returns
+    a :class:`Solution` of 3-tuples. ``record``, if a dict, receives the
+    kernel's per-element quantities (see :func:`elements`).
+    """
+    x, y, z = position
+    vx, vy, vz = velocity
+    ax, ay, az = acceleration
+    if not math.isfinite(x + y + z + vx + vy + vz + ax + ay + az):
+        _check_finite_inputs(position, velocity, acceleration)
+    l3sq = robot.l3 * robot.l3
+    rho = max(y * y + z * z, z * z + x * x, x * x + y * y)
+    if rho >= l3sq * (1.0 - margin * margin):
+        raise _leg_error(robot, position, margin)
+    out = kernel.solve(robot.constants, float(x), float(y), float(z),
+                       float(vx), float(vy), float(vz), float(ax),
+                       float(ay), float(az), math.sqrt, record)
+    lam, lamd, lamdd, force, power, alphas, conditioning = out
+    if conditioning < margin:
+        raise WorkspaceError('singular', (
+            f'position {_fmt(position)} m is too near a singularity of '
+            f'J2: 1/kappa_F(J_lambda) = {conditioning:.3g} < margin '
+            f'{margin:g}'))
+    if not math.isfinite(sum(lamdd) + sum(force) + sum(power)):
+        raise WorkspaceError('overflow', (
+            f'the result for position {_fmt(position)} m, velocity '
+            f'{_fmt(velocity)} m/s, acceleration {_fmt(acceleration)} '
+            'm/s^2 is not finite'))
+    l3 = robot.l3
+    ratio = (alphas[0] / l3, alphas[1] / l3, alphas[2] / l3)
+    return Solution(lam, lamd, lamdd, force, power, ratio, conditioning,
+                    min(min(ratio), conditioning))
+
+
+def solve_batch(robot, positions, velocities=None, accelerations=None,
+                margin=DEFAULT_SINGULARITY_MARGIN):
+    """Solve N samples at once, vectorised (the same kernel on arrays).
+
+    ``positions``, ``velocities``, ``accelerations``: (N, 3) arrays in frame
+    0 (m, m/s, m/s^2); a missing velocity or acceleration means zero.
+    Returns a :class:`Solution` of (N, 3) and (N,) arrays. The first bad
+    sample raises :class:`WorkspaceError` with its index in ``row``.
+    """
+    p = _as_samples('positions', positions)
+    n = len(p)
+    v = np.zeros((n, 3)) if velocities is None else _as_samples(
+        'velocities', velocities, n)
+    a = np.zeros((n, 3)) if accelerations is None else _as_samples(
+        'accelerations', accelerations, n)
+    finite = np.isfinite(p).all(1) & np.isfinite(v).all(1) & np.isfinite(
+        a).all(1)
+    if not finite.all():
+        row = int(np.argmin(finite))
+        _check_finite_inputs(p[row], v[row], a[row], row)
+    x, y, z = p.T.copy()
+    rho = np.maximum(np.maximum(y * y + z * z, z * z + x * x), x * x + y * y)
+    reach = rho < robot.l3 * robot.l3 * (1.0 - margin * margin)
+    if not reach.all():
+        row = int(np.argmin(reach))
+        raise _leg_error(robot, p[row], margin, row)
+    out = np.empty((5, n, 3))
+    alphas = np.empty((n, 3))
+    conditioning = np.empty(n)
+    columns = (x, y, z, *v.T.copy(), *a.T.copy())
+    for start in range(0, n, BATCH_CHUNK):
+        chunk = slice(start, start + BATCH_CHUNK)
+        *values, al, conditioning[chunk] = kernel.solve(
+            robot.constants, *(c[chunk] for c in columns), np.sqrt)
+        for j, triple in enumerate(values):
+            out[j, chunk] = np.column_stack(triple)
+        alphas[chunk] = np.column_stack(al)
+    if not (conditioning >= margin).all():
+        row = int(np.argmin(conditioning >= margin))
+        raise WorkspaceError('singular', (
+            f'position {_fmt(p[row])} m is too near a singularity of J2: '
+            f'1/kappa_F(J_lambda) = {conditioning[row]:.3g} < margin '
+            f'{margin:g}'), row)
+    bad = ~np.isfinite(out[2].sum(1) + out[3].sum(1) + out[4].sum(1))
+    if bad.any():
+        row = int(np.argmax(bad))
+        raise WorkspaceError('overflow', (
+            f'the result for position {_fmt(p[row])} m, velocity '
+            f'{_fmt(v[row])} m/s, acceleration {_fmt(a[row])} m/s^2 is not '
+            'finite'), row)
+    ratio = alphas / robot.l3
+    return Solution(*out, ratio, conditioning,
+                    np.minimum(ratio.min(1), conditioning))
+
+
+def workspace_status(robot, position, margin=DEFAULT_SINGULARITY_MARGIN):
+    """Reachability and distance to the singularities of J1 and J2.
+
+    ``position``: one point (3,) or N points (N, 3) in frame 0 (m). The
+    singularity distance is the smallest of ``alpha_i / l3 = cos(phi21)
+    cos(phi32)`` over the legs (J1 = diag(alpha_i) is singular at 0) and of
+    ``1 / kappa_F(J_lambda) = 3 |det J| / (|J|_F |J^-1 det J|_F)``, the
+    normalised inverse Frobenius condition number of the inverse-kinematics
+    Jacobian ``J_lambda = J1^-1 J2`` (eq. 16; J2 is singular at 0). Both are
+    1 at home. Returns a :class:`WorkspaceStatus` (arrays for N points).
+    """
+    p = np.asarray(position, dtype=float)
+    x, y, z = p[..., 0], p[..., 1], p[..., 2]
+    l3sq = robot.l3 * robot.l3
+    q = 1.0 - np.stack([y * y + z * z, z * z + x * x, x * x + y * y],
+                       -1) / l3sq
+    with np.errstate(invalid='ignore'):
+        reachable = (q > 0.0).all(-1)
+    ratio = np.sqrt(np.where(reachable[..., None], q, 1.0))
+    al = robot.l3 * ratio
+    with np.errstate(divide='ignore', invalid='ignore'):
+        conditioning = kernel.jacobian_cofactors(
+            x, y, z, al[..., 0], al[..., 1], al[..., 2], np.sqrt)[2]
+    conditioning = np.nan_to_num(conditioning, nan=0.0)
+    ratio = np.where(reachable[..., None], ratio, 0.0)
+    conditioning = np.where(reachable, conditioning, 0.0)
+    distance = np.minimum(ratio.min(-1), conditioning)
+    ok = reachable & (distance >= margin)
+    return WorkspaceStatus(reachable, ratio, conditioning, distance, ok)
+
+
+def forward_kinematics(robot, lam):
+    """Platform centre G (m) from the actuator displacements (m), eq. (14).
+
+    Intersects the three constraint spheres of eq. (14) on the branch that
+    holds the home position (every ``alpha_i > 0``). ``lam``: (3,) or
+    (N, 3). With ``d_j = l3 - lambda_j`` and ``s = |r_G|^2`` each sphere
+    reads ``s + 2 r_j d_j + d_j^2 = l3^2``, so ``r_j = (l3^2 - d_j^2 - s) /
+    (2 d_j)`` and ``s`` solves a quadratic whose smaller root is the home
+    branch. Raises :class:`WorkspaceError` where there is no such point.
+    """
+    lam = np.asarray(lam, dtype=float)
+    if not np.isfinite(lam).all():
+        raise WorkspaceError('non_finite', f'lambda {lam} is not finite')
+    l3 = robot.l3
+    d = l3 - lam
+    kk = l3 * l3 - d * d
+    with np.errstate(divide='ignore', invalid='ignore'):
+        w = 0.25 / (d * d)
+        qa = w.sum(-1)
+        qb = 1.0 + 2.0 * (w * kk).sum(-1)
+        qc = (w * kk * kk).sum(-1)
+        disc = qb * qb - 4.0 * qa * qc
+        s = 2.0 * qc / (qb + np.sqrt(disc))
+        r = (kk - s[..., None]) / (2.0 * d)
+        alpha = r + d
+    good = (disc >= 0.0) & np.isfinite(r).all(-1) & (alpha > 0.0).all(-1)
+    if not np.all(good):
+        raise WorkspaceError('unreachable', (
+            f'lambda {np.asarray(lam)[~good][0]} m has no platform position'
+            ' on the home branch'))
+    return r
+
+
+def elements(robot, position, velocity=ZERO, acceleration=ZERO,
+             margin=DEFAULT_SINGULARITY_MARGIN):
+    """Position, velocity and acceleration of every element (section 2).
+
+    Returns ``{'A': leg, 'B': leg, 'C': leg}`` for one sample. Each leg is a
+    dict with ``phi21``, ``phi32`` (rad), ``omega21``, ``omega32`` (rad/s),
+    ``epsilon21``, ``epsilon32`` (rad/s^2), ``lambda``, ``lambdadot``,
+    ``lambdaddot``, the joint centres ``joints`` (``'A1'`` ... ``'A7'`` and
+    ``'G'``, the platform centre reached through this leg's chain, eq. 7)
+    in frame 0 (m), and ``bodies``: for k in 1..6, a dict with ``rotation``
+    (``a_k0``, 3x3, frame 0 -> frame k), ``origin`` (joint A_k, frame 0, m),
+    ``omega``, ``epsilon`` (rad/s, rad/s^2) and ``velocity``,
+    ``acceleration`` of A_k (m/s, m/s^2), all four in frame 0. Bodies 1 to 6
+    follow MODEL.md (5 is the platform as seen from this leg; 6 the second
+    bar A6A7). The rates come from the kernel's recursion (10)-(12), (19).
+    """
+    record = {}
+    solve(robot, position, velocity, acceleration, margin, record)
+    return {leg: _leg_elements(robot, leg, record[leg]) for leg in 'ABC'}
+
+
+# Constant matrices of eq. (1)-(2); a1 = a10 of leg A.
+A1 = np.array([[0, 0, -1], [0, 1, 0], [1, 0, 0]], dtype=float)
+A2 = np.array([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], dtype=float)
+A3 = np.array([[0, 0, -1], [-1, 0, 0], [0, 1, 0]], dtype=float)
+A4 = np.array([[-1, 0, 0], [0, 1, 0], [0, 0, -1]], dtype=float)
+# Leg coordinates: P_leg r_G is the point a leg sees (b10 = a1 P, c10 = a1 P^2).
+LEG_PERMUTATION = {
+    'A': np.eye(3),
+    'B': np.array([[0, 1, 0], [0, 0, 1], [1, 0, 0]], dtype=float),
+    'C': np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0]], dtype=float),
+}
+
+
+def rotation_z(sin_phi, cos_phi):
+    """Return ``a^phi`` of eq. (2), the passive rotation about z."""
+    return np.array([[cos_phi, sin_phi, 0.0], [-sin_phi, cos_phi, 0.0],
+                     [0.0, 0.0, 1.0]])
+
+
+def _leg_elements(robot, leg, rec):
+    """Frame-0 elements of one leg from the kernel's record (eqs. 1-8)."""
+    s1, c1 = rec['phi21']
+    s2, c2 = rec['phi32']
+    a21 = rotation_z(s1, c1) @ A2
+    a32 = rotation_z(s2, c2) @ A3
+    a43 = rotation_z(s2, c2) @ A4
+    a10 = A1 @ LEG_PERMUTATION[leg]
+    rot = {1: a10}
+    rot[2] = a21 @ rot[1]
+    rot[3] = a32 @ rot[2]
+    rot[6] = rot[3]
+    rot[4] = a43 @ rot[3]
+    rot[5] = a21 @ rot[4]           # a54 = a^phi21 a2 = a21
+    ca, sa = math.cos(robot.alpha), math.sin(robot.alpha)
+    u3 = np.array([0.0, 0.0, 1.0])
+    joints = {'A1': (rec['lam'] - robot.l1 * ca - robot.l3 - robot.l / 2)
+              * rot[1].T @ u3}
+    joints['A2'] = joints['A1'] + rot[1].T @ [0.0, robot.l1 * sa,
+                                              robot.l1 * ca]
+    joints['A3'] = joints['A2'] + rot[2].T @ [0.0, 0.0, -robot.l2 / 2]
+    joints['A6'] = joints['A2'] + rot[2].T @ [0.0, 0.0, robot.l2 / 2]
+    joints['A4'] = joints['A3'] + rot[3].T @ [0.0, -robot.l3, 0.0]
+    joints['A7'] = joints['A6'] + rot[6].T @ [0.0, -robot.l3, 0.0]
+    joints['A5'] = joints['A4'] + rot[4].T @ [robot.l2 / 2, 0.0, 0.0]
+    joints['G'] = joints['A5'] + rot[5].T @ [robot.l1 * sa, -robot.l / 2,
+                                             0.0]
+    origin = {1: 'A1', 2: 'A2', 3: 'A3', 4: 'A4', 5: 'A5', 6: 'A6'}
+    bodies = {
+        b: {'rotation': rot[b], 'origin': joints[origin[b]],
+            'omega': rot[b].T @ rec['omega'][b],
+            'epsilon': rot[b].T @ rec['epsilon'][b],
+            'velocity': rot[b].T @ rec['v'][b],
+            'acceleration': rot[b].T @ rec['gamma'][b]}
+        for b in (1, 2, 3, 4, 5, 6)}
+    return {
+        'phi21': math.atan2(s1, c1), 'phi32': math.atan2(s2, c2),
+        'omega21': rec['omega21'], 'omega32': rec['omega32'],
+        'epsilon21': rec['epsilon21'], 'epsilon32': rec['epsilon32'],
+        'lambda': rec['lam'], 'lambdadot': rec['lamd'],
+        'lambdaddot': rec['lamdd'], 'joints': joints, 'bodies': bodies}
+
+
+def _as_samples(name, values, n=None):
+    arr = np.asarray(values, dtype=float)
+    if arr.ndim != 2 or arr.shape[1] != 3 or (n is not None and len(arr)
+                                               != n):
+        want = '(N, 3)' if n is None else f'({n}, 3)'
+        raise ValueError(f'{name} must have shape {want}, got {arr.shape}')
+    return arr
+
+
+def _check_finite_inputs(position, velocity, acceleration, row=None):
+    for name, vec in (('position', position), ('velocity', velocity),
+                      ('acceleration', acceleration)):
+        if not all(math.isfinite(v) for v in vec):
+            raise WorkspaceError(
+                'non_finite', f'{name} {_fmt(vec)} is not finite', row)
+
+
+def _leg_error(robot, position, margin, row=None):
+    """Explain which leg refuses ``position`` (a WorkspaceError)."""
+    x, y, z = (float(v) for v in position)
+    l3 = robot.l3
+    for leg, rho in (('A', y * y + z * z), ('B', z * z + x * x),
+                     ('C', x * x + y * y)):
+        if rho >= l3 * l3:
+            return WorkspaceError('unreachable', (
+                f'position {_fmt(position)} m is out of reach of leg {leg}: '
+                f'its distance {math.sqrt(rho):.4g} m from the leg\'s axis '
+                f'is not below l3 = {l3:g} m'), row)
+        ratio = math.sqrt(1.0 - rho / (l3 * l3))
+        if ratio < margin:
+            return WorkspaceError('singular', (
+                f'position {_fmt(position)} m is too near a singularity of '
+                f'J1: leg {leg} has alpha/l3 = {ratio:.3g} < margin '
+                f'{margin:g}'), row)
+    raise AssertionError('no leg refuses this position')
+
+
+def _fmt(vec):
+    return '[' + ', '.join(f'{float(v):.6g}' for v in vec) + ']'

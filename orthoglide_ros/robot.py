@@ -1,0 +1,141 @@
+"""The Orthoglide's constant description: lengths, masses and gravity.
+
+One immutable :class:`Robot` is built and validated once; every algorithm of
+the package takes it as its first argument (in the manner of Pinocchio's
+``Model``) and never validates it again on the hot path.
+
+The parameter names are the paper's (section 2) and those of the
+``robot.*`` ROS parameters of ``config/orthoglide.yaml``; see ``MODEL.md``
+for the bodies they describe.
+"""
+
+from dataclasses import dataclass, field, fields
+import math
+
+from orthoglide_ros.kernel import kernel_constants
+
+# The paper's example robot (section 2): lengths in m, masses in kg.
+PAPER_VALUES = {
+    'l': 0.20, 'l1': 0.15, 'l2': 0.08, 'l3': 0.85, 'alpha': math.pi / 4,
+    'm1': 0.35, 'm2': 0.2, 'm3': 2.5, 'm5': 15.0,
+}
+DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+
+# Units of every parameter, for messages, descriptions and the README.
+UNITS = {
+    'l': 'm', 'l1': 'm', 'l2': 'm', 'l3': 'm', 'alpha': 'rad',
+    'm1': 'kg', 'm2': 'kg', 'm3': 'kg', 'm4': 'kg', 'm5': 'kg', 'm6': 'kg',
+    'gravity': 'm/s^2',
+}
+
+DESCRIPTIONS = {
+    'l': 'side of the cubic platform (body 5)',
+    'l1': 'length of the slider rod A1A2 (body 1)',
+    'l2': 'length of the rods A3A6 (body 2) and A4A7 (body 4)',
+    'l3': 'length of the parallelogram bars A3A4 (body 3) and A6A7 (body 6)',
+    'alpha': 'orientation angle of the slider rod about its guide-way',
+    'm1': 'mass of each slider (body 1)',
+    'm2': 'mass of each rod A3A6 (body 2)',
+    'm3': 'mass of each bar A3A4 (body 3)',
+    'm4': 'mass of each rod A4A7 (body 4); defaults to m2',
+    'm5': 'mass of the platform (body 5, counted once)',
+    'm6': 'mass of each bar A6A7 (body 6); defaults to m3',
+    'gravity': 'gravity vector in the base frame 0',
+}
+
+
+class RobotParameterError(ValueError):
+    """A robot parameter breaks a rule; the message names both."""
+
+    def __init__(self, name, rule):
+        super().__init__(f'robot.{name}: {rule}')
+        self.name = name
+        self.rule = rule
+
+
+@dataclass(frozen=True)
+class Robot:
+    """Geometry (m, rad), masses (kg) and gravity (m/s^2, frame 0).
+
+    ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the paper's
+    ``m4 = m2``, ``m6 = m3``). Every value must be finite, lengths and
+    masses positive, ``alpha`` in (0, pi/2) and ``gravity`` a 3-vector;
+    otherwise :class:`RobotParameterError` names the parameter.
+
+    >>> Robot().l3
+    0.85
+    >>> Robot(m5=18.0).m4 == Robot().m2
+    True
+    """
+
+    l: float = PAPER_VALUES['l']
+    l1: float = PAPER_VALUES['l1']
+    l2: float = PAPER_VALUES['l2']
+    l3: float = PAPER_VALUES['l3']
+    alpha: float = PAPER_VALUES['alpha']
+    m1: float = PAPER_VALUES['m1']
+    m2: float = PAPER_VALUES['m2']
+    m3: float = PAPER_VALUES['m3']
+    m4: float = None
+    m5: float = PAPER_VALUES['m5']
+    m6: float = None
+    gravity: tuple = field(default=DEFAULT_GRAVITY)
+
+    def __post_init__(self):
+        for name in ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm5'):
+            _check_positive(name, getattr(self, name))
+        if self.m4 is None:
+            object.__setattr__(self, 'm4', self.m2)
+        if self.m6 is None:
+            object.__setattr__(self, 'm6', self.m3)
+        _check_positive('m4', self.m4)
+        _check_positive('m6', self.m6)
+        if not self.alpha < math.pi / 2:
+            raise RobotParameterError('alpha', 'must lie in (0, pi/2) rad')
+        object.__setattr__(self, 'gravity', _check_gravity(self.gravity))
+        # Derived once for the kernel (not a field: no part of eq or repr).
+        object.__setattr__(self, 'constants', kernel_constants(self))
+
+    @classmethod
+    def parameter_names(cls):
+        """Names of the parameters, in declaration order (``robot.`` less)."""
+        return tuple(f.name for f in fields(cls))
+
+    def as_parameters(self):
+        """Return the description as a ``{name: value}`` dict of floats."""
+        values = {name: float(getattr(self, name))
+                  for name in self.parameter_names() if name != 'gravity'}
+        values['gravity'] = list(self.gravity)
+        return values
+
+    def replace(self, **changes):
+        """Return a validated copy with some parameters changed."""
+        values = self.as_parameters()
+        values.update(changes)
+        return Robot(**values)
+
+
+def _check_positive(name, value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise RobotParameterError(name, f'must be a number, got {value!r}')
+    if not math.isfinite(value):
+        raise RobotParameterError(name, f'must be finite, got {value!r}')
+    if not value > 0.0:
+        raise RobotParameterError(name, f'must be positive, got {value!r}')
+
+
+def _check_gravity(value):
+    try:
+        vector = tuple(value)
+    except TypeError:
+        raise RobotParameterError(
+            'gravity', f'must be a 3-vector, got {value!r}') from None
+    if len(vector) != 3 or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool)
+            for v in vector):
+        raise RobotParameterError(
+            'gravity', f'must be a 3-vector of numbers, got {value!r}')
+    if not all(math.isfinite(v) for v in vector):
+        raise RobotParameterError(
+            'gravity', f'must be finite, got {value!r}')
+    return tuple(float(v) for v in vector)

@@ -1,0 +1,47 @@
+"""Build script for the orthoglide_ros ament_python package."""
+
+from glob import glob
+
+import setuptools
+from setuptools import setup
+
+package_name = 'orthoglide_ros'
+test_requires = ['pytest', 'hypothesis']
+
+# setuptools < 72 (e.g. Ubuntu 24.04's, used by apt ROS Jazzy) still knows
+# tests_require; newer ones warn "Unknown distribution option".
+legacy_kwargs = {}
+if int(setuptools.__version__.split('.')[0]) < 72:
+    legacy_kwargs['tests_require'] = test_requires
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=[package_name],
+    data_files=[
+        ('share/ament_index/resource_index/packages',
+            ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        # config/orthoglide.yaml (and any other config/*.yaml).
+        ('share/' + package_name + '/config', sorted(glob('config/*.yaml'))),
+    ],
+    # ROS packages (rclpy, *_msgs) are deliberately absent: they come from
+    # apt ROS or from the ros-jazzy-* wheels in requirements.txt.
+    install_requires=['setuptools', 'numpy', 'PyYAML'],
+    zip_safe=True,
+    maintainer='Orthoglide ROS maintainers',
+    maintainer_email='orthoglide@example.com',
+    description='ROS 2 nodes and tools for the Orthoglide parallel robot.',
+    license='Apache-2.0',
+    # With newer setuptools colcon only runs pytest if it is declared here.
+    extras_require={
+        'test': test_requires,
+    },
+    entry_points={
+        'console_scripts': [
+            'feedforward = orthoglide_ros.feedforward_node:main',
+            'orthoglide = orthoglide_ros.cli:main',
+        ],
+    },
+    **legacy_kwargs,
+)
