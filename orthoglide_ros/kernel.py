@@ -24,6 +24,7 @@ the finiteness of what it returns.
 """
 
 from collections import namedtuple
+from math import sin
 
 # Constants of the kernel derived once from a Robot (see kernel_constants).
 KernelConstants = namedtuple('KernelConstants', (
@@ -40,7 +41,6 @@ def kernel_constants(robot):
     ``(p5, q5, 0) = (l1 sin(alpha), -l / 2, 0)`` is ``r5G``, the platform's
     centre G seen from A5 in frame 5 (eq. 8).
     """
-    from math import sin
     gx, gy, gz = robot.gravity
     return KernelConstants(
         robot.l3, -1.0 / robot.l3, robot.l3 / 2.0, robot.l3 ** 2 / 3.0,

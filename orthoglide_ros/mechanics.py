@@ -7,6 +7,7 @@ Plain numpy, no ROS. Every function takes a validated :class:`Robot` first.
 - :func:`elements`: position, velocity and acceleration of every body.
 - :func:`forward_kinematics`: actuator displacements -> platform centre.
 - :func:`workspace_status`: reachability and distance to singularity.
+- :func:`jacobians`: J1 and J2 of eq. (16).
 
 Units: m, m/s, m/s^2, N, W; vectors in the base frame 0. An input that is
 not finite, not reachable or nearer a singularity than the margin raises
@@ -230,10 +231,32 @@ def forward_kinematics(robot, lam):
         alpha = r + d
     good = (disc >= 0.0) & np.isfinite(r).all(-1) & (alpha > 0.0).all(-1)
     if not np.all(good):
+        row = int(np.argmin(np.atleast_1d(good)))
         raise WorkspaceError('unreachable', (
-            f'lambda {np.asarray(lam)[~good][0]} m has no platform position'
-            ' on the home branch'))
+            f'lambda {_fmt(np.atleast_2d(lam)[row])} m has no platform '
+            'position on the home branch'), row if lam.ndim == 2 else None)
     return r
+
+
+def jacobians(robot, position):
+    """Return ``(J1, J2)`` of eq. (16) at a position (m) in frame 0.
+
+    ``J1 lambdadot = J2 rdot_G`` (eq. 15) with ``J1 = diag(alpha_i)`` and
+    ``J2 = [[alpha_1, y, z], [x, alpha_2, z], [x, y, alpha_3]]``, ``alpha_i``
+    of eq. (17) (m). ``position``: (3,) or (N, 3); returns (3, 3) or
+    (N, 3, 3) arrays. Raises :class:`WorkspaceError` where unreachable.
+    """
+    p = np.asarray(position, dtype=float)
+    status = workspace_status(robot, p, 0.0)
+    if not np.all(status.reachable):
+        row = int(np.argmin(np.atleast_1d(status.reachable)))
+        raise _leg_error(robot, np.atleast_2d(p)[row], 0.0,
+                         row if p.ndim == 2 else None)
+    alpha = robot.l3 * status.alpha_ratio
+    j1 = alpha[..., :, None] * np.eye(3)
+    j2 = np.broadcast_to(p[..., None, :], j1.shape).copy()
+    j2[..., [0, 1, 2], [0, 1, 2]] = alpha
+    return j1, j2
 
 
 def elements(robot, position, velocity=ZERO, acceleration=ZERO,

@@ -1,0 +1,218 @@
+"""The feedforward's logic without ROS: setpoints in, joint targets out.
+
+:class:`Feedforward` pairs the pose, twist and accel of one setpoint by their
+exact stamp, checks the setpoint, runs :func:`mechanics.solve` on it and keeps
+the counters the diagnostics report. The ROS node (``feedforward_node``)
+only converts messages to and from the plain values used here, so every rule
+below is testable without DDS.
+
+Rules (the README states them for users):
+
+- A setpoint is complete when a pose, a twist and an accel with the same
+  stamp have arrived (or a pose alone with ``pose_only``), or when one
+  trajectory point arrives. A zero stamp cannot be paired and is rejected.
+- A partial setpoint waits at most ``pairing_timeout`` (by arrival time) for
+  its partners; it is dropped as ``unpaired`` when that runs out, or at once
+  when a newer setpoint completes (its partners can no longer come in order).
+- A complete setpoint is rejected, and counted by reason, if a frame is
+  neither empty nor ``base_frame`` (``frame``), its orientation turns more than
+  1e-3 rad from the identity (``orientation``), or the mechanics refuse it
+  (``non_finite``, ``unreachable``, ``singular``, ``overflow``). A rejected
+  setpoint changes nothing: the previous result stays the newest.
+- Freshness is judged by arrival time on a monotonic clock, never by stamp:
+  the newest result is fresh for ``setpoint_timeout`` after its setpoint
+  completed.
+"""
+
+from collections import namedtuple
+import math
+import time
+
+from orthoglide_ros import mechanics
+
+# Largest rotation of the platform accepted as "the identity" (rad).
+ORIENTATION_TOLERANCE = 1e-3
+# Most partial setpoints held at once; beyond, the oldest is dropped.
+MAX_PENDING = 1000
+
+REASONS = ('non_finite', 'unreachable', 'singular', 'overflow', 'frame',
+           'orientation', 'stamp', 'malformed', 'unpaired')
+INPUTS = ('pose', 'twist', 'accel', 'trajectory')
+
+Output = namedtuple('Output', 'stamp solution')
+Output.__doc__ = """A result: ``stamp`` (sec, nanosec) of its setpoint and
+the :class:`mechanics.Solution`."""
+
+_ZERO = (0.0, 0.0, 0.0)
+
+
+class Rejected(ValueError):
+    """A setpoint refused by a rule; ``reason`` is one of REASONS."""
+
+    def __init__(self, reason, message):
+        super().__init__(message)
+        self.reason = reason
+
+
+class Feedforward:
+    """Pairing, checks, mechanics and counters of the feedforward node.
+
+    Every method takes ``now``, a monotonic time in seconds, so tests can
+    drive time. Methods that complete a setpoint return its :class:`Output`
+    or raise :class:`Rejected`; the rejection is already counted.
+    """
+
+    def __init__(self, settings):
+        self.settings = settings
+        self.latest = None
+        self.latest_arrival = None
+        self.received = dict.fromkeys(INPUTS, 0)
+        self.rejected = dict.fromkeys(REASONS, 0)
+        self.computed = 0
+        self.compute_ns_total = 0
+        self.compute_ns_max = 0
+        self._pending = {}
+
+    def configure(self, settings):
+        """Use new settings from the next setpoint on (one assignment)."""
+        self.settings = settings
+
+    def pose(self, stamp, frame, position, orientation, now):
+        """Take a pose of G (m) and the platform orientation (quaternion)."""
+        self.received['pose'] += 1
+        if self.settings.pose_only:
+            self._check_stamp(stamp)
+            return self._complete(stamp, (frame,), position, _ZERO, _ZERO,
+                                  orientation, now)
+        return self._part(stamp, 0, (frame, position, orientation), now)
+
+    def twist(self, stamp, frame, velocity, now):
+        """Take the linear velocity of G (m/s); ignored with pose_only."""
+        self.received['twist'] += 1
+        if not self.settings.pose_only:
+            return self._part(stamp, 1, (frame, velocity), now)
+        return None
+
+    def accel(self, stamp, frame, acceleration, now):
+        """Take the linear acceleration of G (m/s^2); ignored with pose_only."""
+        self.received['accel'] += 1
+        if not self.settings.pose_only:
+            return self._part(stamp, 2, (frame, acceleration), now)
+        return None
+
+    def trajectory_point(self, stamp, frame, position, orientation,
+                         velocity, acceleration, now):
+        """Take one atomic setpoint; ``velocity``/``acceleration`` may be None.
+
+        A point without velocity or acceleration is ``malformed`` unless
+        ``pose_only`` lets them be zero.
+        """
+        self.received['trajectory'] += 1
+        if velocity is None or acceleration is None:
+            if not self.settings.pose_only:
+                self._reject('malformed', (
+                    'trajectory point without velocities or accelerations '
+                    '(set pose_only to accept them as zero)'))
+            velocity = velocity or _ZERO
+            acceleration = acceleration or _ZERO
+        return self._complete(stamp, (frame,), position, velocity,
+                              acceleration, orientation, now)
+
+    def reject_malformed(self, message, now):
+        """Count and raise a message that holds no usable setpoint."""
+        self._reject('malformed', message)
+
+    def expire(self, now):
+        """Drop the partial setpoints older than pairing_timeout; count them."""
+        limit = now - self.settings.pairing_timeout
+        dropped = 0
+        for stamp, entry in list(self._pending.items()):
+            if entry[3] >= limit and len(self._pending) <= MAX_PENDING:
+                break
+            del self._pending[stamp]
+            dropped += 1
+        self.rejected['unpaired'] += dropped
+        return dropped
+
+    def fresh(self, now):
+        """Whether the newest result's setpoint arrived within the timeout."""
+        return (self.latest_arrival is not None
+                and now - self.latest_arrival <= self.settings.setpoint_timeout)
+
+    def tick(self, now):
+        """Return the newest result if it is fresh, else None (timer mode)."""
+        return self.latest if self.fresh(now) else None
+
+    @property
+    def pending(self):
+        """Number of partial setpoints waiting for partners."""
+        return len(self._pending)
+
+    def _check_stamp(self, stamp):
+        if stamp[0] < 0 or stamp == (0, 0):
+            self._reject('stamp', (
+                f'stamp {stamp[0]}.{stamp[1]:09d} cannot pair pose, twist and '
+                'accel: stamp setpoints with their time'))
+
+    def _part(self, stamp, slot, value, now):
+        self._check_stamp(stamp)
+        entry = self._pending.get(stamp)
+        if entry is None:
+            entry = self._pending[stamp] = [None, None, None, now]
+            self.expire(now)
+        entry[slot] = value
+        if entry[0] is None or entry[1] is None or entry[2] is None:
+            return None
+        del self._pending[stamp]
+        superseded = [s for s in self._pending if s < stamp]
+        for s in superseded:
+            del self._pending[s]
+        self.rejected['unpaired'] += len(superseded)
+        (pose_frame, position, orientation), (twist_frame, velocity), \
+            (accel_frame, acceleration) = entry[:3]
+        return self._complete(
+            stamp, (pose_frame, twist_frame, accel_frame), position,
+            velocity, acceleration, orientation, now)
+
+    def _complete(self, stamp, frames, position, velocity, acceleration,
+                  orientation, now):
+        settings = self.settings
+        for frame in frames:
+            if frame and frame != settings.base_frame:
+                self._reject('frame', (
+                    f'setpoint in frame {frame!r}, expected '
+                    f'{settings.base_frame!r} (or empty)'))
+        self._check_orientation(orientation)
+        start = time.perf_counter_ns()
+        try:
+            solution = mechanics.solve(
+                settings.robot, position, velocity, acceleration,
+                settings.singularity_margin)
+        except mechanics.WorkspaceError as error:
+            self._reject(error.reason, str(error))
+        spent = time.perf_counter_ns() - start
+        self.computed += 1
+        self.compute_ns_total += spent
+        if spent > self.compute_ns_max:
+            self.compute_ns_max = spent
+        self.latest = Output(stamp, solution)
+        self.latest_arrival = now
+        return self.latest
+
+    def _check_orientation(self, q):
+        x, y, z, w = q
+        vector = math.sqrt(x * x + y * y + z * z)
+        if not math.isfinite(vector + w):
+            self._reject('non_finite', f'orientation {q} is not finite')
+        if vector == 0.0 and w == 0.0:
+            self._reject('orientation', 'orientation is the zero quaternion')
+        angle = 2.0 * math.atan2(vector, abs(w))
+        if angle > ORIENTATION_TOLERANCE:
+            self._reject('orientation', (
+                f'platform orientation turns {angle:.3g} rad from the '
+                f'identity (tolerance {ORIENTATION_TOLERANCE:g} rad): the '
+                'Orthoglide only translates'))
+
+    def _reject(self, reason, message):
+        self.rejected[reason] += 1
+        raise Rejected(reason, message)

@@ -1,0 +1,37 @@
+"""Test-session set-up: DDS stays on this host, in a domain of its own.
+
+Set before anything imports rclpy, so a bare ``pytest`` is as safe as the
+README's test command:
+
+- ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``: Fast DDS discovers only on the
+  loopback interface (otherwise it multicasts out of the network card);
+- ``ROS_DOMAIN_ID``: one per test session (drawn from the process id, and
+  never the caller's own domain), so parallel runs and a live ROS graph on
+  the same machine do not see each other;
+- ``ROS_LOG_DIR``: a temporary directory, so tests leave no logs behind.
+"""
+
+import os
+import tempfile
+
+import pytest
+
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+_CALLER_DOMAIN = os.environ.get('ROS_DOMAIN_ID', '0')
+_DOMAIN = 1 + os.getpid() % 232
+if str(_DOMAIN) == _CALLER_DOMAIN:
+    _DOMAIN = _DOMAIN % 232 + 1
+os.environ['ROS_DOMAIN_ID'] = str(_DOMAIN)
+os.environ.setdefault('ROS_LOG_DIR', tempfile.mkdtemp(prefix='orthoglide-ros-log-'))
+
+
+@pytest.fixture
+def ros_context():
+    """A fresh rclpy context for one test, shut down afterwards."""
+    rclpy = pytest.importorskip('rclpy')
+    context = rclpy.context.Context()
+    rclpy.init(context=context)
+    try:
+        yield context
+    finally:
+        rclpy.try_shutdown(context=context)
