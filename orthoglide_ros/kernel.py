@@ -142,129 +142,124 @@ def _leg(k, x, y, z, vx, vy, vz, ax, ay, az, gx, gy, gz, platform, sqrt,
     r2 = 1.0 / (l3 * c2)
     s1 = y * r2
     c1 = sqrt(1.0 - s1 * s1)
-    al = l3 * c1 * c2
+    l3s1 = l3 * s1
+    l3c1 = l3 * c1
+    al = l3c1 * c2
     ra = 1.0 / al
     lam = x + l3 - al
 
     # Connectivity conditions (13), derived from (7)-(8) and solved:
     # v10 a10^T u3 - l3 w1 a20^T u3~ a32^T u2 - l3 w2 a30^T u3~ u2 = rdot_G.
     w2 = -vz * r2
-    l3s1 = l3 * s1
-    l3c1 = l3 * c1
-    w1 = (vy + l3s1 * s2 * w2) * ra
-    lamd = vx + l3s1 * c2 * w1 + l3c1 * s2 * w2
+    s2w2 = s2 * w2
+    w1 = (vy + l3s1 * s2w2) * ra
+    lamd = vx + l3s1 * c2 * w1 + l3c1 * s2w2
     # Their time derivative, eq. (18) with the signs of r43 = -l3 u2.
-    ww = w1 * w1 + w2 * w2
-    w12 = 2.0 * w1 * w2
-    e2 = (l3 * s2 * w2 * w2 - az) * r2
-    e1 = (ay + l3s1 * (s2 * e2 + c2 * ww) + l3c1 * s2 * w12) * ra
-    a = ax + l3s1 * (c2 * e1 - s2 * w12) + l3c1 * (s2 * e2 + c2 * ww)
+    w1w1 = w1 * w1
+    w2w2 = w2 * w2
+    w1w2 = w1 * w2
+    s2w12 = 2.0 * s2 * w1w2
+    e2 = (l3 * s2w2 * w2 - az) * r2
+    se_cw = s2 * e2 + c2 * (w1w1 + w2w2)
+    e1 = (ay + l3s1 * se_cw + l3c1 * s2w12) * ra
+    c2e1 = c2 * e1
+    a = ax + l3s1 * (c2e1 - s2w12) + l3c1 * se_cw
 
     # Recursion (10)-(12), (19), body by body (frames k). Body 1 translates:
     # gamma10 = a u3. Body 2: omega20 = w1 u3, epsilon20 = e1 u3,
-    # gamma20 = a21 gamma10.
-    g20x = c1 * a
-    g20y = -s1 * a
+    # gamma20 = a21 gamma10 = (c1 a, -s1 a, 0).
+    c1a = c1 * a
+    s1a = s1 * a
     # Body 3 (and its twin 6: a62 = a32, r62 parallel to omega20):
-    # omega30 = a32 omega20 + w2 u3, epsilon30 from (19), gamma30 = a32
-    # gamma20 (r32 is parallel to omega20 and epsilon20).
-    o3x = -c2 * w1
-    o3y = s2 * w1
-    o3z = w2
-    e3x = -c2 * e1 + s2 * w1 * w2
-    e3y = s2 * e1 + c2 * w1 * w2
-    e3z = e2
-    g30x = -s2 * g20x
-    g30y = -c2 * g20x
-    g30z = g20y
-    # (omega30~ omega30~ + epsilon30~) r43 with r43 = -l3 u2.
-    t3x = l3 * (e3z - o3x * o3y)
-    t3y = l3 * (o3x * o3x + o3z * o3z)
-    t3z = -l3 * (e3x + o3y * o3z)
+    # omega30 = a32 omega20 + w2 u3 = (-c2 w1, s2 w1, w2), epsilon30 from
+    # (19) = (-c2 e1 + s2 w1 w2, s2 e1 + c2 w1 w2, e2), gamma30 = a32 gamma20
+    # = (-s2 c1 a, -c2 c1 a, -s1 a) (r32 is parallel to omega20, epsilon20).
+    # (omega30~ omega30~ + epsilon30~) r43 with r43 = -l3 u2 is
+    # l3 (bx, by, -bz) with these brackets (also in body 3's moment):
+    bx = e2 + s2 * c2 * w1w1            # eps_z - om_x om_y
+    by = c2 * c2 * w1w1 + w2w2          # om_x^2 + om_z^2
+    bz = s2w12 - c2e1                   # eps_x + om_y om_z
     # Body 4: omega40 = w1 u1 and epsilon40 = e1 u1 (parallel to body 2),
-    # gamma40 = a43 (gamma30 + t3).
-    bx = g30x + t3x
-    by = g30y + t3y
-    g40x = -c2 * bx + s2 * by
-    g40y = s2 * bx + c2 * by
-    g40z = -(g30z + t3z)
+    # gamma40 = a43 (gamma30 + l3 (bx, by, -bz)).
+    gx3 = l3 * bx - s2 * c1a
+    gy3 = l3 * by - c2 * c1a
+    g40x = s2 * gy3 - c2 * gx3
+    g40y = s2 * gx3 + c2 * gy3
+    g40z = s1a + l3 * bz
 
-    # Gravity in frames 2, 3, 4 (g_k = a_k0 g), 1 (z only) and 5.
+    # Gravity in frames 2 (hg, kg, gz), 3, 4 (gz, -hg, -kg) and 1 (z: gx).
     hg = c1 * gx + s1 * gy
     kg = c1 * gy - s1 * gx
-    g3x = -c2 * gz - s2 * hg
-    g3y = s2 * gz - c2 * hg
-
     # Wrenches (20)-(24) per unit mass, about each body's joint A_k:
     # f = a_C - g, m = r_C~ (gamma - g) + I_A epsilon + omega~ I_A omega.
-    # Body 3: r_C = r43 / 2, I_A = l3^2/3 diag(1, 0, 1) (parallel axis).
-    d3x = g30x - g3x
-    d3z = g30z - kg
-    f3x = d3x + 0.5 * t3x
-    f3y = g30y - g3y + 0.5 * t3y
-    f3z = d3z + 0.5 * t3z
+    # Body 3: r_C = r43 / 2, I_A = l3^2/3 diag(1, 0, 1) (parallel axis);
+    # d3 = gamma30 - g3 with g3 = (-c2 gz - s2 hg, s2 gz - c2 hg, kg).
+    hc = hg - c1a
+    d3x = s2 * hc + c2 * gz
+    d3y = c2 * hc - s2 * gz
+    d3z = -(s1a + kg)
     h3 = k.h3
     i3 = k.i3
-    n3x = -h3 * d3z + i3 * (e3x + o3y * o3z)
-    n3z = h3 * d3x + i3 * (e3z - o3x * o3y)
-    # Body 4: r_C = h4 u1 parallel to omega40, epsilon40: no rotary terms.
+    f3x = d3x + h3 * bx
+    f3y = d3y + h3 * by
+    f3z = d3z - h3 * bz
+    n3x = i3 * bz - h3 * d3z
+    n3z = i3 * bx + h3 * d3x
+    # Body 4: r_C = h4 u1 parallel to omega40, epsilon40: no rotary terms;
+    # d4 = gamma40 - g4.
     m4 = k.m4
-    h4 = k.h4
-    d4x = g40x - gz
+    m4h4 = m4 * k.h4
     d4y = g40y + hg
     d4z = g40z + kg
-    f4x = m4 * d4x
+    f4x = m4 * (g40x - gz)
     f4y = m4 * d4y
     f4z = m4 * d4z
-    n4x = 0.0
-    n4y = -m4 * h4 * d4z
-    n4z = m4 * h4 * d4y
+    n4y = -m4h4 * d4z
+    n4z = m4h4 * d4y
     t21 = 0.0
     if platform:
-        # Body 5, the platform, in leg A's tree: it translates, r_C = r5G.
-        # gamma50 = a54 gamma40 (r54 parallel to omega40, epsilon40).
+        # Body 5, the platform, in leg A's tree: it translates, r_C = r5G;
+        # d5 = a54 gamma40 - g5 (r54 parallel to omega40, epsilon40),
+        # g5 = (-gy, -gx, -gz).
         m5 = k.m5
-        p5 = k.p5
-        q5 = k.q5
+        h4 = k.h4
+        p5 = m5 * k.p5
+        q5 = m5 * k.q5
         d5x = c1 * g40z + s1 * g40y + gy
         d5y = c1 * g40y - s1 * g40z + gx
-        d5z = -g40x + gz
-        n5x = m5 * q5 * d5z
-        n5y = -m5 * p5 * d5z
-        n5z = m5 * (p5 * d5y - q5 * d5x)
+        d5z = gz - g40x
+        n5x = q5 * d5z
+        n5y = -p5 * d5z
+        t21 = p5 * d5y - q5 * d5x           # m5_z
         # Accumulate into body 4 (23): a54^T f5, a54^T m5, r54~ a54^T f5.
-        u0 = -m5 * d5z
         u1 = m5 * (s1 * d5x + c1 * d5y)
         u2 = m5 * (c1 * d5x - s1 * d5y)
-        f4x += u0
-        f4y += u1
-        f4z += u2
-        n4x += -n5z
-        n4y += s1 * n5x + c1 * n5y - h4 * u2
-        n4z += c1 * n5x - s1 * n5y + h4 * u1
-        t21 = n5z
-    # Accumulate body 4 into body 3 (23): a43^T f4, a43^T m4, r43~ a43^T f4.
-    m3 = k.m3
+        f4x = f4x - m5 * d5z
+        f4y = f4y + u1
+        f4z = f4z + u2
+        n4x = -t21
+        n4y = n4y + s1 * n5x + c1 * n5y - h4 * u2
+        n4z = n4z + c1 * n5x - s1 * n5y + h4 * u1
+    # Accumulate body 4 into body 3 (23): a43^T f4, a43^T m4, r43~ a43^T f4
+    # with a43^T u = (s2 u1 - c2 u0, s2 u0 + c2 u1, -u2); body 6 (a leaf:
+    # the parallelogram is cut at A7) adds m6 times body 3's own terms.
+    m36 = k.m3 + k.m6
     u0 = s2 * f4y - c2 * f4x
-    u2 = -f4z
-    f3ax = m3 * f3x + u0
-    f3ay = m3 * f3y + s2 * f4x + c2 * f4y
-    f3az = m3 * f3z + u2
-    n3ax = m3 * n3x + s2 * n4y - c2 * n4x - l3 * u2
-    n3ay = s2 * n4x + c2 * n4y
-    n3az = m3 * n3z - n4z + l3 * u0
-    # Body 6 (a leaf: the parallelogram is cut at A7) has body 3's motion.
-    m6 = k.m6
-    # Accumulate bodies 3 and 6 into body 2 (23): a32^T (f3 + f6), moments.
-    ux = f3ax + m6 * f3x
-    uy = f3ay + m6 * f3y
-    uz = f3az + m6 * f3z
-    nx = n3ax + m6 * n3x
-    t21 = t21 + s2 * n3ay - c2 * nx
-    t32 = n3az + n4z + m6 * n3z
+    fx = m36 * f3x + u0
+    fy = m36 * f3y + s2 * f4x + c2 * f4y
+    fz = m36 * f3z - f4z
+    nx = m36 * n3x + s2 * n4y + l3 * f4z
+    ny = c2 * n4y
+    if platform:
+        nx = nx - c2 * n4x
+        ny = ny + s2 * n4x
+    # Eq. (25) groups joints 3-2, 4-3 and 6-2 (rate w2): m3_z + m4_z + m6_z.
+    t32 = m36 * n3z + l3 * u0
+    # Into body 2 (23): a32^T u = (-(s2 u0 + c2 u1), u2, -(c2 u0 - s2 u1)).
+    t21 = t21 + s2 * ny - c2 * nx
     m2 = k.m2
-    f2x = m2 * (g20x - hg) - s2 * ux - c2 * uy
-    f2y = m2 * (g20y - kg) + uz
+    f2x = m2 * (c1a - hg) - s2 * fx - c2 * fy
+    f2y = m2 * d3z + fz
     # Body 1 (23): u3^T (f10 + a21^T f2), with g1 = a10 g = (-gz, gy, gx).
     f1 = k.m1 * (a - gx) + c1 * f2x - s1 * f2y
 
@@ -274,9 +269,11 @@ def _leg(k, x, y, z, vx, vy, vz, ax, ay, az, gx, gy, gz, platform, sqrt,
     qz = -(t32 * c1 + t21 * s1 * s2 / c2) * ra
 
     if record is not None:
+        o3 = (-c2 * w1, s2 * w1, w2)
+        e3 = (s2 * w1w2 - c2e1, s2 * e1 + c2 * w1w2, e2)
         _record_leg(record, l3, s1, c1, s2, c2, lam, lamd, a, w1, w2, e1,
-                    e2, (o3x, o3y, o3z), (e3x, e3y, e3z),
-                    (g30x, g30y, g30z), (g40x, g40y, g40z))
+                    e2, o3, e3, (-s2 * c1a, -c2 * c1a, -s1a),
+                    (g40x, g40y, g40z))
     return lam, lamd, a, al, f1, qy, qz
 
 

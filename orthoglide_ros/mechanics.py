@@ -98,9 +98,15 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
     rho = max(y * y + z * z, z * z + x * x, x * x + y * y)
     if rho >= l3sq * (1.0 - margin * margin):
         raise _leg_error(robot, position, margin)
-    out = kernel.solve(robot.constants, float(x), float(y), float(z),
-                       float(vx), float(vy), float(vz), float(ax),
-                       float(ay), float(az), math.sqrt, record)
+    try:
+        out = kernel.solve(robot.constants, float(x), float(y), float(z),
+                           float(vx), float(vy), float(vz), float(ax),
+                           float(ay), float(az), math.sqrt, record)
+    except (ZeroDivisionError, ValueError):
+        # Only on the boundary itself (margin 0): det J_lambda = 0, or
+        # rounding puts a cosine's square below 0.
+        raise WorkspaceError('singular', (
+            f'position {_fmt(position)} m is on a singularity')) from None
     lam, lamd, lamdd, force, power, alphas, conditioning = out
     if conditioning < margin:
         raise WorkspaceError('singular', (
