@@ -307,7 +307,10 @@ def main(args=None):
         node = FeedforwardNode()
         executor = _executor()
         executor.add_node(node)
-        executor.spin()
+        # Not executor.spin(): with the EventsExecutor of the rclpy 7.1.6
+        # wheels it busy-loops without running callbacks or seeing SIGINT.
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=0.1)
     except (ValueError, ParameterException) as error:
         rclpy.logging.get_logger('feedforward').fatal(
             f'invalid parameters, not starting: {error}')
