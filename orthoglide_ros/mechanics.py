@@ -103,8 +103,8 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
                            float(vx), float(vy), float(vz), float(ax),
                            float(ay), float(az), math.sqrt, record)
     except (ZeroDivisionError, ValueError):
-        # Only on the boundary itself (margin 0): det J_lambda = 0, or
-        # rounding puts a cosine's square below 0.
+        # Only exactly on a singularity: det J_lambda = 0 (J2 singular, as
+        # at x = y = z = l3/sqrt(3)), or a cosine's square rounded below 0.
         raise WorkspaceError('singular', (
             f'position {_fmt(position)} m is on a singularity')) from None
     lam, lamd, lamdd, force, power, alphas, conditioning = out
@@ -156,11 +156,13 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
     columns = (x, y, z, *v.T.copy(), *a.T.copy())
     for start in range(0, n, BATCH_CHUNK):
         chunk = slice(start, start + BATCH_CHUNK)
-        *values, al, conditioning[chunk] = kernel.solve(
-            robot.constants, *(c[chunk] for c in columns), np.sqrt)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            *values, al, conditioning[chunk] = kernel.solve(
+                robot.constants, *(c[chunk] for c in columns), np.sqrt)
         for j, triple in enumerate(values):
             out[j, chunk] = np.column_stack(triple)
         alphas[chunk] = np.column_stack(al)
+    conditioning = np.nan_to_num(conditioning, nan=0.0)
     if not (conditioning >= margin).all():
         row = int(np.argmin(conditioning >= margin))
         raise WorkspaceError('singular', (

@@ -1,0 +1,406 @@
+"""
+The ``orthoglide`` command-line tool: the mechanics without ROS.
+
+Subcommands (``orthoglide SUBCOMMAND --help`` for details):
+
+- ``paper``: the paper's figures 3-8 over the trajectory of eq. (6), as a
+  summary table, a CSV file (``--csv``) and a PNG figure (``--plot``).
+- ``solve``: inverse kinematics and dynamics of one sample.
+- ``batch``: the same for every row of a trajectory CSV file.
+
+Units are SI throughout: m, m/s, m/s^2, N, W, s. Bad input exits with code 2
+and one line ``orthoglide: error: ...`` on standard error; output files are
+written atomically, only once every sample is solved.
+"""
+
+import argparse
+import csv
+import io
+import json
+import math
+import os
+import sys
+import tempfile
+
+import numpy as np
+
+from orthoglide_ros import mechanics, trajectory
+from orthoglide_ros.params_file import load_robot, ParametersFileError
+from orthoglide_ros.robot import Robot, RobotParameterError
+
+PROG = 'orthoglide'
+LEGS = ('a', 'b', 'c')
+QUANTITIES = ('lambda', 'lambdadot', 'lambdaddot', 'force', 'power')
+# Columns of every CSV the tool writes (SI units).
+CSV_COLUMNS = ('t', 'x', 'y', 'z') + tuple(
+    f'{q}_{leg}' for q in QUANTITIES for leg in LEGS)
+# Columns of a trajectory file read by ``batch``: (name, required).
+INPUT_GROUPS = (('position', ('x', 'y', 'z'), True),
+                ('velocity', ('vx', 'vy', 'vz'), False),
+                ('acceleration', ('ax', 'ay', 'az'), False))
+UNITS = {'lambda': 'm', 'lambdadot': 'm/s', 'lambdaddot': 'm/s^2',
+         'force': 'N', 'power': 'W'}
+DEFAULT_SAMPLES = 201
+
+
+class CliError(Exception):
+    """Bad input: printed as one line ``orthoglide: error: ...``."""
+
+    def __init__(self, message, code=2):
+        """Keep ``message`` and the exit ``code``."""
+        super().__init__(message)
+        self.code = code
+
+
+def main(argv=None):
+    """Run the tool on ``argv`` (default: sys.argv[1:]); return the code."""
+    parser = _parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as stop:      # --help, --version or a usage error
+        return 0 if stop.code is None else stop.code
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return 2
+    try:
+        robot = _robot(args.params)
+        return args.run(robot, args)
+    except CliError as error:
+        _fail(str(error))
+        return error.code
+    except (ParametersFileError, RobotParameterError) as error:
+        where = f'{args.params}: ' if isinstance(
+            error, RobotParameterError) else ''
+        _fail(where + str(error))
+        return 2
+
+
+# -- paper ------------------------------------------------------------------
+
+def run_paper(robot, args):
+    """Solve the trajectory of eq. (6); write the CSV, plot or summary."""
+    times = trajectory.paper_times(args.samples)
+    p, v, a = trajectory.paper_batch(times)
+    try:
+        sol = mechanics.solve_batch(robot, p, v, a)
+    except mechanics.WorkspaceError as error:
+        raise CliError(f'the paper trajectory at t = {times[error.row]:.6g} '
+                       f's: {_reason(error)}') from None
+    outputs = []
+    if args.plot is not None:
+        outputs.append((args.plot, _plot_png(times, sol)))
+    if args.csv is not None:
+        outputs.append((args.csv, _csv_text(times, p, sol)))
+    if not outputs:
+        static = mechanics.solve(robot, tuple(float(c) for c in p[0]))
+        print(_paper_summary(times, sol, static.force))
+    for path, data in outputs:
+        _write_output(path, data)
+    return 0
+
+
+def _paper_summary(times, sol, static_force):
+    lines = [f'Paper trajectory, eq. (6): {len(times)} samples over '
+             f'[{times[0]:g}, {times[-1]:g}] s', _row('', 'A', 'B', 'C')]
+    for label, values in (
+            ('peak |lambda| (m)', sol.lambda_),
+            ('peak |force| (N)', sol.force),
+            ('peak |power| (W)', sol.power)):
+        lines.append(_row(label, *np.abs(values).max(0)))
+    lines.append(_row('statics force at t=0 (N)', *static_force))
+    return '\n'.join(lines)
+
+
+def _plot_png(times, sol):
+    """Render figures 3-8 as PNG bytes (matplotlib's Agg canvas, no pyplot)."""
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise CliError('--plot needs matplotlib (pip install matplotlib)',
+                       code=1) from None
+    figure = Figure(figsize=(13, 7), layout='constrained')
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(2, 3, sharex=True)
+    for j, leg in enumerate('ABC'):
+        top, bottom = axes[0, j], axes[1, j]
+        top.plot(times, sol.lambda_[:, j] * 1e3)
+        top.set_title(f'Fig. {3 + j}: displacement of actuator {leg}')
+        top.set_ylabel(f'$\\lambda_{leg}$ (mm)')
+        bottom.plot(times, sol.power[:, j], color='tab:red')
+        bottom.set_title(f'Fig. {6 + j}: power of actuator {leg}')
+        bottom.set_ylabel(f'$p_{leg}$ (W)')
+        bottom.set_xlabel('t (s)')
+        for ax in (top, bottom):
+            ax.grid(True, alpha=0.4)
+    figure.suptitle('Orthoglide, trajectory of eq. (6)')
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format='png', dpi=100)
+    return buffer.getvalue()
+
+
+# -- solve ------------------------------------------------------------------
+
+def run_solve(robot, args):
+    """Solve one sample; print a table or a JSON object."""
+    try:
+        sol = mechanics.solve(robot, args.position, args.velocity,
+                              args.acceleration)
+    except mechanics.WorkspaceError as error:
+        raise CliError(str(error)) from None
+    if args.json:
+        record = dict(zip(('x', 'y', 'z'), args.position))
+        for q, values in zip(QUANTITIES, sol):
+            record.update(zip((f'{q}_{leg}' for leg in LEGS), values))
+        print(json.dumps({k: float(v) for k, v in record.items()}))
+        return 0
+    lines = [_row('', 'A', 'B', 'C')]
+    for q, values in zip(QUANTITIES, sol):
+        lines.append(_row(f'{q} ({UNITS[q]})', *values))
+    lines.append(f'singularity distance: {sol.singularity_distance:.6g} '
+                 f'(1 at home, refused below '
+                 f'{mechanics.DEFAULT_SINGULARITY_MARGIN:g})')
+    print('\n'.join(lines))
+    return 0
+
+
+# -- batch ------------------------------------------------------------------
+
+def run_batch(robot, args):
+    """Solve every row of a trajectory file; write the results as CSV."""
+    name = '<stdin>' if args.input == '-' else args.input
+    times, p, v, a, lines = _read_trajectory(args.input, name)
+    try:
+        sol = mechanics.solve_batch(robot, p, v, a)
+    except mechanics.WorkspaceError as error:
+        raise CliError(f'{name}: data row {error.row + 1} (line '
+                       f'{lines[error.row]}): {_reason(error)}') from None
+    _write_output(args.output, _csv_text(times, p, sol))
+    return 0
+
+
+def _read_trajectory(path, name):
+    """
+    Read ``t,x,y,z,vx,...`` by header name; return arrays and line numbers.
+
+    ``t`` is None if the file has no ``t`` column; a missing velocity or
+    acceleration group is None (zero).
+    """
+    try:
+        if path == '-':
+            text = sys.stdin.read()
+        else:
+            with open(path, encoding='utf-8-sig', newline='') as stream:
+                text = stream.read()
+    except OSError as error:
+        raise CliError(f'cannot read {name}: {error.strerror}') from None
+    except UnicodeDecodeError:
+        raise CliError(f'{name}: not a UTF-8 text file') from None
+    reader = csv.reader(io.StringIO(text, newline=''))
+    header = next(reader, None)
+    if not header:
+        raise CliError(f'{name}: empty file: expected a header line such as '
+                       't,x,y,z,vx,vy,vz,ax,ay,az')
+    header = [h.strip().lower() for h in header]
+    index = {}
+    for i, column in enumerate(header):
+        if column in index and column in _known_columns():
+            raise CliError(f'{name}: column {column!r} appears twice')
+        index.setdefault(column, i)
+    groups = []
+    for group, columns, required in INPUT_GROUPS:
+        present = [c for c in columns if c in index]
+        if present and len(present) < 3 or required and not present:
+            missing = [c for c in columns if c not in index]
+            raise CliError(f'{name}: no {missing[0]!r} column: the '
+                           f'{group} needs all of {", ".join(columns)}')
+        groups.append(columns if present else None)
+    wanted = (['t'] if 't' in index else []) + [
+        c for columns in groups if columns for c in columns]
+    rows, lines = [], []
+    for cells in reader:
+        if not any(cell.strip() for cell in cells):
+            continue        # blank line
+        row, line = len(rows) + 1, reader.line_num
+        values = []
+        for column in wanted:
+            i = index[column]
+            cell = cells[i].strip() if i < len(cells) else ''
+            try:
+                value = float(cell)
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                raise CliError(
+                    f'{name}: data row {row} (line {line}), column '
+                    f'{column!r}: {cell!r} is not a finite number')
+            values.append(value)
+        rows.append(values)
+        lines.append(line)
+    data = np.array(rows, dtype=float).reshape(len(rows), len(wanted))
+    columns = dict(zip(wanted, data.T))
+    times = columns.get('t')
+    p, v, a = (None if group is None else np.column_stack(
+        [columns[c] for c in group]).reshape(-1, 3) for group in groups)
+    return times, p, v, a, lines
+
+
+def _known_columns():
+    return {'t'} | {c for _, columns, _ in INPUT_GROUPS for c in columns}
+
+
+# -- shared -----------------------------------------------------------------
+
+def _csv_text(times, positions, sol):
+    """Format samples as CSV bytes (CSV_COLUMNS, repr); times may be None."""
+    table = np.column_stack([positions] + [
+        np.asarray(values) for values in sol[:5]])
+    out = [','.join(CSV_COLUMNS)]
+    t_cells = [''] * len(table) if times is None else map(
+        repr, np.asarray(times, dtype=float).tolist())
+    for t, row in zip(t_cells, table.tolist()):
+        out.append(t + ',' + ','.join(map(repr, row)))
+    return ('\n'.join(out) + '\n').encode('utf-8')
+
+
+def _write_output(path, data):
+    """Write bytes to ``path`` atomically (temp file, os.replace)."""
+    if path is None or path == '-':
+        sys.stdout.write(data.decode('utf-8'))
+        sys.stdout.flush()
+        return
+    directory = os.path.dirname(os.path.abspath(path))
+    try:
+        mode = os.stat(path).st_mode & 0o777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        mode = 0o666 & ~umask
+    try:
+        fd, tmp = tempfile.mkstemp(dir=directory, suffix='.tmp',
+                                   prefix='.' + os.path.basename(path) + '.')
+    except OSError as error:
+        raise CliError(f'cannot write {path}: {error.strerror}') from None
+    try:
+        with os.fdopen(fd, 'wb') as stream:
+            stream.write(data)
+        os.chmod(tmp, mode)
+        os.replace(tmp, path)
+    except OSError as error:
+        os.unlink(tmp)
+        raise CliError(f'cannot write {path}: {error.strerror}') from None
+
+
+def _robot(path):
+    return Robot() if path is None else load_robot(path)
+
+
+def _reason(error):
+    """Return a WorkspaceError's message less its 0-based sample prefix."""
+    message = str(error)
+    if error.row is not None:
+        message = message.removeprefix(f'sample {error.row}: ')
+    return message
+
+
+def _row(label, *values):
+    cells = [v if isinstance(v, str) else f'{float(v):.6g}' for v in values]
+    return f'{label:<26}' + ''.join(f'{c:>14}' for c in cells)
+
+
+def _fail(message):
+    print(f'{PROG}: error: {" ".join(message.split())}', file=sys.stderr)
+
+
+def _samples(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 2:
+        raise argparse.ArgumentTypeError(
+            f'must be an integer of at least 2, got {text!r}')
+    return value
+
+
+def _version():
+    try:
+        from importlib.metadata import version
+        return version('orthoglide_ros')
+    except Exception:       # not installed: running from a source tree
+        return 'unknown'
+
+
+def _parser():
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument(
+        '--params', metavar='FILE',
+        help='ROS 2 parameters file with the robot.* parameters (as '
+             'config/orthoglide.yaml: lengths m, angle rad, masses kg, '
+             'gravity m/s^2); default: the paper\'s robot')
+    parser = argparse.ArgumentParser(
+        prog=PROG, description='Inverse kinematics and dynamics of the '
+        'Orthoglide, without ROS. Units: m, m/s, m/s^2, N, W, s. Bad input '
+        'exits with code 2 and one line on standard error.')
+    parser.add_argument('--version', action='version',
+                        version=f'%(prog)s {_version()}')
+    sub = parser.add_subparsers(dest='command', metavar='COMMAND')
+    columns = ', '.join(CSV_COLUMNS)
+
+    paper = sub.add_parser(
+        'paper', parents=[common], help='reproduce the paper\'s figures 3-8',
+        description='Solve the trajectory of eq. (6), r_G(t) = r* (1 - '
+        'cos(pi t / 3)) with r* = (0.05, 0.10, -0.20) m, over [0, 2] s: '
+        'actuator displacements lambda (m; figures 3-5) and powers p (W; '
+        'figures 6-8). Without --csv or --plot, print peak |lambda| (m), '
+        '|force| (N), |power| (W) per actuator and the statics force (N) at '
+        't = 0.')
+    paper.add_argument('--samples', type=_samples, default=DEFAULT_SAMPLES,
+                       metavar='N', help='number of instants evenly spaced '
+                       'over [0, 2] s, both ends included (default '
+                       f'{DEFAULT_SAMPLES})')
+    paper.add_argument('--csv', metavar='FILE', help='write the samples as '
+                       f'CSV ({columns}; SI units); - for standard output')
+    paper.add_argument('--plot', metavar='FILE', help='write figures 3-8 as '
+                       'a PNG image (needs matplotlib)')
+    paper.set_defaults(run=run_paper)
+
+    solve = sub.add_parser(
+        'solve', parents=[common], help='solve one sample',
+        description='Inverse kinematics and dynamics of one sample: lambda '
+        '(m), lambdadot (m/s), lambdaddot (m/s^2), force (N, on each slider '
+        'along +lambda) and power (W) of actuators A, B, C.')
+    solve.add_argument('--position', type=float, nargs=3, required=True,
+                       metavar=('X', 'Y', 'Z'),
+                       help='platform centre in the base frame (m)')
+    solve.add_argument('--velocity', type=float, nargs=3,
+                       default=mechanics.ZERO, metavar=('VX', 'VY', 'VZ'),
+                       help='its velocity (m/s; default 0 0 0)')
+    solve.add_argument('--acceleration', type=float, nargs=3,
+                       default=mechanics.ZERO, metavar=('AX', 'AY', 'AZ'),
+                       help='its acceleration (m/s^2; default 0 0 0)')
+    solve.add_argument('--json', action='store_true', help='print one JSON '
+                       f'object with the keys {columns[3:]} (SI units, full '
+                       'double precision)')
+    solve.set_defaults(run=run_solve)
+
+    batch = sub.add_parser(
+        'batch', parents=[common], help='solve a trajectory CSV file',
+        description='Solve every row of a trajectory CSV file. Columns are '
+        'matched by header name, in any order, case-insensitively; others '
+        'are ignored. x, y, z (m) are required; vx, vy, vz (m/s) and ax, '
+        'ay, az (m/s^2) are optional, each group all or none, a missing '
+        'group meaning zero; t (s) is optional and copied to the output, '
+        'left empty if absent. Blank lines are skipped; rows are counted '
+        'from 1 after the header. Output columns: ' + columns + ' (SI '
+        'units). Nothing is written unless every row is solved.')
+    batch.add_argument('--input', required=True, metavar='FILE',
+                       help='trajectory CSV file; - for standard input')
+    batch.add_argument('--output', metavar='FILE', help='result CSV file '
+                       '(default: standard output)')
+    batch.set_defaults(run=run_batch)
+    return parser
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,370 @@
+"""An independent second model of the Orthoglide for the tests.
+
+Written from MODEL.md and the paper alone; it shares nothing with the
+package but the values of a :class:`Robot` (read as plain attributes).
+
+- :func:`leg_geometry`: the chain (1)-(8) of one leg with plain 3x3 matrices
+  (``a_k0`` products, joint centres, centres of mass, frame 0) from the
+  closed-form inverse geometry (9). It accepts a complex platform position
+  so that derivatives can be taken by complex step.
+- :func:`body_jacobians`: the linear (centre of mass) and angular Jacobians
+  of every body with respect to the generalised coordinates ``q = r_G``,
+  by complex step (exact to machine precision).
+- :func:`mass_matrix`, :func:`kinetic_energy`, :func:`potential_energy`.
+- :func:`lagrange_forces`: the actuator forces from Lagrange's equations,
+  ``Q = M qdd + C(q, qd) + dV/dq`` and ``f = J_lambda^-T Q``, with the
+  Christoffel terms from central finite differences of the exact ``M``.
+
+Units: m, kg, s, N, J; vectors in frame 0.
+"""
+
+from collections import namedtuple
+
+import numpy as np
+
+# Complex-step size: the derivative is Im f(q + i h) / h, with no
+# subtraction, hence exact to rounding for any tiny h.
+COMPLEX_STEP = 1e-30
+# Central finite-difference step (m) for dM/dq in the Christoffel terms.
+MASS_MATRIX_STEP = 1e-5
+
+U1 = np.array([1.0, 0.0, 0.0])
+U2 = np.array([0.0, 1.0, 0.0])
+U3 = np.array([0.0, 0.0, 1.0])
+
+# The constant matrices of eq. (2) as printed in the paper.
+PAPER_A1 = np.array([[0, 0, -1], [0, 1, 0], [1, 0, 0]], dtype=float)
+PAPER_A2 = np.array([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], dtype=float)
+PAPER_A3 = np.array([[0, 0, -1], [-1, 0, 0], [0, 1, 0]], dtype=float)
+PAPER_A4 = np.array([[-1, 0, 0], [0, 1, 0], [0, 0, -1]], dtype=float)
+PAPER_A5 = np.array([[-1, 0, 0], [0, 0, 1], [0, 1, 0]], dtype=float)
+PAPER_A6 = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]], dtype=float)
+
+# Eq. (1): a10 = a1, b10 = a5, c10 = a6.
+BASE_ROTATION = {'A': PAPER_A1, 'B': PAPER_A5, 'C': PAPER_A6}
+# Eq. (9): the coordinates each leg sees, as indices into (x, y, z).
+LEG_AXES = {'A': (0, 1, 2), 'B': (1, 2, 0), 'C': (2, 0, 1)}
+LEGS = ('A', 'B', 'C')
+# The bodies of one leg that the tree holds (the platform, 5, once).
+LEG_BODIES = (1, 2, 3, 4, 6)
+
+
+def a_phi(sin_phi, cos_phi):
+    """Passive rotation about z of eq. (2) (complex entries allowed)."""
+    zero = 0.0 * sin_phi
+    return np.array([[cos_phi, sin_phi, zero],
+                     [-sin_phi, cos_phi, zero],
+                     [zero, zero, zero + 1.0]])
+
+
+def skew(v):
+    """Return the skew-symmetric matrix ``v~`` with ``v~ w = v x w``."""
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]],
+                     [-v[1], v[0], 0.0]])
+
+
+def unskew(s):
+    """Vector of a skew-symmetric matrix (its antisymmetric part)."""
+    return 0.5 * np.array([s[2, 1] - s[1, 2], s[0, 2] - s[2, 0],
+                           s[1, 0] - s[0, 1]])
+
+
+Geometry = namedtuple('Geometry', (
+    'lam', 'sin21', 'cos21', 'sin32', 'cos32', 'rotation', 'joints',
+    'centre'))
+Geometry.__doc__ = """One leg's configuration (eqs. 1-9).
+
+``lam``: slider displacement (m); ``sin21 ... cos32``: sine and cosine of
+phi21, phi32; ``rotation[k]``: ``a_k0`` (frame 0 -> frame k) for k in
+1..6; ``joints``: 'A1' ... 'A7' and 'G' in frame 0 (m); ``centre[k]``:
+centre of mass of body k in frame 0 (m), k in 1, 2, 3, 4, 6.
+"""
+
+
+def leg_geometry(robot, leg, position):
+    """Build the chain (1)-(8) of leg ``leg`` for the centre ``position``.
+
+    ``position`` is (x, y, z) in frame 0, real or complex. Eq. (9) gives
+    the joint variables on the home branch (cosines positive).
+    """
+    p = [position[0], position[1], position[2]]
+    i, j, k = LEG_AXES[leg]
+    x, y, z = p[i], p[j], p[k]
+    l3 = robot.l3
+    sin32 = -z / l3
+    cos32 = np.sqrt(1.0 - sin32 * sin32)
+    sin21 = y / (l3 * cos32)
+    cos21 = np.sqrt(1.0 - sin21 * sin21)
+    lam = x + l3 * (1.0 - cos21 * cos32)
+
+    a10 = BASE_ROTATION[leg]
+    a21 = a_phi(sin21, cos21) @ PAPER_A2
+    a32 = a_phi(sin32, cos32) @ PAPER_A3
+    a43 = a_phi(sin32, cos32) @ PAPER_A4     # phi43 = phi32, eq. (5)
+    a54 = a_phi(sin21, cos21) @ PAPER_A2     # phi54 = phi21, eq. (5)
+    a62 = a32
+    rot = {1: a10 + 0.0 * lam}
+    rot[2] = a21 @ rot[1]
+    rot[3] = a32 @ rot[2]
+    rot[4] = a43 @ rot[3]
+    rot[5] = a54 @ rot[4]
+    rot[6] = a62 @ rot[2]
+
+    side, l1, l2 = robot.l, robot.l1, robot.l2
+    ca, sa = np.cos(robot.alpha), np.sin(robot.alpha)
+    r21 = np.array([0.0, l1 * sa, l1 * ca])
+    r32 = -(l2 / 2.0) * U3
+    r62 = (l2 / 2.0) * U3
+    r43 = -l3 * U2
+    r54 = (l2 / 2.0) * U1
+    r5g = np.array([l1 * sa, -side / 2.0, 0.0])
+
+    joints = {'A1': (lam - l1 * ca - l3 - side / 2.0) * (rot[1].T @ U3)}
+    joints['A2'] = joints['A1'] + rot[1].T @ r21
+    joints['A3'] = joints['A2'] + rot[2].T @ r32
+    joints['A6'] = joints['A2'] + rot[2].T @ r62
+    joints['A4'] = joints['A3'] + rot[3].T @ r43
+    joints['A7'] = joints['A6'] + rot[6].T @ r43
+    joints['A5'] = joints['A4'] + rot[4].T @ r54
+    joints['G'] = joints['A5'] + rot[5].T @ r5g
+
+    # Centres of mass (MODEL.md's table), each from its body's frame.
+    centre = {
+        1: joints['A1'] + rot[1].T @ (r21 / 2.0),
+        2: joints['A2'],
+        3: joints['A3'] + rot[3].T @ (-(l3 / 2.0) * U2),
+        6: joints['A6'] + rot[6].T @ (-(l3 / 2.0) * U2),
+        4: joints['A4'] + rot[4].T @ ((l2 / 2.0) * U1),
+    }
+    return Geometry(lam, sin21, cos21, sin32, cos32, rot, joints, centre)
+
+
+def masses(robot):
+    """Mass (kg) of each body of a leg, and of the platform (key 5)."""
+    return {1: robot.m1, 2: robot.m2, 3: robot.m3, 4: robot.m4,
+            5: robot.m5, 6: robot.m6}
+
+
+def central_inertias(robot):
+    """Inertia (kg m^2) about the centre of mass, body frame (MODEL.md).
+
+    Bodies 1 and 5 only translate; their inertia is given for
+    completeness (body 1 as a thin rod, body 5 as the cube).
+    """
+    l1, l2, l3, side = robot.l1, robot.l2, robot.l3, robot.l
+    return {
+        1: robot.m1 * l1 ** 2 / 12.0 * np.diag([1.0, 1.0, 0.0]),
+        2: robot.m2 * l2 ** 2 / 12.0 * np.diag([1.0, 1.0, 0.0]),
+        3: robot.m3 * l3 ** 2 / 12.0 * np.diag([1.0, 0.0, 1.0]),
+        6: robot.m6 * l3 ** 2 / 12.0 * np.diag([1.0, 0.0, 1.0]),
+        4: robot.m4 * l2 ** 2 / 12.0 * np.diag([0.0, 1.0, 1.0]),
+        5: robot.m5 * side ** 2 / 6.0 * np.eye(3),
+    }
+
+
+def actuator_displacements(robot, position):
+    """``(lambda_A, lambda_B, lambda_C)`` (m) by eq. (9)."""
+    return np.array([leg_geometry(robot, leg, position).lam
+                     for leg in LEGS])
+
+
+def lambda_jacobian(robot, position):
+    """``J_lambda = d lambda / d r_G`` (3x3) by complex step."""
+    q = np.asarray(position, dtype=float)
+    jac = np.empty((3, 3))
+    for i in range(3):
+        dq = q.astype(complex)
+        dq[i] += 1j * COMPLEX_STEP
+        jac[:, i] = actuator_displacements(robot, dq).imag / COMPLEX_STEP
+    return jac
+
+
+BodyJacobians = namedtuple('BodyJacobians', (
+    'centre', 'rotation', 'linear', 'angular'))
+BodyJacobians.__doc__ = """Every body's state and Jacobians at one q.
+
+Dicts keyed by ``(leg, k)`` for the leg bodies and ``('platform', 5)``:
+``centre`` (3,) m and ``rotation`` (3x3, body frame -> frame 0) at q,
+``linear`` = d centre / dq and ``angular`` (3x3, omega = angular @ qdot,
+frame 0).
+"""
+
+
+def body_jacobians(robot, position):
+    """Centres, orientations and Jacobians of all bodies by complex step.
+
+    The angular Jacobian's column i is the vector of
+    ``(dR/dq_i) R^T`` with ``R = a_k0^T`` the body's orientation in frame 0.
+    """
+    q = np.asarray(position, dtype=float)
+    base = {leg: leg_geometry(robot, leg, q) for leg in LEGS}
+    perturbed = []
+    for i in range(3):
+        dq = q.astype(complex)
+        dq[i] += 1j * COMPLEX_STEP
+        perturbed.append({leg: leg_geometry(robot, leg, dq) for leg in LEGS})
+    centre, rotation, linear, angular = {}, {}, {}, {}
+    for leg in LEGS:
+        for k in LEG_BODIES:
+            key = (leg, k)
+            rot = base[leg].rotation[k].T.real
+            centre[key] = base[leg].centre[k].real
+            rotation[key] = rot
+            jv = np.empty((3, 3))
+            jw = np.empty((3, 3))
+            for i in range(3):
+                geo = perturbed[i][leg]
+                jv[:, i] = geo.centre[k].imag / COMPLEX_STEP
+                d_rot = geo.rotation[k].T.imag / COMPLEX_STEP
+                jw[:, i] = unskew(d_rot @ rot.T)
+            linear[key] = jv
+            angular[key] = jw
+    # The platform: one body, centre G = q, translating (a50 constant).
+    key = ('platform', 5)
+    centre[key] = q.copy()
+    rotation[key] = base['A'].rotation[5].T.real
+    linear[key] = np.eye(3)
+    angular[key] = np.zeros((3, 3))
+    return BodyJacobians(centre, rotation, linear, angular)
+
+
+def _body_mass_inertia(robot, key, rotation):
+    mass = masses(robot)[key[1]]
+    inertia = central_inertias(robot)[key[1]]
+    return mass, rotation @ inertia @ rotation.T
+
+
+def mass_matrix(robot, position):
+    """``M(q) = sum m Jv^T Jv + Jw^T I Jw`` over every body (kg)."""
+    jac = body_jacobians(robot, position)
+    mm = np.zeros((3, 3))
+    for key in jac.centre:
+        mass, inertia = _body_mass_inertia(robot, key, jac.rotation[key])
+        jv, jw = jac.linear[key], jac.angular[key]
+        mm += mass * jv.T @ jv + jw.T @ inertia @ jw
+    return mm
+
+
+def kinetic_energy(robot, position, velocity):
+    """T (J): sum over every body of m |v_C|^2 / 2 + omega^T I omega / 2."""
+    jac = body_jacobians(robot, position)
+    qd = np.asarray(velocity, dtype=float)
+    total = 0.0
+    for key in jac.centre:
+        mass, inertia = _body_mass_inertia(robot, key, jac.rotation[key])
+        v = jac.linear[key] @ qd
+        w = jac.angular[key] @ qd
+        total += 0.5 * mass * v @ v + 0.5 * w @ inertia @ w
+    return total
+
+
+def potential_energy(robot, position):
+    """V (J) = -sum m g . r_C over every body (platform once)."""
+    g = np.asarray(robot.gravity, dtype=float)
+    total = -robot.m5 * g @ np.asarray(position, dtype=float)
+    for leg in LEGS:
+        geo = leg_geometry(robot, leg, position)
+        for k in LEG_BODIES:
+            total -= masses(robot)[k] * g @ geo.centre[k]
+    return total
+
+
+def potential_gradient(robot, position):
+    """dV/dq (N) = -sum m Jv^T g, exact (complex-step Jacobians)."""
+    jac = body_jacobians(robot, position)
+    g = np.asarray(robot.gravity, dtype=float)
+    grad = np.zeros(3)
+    for key in jac.centre:
+        grad -= masses(robot)[key[1]] * jac.linear[key].T @ g
+    return grad
+
+
+def mass_matrix_derivative(robot, position, step=MASS_MATRIX_STEP):
+    """``dM/dq`` as an array ``[k, i, j] = dM_ij / dq_k`` (central FD)."""
+    q = np.asarray(position, dtype=float)
+    dm = np.empty((3, 3, 3))
+    for k in range(3):
+        dq = np.zeros(3)
+        dq[k] = step
+        dm[k] = (mass_matrix(robot, q + dq)
+                 - mass_matrix(robot, q - dq)) / (2.0 * step)
+    return dm
+
+
+LagrangeSolution = namedtuple('LagrangeSolution', (
+    'force', 'generalised_force', 'mass_matrix', 'coriolis', 'gravity',
+    'dmass', 'jacobian'))
+LagrangeSolution.__doc__ = """Lagrange's equations on q = r_G.
+
+``force`` (N, actuators A, B, C) = ``J_lambda^-T generalised_force``;
+``generalised_force`` = ``mass_matrix @ qdd + coriolis + gravity`` (N);
+``dmass[k, i, j] = dM_ij/dq_k``; ``jacobian`` = ``J_lambda``.
+"""
+
+
+def lagrange_forces(robot, position, velocity, acceleration,
+                    step=MASS_MATRIX_STEP):
+    """Actuator forces (N) by Lagrange's equations with q = r_G.
+
+    ``d/dt dT/dqd - dT/dq + dV/dq = Q`` with ``T = qd^T M(q) qd / 2``
+    gives ``Q = M qdd + C + dV/dq``, ``C_i = sum_jk (dM_ij/dq_k -
+    dM_jk/dq_i / 2) qd_j qd_k``; the actuators' virtual work
+    ``f . d lambda = Q . dq`` gives ``f = J_lambda^-T Q``.
+    """
+    q = np.asarray(position, dtype=float)
+    qd = np.asarray(velocity, dtype=float)
+    qdd = np.asarray(acceleration, dtype=float)
+    mm = mass_matrix(robot, q)
+    dm = mass_matrix_derivative(robot, q, step)
+    coriolis = (np.einsum('kij,j,k->i', dm, qd, qd)
+                - 0.5 * np.einsum('ijk,j,k->i', dm, qd, qd))
+    grav = potential_gradient(robot, q)
+    gen = mm @ qdd + coriolis + grav
+    jac = lambda_jacobian(robot, q)
+    force = np.linalg.solve(jac.T, gen)
+    return LagrangeSolution(force, gen, mm, coriolis, grav, dm, jac)
+
+
+# --- Shared helpers of the test suite (no part of the second model) ---
+
+# Half side (m) of the tested workspace cube |x|, |y|, |z| <= CUBE (MODEL.md).
+CUBE = 0.3
+
+# A robot unlike the paper's in every length, angle and in m4, m6 (which
+# then differ from their defaults m2, m3): keyword arguments of Robot.
+OTHER_ROBOT_VALUES = {
+    'l': 0.13, 'l1': 0.21, 'l2': 0.11, 'l3': 0.93, 'alpha': 0.61,
+    'm1': 0.47, 'm2': 0.31, 'm3': 1.9, 'm4': 0.53, 'm5': 11.0, 'm6': 3.1,
+}
+
+# Fast trajectories of eq. (6)'s shape, r* (1 - cos(omega t)): targets
+# (m) whose whole path 0 .. 2 r* stays in the cube, and omega (rad/s).
+FAST_TRAJECTORIES = (
+    ((0.15, -0.15, 0.12), 4.0),
+    ((-0.12, 0.15, -0.15), 6.0),
+    ((0.15, 0.15, 0.15), 8.0),
+)
+
+
+def cube_points(half=CUBE):
+    """Hypothesis strategy: a point (3,) of the cube |x|,|y|,|z| <= half."""
+    from hypothesis import strategies as st
+    coordinate = st.floats(-half, half, allow_nan=False,
+                           allow_infinity=False)
+    return st.tuples(coordinate, coordinate, coordinate).map(np.array)
+
+
+def vectors(bound):
+    """Hypothesis strategy: a vector (3,) with components in [-bound, bound]."""
+    return cube_points(bound)
+
+
+def derivative(f, t, h):
+    """Fourth-order central difference of ``f`` (array-valued) at ``t``.
+
+    ``(f(t-2h) - 8 f(t-h) + 8 f(t+h) - f(t+2h)) / 12h``: truncation error
+    ``h^4 f^(5) / 30``, rounding about ``1.5 eps max|f| / h``.
+    """
+    values = [np.asarray(f(t + k * h), dtype=float) for k in (-2, -1, 1, 2)]
+    return (values[0] - 8.0 * values[1] + 8.0 * values[2]
+            - values[3]) / (12.0 * h)

@@ -1,0 +1,138 @@
+"""Invariant 7: the recursive method agrees with Lagrange's equations.
+
+``mechanics_reference.lagrange_forces`` is a second formulation sharing no
+code with the package: the geometry of every body from eqs. (1)-(9), body
+Jacobians by complex step, ``M(q) = sum m Jv^T Jv + Jw^T I Jw``, Christoffel
+terms from ``dM/dq`` and ``f = J_lambda^-T (M qdd + C + dV/dq)``.
+
+Tolerance. Everything in the reference is exact to rounding except
+``dM/dq``, a central difference with step h = 1e-5 m: its truncation error
+is ``h^2 M''' / 6``, about ``h^2 / L^2 = 4e-10`` relative with L = 0.5 m the
+length over which M varies (l3 cos(phi) >= 0.7 m in the cube), and its
+rounding ``eps |M| / h``, about 2e-11 relative to ``|M| / L``. So the
+Christoffel terms carry a relative error below ``DM_RELATIVE = 1e-8``
+(20x margin) of ``|dM/dq| |qd|^2``; the other terms carry rounding,
+``ROUNDING = 1e-12`` of their size. ``J_lambda^-T`` amplifies both by at
+most its norm, which the bound includes.
+"""
+
+from hypothesis import given, settings, strategies as st
+from mechanics_reference import (
+    cube_points, lagrange_forces, lambda_jacobian, mass_matrix,
+    OTHER_ROBOT_VALUES, potential_gradient, vectors)
+import numpy as np
+from orthoglide_ros.mechanics import elements, solve, solve_batch
+from orthoglide_ros.robot import Robot
+
+DM_RELATIVE = 1e-8
+ROUNDING = 1e-12
+GRAVITIES = {'default': (0.0, 0.0, -9.81), 'zero': (0.0, 0.0, 0.0),
+             'oblique': (2.0, -5.0, -7.5)}
+ROBOTS = {'paper': {}, 'other': OTHER_ROBOT_VALUES}
+
+
+def tolerance(ref, velocity, acceleration):
+    """Error bound (N) on the reference forces (see the module docstring)."""
+    inverse_t = np.linalg.norm(np.linalg.inv(ref.jacobian.T), 2)
+    speed2 = velocity @ velocity
+    fd_part = DM_RELATIVE * np.abs(ref.dmass).max() * 9.0 * speed2
+    exact_part = ROUNDING * (
+        np.abs(ref.mass_matrix).max() * 3.0 * np.abs(acceleration).max()
+        + np.abs(ref.gravity).max() + np.abs(ref.coriolis).max())
+    return inverse_t * (fd_part + exact_part) + 1e-300
+
+
+@settings(deadline=None, max_examples=40)
+@given(position=cube_points(), velocity=vectors(3.0),
+       acceleration=vectors(30.0), gravity=st.sampled_from(sorted(GRAVITIES)),
+       robot_name=st.sampled_from(sorted(ROBOTS)))
+def test_forces_equal_lagrange_forces(position, velocity, acceleration,
+                                      gravity, robot_name):
+    robot = Robot(**ROBOTS[robot_name], gravity=GRAVITIES[gravity])
+    force = np.array(solve(robot, position, velocity, acceleration).force)
+    ref = lagrange_forces(robot, position, velocity, acceleration)
+    assert np.abs(force - ref.force).max() <= tolerance(
+        ref, velocity, acceleration)
+
+
+@settings(deadline=None, max_examples=40)
+@given(position=cube_points(), acceleration=vectors(30.0),
+       gravity=vectors(10.0), robot_name=st.sampled_from(sorted(ROBOTS)))
+def test_forces_at_zero_velocity_equal_the_exact_reference(
+        position, acceleration, gravity, robot_name):
+    """No Christoffel term: the reference is exact to rounding here."""
+    robot = Robot(**ROBOTS[robot_name], gravity=tuple(gravity))
+    force = np.array(solve(robot, position, (0.0, 0.0, 0.0),
+                           acceleration).force)
+    mm = mass_matrix(robot, position)
+    grad = potential_gradient(robot, position)
+    jac = lambda_jacobian(robot, position)
+    expected = np.linalg.solve(jac.T, mm @ acceleration + grad)
+    bound = ROUNDING * np.linalg.norm(np.linalg.inv(jac.T), 2) * (
+        np.abs(mm).max() * 3.0 * np.abs(acceleration).max()
+        + np.abs(grad).max())
+    assert np.abs(force - expected).max() <= bound + 1e-300
+
+
+def test_inertial_forces_dominate_on_fast_motion_without_gravity():
+    """The check above is not a check of gravity alone."""
+    robot = Robot(gravity=(0.0, 0.0, 0.0))
+    rng = np.random.default_rng(7)
+    for _ in range(10):
+        position = rng.uniform(-0.3, 0.3, 3)
+        velocity = rng.uniform(-3.0, 3.0, 3)
+        ref = lagrange_forces(robot, position, velocity, np.zeros(3))
+        force = np.array(solve(robot, position, velocity).force)
+        # Pure velocity terms: tens of newtons, checked to the bound.
+        assert np.abs(ref.force).max() > 1.0
+        assert np.abs(force - ref.force).max() <= tolerance(
+            ref, velocity, np.zeros(3))
+
+
+def random_states(seed, n):
+    rng = np.random.default_rng(seed)
+    return (rng.uniform(-0.3, 0.3, (n, 3)), rng.uniform(-3.0, 3.0, (n, 3)),
+            rng.uniform(-30.0, 30.0, (n, 3)))
+
+
+def test_forces_do_not_depend_on_l_l1_l2_alpha():
+    """MODEL.md: only l3, the masses and gravity enter the forces."""
+    positions, velocities, accelerations = random_states(8, 500)
+    paper = Robot()
+    changed = paper.replace(l=0.31, l1=0.07, l2=0.19, alpha=1.2)
+    f0 = solve_batch(paper, positions, velocities, accelerations).force
+    f1 = solve_batch(changed, positions, velocities, accelerations).force
+    assert np.abs(f1 - f0).max() <= ROUNDING * np.abs(f0).max()
+    # The positions of the elements do depend on them (lambda does not).
+    for leg in 'ABC':
+        a1 = elements(changed, positions[0])[leg]['joints']['A1']
+        assert np.abs(a1 - elements(paper, positions[0])[leg]['joints'][
+            'A1']).max() > 0.01
+
+
+def test_reference_forces_do_not_depend_on_l_l1_l2_alpha():
+    """The same fact, shown by the independent model at rest."""
+    positions, _, accelerations = random_states(9, 5)
+    paper = Robot()
+    changed = paper.replace(l=0.31, l1=0.07, l2=0.19, alpha=1.2)
+    for position, acceleration in zip(positions, accelerations):
+        forces = []
+        for robot in (paper, changed):
+            jac = lambda_jacobian(robot, position)
+            generalised = (mass_matrix(robot, position) @ acceleration
+                           + potential_gradient(robot, position))
+            forces.append(np.linalg.solve(jac.T, generalised))
+        assert np.abs(forces[1] - forces[0]).max() <= ROUNDING * np.abs(
+            forces[0]).max()
+
+
+def test_forces_do_depend_on_l3_and_every_mass():
+    """The independence test above is not vacuous."""
+    positions, velocities, accelerations = random_states(10, 50)
+    paper = Robot()
+    f0 = solve_batch(paper, positions, velocities, accelerations).force
+    for change in ({'l3': 0.9}, {'m1': 0.5}, {'m2': 0.3}, {'m3': 3.0},
+                   {'m4': 0.3}, {'m5': 16.0}, {'m6': 3.0}):
+        f1 = solve_batch(paper.replace(**change), positions, velocities,
+                         accelerations).force
+        assert np.abs(f1 - f0).max() > 1e-3 * np.abs(f0).max(), change

@@ -1,0 +1,163 @@
+"""Parameters files are read with rcl's rules into a validated ``Robot``.
+
+The node's section may be keyed ``feedforward``, ``/feedforward`` or
+``/**`` (the node's own section overriding ``/**``), parameters may be
+nested or dotted, a double needs a decimal point or an exponent (``1e-3``
+is a double, as in rcl), arrays must not mix integers and doubles,
+booleans are not numbers, unknown ``robot.*`` names are refused and other
+names are ignored.
+"""
+
+import math
+import os
+import textwrap
+
+from orthoglide_ros.params_file import (
+    load_parameters, load_robot, ParametersFileError, robot_from_parameters)
+from orthoglide_ros.robot import Robot, RobotParameterError
+import pytest
+
+CONFIG = os.path.join(os.path.dirname(__file__), os.pardir, 'config',
+                      'orthoglide.yaml')
+
+
+def write(tmp_path, text):
+    path = tmp_path / 'params.yaml'
+    path.write_text(textwrap.dedent(text), encoding='utf-8')
+    return str(path)
+
+
+def refused(tmp_path, text, name):
+    with pytest.raises(RobotParameterError) as error:
+        load_robot(write(tmp_path, text))
+    assert error.value.name == name
+    assert f'robot.{name}' in str(error.value)
+
+
+def test_shipped_config_is_the_paper_robot():
+    robot = load_robot(CONFIG)
+    assert robot == Robot()
+    assert robot.alpha == pytest.approx(math.pi / 4, abs=1e-15)
+    assert robot.m4 == robot.m2 and robot.m6 == robot.m3
+    assert robot.gravity == (0.0, 0.0, -9.81)
+
+
+@pytest.mark.parametrize('key', ['feedforward', '/feedforward', '/**',
+                                 "'/**'"])
+def test_section_keys(tmp_path, key):
+    text = f"""
+    {key}:
+      ros__parameters:
+        robot:
+          l3: 0.9
+          m5: 18.0
+    """
+    robot = load_robot(write(tmp_path, text))
+    assert robot.l3 == 0.9 and robot.m5 == 18.0
+    assert robot.m1 == Robot().m1
+
+
+def test_node_section_overrides_wildcard(tmp_path):
+    text = """
+    feedforward:
+      ros__parameters:
+        robot.l3: 0.8
+    /**:
+      ros__parameters:
+        robot:
+          l3: 0.9
+          m1: 0.5
+    """
+    robot = load_robot(write(tmp_path, text))
+    assert robot.l3 == 0.8
+    assert robot.m1 == 0.5
+
+
+def test_other_nodes_and_missing_sections(tmp_path):
+    text = """
+    some_other_node:
+      ros__parameters:
+        robot.l3: 0.8
+    """
+    with pytest.raises(ParametersFileError):
+        load_parameters(write(tmp_path, text))
+    with pytest.raises(ParametersFileError):
+        load_parameters(str(tmp_path / 'missing.yaml'))
+    with pytest.raises(ParametersFileError):
+        load_parameters(write(tmp_path, 'feedforward: [1, 2\n'))
+
+
+def test_nested_and_dotted_keys_mix(tmp_path):
+    text = """
+    feedforward:
+      ros__parameters:
+        robot.l3: 0.9
+        robot:
+          m5: 18.0
+          m4: 0.25
+        robot.gravity: [0.0, -9.81, 0.0]
+    """
+    robot = load_robot(write(tmp_path, text))
+    assert (robot.l3, robot.m5, robot.m4) == (0.9, 18.0, 0.25)
+    assert robot.gravity == (0.0, -9.81, 0.0)
+
+
+def test_exponent_notation_is_a_double(tmp_path):
+    text = """
+    feedforward:
+      ros__parameters:
+        robot:
+          l: 1e-1
+          l1: 15E-2
+          m1: 3.5e-1
+          gravity: [0.0, 0.0, -981e-2]
+    """
+    robot = load_robot(write(tmp_path, text))
+    assert robot.l == 0.1 and robot.l1 == 0.15 and robot.m1 == 0.35
+    assert robot.gravity == (0.0, 0.0, -9.81)
+
+
+@pytest.mark.parametrize('line, name', [
+    ('l3: 1', 'l3'),
+    ('m5: 15', 'm5'),
+    ('l3: true', 'l3'),
+    ("l3: '0.85'", 'l3'),
+    ('gravity: [0, 0.0, -9.81]', 'gravity'),
+    ('gravity: [0, 0, -10]', 'gravity'),
+    ('gravity: [0.0, false, -9.81]', 'gravity'),
+    ('gravity: 9.81', 'gravity'),
+    ('stiffness: 1.0', 'stiffness'),
+    ('l3: -0.85', 'l3'),
+    ('alpha: 2.0', 'alpha'),
+])
+def test_refused_values_name_the_parameter(tmp_path, line, name):
+    text = f"""
+    feedforward:
+      ros__parameters:
+        robot:
+          {line}
+    """
+    refused(tmp_path, text, name)
+
+
+def test_non_robot_parameters_are_ignored(tmp_path):
+    text = """
+    feedforward:
+      ros__parameters:
+        rate_hz: 1000
+        use_sim_time: false
+        frames: [a, b]
+        controller:
+          gain: 3
+        robot:
+          m5: 16.0
+    """
+    assert load_robot(write(tmp_path, text)) == Robot(m5=16.0)
+
+
+def test_robot_from_parameters_on_a_flat_dict():
+    robot = robot_from_parameters({'robot.l3': 0.9, 'other': 1,
+                                   'robot.gravity': [0.0, 0.0, -1.62]})
+    assert robot.l3 == 0.9 and robot.gravity == (0.0, 0.0, -1.62)
+    with pytest.raises(RobotParameterError):
+        robot_from_parameters({'robot.m2': 1})

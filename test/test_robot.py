@@ -1,0 +1,98 @@
+"""``Robot`` validates every parameter once and names the one it refuses.
+
+Lengths and masses must be finite positive numbers, ``alpha`` must lie in
+(0, pi/2) rad and ``gravity`` must be a finite 3-vector of numbers; each
+bad value raises ``RobotParameterError`` whose ``name`` and message name
+the parameter. ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the paper's
+``m4 = m2``, ``m6 = m3``). The defaults are the paper's robot (section 2).
+"""
+
+import dataclasses
+import math
+
+import numpy as np
+from orthoglide_ros.robot import Robot, RobotParameterError
+import pytest
+
+POSITIVE = ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm4', 'm5',
+            'm6')
+BAD_NUMBERS = (0.0, -0.1, -math.inf, math.inf, math.nan, '0.2', None,
+               True, [0.2])
+
+
+def refused(name, **values):
+    with pytest.raises(RobotParameterError) as error:
+        Robot(**values)
+    assert error.value.name == name
+    assert f'robot.{name}' in str(error.value)
+    return error.value
+
+
+def test_defaults_are_the_paper_robot():
+    robot = Robot()
+    paper = {'l': 0.20, 'l1': 0.15, 'l2': 0.08, 'l3': 0.85,
+             'alpha': math.pi / 4, 'm1': 0.35, 'm2': 0.2, 'm3': 2.5,
+             'm4': 0.2, 'm5': 15.0, 'm6': 2.5}
+    for name, value in paper.items():
+        assert getattr(robot, name) == value, name
+    assert robot.gravity == (0.0, 0.0, -9.81)
+
+
+@pytest.mark.parametrize('name, value', [
+    (name, value) for name in POSITIVE for value in BAD_NUMBERS
+    # None means "the default" for m4 and m6.
+    if not (value is None and name in ('m4', 'm6'))], ids=repr)
+def test_each_bad_value_is_refused_with_its_name(name, value):
+    refused(name, **{name: value})
+
+
+@pytest.mark.parametrize('value', [math.pi / 2, 2.0, 3 * math.pi / 4])
+def test_alpha_below_a_right_angle(value):
+    error = refused('alpha', alpha=value)
+    assert 'pi/2' in str(error)
+
+
+@pytest.mark.parametrize('value', [
+    (0.0, 0.0), (0.0, 0.0, -9.81, 0.0), 9.81, 'down', (0.0, 0.0, 'x'),
+    (0.0, 0.0, math.nan), (math.inf, 0.0, 0.0), (0.0, True, -9.81),
+    None])
+def test_gravity_must_be_a_finite_3_vector(value):
+    refused('gravity', gravity=value)
+
+
+def test_gravity_accepts_finite_3_sequences_and_stores_floats():
+    robot = Robot(gravity=np.array([1.0, 2.0, -3.0]))
+    assert robot.gravity == (1.0, 2.0, -3.0)
+    assert all(type(g) is float for g in robot.gravity)
+    assert Robot(gravity=[0, 0, 0]).gravity == (0.0, 0.0, 0.0)
+
+
+def test_m4_and_m6_default_to_m2_and_m3():
+    robot = Robot(m2=0.4, m3=3.5)
+    assert robot.m4 == 0.4
+    assert robot.m6 == 3.5
+    robot = Robot(m2=0.4, m3=3.5, m4=0.7, m6=1.1)
+    assert (robot.m4, robot.m6) == (0.7, 1.1)
+
+
+def test_robot_is_frozen_and_replace_validates():
+    robot = Robot()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        robot.l3 = 1.0
+    changed = robot.replace(l3=0.9, gravity=(0.0, -9.81, 0.0))
+    assert changed.l3 == 0.9 and changed.gravity == (0.0, -9.81, 0.0)
+    assert robot.l3 == 0.85
+    with pytest.raises(RobotParameterError) as error:
+        robot.replace(m5=-1.0)
+    assert error.value.name == 'm5'
+
+
+def test_equal_values_make_equal_robots():
+    assert Robot() == Robot(m4=0.2, m6=2.5)
+    assert Robot() != Robot(m5=15.5)
+
+
+def test_parameter_names_and_values_round_trip():
+    robot = Robot(m4=0.3, gravity=(1.0, 2.0, 3.0))
+    assert set(Robot.parameter_names()) == set(POSITIVE) | {'gravity'}
+    assert Robot(**robot.as_parameters()) == robot
