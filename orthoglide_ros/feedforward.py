@@ -119,7 +119,8 @@ class Feedforward:
                               acceleration, orientation, now)
 
     def reject_malformed(self, message, now):
-        """Count and raise a message that holds no usable setpoint."""
+        """Count and raise a trajectory that holds no usable setpoint."""
+        self.received['trajectory'] += 1
         self._reject('malformed', message)
 
     def expire(self, now):
@@ -156,10 +157,12 @@ class Feedforward:
 
     def _part(self, stamp, slot, value, now):
         self._check_stamp(stamp)
+        self.expire(now)
         entry = self._pending.get(stamp)
         if entry is None:
             entry = self._pending[stamp] = [None, None, None, now]
-            self.expire(now)
+            if len(self._pending) > MAX_PENDING:
+                self.expire(now)
         entry[slot] = value
         if entry[0] is None or entry[1] is None or entry[2] is None:
             return None

@@ -102,6 +102,10 @@ class FeedforwardNode(Node):
 
     # Parameters -----------------------------------------------------------
     def _values(self, changes=()):
+        """Current parameter values with ``changes`` applied, as plain types.
+
+        rclpy gives double arrays as ``array.array``; the settings take lists.
+        """
         values = {}
         for spec in SPECS:
             try:
@@ -109,7 +113,8 @@ class FeedforwardNode(Node):
             except ParameterUninitializedException:
                 values[spec.name] = None
         values.update((p.name, p.value) for p in changes)
-        return values
+        return {name: list(value) if isinstance(value, array.array)
+                else value for name, value in values.items()}
 
     def _validate_parameters(self, parameters):
         """Accept a change only if the whole resulting set is valid."""
@@ -301,7 +306,12 @@ def _text(value):
 
 def main(args=None):
     """Run the node until Ctrl-C or shutdown; return the exit code."""
-    rclpy.init(args=args)
+    logger = rclpy.logging.get_logger('feedforward')
+    try:
+        rclpy.init(args=args)
+    except RuntimeError as error:   # rcl refuses the arguments or file
+        logger.fatal(f'cannot start: {error}')
+        return 2
     node = None
     try:
         node = FeedforwardNode()
@@ -312,11 +322,14 @@ def main(args=None):
         while rclpy.ok():
             executor.spin_once(timeout_sec=0.1)
     except (ValueError, ParameterException) as error:
-        rclpy.logging.get_logger('feedforward').fatal(
-            f'invalid parameters, not starting: {error}')
+        logger.fatal(f'invalid parameters, not starting: {error}')
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except RuntimeError:
+        if rclpy.ok():
+            raise
+        # Interrupted while starting: rcl calls fail on the shut-down context.
     finally:
         if node is not None:
             node.destroy_node()

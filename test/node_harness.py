@@ -1,0 +1,294 @@
+"""Helpers for the feedforward node's DDS tests: a probe node, spinning, processes.
+
+- :class:`Probe`: a test node that publishes setpoints (pose/twist/accel or
+  one trajectory point) and records every message on the node's outputs and
+  on ``/diagnostics``;
+- :func:`spin_until`: spin an executor until a predicate holds or time runs
+  out;
+- :func:`start_node_process` / :func:`stop_process`: run the node as a
+  separate process and stop it the way a user does (Ctrl-C = SIGINT), then
+  kill it if it does not stop.
+
+Import it with the test directory on ``sys.path`` (the tests insert it).
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
+                               TwistStamped)
+from rclpy.node import Node
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+from trajectory_msgs.msg import (MultiDOFJointTrajectory,
+                                 MultiDOFJointTrajectoryPoint)
+
+IDENTITY = (0.0, 0.0, 0.0, 1.0)
+ZERO = (0.0, 0.0, 0.0)
+# Reliable like the node; deep, so that no output is lost while a test
+# spins at its own pace.
+PROBE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
+                       reliability=ReliabilityPolicy.RELIABLE)
+OUTPUTS = ('joint_states', 'forces', 'power')
+STOP_TIMEOUT = 10.0     # s between SIGINT and SIGKILL
+
+
+def stamp_of(seconds, base=(1000, 0)):
+    """Return ``base`` + ``seconds`` as a (sec, nanosec) stamp."""
+    total = base[0] * 10**9 + base[1] + round(seconds * 1e9)
+    return divmod(total, 10**9)
+
+
+def header_stamp(msg):
+    """Return a message's header stamp as (sec, nanosec)."""
+    return (msg.header.stamp.sec, msg.header.stamp.nanosec)
+
+
+def diagnostic_values(msg):
+    """Return ``{key: value}`` of the first status of a DiagnosticArray."""
+    return {kv.key: kv.value for kv in msg.status[0].values}
+
+
+class Probe(Node):
+    """Publishes setpoints to the feedforward node and records its outputs.
+
+    ``joint_states``, ``forces``, ``power``, ``diagnostics``: every message
+    received, in order; ``arrivals``: the monotonic time (s) each joint
+    state arrived. ``forces_topic`` lets a test follow a remapped topic.
+    """
+
+    def __init__(self, context, name='feedforward_probe', namespace='',
+                 forces_topic='feedforward/forces'):
+        super().__init__(name, namespace=namespace, context=context)
+        qos = PROBE_QOS
+        self.publishers_by_input = {
+            'pose': self.create_publisher(PoseStamped, 'setpoint/pose', qos),
+            'twist': self.create_publisher(TwistStamped, 'setpoint/twist',
+                                           qos),
+            'accel': self.create_publisher(AccelStamped, 'setpoint/accel',
+                                           qos),
+            'trajectory': self.create_publisher(
+                MultiDOFJointTrajectory, 'setpoint/trajectory', qos),
+        }
+        self.joint_states = []
+        self.arrivals = []
+        self.forces = []
+        self.power = []
+        self.diagnostics = []
+        self.subscriptions_by_output = {
+            'joint_states': self.create_subscription(
+                JointState, 'feedforward/joint_states', self._on_joints, qos),
+            'forces': self.create_subscription(
+                Float64MultiArray, forces_topic, self.forces.append, qos),
+            'power': self.create_subscription(
+                Float64MultiArray, 'feedforward/power', self.power.append,
+                qos),
+            'diagnostics': self.create_subscription(
+                DiagnosticArray, '/diagnostics', self.diagnostics.append,
+                qos),
+        }
+
+    def _on_joints(self, msg):
+        self.joint_states.append(msg)
+        self.arrivals.append(time.monotonic())
+
+    # Sending --------------------------------------------------------------
+    def send(self, stamp, position, velocity=ZERO, acceleration=ZERO,
+             frame='', orientation=IDENTITY, order=('pose', 'twist', 'accel')):
+        """Publish one setpoint as pose, twist and accel (in ``order``).
+
+        ``stamp`` is (sec, nanosec); ``order`` may leave parts out.
+        """
+        for part in order:
+            if part == 'pose':
+                msg = PoseStamped()
+                p, q = msg.pose.position, msg.pose.orientation
+                p.x, p.y, p.z = (float(v) for v in position)
+                q.x, q.y, q.z, q.w = (float(v) for v in orientation)
+            elif part == 'twist':
+                msg = TwistStamped()
+                v = msg.twist.linear
+                v.x, v.y, v.z = (float(c) for c in velocity)
+            else:
+                msg = AccelStamped()
+                a = msg.accel.linear
+                a.x, a.y, a.z = (float(c) for c in acceleration)
+            msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+            msg.header.frame_id = frame
+            self.publishers_by_input[part].publish(msg)
+
+    def send_trajectory(self, stamp, position, velocity=ZERO,
+                        acceleration=ZERO, frame='', orientation=IDENTITY,
+                        time_from_start=(0, 0), extra_points=(),
+                        with_point=True, with_transform=True):
+        """Publish one MultiDOFJointTrajectory; its first point is the setpoint.
+
+        ``stamp`` is the header stamp (sec, nanosec); the node adds
+        ``time_from_start``. A None ``velocity`` or ``acceleration`` leaves
+        that list empty. ``extra_points``: (position, velocity,
+        acceleration) of further points, which the node must ignore.
+        """
+        msg = MultiDOFJointTrajectory()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+        msg.header.frame_id = frame
+        msg.joint_names = ['platform']
+        if with_point:
+            first = _point(position, velocity, acceleration, orientation,
+                           time_from_start, with_transform)
+            msg.points = [first] + [
+                _point(p, v, a, IDENTITY, time_from_start, True)
+                for p, v, a in extra_points]
+        self.publishers_by_input['trajectory'].publish(msg)
+
+    # Reading --------------------------------------------------------------
+    def clear(self):
+        """Forget every message recorded so far."""
+        for name in OUTPUTS + ('diagnostics', 'arrivals'):
+            getattr(self, name).clear()
+
+    def output_stamps(self):
+        """Return the header stamps of the joint states received."""
+        return [header_stamp(m) for m in self.joint_states]
+
+    def matched(self, node=None):
+        """Whether every input and output is matched with the node.
+
+        ``node``, when the node runs in this process, also lets the node's
+        own publishers confirm that they match this probe's subscriptions.
+        """
+        if any(p.get_subscription_count() == 0
+               for p in self.publishers_by_input.values()):
+            return False
+        if any(s.get_publisher_count() == 0
+               for s in self.subscriptions_by_output.values()):
+            return False
+        if node is not None:
+            return all(p.get_subscription_count() > 0
+                       for p in node.publishers
+                       if p.topic_name != '/parameter_events')
+        return True
+
+    def handshake(self, executor, timeout=30.0, outputs=OUTPUTS):
+        """Wait until the node answers; then forget the answers.
+
+        For a node in another process, whose publishers cannot be asked:
+        sends home setpoints on the trajectory input (stamps (1, k)) until
+        every output in ``outputs`` has delivered a message. Returns the
+        number of setpoints sent.
+        """
+        deadline = time.monotonic() + timeout
+        assert spin_until(executor, self.matched, timeout), (
+            'the node did not appear on the graph')
+        sent = 0
+        while not all(getattr(self, name) for name in outputs):
+            assert time.monotonic() < deadline, (
+                'the node did not answer: '
+                + ', '.join(f'{n}: {len(getattr(self, n))}' for n in outputs))
+            sent += 1
+            self.send_trajectory((1, sent), ZERO)
+            spin_until(executor, lambda: all(
+                getattr(self, name) for name in outputs), 0.5)
+        spin_until(executor, lambda: False, 0.1)    # drain stragglers
+        self.clear()
+        return sent
+
+
+def _point(position, velocity, acceleration, orientation, time_from_start,
+           with_transform):
+    point = MultiDOFJointTrajectoryPoint()
+    if with_transform:
+        transform = Transform()
+        t, q = transform.translation, transform.rotation
+        t.x, t.y, t.z = (float(v) for v in position)
+        q.x, q.y, q.z, q.w = (float(v) for v in orientation)
+        point.transforms = [transform]
+    for name, vector, field in (('velocities', velocity, 'linear'),
+                                ('accelerations', acceleration, 'linear')):
+        if vector is not None:
+            twist = Twist()
+            v = getattr(twist, field)
+            v.x, v.y, v.z = (float(c) for c in vector)
+            setattr(point, name, [twist])
+    point.time_from_start.sec, point.time_from_start.nanosec = time_from_start
+    return point
+
+
+def spin_until(executor, predicate, timeout):
+    """Spin ``executor`` until ``predicate()`` holds; return whether it did."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        remaining = deadline - time.monotonic()
+        if remaining <= 0.0:
+            return predicate()
+        executor.spin_once(timeout_sec=min(0.05, remaining))
+    return True
+
+
+def spin_for(executor, seconds):
+    """Spin ``executor`` for ``seconds``, whatever happens."""
+    spin_until(executor, lambda: False, seconds)
+
+
+def node_executable(name='feedforward'):
+    """Return the console script ``name`` next to the running Python."""
+    return os.path.join(os.path.dirname(sys.executable), name)
+
+
+def start_node_process(args, env=None, command=None, cwd=None):
+    """Start ``command`` (default: the feedforward console script) + ``args``.
+
+    ``env`` defaults to ``os.environ`` (which conftest keeps on localhost
+    and in the session's domain). Standard output and error go to temporary
+    files, read back by :func:`stop_process`.
+    """
+    command = [node_executable()] if command is None else list(command)
+    out = tempfile.TemporaryFile()
+    err = tempfile.TemporaryFile()
+    proc = subprocess.Popen(command + list(args),
+                            env=os.environ if env is None else env,
+                            cwd=cwd, stdin=subprocess.DEVNULL, stdout=out,
+                            stderr=err)
+    proc.output_files = (out, err)
+    return proc
+
+
+def stop_process(proc, timeout=STOP_TIMEOUT):
+    """Stop ``proc``: SIGINT, wait ``timeout`` s, then SIGKILL.
+
+    Returns (exit code, standard error text); the exit code is negative for
+    a signal (-9 if it had to be killed). Safe on a process that has
+    already exited.
+    """
+    try:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait(timeout)
+    finally:
+        out, err = proc.output_files
+        err.seek(0)
+        text = err.read().decode('utf-8', 'replace')
+        out.seek(0)
+        text_out = out.read().decode('utf-8', 'replace')
+        out.close()
+        err.close()
+    if text_out:
+        text += '\n[stdout]\n' + text_out
+    return proc.returncode, text
+
+
+def wait_exit(proc, timeout):
+    """Wait up to ``timeout`` s for ``proc`` to exit; return its code or None."""
+    try:
+        return proc.wait(timeout)
+    except subprocess.TimeoutExpired:
+        return None
