@@ -118,9 +118,9 @@ class Feedforward:
         return self._complete(stamp, (frame,), position, velocity,
                               acceleration, orientation, now)
 
-    def reject_malformed(self, message, now):
-        """Count and raise a trajectory that holds no usable setpoint."""
-        self.received['trajectory'] += 1
+    def reject_malformed(self, source, message, now):
+        """Count and raise a message on input ``source`` holding no setpoint."""
+        self.received[source] += 1
         self._reject('malformed', message)
 
     def expire(self, now):

@@ -18,6 +18,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.serialization import deserialize_message, serialize_message
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import AccelStamped, PoseStamped, TwistStamped
@@ -27,6 +28,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
+from orthoglide_ros import cdr
 from orthoglide_ros.feedforward import Feedforward, REASONS, Rejected
 from orthoglide_ros.settings import SPECS, settings_from_parameters
 
@@ -82,10 +84,11 @@ class FeedforwardNode(Node):
             name = kind.__name__.replace('Stamped', '').lower()
             self.create_subscription(
                 kind, f'setpoint/{name}', callback, QOS,
-                qos_overriding_options=overrides)
+                qos_overriding_options=overrides, raw=True)
         self.create_subscription(
             MultiDOFJointTrajectory, 'setpoint/trajectory',
-            self._on_trajectory, QOS, qos_overriding_options=overrides)
+            self._on_trajectory, QOS, qos_overriding_options=overrides,
+            raw=True)
 
         self._joints = JointState()
         self._forces = _vector_message()
@@ -146,40 +149,54 @@ class FeedforwardNode(Node):
             self._tick_timer = self.create_timer(1.0 / rate, self._on_tick)
 
     # Inputs ---------------------------------------------------------------
-    def _on_pose(self, msg):
-        p, q = msg.pose.position, msg.pose.orientation
-        self._take(self._core.pose, _stamp(msg.header.stamp),
-                   msg.header.frame_id, (p.x, p.y, p.z), (q.x, q.y, q.z, q.w))
+    # Subscriptions are raw: cdr reads the few fields used straight from the
+    # serialized message, several times cheaper than rclpy's conversion.
+    def _on_pose(self, data):
+        fields = self._read(cdr.pose_stamped, data, PoseStamped, 'pose')
+        if fields is not None:
+            self._take(self._core.pose, *fields)
 
-    def _on_twist(self, msg):
-        v = msg.twist.linear
-        self._take(self._core.twist, _stamp(msg.header.stamp),
-                   msg.header.frame_id, (v.x, v.y, v.z))
+    def _on_twist(self, data):
+        fields = self._read(cdr.vector3_stamped, data, TwistStamped, 'twist')
+        if fields is not None:
+            self._take(self._core.twist, *fields)
 
-    def _on_accel(self, msg):
-        a = msg.accel.linear
-        self._take(self._core.accel, _stamp(msg.header.stamp),
-                   msg.header.frame_id, (a.x, a.y, a.z))
+    def _on_accel(self, data):
+        fields = self._read(cdr.vector3_stamped, data, AccelStamped, 'accel')
+        if fields is not None:
+            self._take(self._core.accel, *fields)
 
-    def _on_trajectory(self, msg):
-        try:
-            point = msg.points[0]
-            transform = point.transforms[0]
-        except IndexError:
-            self._take(self._core.reject_malformed,
+    def _on_trajectory(self, data):
+        fields = self._read(cdr.trajectory_point, data,
+                            MultiDOFJointTrajectory, 'trajectory')
+        if fields is None:
+            return
+        stamp, frame, point = fields
+        if point is None:
+            self._take(self._core.reject_malformed, 'trajectory',
                        'trajectory without a point holding a transform')
             return
-        t, q = transform.translation, transform.rotation
-        stamp = msg.header.stamp
-        if stamp.sec == 0 and stamp.nanosec == 0:
-            stamp = self.get_clock().now().to_msg()
-        offset = point.time_from_start
-        nanoseconds = (stamp.sec + offset.sec) * 10**9 + stamp.nanosec \
-            + offset.nanosec
+        position, orientation, velocity, acceleration, offset = point
+        if stamp == (0, 0):
+            stamp = self.get_clock().now().seconds_nanoseconds()
+        nanoseconds = (stamp[0] + offset[0]) * 10**9 + stamp[1] + offset[1]
         self._take(self._core.trajectory_point, divmod(nanoseconds, 10**9),
-                   msg.header.frame_id, (t.x, t.y, t.z),
-                   (q.x, q.y, q.z, q.w), _linear(point.velocities),
-                   _linear(point.accelerations))
+                   frame, position, orientation, velocity, acceleration)
+
+    def _read(self, reader, data, kind, name):
+        """Read a raw message; None (counted, warned) if it is unreadable."""
+        try:
+            return reader(data)
+        except cdr.CdrError:
+            pass
+        try:
+            # Not the little-endian CDR the fast reader knows: decode it with
+            # rclpy and read the local encoding.
+            return reader(serialize_message(deserialize_message(data, kind)))
+        except Exception as error:   # any decoding failure is malformed
+            self._take(self._core.reject_malformed, name,
+                       f'unreadable {kind.__name__}: {error}')
+            return None
 
     def _take(self, method, *args):
         """Call the core; publish a completed setpoint, warn on a rejection."""
@@ -276,18 +293,6 @@ class FeedforwardNode(Node):
         message = DiagnosticArray(status=[status])
         message.header.stamp = self.get_clock().now().to_msg()
         self._pub_diagnostics.publish(message)
-
-
-def _stamp(time_msg):
-    return (time_msg.sec, time_msg.nanosec)
-
-
-def _linear(vectors):
-    """First twist's linear part, or None where the point has none."""
-    if not vectors:
-        return None
-    v = vectors[0].linear
-    return (v.x, v.y, v.z)
 
 
 def _vector_message():

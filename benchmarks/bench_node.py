@@ -1,0 +1,633 @@
+#!/usr/bin/env python3
+"""
+End-to-end benchmark of the ``feedforward`` node, cross-process, over DDS.
+
+For each input form (``trajectory``: one MultiDOFJointTrajectory per
+setpoint; ``topics``: pose, twist and accel paired by stamp) and each
+target process:
+
+- ``node``: ``.venv/bin/feedforward --ros-args --params-file
+  config/orthoglide.yaml -p setpoint_timeout:=1.0`` (EventsExecutor spun by
+  ``spin_once`` in a loop);
+- ``echo-single``, ``echo-events``: the baseline ``echo_node.py``, a bare
+  rclpy node that only echoes the stamp, spun by rclpy's default
+  SingleThreadedExecutor and by the EventsExecutor (``spin_once`` loop);
+
+this process (the producer) publishes N setpoints of the paper trajectory
+at a steady rate (sleep until each deadline, no bursts; unique nonzero
+stamps) and a separate recorder process (this script with ``--record``,
+EventsExecutor, so producer and recorder do not share one GIL) stamps the
+arrival of each ``feedforward/joint_states`` with CLOCK_MONOTONIC, the
+clock the producer uses for the publish times (system-wide on Linux).
+Latency = receive time - publish time of the setpoint with that stamp
+(for ``topics``, the publish time of its pose, published first). Each
+target process first echoes one start-up setpoint and gets a 0.5 s
+pre-roll, both unmeasured. CPU per tick = utime + stime of the target
+process over the run (first publish to end of the drain) / setpoints sent.
+
+A rate scan then finds, per target and input, the highest rate of the scan
+list that is sustained: loss <= 0.1 % and p99 latency < 20 ms.
+
+Usage: python benchmarks/bench_node.py [--rate 1000] [--duration 10]
+       [--inputs trajectory,topics] [--qos reliable[,best_effort]]
+       [--rates-scan 500,1000,1500,2000,3000] [--scan-duration S]
+       [--targets node,echo-single,echo-events] [--json FILE]
+"""
+
+import argparse
+import array
+import json
+import os
+import platform
+import select
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
+                               TwistStamped)
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import (MultiDOFJointTrajectory,
+                                 MultiDOFJointTrajectoryPoint)
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, ROOT)
+
+from orthoglide_ros.trajectory import PAPER_DURATION  # noqa: E402
+from orthoglide_ros.trajectory import paper_sample  # noqa: E402
+
+TARGETS = ('node', 'echo-single', 'echo-events')
+NODES = ('node',)
+EXECUTORS = {'echo-single': 'single', 'echo-events': 'events'}
+BASELINES = ('echo-single', 'echo-events')
+INPUT_TOPICS = {'trajectory': ('trajectory',),
+                'topics': ('pose', 'twist', 'accel')}
+SUSTAINED_LOSS = 0.001      # fraction of the setpoints sent
+SUSTAINED_P99_MS = 20.0
+ISSUE_RATE, ISSUE_DURATION = 1000, 10.0
+SEGMENT_S = 10000           # stamps of run k start at (k + 1) * SEGMENT_S s
+DRAIN_S = 0.5
+PREROLL_S = 0.5
+START_TIMEOUT_S = 20.0
+CLK_TCK = os.sysconf('SC_CLK_TCK')
+
+
+def qos_profile(name, depth=10):
+    """Keep-last ``depth`` QoS, reliable or best_effort."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
+                      reliability=ReliabilityPolicy.RELIABLE
+                      if name == 'reliable'
+                      else ReliabilityPolicy.BEST_EFFORT)
+
+
+# Recorder process --------------------------------------------------------
+def record(path, qos):
+    """Log (sec, nanosec, monotonic ns) of each joint state to ``path``."""
+    from rclpy.experimental import EventsExecutor
+    rclpy.init()
+    node = rclpy.create_node('bench_recorder')
+    log = array.array('q')
+    clock = time.monotonic_ns
+    out = sys.stdout
+
+    def on_joints(msg):
+        stamp = msg.header.stamp
+        log.extend((stamp.sec, stamp.nanosec, clock()))
+        if stamp.sec == 1:      # a start-up setpoint came through
+            out.write(f'echo {stamp.sec} {stamp.nanosec}\n')
+            out.flush()
+
+    # Depth 1000 so that the recorder's own queue is not what loses data.
+    sub = node.create_subscription(JointState, 'feedforward/joint_states',
+                                   on_joints, qos_profile(qos, 1000))
+
+    def matched():
+        if sub.get_publisher_count() > 0:
+            timer.cancel()
+            out.write('matched\n')
+            out.flush()
+
+    timer = node.create_timer(0.01, matched)
+    executor = EventsExecutor()
+    executor.add_node(node)
+    try:
+        while rclpy.ok():   # not spin(): it busy-polls and ignores SIGINT
+            executor.spin_once(timeout_sec=0.1)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        with open(path, 'wb') as f:
+            log.tofile(f)
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+# Target processes --------------------------------------------------------
+def target_command(target, kind, qos):
+    """Command line of a target process."""
+    if target in NODES:
+        cmd = [os.path.join(os.path.dirname(sys.executable), 'feedforward')]
+        cmd += ['--ros-args', '--params-file',
+                os.path.join(ROOT, 'config', 'orthoglide.yaml'),
+                '-p', 'setpoint_timeout:=1.0']
+        if qos != 'reliable':
+            for topic in INPUT_TOPICS[kind]:
+                cmd += ['-p', f'qos_overrides./setpoint/{topic}.subscription'
+                        f'.reliability:={qos}']
+            for topic in ('joint_states', 'forces', 'power'):
+                cmd += ['-p', f'qos_overrides./feedforward/{topic}.publisher'
+                        f'.reliability:={qos}']
+        return cmd
+    return [sys.executable, os.path.join(HERE, 'echo_node.py'),
+            '--input', kind, '--executor', EXECUTORS[target],
+            '--qos', qos]
+
+
+def cpu_seconds(pid):
+    """Return utime + stime (s) of a process; None if it is gone."""
+    try:
+        with open(f'/proc/{pid}/stat') as f:
+            fields = f.read().rsplit(')', 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return (int(fields[11]) + int(fields[12])) / CLK_TCK
+
+
+def stop(proc, timeout=3.0):
+    """SIGINT a child, wait, else kill it; return how it ended."""
+    if proc.poll() is not None:
+        return f'had exited ({proc.returncode})'
+    proc.send_signal(signal.SIGINT)
+    try:
+        return f'exited on SIGINT ({proc.wait(timeout)})'
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+        return f'ignored SIGINT for {timeout:g} s, killed'
+
+
+class Failed(RuntimeError):
+    """A target or the recorder exited or does not answer."""
+
+
+# Producer ----------------------------------------------------------------
+class Producer:
+    """Publishers of one input form, with messages built once and reused."""
+
+    def __init__(self, node, kind, qos):
+        self.kind = kind
+        profile = qos_profile(qos)
+        if kind == 'trajectory':
+            self.msg = MultiDOFJointTrajectory(
+                joint_names=['G'], points=[MultiDOFJointTrajectoryPoint(
+                    transforms=[Transform()], velocities=[Twist()],
+                    accelerations=[Twist()])])
+            self.pubs = [node.create_publisher(
+                MultiDOFJointTrajectory, 'setpoint/trajectory', profile)]
+            point = self.msg.points[0]
+            self.vectors = (point.transforms[0].translation,
+                            point.velocities[0].linear,
+                            point.accelerations[0].linear)
+            self.stamps = (self.msg.header.stamp,)
+        else:
+            self.msgs = (PoseStamped(), TwistStamped(), AccelStamped())
+            self.pubs = [node.create_publisher(type(m), f'setpoint/{t}',
+                                               profile)
+                         for m, t in zip(self.msgs, INPUT_TOPICS[kind])]
+            self.vectors = (self.msgs[0].pose.position,
+                            self.msgs[1].twist.linear,
+                            self.msgs[2].accel.linear)
+            self.stamps = tuple(m.header.stamp for m in self.msgs)
+
+    def matched(self):
+        """Whether every input publisher has matched a subscription."""
+        return all(p.get_subscription_count() > 0 for p in self.pubs)
+
+    def fill(self, stamp_ns, sample):
+        """Set the stamp and the (position, velocity, acceleration)."""
+        sec, nanosec = divmod(stamp_ns, 1000000000)
+        for stamp in self.stamps:
+            stamp.sec, stamp.nanosec = sec, nanosec
+        for vector, values in zip(self.vectors, sample):
+            vector.x, vector.y, vector.z = values
+
+    def publish(self):
+        """Publish the setpoint (pose, twist, accel in that order)."""
+        if self.kind == 'trajectory':
+            self.pubs[0].publish(self.msg)
+        else:
+            for pub, msg in zip(self.pubs, self.msgs):
+                pub.publish(msg)
+
+
+def produce(producer, rate, count, base_ns, check):
+    """Publish ``count`` setpoints at ``rate``; return stamps and times."""
+    step = 1e9 / rate
+    stamps = [base_ns + round(i * step) for i in range(count)]
+    samples = [paper_sample((i / rate) % PAPER_DURATION)
+               for i in range(count)]
+    published = np.zeros(count, dtype=np.int64)
+    late = np.zeros(count, dtype=np.int64)
+    clock, sleep = time.monotonic_ns, time.sleep
+    start = clock() + 10000000
+    for i in range(count):
+        producer.fill(stamps[i], samples[i])
+        deadline = start + round(i * step)
+        wait = deadline - clock()
+        if wait > 0:
+            sleep(wait / 1e9)
+        now = clock()
+        producer.publish()
+        published[i] = now
+        late[i] = now - deadline
+        if i % 200 == 199:
+            check()
+    return np.asarray(stamps, dtype=np.int64), published, late
+
+
+# One target process, several runs -----------------------------------------
+def run_group(target, kind, qos, runs, domain, say):
+    """Start a target and a recorder, do ``runs`` [(rate, s)], stop both."""
+    tmp = tempfile.mkdtemp(prefix='bench-node-')
+    env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
+               ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
+               ROS_LOG_DIR=os.path.join(tmp, 'log'))
+    log_path = os.path.join(tmp, 'recorder.bin')
+    err = open(os.path.join(tmp, 'target.err'), 'w+')
+    procs = {}
+    context = node = None
+    results = [dict(target=target, input=kind, qos=qos, rate=rate,
+                    duration=duration, status='not run')
+               for rate, duration in runs]
+    try:
+        t0 = time.monotonic()
+        procs['target'] = subprocess.Popen(
+            target_command(target, kind, qos), env=env, cwd=ROOT,
+            stdin=subprocess.DEVNULL, stdout=err, stderr=err)
+        procs['recorder'] = subprocess.Popen(
+            [sys.executable, os.path.abspath(__file__), '--record',
+             log_path, '--qos', qos], env=env, cwd=ROOT,
+            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, text=True)
+
+        def check():
+            for name, proc in procs.items():
+                if proc.poll() is not None:
+                    raise Failed(f'{name} exited with code {proc.returncode}')
+
+        context = rclpy.Context()
+        rclpy.init(context=context, domain_id=domain)
+        node = rclpy.create_node('bench_producer', context=context)
+        producer = Producer(node, kind, qos)
+        _start(producer, procs['recorder'], check, runs[0][0])
+        for k, (rate, duration) in enumerate(runs):
+            result = results[k]
+            count = max(1, round(rate * duration))
+            pid = procs['target'].pid
+            cpu = (cpu_seconds(pid), cpu_seconds(procs['recorder'].pid),
+                   time.process_time())
+            try:
+                stamps, published, late = produce(
+                    producer, rate, count, (k + 1) * SEGMENT_S * 10**9,
+                    check)
+                time.sleep(DRAIN_S)
+                check()
+            except Failed as error:
+                result['status'] = f'failed: {error}'
+                raise
+            end = (cpu_seconds(pid), cpu_seconds(procs['recorder'].pid),
+                   time.process_time())
+            result.update(status='ok', stamps=stamps, published=published,
+                          late=late, sent=count,
+                          cpu_us=_per_tick(cpu[0], end[0], count),
+                          recorder_cpu_us=_per_tick(cpu[1], end[1], count),
+                          producer_cpu_us=_per_tick(cpu[2], end[2], count))
+            say(f'  {target:11} {kind:10} {qos:11} {rate:5d} Hz done')
+    except Failed as error:
+        pid = procs['target'].pid
+        busy = cpu_seconds(pid)
+        if busy is not None:
+            share = busy / (time.monotonic() - t0)
+            error = f'{error}; target used {share:.0%} of a core'
+        for result in results:
+            if result['status'] == 'not run':
+                result['status'] = f'failed: {error}'
+    finally:
+        ends = {name: stop(proc) for name, proc in procs.items()}
+        if node is not None:
+            node.destroy_node()
+        if context is not None:
+            rclpy.try_shutdown(context=context)
+        err.seek(0)
+        tail = err.read()[-600:]
+        err.close()
+        try:
+            log = np.fromfile(log_path, dtype=np.int64).reshape(-1, 3)
+        except (OSError, ValueError):
+            log = None
+        shutil.rmtree(tmp, ignore_errors=True)
+    for result in results:
+        result['stop'] = ends
+        if result['status'].startswith('failed'):
+            result['target_stderr'] = tail
+        if 'stamps' in result:
+            _latencies(result, log)
+    return results
+
+
+def _start(producer, recorder, check, rate):
+    """Wait for discovery and one setpoint's echo; then a pre-roll."""
+    deadline = time.monotonic() + START_TIMEOUT_S
+    matched = False
+    while not (matched and producer.matched()):
+        check()
+        if time.monotonic() > deadline:
+            raise Failed('discovery timed out')
+        ready, _, _ = select.select([recorder.stdout], [], [], 0.05)
+        if ready and recorder.stdout.readline().startswith('matched'):
+            matched = True
+    warmup = 0
+    while True:
+        check()
+        if time.monotonic() > deadline:
+            raise Failed('unresponsive: no warm-up setpoint came back '
+                         f'in {START_TIMEOUT_S:g} s')
+        warmup += 1
+        producer.fill(10**9 + warmup * 1000, paper_sample(0.0))
+        producer.publish()
+        ready, _, _ = select.select([recorder.stdout], [], [], 0.1)
+        if ready and recorder.stdout.readline().startswith('echo'):
+            break
+    # Pre-roll, not measured: PREROLL_S at the rate of the first run.
+    produce(producer, rate, round(rate * PREROLL_S), 2 * 10**9, check)
+    time.sleep(0.2)
+
+
+def _per_tick(start, end, count):
+    if start is None or end is None:
+        return None
+    return (end - start) / count * 1e6
+
+
+def _latencies(result, log):
+    """Match received stamps to published ones; add loss and latency."""
+    stamps = result.pop('stamps')
+    published = result.pop('published')
+    late = result.pop('late')
+    result['late_p99_ms'] = float(np.percentile(late, 99)) / 1e6
+    if log is None:
+        log = np.zeros((0, 3), dtype=np.int64)
+    got = log[:, 0] * 10**9 + log[:, 1]
+    inside = (got >= stamps[0]) & (got <= stamps[-1])
+    got, received = got[inside], log[inside, 2]
+    index = np.searchsorted(stamps, got)
+    hit = stamps[np.minimum(index, len(stamps) - 1)] == got
+    _, first = np.unique(got[hit], return_index=True)
+    matched = len(first)
+    latency = (received[hit][first] - published[index[hit][first]]) / 1e6
+    seen = np.zeros(len(stamps), dtype=bool)
+    seen[index[hit]] = True
+    result.update(received=int(inside.sum()), matched=matched,
+                  lost=result['sent'] - matched,
+                  first_lost=np.flatnonzero(~seen)[:10].tolist(),
+                  loss=(result['sent'] - matched) / result['sent'])
+    if matched:
+        p50, p99 = np.percentile(latency, (50, 99))
+        result.update(p50_ms=float(p50), p99_ms=float(p99),
+                      max_ms=float(latency.max()))
+    result['sustained'] = bool(
+        matched and result['loss'] <= SUSTAINED_LOSS
+        and result['p99_ms'] < SUSTAINED_P99_MS)
+
+
+# Report -------------------------------------------------------------------
+def _f(value, form='.2f'):
+    return '-' if value is None else format(value, form)
+
+
+def table(results):
+    """Lines of the main table."""
+    head = (f'{"target":11} {"input":10} {"qos":11} {"rate":>5} '
+            f'{"sent":>6} {"recv":>6} {"lost":>5} {"p50":>6} {"p99":>6} '
+            f'{"max":>7} {"cpu/tick":>8} {"rec/tk":>6} {"late99":>6}')
+    lines = [head, f'{"":50}{"(ms)":>20}{"(us)":>17}{"(us)":>7}'
+             f'{"(ms)":>7}', '-' * len(head)]
+    for r in results:
+        row = (f'{r["target"]:11} {r["input"]:10} {r["qos"]:11} '
+               f'{r["rate"]:5d} ')
+        if r['status'] != 'ok':
+            lines.append(row + r['status'])
+            continue
+        lines.append(
+            row + f'{r["sent"]:6d} {r["received"]:6d} {r["lost"]:5d} '
+            f'{_f(r.get("p50_ms")):>6} {_f(r.get("p99_ms")):>6} '
+            f'{_f(r.get("max_ms")):>7} {_f(r["cpu_us"], ".0f"):>8} '
+            f'{_f(r["recorder_cpu_us"], ".0f"):>6} '
+            f'{_f(r["late_p99_ms"]):>6}')
+    return lines
+
+
+def _find(results, target, kind, qos, rate, duration, ok=True):
+    for r in results:
+        if (r['target'], r['input'], r['qos'], r['rate'],
+                r['duration']) == (target, kind, qos, rate, duration) \
+                and (r['status'] == 'ok' or not ok):
+            return r
+    return None
+
+
+def _ratio(a, b):
+    if a is None or b is None:
+        return '-'
+    return f'{a / b:.2f}' if b else ('1.00' if a == 0 else 'inf')
+
+
+def ratios(results, nodes, kinds, qoses, rate, duration):
+    """Lines comparing each node target to each baseline."""
+    lines = [f'node / echo at {rate} Hz (p99 latency, CPU per tick; loss as '
+             'node vs echo setpoints lost):']
+    for node_target in nodes:
+        for kind in kinds:
+            for qos in qoses:
+                node = _find(results, node_target, kind, qos, rate,
+                             duration, ok=False)
+                for base in BASELINES:
+                    echo = _find(results, base, kind, qos, rate, duration)
+                    row = f'  {node_target:9} {kind:10} {qos:11} vs ' \
+                        f'{base:11}: '
+                    if node is None or echo is None:
+                        lines.append(row + 'missing run')
+                    elif node['status'] != 'ok':
+                        lines.append(row + node['status'])
+                    else:
+                        lines.append(row + 'p99 x' + _ratio(
+                            node.get('p99_ms'), echo.get('p99_ms'))
+                            + ', CPU x'
+                            + _ratio(node['cpu_us'], echo['cpu_us'])
+                            + f', lost {node["lost"]} vs {echo["lost"]}')
+    return lines
+
+
+def checks(results, nodes, args):
+    """Issue targets for the trajectory input: (lines, verdicts)."""
+    lines, verdicts = [], {}
+    full = args.rate == ISSUE_RATE and args.duration >= ISSUE_DURATION
+    lines.append(
+        f'Issue target (trajectory, reliable): {ISSUE_RATE} Hz sustained '
+        f'for {ISSUE_DURATION:g} s, loss <= echo, p99 <= 2x echo'
+        + ('' if full else f' [INDICATIVE: this run is {args.rate} Hz for '
+           f'{args.duration:g} s]'))
+    for node_target in nodes:
+        node = _find(results, node_target, 'trajectory', 'reliable',
+                     args.rate, args.duration, ok=False)
+        for base in BASELINES:
+            echo = _find(results, base, 'trajectory', 'reliable',
+                         args.rate, args.duration)
+            row = f'  {node_target:9} vs {base:11}: '
+            if node is None or echo is None:
+                lines.append(row + 'no result')
+                continue
+            if node['status'] != 'ok':
+                verdict, why = 'MISS', node['status']
+            else:
+                parts = {
+                    'sustained': node['sustained'],
+                    'loss<=echo': node['lost'] <= echo['lost'],
+                    'p99<=2x': ('p99_ms' in node and 'p99_ms' in echo
+                                and node['p99_ms'] <= 2 * echo['p99_ms'])}
+                verdict = 'PASS' if all(parts.values()) else 'MISS'
+                why = ', '.join(f'{k} {"ok" if v else "NO"}'
+                                for k, v in parts.items())
+            verdicts[f'{node_target} vs {base}'] = verdict
+            lines.append(row + f'{verdict}  ({why})')
+    return lines, verdicts
+
+
+def scan_lines(results, targets, kinds, qos, rates, duration):
+    """Lines of the rate scan: highest sustained rate, mark per rate."""
+    lines = [f'Rate scan ({qos}); sustained = loss <= '
+             f'{SUSTAINED_LOSS:.1%} and p99 latency < '
+             f'{SUSTAINED_P99_MS:g} ms over the run:']
+    summary = {}
+    for kind in kinds:
+        for target in targets:
+            marks, best = [], None
+            for rate in rates:
+                r = _find(results, target, kind, qos, rate, duration)
+                if r is None:
+                    marks.append(f'{rate}:failed')
+                    continue
+                if r['sustained']:
+                    best = rate
+                    marks.append(f'{rate}:ok')
+                else:
+                    why = [w for w, bad in (
+                        ('loss', r['loss'] > SUSTAINED_LOSS),
+                        ('p99', r.get('p99_ms', 1e9) >= SUSTAINED_P99_MS))
+                        if bad]
+                    marks.append(f'{rate}:' + '+'.join(why))
+            summary[f'{target}/{kind}'] = best
+            lines.append(f'  {target:11} {kind:10} highest '
+                         f'{_f(best, "d"):>5} Hz   ' + ' '.join(marks))
+    return lines, summary
+
+
+def main():
+    """Run the benchmark; return the exit code."""
+    parser = argparse.ArgumentParser(
+        description=__doc__.strip().split('\n')[0])
+    parser.add_argument('--rate', type=int, default=ISSUE_RATE,
+                        help='setpoints per second (default 1000)')
+    parser.add_argument('--duration', type=float, default=ISSUE_DURATION,
+                        help='seconds per run (default 10)')
+    parser.add_argument('--inputs', default='trajectory,topics')
+    parser.add_argument('--targets', default=','.join(TARGETS))
+    parser.add_argument('--qos', default='reliable',
+                        help='reliable and/or best_effort, comma-separated')
+    parser.add_argument('--rates-scan', default='500,1000,1500,2000,3000',
+                        help='rates (Hz) to scan; empty to skip the scan')
+    parser.add_argument('--scan-duration', type=float,
+                        help='seconds per scan run (default --duration)')
+    parser.add_argument('--domain', type=int, default=200,
+                        help='first ROS_DOMAIN_ID, one per target process, '
+                        'wrapping within 200-230')
+    parser.add_argument('--json', metavar='FILE', help='save the results')
+    parser.add_argument('--record', help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.record:
+        record(args.record, args.qos)
+        return 0
+    kinds = [k for k in args.inputs.split(',') if k]
+    targets = [t for t in args.targets.split(',') if t]
+    qoses = [q for q in args.qos.split(',') if q]
+    scan = sorted({int(r) for r in args.rates_scan.split(',') if r})
+    scan_duration = args.scan_duration or args.duration
+    for value, allowed in ((kinds, INPUT_TOPICS),
+                           (targets, NODES + tuple(EXECUTORS)),
+                           (qoses, ('reliable', 'best_effort'))):
+        bad = set(value) - set(allowed)
+        if bad:
+            parser.error(f'unknown {", ".join(sorted(bad))}')
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+
+    def say(text):
+        print(text, file=sys.stderr, flush=True)
+
+    load = os.getloadavg()
+    results, group = [], 0
+    for qos in qoses:
+        for kind in kinds:
+            for target in targets:
+                runs = [(args.rate, args.duration)]
+                if qos == qoses[0]:
+                    runs += [(r, scan_duration) for r in scan
+                             if (r, scan_duration) != runs[0]]
+                domain = 200 + (args.domain - 200 + group) % 31
+                group += 1
+                results += run_group(target, kind, qos, runs, domain, say)
+    main_runs = [r for r in results if r['rate'] == args.rate
+                 and r['duration'] == args.duration]
+    out = [f'bench_node: {platform.node()}, {os.cpu_count()} CPUs, load '
+           f'{load[0]:.2f} -> {os.getloadavg()[0]:.2f}; recorder in its own '
+           'process (EventsExecutor); latency = recorder receive - '
+           'producer publish, CLOCK_MONOTONIC', '']
+    out += table(main_runs)
+    out += ['', 'cpu/tick: target process utime+stime / setpoints sent; '
+            'rec/tk: the recorder\'s; late99: producer p99 lateness', '']
+    stops = sorted({(r['target'], r['stop']['target']) for r in results
+                    if 'stop' in r})
+    out += [f'{t} process: {how}' for t, how in stops] + ['']
+    nodes = [t for t in targets if t in NODES]
+    out += ratios(results, nodes, kinds, qoses, args.rate, args.duration)
+    check_lines, verdicts = checks(results, nodes, args)
+    out += [''] + check_lines
+    summary = {}
+    if scan:
+        lines, summary = scan_lines(results, targets, kinds, qoses[0],
+                                    scan, scan_duration)
+        out += [''] + lines
+        out += ['', 'Scan runs:'] + table(
+            [r for r in results if r['qos'] == qoses[0]
+             and r['rate'] in scan and r['duration'] == scan_duration])
+    print('\n'.join(out))
+    if args.json:
+        with open(args.json, 'w') as f:
+            json.dump(dict(args=vars(args), cpus=os.cpu_count(),
+                           python=platform.python_version(),
+                           results=results, checks=verdicts,
+                           scan_highest=summary), f, indent=1)
+    dead = [r for r in results if r['status'] != 'ok']
+    return 1 if dead else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
