@@ -41,6 +41,7 @@ setup(
         'console_scripts': [
             'feedforward = orthoglide_ros.feedforward_node:main',
             'orthoglide = orthoglide_ros.cli:main',
+            'setpoint_publisher = orthoglide_ros.setpoint_publisher:main',
         ],
     },
     **legacy_kwargs,

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Create/refresh the project virtualenv (.venv in the repo root) with ROS 2
 # Jazzy from PyPI wheels, the test tooling, and orthoglide_ros installed in
-# editable mode (console scripts `orthoglide`, `feedforward` in .venv/bin).
+# editable mode (console scripts `orthoglide`, `feedforward`,
+# `setpoint_publisher` in .venv/bin).
 #
 # Usage: scripts/setup_venv.sh [REQUIREMENTS_FILE]   (default: requirements-test.txt)
 # Env:   PYTHON=python3.11   interpreter used to create the venv (default python3)
@@ -49,7 +50,8 @@ fi
 touch "$VENV/COLCON_IGNORE"
 
 if [ "${FORCE:-0}" != 1 ] && [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$(fingerprint)" ] \
-        && [ -x "$VENV/bin/orthoglide" ] && [ -x "$VENV/bin/feedforward" ]; then
+        && [ -x "$VENV/bin/orthoglide" ] && [ -x "$VENV/bin/feedforward" ] \
+        && [ -x "$VENV/bin/setpoint_publisher" ]; then
     echo "setup_venv: $VENV up to date"
     exit 0
 fi

@@ -6,8 +6,9 @@ README's test command:
 - ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``: Fast DDS discovers only on the
   loopback interface (otherwise it multicasts out of the network card);
 - ``ROS_DOMAIN_ID``: one per test session (drawn from the process id, and
-  never the caller's own domain), so parallel runs and a live ROS graph on
-  the same machine do not see each other;
+  never the caller's own domain; ``ORTHOGLIDE_TEST_DOMAIN_ID`` overrides),
+  so parallel runs and a live ROS graph on the same machine do not see each
+  other;
 - ``ROS_LOG_DIR``: a temporary directory, so tests leave no logs behind.
 """
 
@@ -21,6 +22,8 @@ _CALLER_DOMAIN = os.environ.get('ROS_DOMAIN_ID', '0')
 _DOMAIN = 1 + os.getpid() % 232
 if str(_DOMAIN) == _CALLER_DOMAIN:
     _DOMAIN = _DOMAIN % 232 + 1
+# An explicit choice wins (e.g. a range agreed on a shared machine).
+_DOMAIN = int(os.environ.get('ORTHOGLIDE_TEST_DOMAIN_ID', _DOMAIN))
 os.environ['ROS_DOMAIN_ID'] = str(_DOMAIN)
 os.environ.setdefault('ROS_LOG_DIR', tempfile.mkdtemp(prefix='orthoglide-ros-log-'))
 
