@@ -51,7 +51,8 @@ def vector3_stamped(buf):
 
 
 def trajectory_point(buf):
-    """Read a MultiDOFJointTrajectory's header and first point.
+    """
+    Read a MultiDOFJointTrajectory's header and first point.
 
     Returns ``(stamp, frame, point)``; ``point`` is None when there is no
     point or its first point has no transform, else ``(translation,

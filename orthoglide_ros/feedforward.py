@@ -1,4 +1,5 @@
-"""The feedforward's logic without ROS: setpoints in, joint targets out.
+"""
+The feedforward's logic without ROS: setpoints in, joint targets out.
 
 :class:`Feedforward` pairs the pose, twist and accel of one setpoint by their
 exact stamp, checks the setpoint, runs :func:`mechanics.solve` on it and keeps
@@ -55,7 +56,8 @@ class Rejected(ValueError):
 
 
 class Feedforward:
-    """Pairing, checks, mechanics and counters of the feedforward node.
+    """
+    Pairing, checks, mechanics and counters of the feedforward node.
 
     Every method takes ``now``, a monotonic time in seconds, so tests can
     drive time. Methods that complete a setpoint return its :class:`Output`
@@ -102,7 +104,8 @@ class Feedforward:
 
     def trajectory_point(self, stamp, frame, position, orientation,
                          velocity, acceleration, now):
-        """Take one atomic setpoint; ``velocity``/``acceleration`` may be None.
+        """
+        Take one atomic setpoint; ``velocity``/``acceleration`` may be None.
 
         A point without velocity or acceleration is ``malformed`` unless
         ``pose_only`` lets them be zero.
@@ -146,7 +149,7 @@ class Feedforward:
 
     @property
     def pending(self):
-        """Number of partial setpoints waiting for partners."""
+        """Count the partial setpoints waiting for partners."""
         return len(self._pending)
 
     def _check_stamp(self, stamp):

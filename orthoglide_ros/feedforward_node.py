@@ -1,4 +1,5 @@
-"""The ``feedforward`` ROS 2 node: setpoints in, joint states and forces out.
+"""
+The ``feedforward`` ROS 2 node: setpoints in, joint states and forces out.
 
 A thin layer over :class:`orthoglide_ros.feedforward.Feedforward`: it declares
 the parameters of :mod:`orthoglide_ros.settings`, converts messages to plain
@@ -105,7 +106,8 @@ class FeedforwardNode(Node):
 
     # Parameters -----------------------------------------------------------
     def _values(self, changes=()):
-        """Current parameter values with ``changes`` applied, as plain types.
+        """
+        Return the parameter values with ``changes`` applied, as plain types.
 
         rclpy gives double arrays as ``array.array``; the settings take lists.
         """
@@ -343,7 +345,7 @@ def main(args=None):
 
 
 def _executor():
-    """EventsExecutor (about 2.5x less CPU per message here) if available."""
+    """Return the EventsExecutor (2.5x less CPU per message here) if any."""
     try:
         from rclpy.experimental import EventsExecutor
         return EventsExecutor()

@@ -1,4 +1,5 @@
-"""The arithmetic kernel of the paper's recursive matrix method.
+"""
+The arithmetic kernel of the paper's recursive matrix method.
 
 One implementation of the recursion of sections 2 and 3 of the paper
 (Chablat, Wenger, Staicu), corrected as ``MODEL.md`` lists, written as scalar
@@ -33,7 +34,8 @@ KernelConstants = namedtuple('KernelConstants', (
 
 
 def kernel_constants(robot):
-    """Pack the robot's values the kernel uses (lengths m, masses kg).
+    """
+    Pack the robot's values the kernel uses (lengths m, masses kg).
 
     ``h3 = l3 / 2`` and ``i3 = l3^2 / 3`` give body 3's centre of mass on
     its -y3 axis and its inertia per unit mass about A3; ``h4 = l2 / 2`` is
@@ -50,7 +52,8 @@ def kernel_constants(robot):
 
 
 def solve(k, x, y, z, vx, vy, vz, ax, ay, az, sqrt, record=None):
-    """Inverse kinematics and dynamics of the whole robot (eqs. 9-25).
+    """
+    Inverse kinematics and dynamics of the whole robot (eqs. 9-25).
 
     Takes the platform centre G (m), its velocity (m/s) and acceleration
     (m/s^2) in frame 0, as floats or as equal-shaped arrays. Returns
@@ -101,7 +104,8 @@ def solve(k, x, y, z, vx, vy, vz, ax, ay, az, sqrt, record=None):
 
 
 def jacobian_cofactors(x, y, z, al_a, al_b, al_c, sqrt):
-    """Cofactors and determinant of ``J_lambda = J1^-1 J2`` (eqs. 15-17).
+    """
+    Cofactors and determinant of ``J_lambda = J1^-1 J2`` (eqs. 15-17).
 
     ``J_lambda = [[1, y/al_a, z/al_a], [x/al_b, 1, z/al_b], [x/al_c,
     y/al_c, 1]]`` maps the platform velocity to ``lambdadot``; its inverse
@@ -127,7 +131,8 @@ def jacobian_cofactors(x, y, z, al_a, al_b, al_c, sqrt):
 
 def _leg(k, x, y, z, vx, vy, vz, ax, ay, az, gx, gy, gz, platform, sqrt,
          record):
-    """One leg in its own coordinates: kinematics and its virtual work.
+    """
+    One leg in its own coordinates: kinematics and its virtual work.
 
     Returns ``(lambda, lambdadot, lambdaddot, alpha_i, F1, Qy, Qz)``: the
     slider's force term ``u3^T f_1`` of eq. (25) and the generalised force
@@ -279,7 +284,8 @@ def _leg(k, x, y, z, vx, vy, vz, ax, ay, az, gx, gy, gz, platform, sqrt,
 
 def _record_leg(record, l3, s1, c1, s2, c2, lam, lamd, lamdd, w1, w2, e1,
                 e2, o3, e3, g30, g40):
-    """Store one leg's per-element quantities (frames k) in ``record``.
+    """
+    Store one leg's per-element quantities (frames k) in ``record``.
 
     Velocities are the same recursion (12) as the accelerations above:
     ``v20 = a21 v10``, ``v30 = a32 v20``, ``v40 = a43 (v30 + omega30~

@@ -1,4 +1,5 @@
-"""Inverse and forward mechanics of the Orthoglide: the package's math API.
+"""
+Inverse and forward mechanics of the Orthoglide: the package's math API.
 
 Plain numpy, no ROS. Every function takes a validated :class:`Robot` first.
 
@@ -68,7 +69,8 @@ margin``.
 
 
 class WorkspaceError(ValueError):
-    """An input the mechanics refuse: ``reason`` is one of REASONS.
+    """
+    An input the mechanics refuse: ``reason`` is one of REASONS.
 
     ``row`` is the 0-based sample index for batch calls, else None.
     """
@@ -82,7 +84,8 @@ class WorkspaceError(ValueError):
 
 def solve(robot, position, velocity=ZERO, acceleration=ZERO,
           margin=DEFAULT_SINGULARITY_MARGIN, record=None):
-    """Solve one sample: eqs. (9), (13), (18) and (25) on Python floats.
+    """
+    Solve one sample: eqs. (9), (13), (18) and (25) on Python floats.
 
     ``position``, ``velocity``, ``acceleration``: the platform centre G and
     its derivatives in frame 0 (m, m/s, m/s^2), each a 3-sequence. Returns
@@ -126,7 +129,8 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
 
 def solve_batch(robot, positions, velocities=None, accelerations=None,
                 margin=DEFAULT_SINGULARITY_MARGIN):
-    """Solve N samples at once, vectorised (the same kernel on arrays).
+    """
+    Solve N samples at once, vectorised (the same kernel on arrays).
 
     ``positions``, ``velocities``, ``accelerations``: (N, 3) arrays in frame
     0 (m, m/s, m/s^2); a missing velocity or acceleration means zero.
@@ -182,7 +186,8 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
 
 
 def workspace_status(robot, position, margin=DEFAULT_SINGULARITY_MARGIN):
-    """Reachability and distance to the singularities of J1 and J2.
+    """
+    Reachability and distance to the singularities of J1 and J2.
 
     ``position``: one point (3,) or N points (N, 3) in frame 0 (m). The
     singularity distance is the smallest of ``alpha_i / l3 = cos(phi21)
@@ -213,7 +218,8 @@ def workspace_status(robot, position, margin=DEFAULT_SINGULARITY_MARGIN):
 
 
 def forward_kinematics(robot, lam):
-    """Platform centre G (m) from the actuator displacements (m), eq. (14).
+    """
+    Platform centre G (m) from the actuator displacements (m), eq. (14).
 
     Intersects the three constraint spheres of eq. (14) on the branch that
     holds the home position (every ``alpha_i > 0``). ``lam``: (3,) or
@@ -247,7 +253,8 @@ def forward_kinematics(robot, lam):
 
 
 def jacobians(robot, position):
-    """Return ``(J1, J2)`` of eq. (16) at a position (m) in frame 0.
+    """
+    Return ``(J1, J2)`` of eq. (16) at a position (m) in frame 0.
 
     ``J1 lambdadot = J2 rdot_G`` (eq. 15) with ``J1 = diag(alpha_i)`` and
     ``J2 = [[alpha_1, y, z], [x, alpha_2, z], [x, y, alpha_3]]``, ``alpha_i``
@@ -269,7 +276,8 @@ def jacobians(robot, position):
 
 def elements(robot, position, velocity=ZERO, acceleration=ZERO,
              margin=DEFAULT_SINGULARITY_MARGIN):
-    """Position, velocity and acceleration of every element (section 2).
+    """
+    Position, velocity and acceleration of every element (section 2).
 
     Returns ``{'A': leg, 'B': leg, 'C': leg}`` for one sample. Each leg is a
     dict with ``phi21``, ``phi32`` (rad), ``omega21``, ``omega32`` (rad/s),
@@ -352,8 +360,7 @@ def _leg_elements(robot, leg, rec):
 
 def _as_samples(name, values, n=None):
     arr = np.asarray(values, dtype=float)
-    if arr.ndim != 2 or arr.shape[1] != 3 or (n is not None and len(arr)
-                                               != n):
+    if arr.ndim != 2 or arr.shape[1] != 3 or n not in (None, len(arr)):
         want = '(N, 3)' if n is None else f'({n}, 3)'
         raise ValueError(f'{name} must have shape {want}, got {arr.shape}')
     return arr

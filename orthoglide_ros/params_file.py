@@ -1,4 +1,5 @@
-"""Read ROS 2 parameters files the way rcl does, without ROS.
+"""
+Read ROS 2 parameters files the way rcl does, without ROS.
 
 The node and the ``orthoglide`` tool share one file (``config/orthoglide.yaml``).
 rcl starts a node only if every value has the declared type, so the tools
@@ -41,7 +42,8 @@ _RclLoader.add_implicit_resolver(
 
 
 def load_parameters(path):
-    """Return the node's parameters in ``path`` as a flat ``{name: value}``.
+    """
+    Return the node's parameters in ``path`` as a flat ``{name: value}``.
 
     Raises :class:`ParametersFileError` if the file cannot be read, is not
     YAML, or has no section for the node.
@@ -72,7 +74,8 @@ def load_parameters(path):
 
 
 def robot_from_parameters(params):
-    """Build a :class:`Robot` from the ``robot.*`` entries of ``params``.
+    """
+    Build a :class:`Robot` from the ``robot.*`` entries of ``params``.
 
     Other entries are ignored. An unknown ``robot.*`` name, a value of the
     wrong type (by rcl's rules) or a value the :class:`Robot` refuses raises

@@ -1,4 +1,5 @@
-"""The Orthoglide's constant description: lengths, masses and gravity.
+"""
+The Orthoglide's constant description: lengths, masses and gravity.
 
 One immutable :class:`Robot` is built and validated once; every algorithm of
 the package takes it as its first argument (in the manner of Pinocchio's
@@ -55,7 +56,8 @@ class RobotParameterError(ValueError):
 
 @dataclass(frozen=True)
 class Robot:
-    """Geometry (m, rad), masses (kg) and gravity (m/s^2, frame 0).
+    """
+    Geometry (m, rad), masses (kg) and gravity (m/s^2, frame 0).
 
     ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the paper's
     ``m4 = m2``, ``m6 = m3``). Every value must be finite, lengths and

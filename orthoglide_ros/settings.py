@@ -1,4 +1,5 @@
-"""The feedforward node's parameters: one table, validated as a whole.
+"""
+The feedforward node's parameters: one table, validated as a whole.
 
 The table below is the single source of the names, types, defaults, ranges
 and descriptions: the node declares its ROS parameters from it, and
@@ -71,7 +72,8 @@ def default_parameters():
 
 
 def settings_from_parameters(values):
-    """Validate a complete set of parameter values into :class:`Settings`.
+    """
+    Validate a complete set of parameter values into :class:`Settings`.
 
     ``values``: ``{name: value}``; a robot parameter that is absent or None
     takes its default (``m4``, ``m6``: ``m2``, ``m3``). Raises ValueError

@@ -11,7 +11,8 @@ PAPER_OMEGA = math.pi / 3.0
 
 
 def paper_sample(t, target=PAPER_TARGET, omega=PAPER_OMEGA):
-    """Position (m), velocity (m/s), acceleration (m/s^2) of eq. (6) at t (s).
+    """
+    Position (m), velocity (m/s), acceleration (m/s^2) of eq. (6) at t (s).
 
     Returns three 3-tuples. ``omega`` (rad/s) scales the speed: the paper's
     is pi/3; a larger one gives the fast trajectories the tests use.
@@ -35,7 +36,7 @@ def paper_batch(times, target=PAPER_TARGET, omega=PAPER_OMEGA):
 
 
 def paper_times(samples, duration=PAPER_DURATION):
-    """``samples`` instants evenly spaced over [0, duration] s, ends included."""
+    """Return ``samples`` instants over [0, duration] s, ends included."""
     if samples < 2:
         raise ValueError(f'samples must be at least 2, got {samples}')
     return np.linspace(0.0, duration, samples)

@@ -1,4 +1,5 @@
-"""Test-session set-up: DDS stays on this host, in a domain of its own.
+"""
+Test-session set-up: DDS stays on this host, in a domain of its own.
 
 Set before anything imports rclpy, so a bare ``pytest`` is as safe as the
 README's test command:
@@ -30,7 +31,7 @@ os.environ.setdefault('ROS_LOG_DIR', tempfile.mkdtemp(prefix='orthoglide-ros-log
 
 @pytest.fixture
 def ros_context():
-    """A fresh rclpy context for one test, shut down afterwards."""
+    """Give one test a fresh rclpy context, shut down afterwards."""
     rclpy = pytest.importorskip('rclpy')
     context = rclpy.context.Context()
     rclpy.init(context=context)

@@ -1,4 +1,5 @@
-"""An independent second model of the Orthoglide for the tests.
+"""
+An independent second model of the Orthoglide for the tests.
 
 Written from MODEL.md and the paper alone; it shares nothing with the
 package but the values of a :class:`Robot` (read as plain attributes).
@@ -82,7 +83,8 @@ centre of mass of body k in frame 0 (m), k in 1, 2, 3, 4, 6.
 
 
 def leg_geometry(robot, leg, position):
-    """Build the chain (1)-(8) of leg ``leg`` for the centre ``position``.
+    """
+    Build the chain (1)-(8) of leg ``leg`` for the centre ``position``.
 
     ``position`` is (x, y, z) in frame 0, real or complex. Eq. (9) gives
     the joint variables on the home branch (cosines positive).
@@ -146,7 +148,8 @@ def masses(robot):
 
 
 def central_inertias(robot):
-    """Inertia (kg m^2) about the centre of mass, body frame (MODEL.md).
+    """
+    Inertia (kg m^2) about the centre of mass, body frame (MODEL.md).
 
     Bodies 1 and 5 only translate; their inertia is given for
     completeness (body 1 as a thin rod, body 5 as the cube).
@@ -191,7 +194,8 @@ frame 0).
 
 
 def body_jacobians(robot, position):
-    """Centres, orientations and Jacobians of all bodies by complex step.
+    """
+    Centres, orientations and Jacobians of all bodies by complex step.
 
     The angular Jacobian's column i is the vector of
     ``(dR/dq_i) R^T`` with ``R = a_k0^T`` the body's orientation in frame 0.
@@ -304,7 +308,8 @@ LagrangeSolution.__doc__ = """Lagrange's equations on q = r_G.
 
 def lagrange_forces(robot, position, velocity, acceleration,
                     step=MASS_MATRIX_STEP):
-    """Actuator forces (N) by Lagrange's equations with q = r_G.
+    """
+    Actuator forces (N) by Lagrange's equations with q = r_G.
 
     ``d/dt dT/dqd - dT/dq + dV/dq = Q`` with ``T = qd^T M(q) qd / 2``
     gives ``Q = M qdd + C + dV/dq``, ``C_i = sum_jk (dM_ij/dq_k -
@@ -360,7 +365,8 @@ def vectors(bound):
 
 
 def derivative(f, t, h):
-    """Fourth-order central difference of ``f`` (array-valued) at ``t``.
+    """
+    Fourth-order central difference of ``f`` (array-valued) at ``t``.
 
     ``(f(t-2h) - 8 f(t-h) + 8 f(t+h) - f(t+2h)) / 12h``: truncation error
     ``h^4 f^(5) / 30``, rounding about ``1.5 eps max|f| / h``.

@@ -1,4 +1,5 @@
-"""Helpers for the feedforward node's DDS tests: a probe node, spinning, processes.
+"""
+Helpers for the feedforward node's DDS tests: a probe node, spinning, processes.
 
 - :class:`Probe`: a test node that publishes setpoints (pose/twist/accel or
   one trajectory point) and records every message on the node's outputs and
@@ -56,7 +57,8 @@ def diagnostic_values(msg):
 
 
 class Probe(Node):
-    """Publishes setpoints to the feedforward node and records its outputs.
+    """
+    Publishes setpoints to the feedforward node and records its outputs.
 
     ``joint_states``, ``forces``, ``power``, ``diagnostics``: every message
     received, in order; ``arrivals``: the monotonic time (s) each joint
@@ -101,7 +103,8 @@ class Probe(Node):
     # Sending --------------------------------------------------------------
     def send(self, stamp, position, velocity=ZERO, acceleration=ZERO,
              frame='', orientation=IDENTITY, order=('pose', 'twist', 'accel')):
-        """Publish one setpoint as pose, twist and accel (in ``order``).
+        """
+        Publish one setpoint as pose, twist and accel (in ``order``).
 
         ``stamp`` is (sec, nanosec); ``order`` may leave parts out.
         """
@@ -127,7 +130,8 @@ class Probe(Node):
                         acceleration=ZERO, frame='', orientation=IDENTITY,
                         time_from_start=(0, 0), extra_points=(),
                         with_point=True, with_transform=True):
-        """Publish one MultiDOFJointTrajectory; its first point is the setpoint.
+        """
+        Publish one MultiDOFJointTrajectory; its first point is the setpoint.
 
         ``stamp`` is the header stamp (sec, nanosec); the node adds
         ``time_from_start``. A None ``velocity`` or ``acceleration`` leaves
@@ -157,7 +161,8 @@ class Probe(Node):
         return [header_stamp(m) for m in self.joint_states]
 
     def matched(self, node=None):
-        """Whether every input and output is matched with the node.
+        """
+        Whether every input and output is matched with the node.
 
         ``node``, when the node runs in this process, also lets the node's
         own publishers confirm that they match this probe's subscriptions.
@@ -175,7 +180,8 @@ class Probe(Node):
         return True
 
     def handshake(self, executor, timeout=30.0, outputs=OUTPUTS):
-        """Wait until the node answers; then forget the answers.
+        """
+        Wait until the node answers; then forget the answers.
 
         For a node in another process, whose publishers cannot be asked:
         sends home setpoints on the trajectory input (stamps (1, k)) until
@@ -241,7 +247,8 @@ def node_executable(name='feedforward'):
 
 
 def start_node_process(args, env=None, command=None, cwd=None):
-    """Start ``command`` (default: the feedforward console script) + ``args``.
+    """
+    Start ``command`` (default: the feedforward console script) + ``args``.
 
     ``env`` defaults to ``os.environ`` (which conftest keeps on localhost
     and in the session's domain). Standard output and error go to temporary
@@ -259,7 +266,8 @@ def start_node_process(args, env=None, command=None, cwd=None):
 
 
 def stop_process(proc, timeout=STOP_TIMEOUT):
-    """Stop ``proc``: SIGINT, wait ``timeout`` s, then SIGKILL.
+    """
+    Stop ``proc``: SIGINT, wait ``timeout`` s, then SIGKILL.
 
     Returns (exit code, standard error text); the exit code is negative for
     a signal (-9 if it had to be killed). Safe on a process that has

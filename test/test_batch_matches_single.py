@@ -1,4 +1,5 @@
-"""``solve_batch`` gives the same numbers as ``solve`` sample by sample.
+"""
+``solve_batch`` gives the same numbers as ``solve`` sample by sample.
 
 Both run the same kernel, on numpy arrays and on Python floats; every
 output (joint states, forces, powers, alpha_ratio, conditioning and

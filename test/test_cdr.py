@@ -112,7 +112,8 @@ def test_trajectory_first_point(stamp, frame, names, points):
         points=[MultiDOFJointTrajectoryPoint(transforms=[Transform()])])),
 ])
 def test_unreadable_buffers_raise_cdr_error(reader, msg):
-    """Truncated or foreign buffers raise CdrError, never a value.
+    """
+    Truncated or foreign buffers raise CdrError, never a value.
 
     (The trajectory reader stops at the first point: what follows it is
     not read, so a cut there goes unnoticed; the tested message has one

@@ -1,4 +1,5 @@
-"""Invariant 1 (closure): every leg's chain (7) reaches the same G, a50 fixed.
+"""
+Invariant 1 (closure): every leg's chain (7) reaches the same G, a50 fixed.
 
 ``mechanics.elements`` builds each leg's chain of eqs. (1)-(8) in frame 0;
 its last point ``joints['G']`` must be the platform centre that was asked

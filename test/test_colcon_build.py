@@ -1,4 +1,5 @@
-"""``colcon build`` of the package, and its installed node talking over DDS.
+"""
+``colcon build`` of the package, and its installed node talking over DDS.
 
 Builds the repository into a temporary directory (build, install and log
 there, the source tree untouched) and runs what ``ros2 run orthoglide_ros
@@ -85,7 +86,8 @@ def test_install_layout(install):
 
 
 def test_installed_code_is_used_and_cli_runs(install):
-    """PYTHONPATH makes the install tree win; ``orthoglide --help`` runs.
+    """
+    PYTHONPATH makes the install tree win; ``orthoglide --help`` runs.
 
     Run from the install prefix, as ``ros2 run`` may be run from anywhere
     (from the repository, ``python -c`` would import the source tree).

@@ -1,4 +1,5 @@
-"""Invariant 2 (constraints): eqs. (14), (15)-(16), (13) and (18) hold.
+"""
+Invariant 2 (constraints): eqs. (14), (15)-(16), (13) and (18) hold.
 
 The package's lambda must satisfy the three sphere constraints (14); its
 lambdadot must satisfy ``J1 lambdadot = J2 rdot_G`` with J1, J2 of eq. (16)

@@ -1,4 +1,5 @@
-"""Invariant 5 (cyclic symmetry): the legs are one design turned about x=y=z.
+"""
+Invariant 5 (cyclic symmetry): the legs are one design turned about x=y=z.
 
 Turning the whole problem by the cyclic permutation ``S (x, y, z) =
 (z, x, y)`` (position, velocity, acceleration and gravity alike) turns leg

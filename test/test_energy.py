@@ -1,4 +1,5 @@
-"""Invariant 4 (energy balance): ``sum_j f_j lambdadot_j = d(T + V)/dt``.
+"""
+Invariant 4 (energy balance): ``sum_j f_j lambdadot_j = d(T + V)/dt``.
 
 Along any smooth trajectory, the actuators' power (the package's
 ``Solution.power``) must equal the rate of change of the robot's energy,

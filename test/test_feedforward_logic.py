@@ -1,4 +1,5 @@
-"""Tests of the feedforward's ROS-free logic (orthoglide_ros.feedforward).
+"""
+Tests of the feedforward's ROS-free logic (orthoglide_ros.feedforward).
 
 Time is driven by hand: every call takes ``now`` (s, monotonic). Every
 output is compared with :func:`mechanics.solve` exactly (``==``), since the
@@ -154,7 +155,8 @@ def test_partial_dropped_after_pairing_timeout():
 
 
 def test_partner_after_pairing_timeout_does_not_complete():
-    """The rule: a partial waits at most pairing_timeout for its partners.
+    """
+    The rule: a partial waits at most pairing_timeout for its partners.
 
     Its partners arriving later must not complete it, even if nothing else
     (a newer stamp, the diagnostics timer) called expire() in between.

@@ -1,4 +1,5 @@
-"""Tests of the feedforward node in the test's own process, over real DDS.
+"""
+Tests of the feedforward node in the test's own process, over real DDS.
 
 The node (``FeedforwardNode``) and a :class:`node_harness.Probe` share one
 rclpy context and one executor (the EventsExecutor the node runs on, unless
@@ -47,7 +48,8 @@ DIAGNOSTIC_NAME = 'feedforward: Orthoglide feedforward'
 
 @pytest.fixture
 def graph(ros_context):
-    """Return make(params, executor): the node and a probe, matched.
+    """
+    Return make(params, executor): the node and a probe, matched.
 
     Everything made is shut down and destroyed after the test.
     """

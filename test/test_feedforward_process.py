@@ -1,4 +1,5 @@
-"""Tests of the feedforward node as a process, started from its console script.
+"""
+Tests of the feedforward node as a process, started from its console script.
 
 ``feedforward --ros-args --params-file config/orthoglide.yaml``, as a user
 runs it; the test talks to it over DDS (on localhost, in the session's

@@ -1,4 +1,5 @@
-"""Invariant 3: element velocities and accelerations are time derivatives.
+"""
+Invariant 3: element velocities and accelerations are time derivatives.
 
 Along smooth trajectories (the paper's and fast ones), the velocity of every
 body's origin joint A_k, the angular velocity of every body and the

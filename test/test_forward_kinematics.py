@@ -1,4 +1,5 @@
-"""``forward_kinematics`` inverts eq. (9) over the workspace cube.
+"""
+``forward_kinematics`` inverts eq. (9) over the workspace cube.
 
 Round trip ``r_G -> lambda (eq. 9) -> r_G`` to 1e-12 m, for single points
 and batches, with lambda from the package and from eq. (9) written

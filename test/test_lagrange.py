@@ -1,4 +1,5 @@
-"""Invariant 7: the recursive method agrees with Lagrange's equations.
+"""
+Invariant 7: the recursive method agrees with Lagrange's equations.
 
 ``mechanics_reference.lagrange_forces`` is a second formulation sharing no
 code with the package: the geometry of every body from eqs. (1)-(9), body

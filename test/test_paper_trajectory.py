@@ -1,4 +1,5 @@
-"""The paper's example (section 2): the trajectory of eq. (6) on its robot.
+"""
+The paper's example (section 2): the trajectory of eq. (6) on its robot.
 
 At t = 0 and t = 2 s the actuator displacements must equal eq. (9)
 evaluated here independently with ``math``; the forces must be finite
@@ -57,7 +58,8 @@ def test_lambda_at_the_ends_is_eq9(t):
 
 
 def test_lambda_at_the_end_has_the_expected_size():
-    """Check lambda at t = 2 s against eq. (9) worked by hand.
+    """
+    Check lambda at t = 2 s against eq. (9) worked by hand.
 
     lambda_A = 0.075 + 0.85 (1 - sqrt(1 - (0.15^2 + 0.3^2) / 0.85^2)), a
     few centimetres; the B and C legs likewise.

@@ -1,4 +1,5 @@
-"""Parameters files are read with rcl's rules into a validated ``Robot``.
+"""
+Parameters files are read with rcl's rules into a validated ``Robot``.
 
 The node's section may be keyed ``feedforward``, ``/feedforward`` or
 ``/**`` (the node's own section overriding ``/**``), parameters may be

@@ -1,4 +1,5 @@
-"""``Robot`` validates every parameter once and names the one it refuses.
+"""
+``Robot`` validates every parameter once and names the one it refuses.
 
 Lengths and masses must be finite positive numbers, ``alpha`` must lie in
 (0, pi/2) rad and ``gravity`` must be a finite 3-vector of numbers; each

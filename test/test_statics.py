@@ -1,4 +1,5 @@
-"""Invariant 6 (statics): at rest at home the forces are the hand statics.
+"""
+Invariant 6 (statics): at rest at home the forces are the hand statics.
 
 The hand argument (virtual work). At rest, ``f . d(lambda) = dV`` for every
 virtual motion, with ``V = -sum m g . r_C``. At home (r_G = 0) eq. (9)

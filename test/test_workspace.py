@@ -1,4 +1,5 @@
-"""Refused inputs raise ``WorkspaceError`` with their reason, never a NaN.
+"""
+Refused inputs raise ``WorkspaceError`` with their reason, never a NaN.
 
 A platform position out of reach of a leg (eq. 9 not real), too near a
 singularity of J1 (some ``alpha_i / l3`` below the margin) or of J2
