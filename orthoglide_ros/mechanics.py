@@ -160,7 +160,7 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
     columns = (x, y, z, *v.T.copy(), *a.T.copy())
     for start in range(0, n, BATCH_CHUNK):
         chunk = slice(start, start + BATCH_CHUNK)
-        with np.errstate(divide='ignore', invalid='ignore'):
+        with np.errstate(all='ignore'):     # checked below, row by row
             *values, al, conditioning[chunk] = kernel.solve(
                 robot.constants, *(c[chunk] for c in columns), np.sqrt)
         for j, triple in enumerate(values):
@@ -173,7 +173,7 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
             f'position {_fmt(p[row])} m is too near a singularity of J2: '
             f'1/kappa_F(J_lambda) = {conditioning[row]:.3g} < margin '
             f'{margin:g}'), row)
-    bad = ~np.isfinite(out[2].sum(1) + out[3].sum(1) + out[4].sum(1))
+    bad = ~np.isfinite(out[2:]).all(axis=(0, 2))
     if bad.any():
         row = int(np.argmax(bad))
         raise WorkspaceError('overflow', (
