@@ -10,6 +10,7 @@ topics, parameters and rules.
 
 import array
 import time
+import traceback
 
 import rclpy
 from rclpy.exceptions import (ParameterException,
@@ -98,6 +99,7 @@ class FeedforwardNode(Node):
         self._tick_timer = None
         self._set_tick()
         self._published = 0
+        self._internal_errors = 0
         self._last_warning = {}
         # Start of the diagnostics period: (time, published, computed,
         # compute ns, rejected) at that moment.
@@ -207,6 +209,13 @@ class FeedforwardNode(Node):
         except Rejected as rejection:
             self._warn(rejection.reason, str(rejection))
             return
+        except Exception:   # a defect, not bad input: publish nothing, go on
+            self._internal_errors += 1
+            if self._throttle('internal'):
+                self.get_logger().error(
+                    'internal error on a setpoint, nothing published:\n'
+                    + traceback.format_exc())
+            return
         if output is not None and self._tick_timer is None:
             self._publish(output)
 
@@ -231,11 +240,17 @@ class FeedforwardNode(Node):
         self._published += 1
 
     def _warn(self, reason, message):
-        now = time.monotonic()
-        if now - self._last_warning.get(reason, -1e9) >= WARNING_PERIOD:
-            self._last_warning[reason] = now
+        if self._throttle(reason):
             self.get_logger().warning(f'setpoint rejected ({reason}): '
                                       f'{message}')
+
+    def _throttle(self, reason):
+        """Say whether a message of this reason may be logged now."""
+        now = time.monotonic()
+        if now - self._last_warning.get(reason, -1e9) < WARNING_PERIOD:
+            return False
+        self._last_warning[reason] = now
+        return True
 
     def _publish_diagnostics(self):
         core = self._core
@@ -258,7 +273,11 @@ class FeedforwardNode(Node):
             hardware_id='orthoglide')
         age = None if core.latest_arrival is None \
             else now - core.latest_arrival
-        if age is None:
+        if self._internal_errors:
+            status.level = DiagnosticStatus.ERROR
+            status.message = (f'{self._internal_errors} internal error(s): '
+                              'see the log')
+        elif age is None:
             status.level, status.message = DiagnosticStatus.OK, \
                 'waiting for the first setpoint'
         elif not core.fresh(now):
@@ -287,6 +306,7 @@ class FeedforwardNode(Node):
             ('singularity margin', settings.singularity_margin),
             ('pending partial setpoints', core.pending),
             ('rate_hz', settings.rate_hz),
+            ('internal errors', self._internal_errors),
         ]
         values += [(f'received {k}', v) for k, v in core.received.items()]
         values += [(f'rejected {r}', core.rejected[r]) for r in REASONS]
