@@ -129,11 +129,13 @@ class Feedforward:
     def expire(self, now):
         """Drop the partial setpoints older than pairing_timeout; count them."""
         limit = now - self.settings.pairing_timeout
+        pending = self._pending
         dropped = 0
-        for stamp, entry in list(self._pending.items()):
-            if entry[3] >= limit and len(self._pending) <= MAX_PENDING:
+        while pending:      # oldest first: the dict keeps arrival order
+            stamp = next(iter(pending))
+            if pending[stamp][3] >= limit and len(pending) <= MAX_PENDING:
                 break
-            del self._pending[stamp]
+            del pending[stamp]
             dropped += 1
         self.rejected['unpaired'] += dropped
         return dropped
