@@ -11,7 +11,10 @@ Rules (the README states them for users):
 
 - A setpoint is complete when a pose, a twist and an accel with the same
   stamp have arrived (or a pose alone with ``pose_only``), or when one
-  trajectory point arrives. A zero stamp cannot be paired and is rejected.
+  trajectory point arrives. A zero or negative stamp cannot be paired and
+  is rejected; so is a trajectory point whose stamp (header plus
+  ``time_from_start``) is zero, negative or beyond an output stamp's int32
+  seconds.
 - A partial setpoint waits at most ``pairing_timeout`` (by arrival time) for
   its partners; it is dropped as ``unpaired`` when that runs out, or at once
   when a newer setpoint completes (its partners can no longer come in order).
@@ -35,6 +38,8 @@ from orthoglide_ros import mechanics
 ORIENTATION_TOLERANCE = 1e-3
 # Most partial setpoints held at once; beyond, the oldest is dropped.
 MAX_PENDING = 1000
+# Largest stamp seconds an output can carry (builtin_interfaces/Time: int32).
+STAMP_SEC_MAX = 2**31 - 1
 
 REASONS = ('non_finite', 'unreachable', 'singular', 'overflow', 'frame',
            'orientation', 'stamp', 'malformed', 'unpaired')
@@ -108,9 +113,11 @@ class Feedforward:
         Take one atomic setpoint; ``velocity``/``acceleration`` may be None.
 
         A point without velocity or acceleration is ``malformed`` unless
-        ``pose_only`` lets them be zero.
+        ``pose_only`` lets them be zero. ``stamp`` (header stamp plus
+        ``time_from_start``) must be a valid stamp as for the other inputs.
         """
         self.received['trajectory'] += 1
+        self._check_stamp(stamp)
         if velocity is None or acceleration is None:
             if not self.settings.pose_only:
                 self._reject('malformed', (
@@ -159,6 +166,10 @@ class Feedforward:
             self._reject('stamp', (
                 f'stamp {stamp[0]}.{stamp[1]:09d} cannot pair pose, twist and '
                 'accel: stamp setpoints with their time'))
+        if stamp[0] > STAMP_SEC_MAX:
+            self._reject('stamp', (
+                f'stamp {stamp[0]}.{stamp[1]:09d} is beyond the int32 seconds '
+                'of builtin_interfaces/Time'))
 
     def _part(self, stamp, slot, value, now):
         self._check_stamp(stamp)
@@ -209,9 +220,11 @@ class Feedforward:
 
     def _check_orientation(self, q):
         x, y, z, w = q
-        vector = math.sqrt(x * x + y * y + z * z)
-        if not math.isfinite(vector + w):
+        if not math.isfinite(x + y + z + w) and not all(
+                math.isfinite(c) for c in q):
             self._reject('non_finite', f'orientation {q} is not finite')
+        # hypot: no squares to overflow (1e200) or underflow (1e-200).
+        vector = math.hypot(x, y, z)
         if vector == 0.0 and w == 0.0:
             self._reject('orientation', 'orientation is the zero quaternion')
         angle = 2.0 * math.atan2(vector, abs(w))

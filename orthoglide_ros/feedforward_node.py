@@ -9,6 +9,8 @@ topics, parameters and rules.
 """
 
 import array
+from copy import copy
+import signal
 import time
 import traceback
 
@@ -21,6 +23,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.signals import SignalHandlerOptions
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import AccelStamped, PoseStamped, TwistStamped
@@ -36,6 +39,7 @@ from orthoglide_ros.settings import SPECS, settings_from_parameters
 
 # Reliable, keep-last 10 on every input and output; users override it with
 # the standard qos_overrides.<topic>.<publisher|subscription>.* parameters.
+# Each entity gets a copy: rclpy writes the overrides into the profile.
 QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                  reliability=ReliabilityPolicy.RELIABLE)
 DIAGNOSTICS_PERIOD = 1.0    # s
@@ -70,13 +74,13 @@ class FeedforwardNode(Node):
 
         overrides = QoSOverridingOptions.with_default_policies()
         self._pub_joints = self.create_publisher(
-            JointState, 'feedforward/joint_states', QOS,
+            JointState, 'feedforward/joint_states', copy(QOS),
             qos_overriding_options=overrides)
         self._pub_forces = self.create_publisher(
-            Float64MultiArray, 'feedforward/forces', QOS,
+            Float64MultiArray, 'feedforward/forces', copy(QOS),
             qos_overriding_options=overrides)
         self._pub_power = self.create_publisher(
-            Float64MultiArray, 'feedforward/power', QOS,
+            Float64MultiArray, 'feedforward/power', copy(QOS),
             qos_overriding_options=overrides)
         self._pub_diagnostics = self.create_publisher(
             DiagnosticArray, '/diagnostics', 10)
@@ -85,11 +89,11 @@ class FeedforwardNode(Node):
                                (AccelStamped, self._on_accel)):
             name = kind.__name__.replace('Stamped', '').lower()
             self.create_subscription(
-                kind, f'setpoint/{name}', callback, QOS,
+                kind, f'setpoint/{name}', callback, copy(QOS),
                 qos_overriding_options=overrides, raw=True)
         self.create_subscription(
             MultiDOFJointTrajectory, 'setpoint/trajectory',
-            self._on_trajectory, QOS, qos_overriding_options=overrides,
+            self._on_trajectory, copy(QOS), qos_overriding_options=overrides,
             raw=True)
 
         self._joints = JointState()
@@ -334,8 +338,14 @@ def _text(value):
 def main(args=None):
     """Run the node until Ctrl-C or shutdown; return the exit code."""
     logger = rclpy.logging.get_logger('feedforward')
+    # Ctrl-C and SIGTERM only set a flag that the spin loop reads (within
+    # 0.1 s): rclpy's handlers would raise or shut the context down inside a
+    # callback, breaking off a publish (logged FATAL by the executor).
+    stop = []
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda number, frame: stop.append(number))
     try:
-        rclpy.init(args=args)
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     except RuntimeError as error:   # rcl refuses the arguments or file
         logger.fatal(f'cannot start: {error}')
         return 2
@@ -346,7 +356,7 @@ def main(args=None):
         executor.add_node(node)
         # Not executor.spin(): with the EventsExecutor of the rclpy 7.1.6
         # wheels it busy-loops without running callbacks or seeing SIGINT.
-        while rclpy.ok():
+        while rclpy.ok() and not stop:
             executor.spin_once(timeout_sec=0.1)
     except (ValueError, ParameterException) as error:
         logger.fatal(f'invalid parameters, not starting: {error}')

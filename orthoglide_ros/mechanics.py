@@ -116,7 +116,9 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
             f'position {_fmt(position)} m is too near a singularity of '
             f'J2: 1/kappa_F(J_lambda) = {conditioning:.3g} < margin '
             f'{margin:g}'))
-    if not math.isfinite(sum(lamdd) + sum(force) + sum(power)):
+    if not math.isfinite(sum(lamdd) + sum(force) + sum(power)) and not all(
+            math.isfinite(f) for f in (*lamdd, *force, *power)):
+        # (A sum of large finite numbers may overflow: check one by one.)
         raise WorkspaceError('overflow', (
             f'the result for position {_fmt(position)} m, velocity '
             f'{_fmt(velocity)} m/s, acceleration {_fmt(acceleration)} '
@@ -151,7 +153,9 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
         row = int(np.argmin(finite))
         _check_finite_inputs(p[row], v[row], a[row], row)
     x, y, z = p.T.copy()
-    rho = np.maximum(np.maximum(y * y + z * z, z * z + x * x), x * x + y * y)
+    with np.errstate(over='ignore'):    # a far point: inf, refused below
+        rho = np.maximum(np.maximum(y * y + z * z, z * z + x * x),
+                         x * x + y * y)
     reach = rho < robot.l3 * robot.l3 * (1.0 - margin * margin)
     if not reach.all():
         row = int(np.argmin(reach))
@@ -170,8 +174,14 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
                 out[j, leg, chunk] = triple[leg]
     out = out.transpose(0, 2, 1)
     conditioning = np.nan_to_num(conditioning, nan=0.0)
-    if not (conditioning >= margin).all():
-        row = int(np.argmin(conditioning >= margin))
+    # 0 (NaN before): exactly on a singularity, where solve divides by
+    # zero; refused whatever the margin, as solve refuses it.
+    accepted = (conditioning >= margin) & (conditioning > 0.0)
+    if not accepted.all():
+        row = int(np.argmin(accepted))
+        if conditioning[row] == 0.0:
+            raise WorkspaceError('singular', (
+                f'position {_fmt(p[row])} m is on a singularity'), row)
         raise WorkspaceError('singular', (
             f'position {_fmt(p[row])} m is too near a singularity of J2: '
             f'1/kappa_F(J_lambda) = {conditioning[row]:.3g} < margin '
@@ -235,8 +245,8 @@ def forward_kinematics(robot, lam):
         raise WorkspaceError('non_finite', f'lambda {lam} is not finite')
     l3 = robot.l3
     d = l3 - lam
-    kk = l3 * l3 - d * d
-    with np.errstate(divide='ignore', invalid='ignore'):
+    with np.errstate(all='ignore'):     # checked below, row by row
+        kk = l3 * l3 - d * d
         w = 0.25 / (d * d)
         qa = w.sum(-1)
         qb = 1.0 + 2.0 * (w * kk).sum(-1)
@@ -380,8 +390,8 @@ def _leg_error(robot, position, margin, row=None):
     """Explain which leg refuses ``position`` (a WorkspaceError)."""
     x, y, z = (float(v) for v in position)
     l3 = robot.l3
-    for leg, rho in (('A', y * y + z * z), ('B', z * z + x * x),
-                     ('C', x * x + y * y)):
+    legs = (('A', y * y + z * z), ('B', z * z + x * x), ('C', x * x + y * y))
+    for leg, rho in legs:
         if rho >= l3 * l3:
             return WorkspaceError('unreachable', (
                 f'position {_fmt(position)} m is out of reach of leg {leg}: '
@@ -393,7 +403,13 @@ def _leg_error(robot, position, margin, row=None):
                 f'position {_fmt(position)} m is too near a singularity of '
                 f'J1: leg {leg} has alpha/l3 = {ratio:.3g} < margin '
                 f'{margin:g}'), row)
-    raise AssertionError('no leg refuses this position')
+    # On the margin's very edge the callers' test and the ones above can
+    # round apart: the leg nearest its singularity refuses it.
+    leg, rho = max(legs, key=lambda item: item[1])
+    return WorkspaceError('singular', (
+        f'position {_fmt(position)} m is on the edge of the singularity '
+        f'margin {margin:g} of J1: leg {leg} has alpha/l3 = '
+        f'{math.sqrt(1.0 - rho / (l3 * l3)):.3g}'), row)
 
 
 def _fmt(vec):

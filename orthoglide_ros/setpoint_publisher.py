@@ -14,6 +14,7 @@ pass with ``loop``. Run it with ``ros2 run orthoglide_ros setpoint_publisher
 --ros-args -p input:=topics`` (parameters: see PARAMETERS below).
 """
 
+from copy import copy
 import math
 import signal
 
@@ -38,6 +39,7 @@ from orthoglide_ros import trajectory
 
 # The feedforward's inputs are reliable, keep-last 10: match them (users
 # override it with the qos_overrides.<topic>.publisher.* parameters).
+# Each publisher gets a copy: rclpy writes the overrides into the profile.
 QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
                  reliability=ReliabilityPolicy.RELIABLE)
 INPUTS = ('trajectory', 'topics')
@@ -119,7 +121,7 @@ class SetpointPublisher(Node):
                     accelerations=[Twist()])])
             self._trajectory.header.frame_id = frame
             self._publishers = [self.create_publisher(
-                MultiDOFJointTrajectory, 'setpoint/trajectory', QOS,
+                MultiDOFJointTrajectory, 'setpoint/trajectory', copy(QOS),
                 qos_overriding_options=overrides)]
         else:
             # Default orientation: the identity quaternion (w = 1).
@@ -128,7 +130,7 @@ class SetpointPublisher(Node):
             for msg in (self._pose, self._twist, self._accel):
                 msg.header.frame_id = frame
             self._publishers = [
-                self.create_publisher(kind, f'setpoint/{name}', QOS,
+                self.create_publisher(kind, f'setpoint/{name}', copy(QOS),
                                       qos_overriding_options=overrides)
                 for kind, name in ((PoseStamped, 'pose'),
                                    (TwistStamped, 'twist'),

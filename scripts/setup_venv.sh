@@ -81,7 +81,10 @@ fi
 if [ -n "$UV" ]; then
     echo "setup_venv: installing $(basename "$REQ") + orthoglide_ros (editable) with uv"
     # `pip` too, so .venv/bin/pip exists for people who want it.
-    run "$UV" pip install --python "$VPY" -r "$REQ" pip
+    # --compile-bytecode: the wheels hold no .pyc, and where
+    # PYTHONDONTWRITEBYTECODE is set every process would compile rclpy,
+    # numpy and the messages again (node start 1.3 s instead of 0.55 s).
+    run "$UV" pip install --python "$VPY" --compile-bytecode -r "$REQ" pip
     run "$UV" pip install --python "$VPY" -e "$ROOT"
 else
     echo "setup_venv: installing $(basename "$REQ") + orthoglide_ros (editable) with pip (no uv)"

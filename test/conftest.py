@@ -39,3 +39,21 @@ def ros_context():
         yield context
     finally:
         rclpy.try_shutdown(context=context)
+
+
+def pytest_collection_modifyitems(config, items):
+    """
+    Skip the tests marked ``soak`` unless asked for.
+
+    They are the long versions (10 s floods, 5 restarts): ``pytest -m soak``
+    or ``ORTHOGLIDE_SOAK=1`` runs them; the default run has a short version
+    of each.
+    """
+    if os.environ.get('ORTHOGLIDE_SOAK') == '1' \
+            or 'soak' in (config.getoption('markexpr') or ''):
+        return
+    skip = pytest.mark.skip(
+        reason='soak test: select it with -m soak or ORTHOGLIDE_SOAK=1')
+    for item in items:
+        if 'soak' in item.keywords:
+            item.add_marker(skip)

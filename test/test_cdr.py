@@ -22,8 +22,9 @@ from trajectory_msgs.msg import (MultiDOFJointTrajectory,  # noqa: E402
 
 floats = st.floats(allow_nan=True, allow_infinity=True, width=64)
 stamps = st.tuples(st.integers(-2**31, 2**31 - 1), st.integers(0, 2**32 - 1))
-# ROS strings are C strings: no NUL inside.
-frames = st.text(st.characters(blacklist_characters='\x00'), max_size=12)
+# ROS strings are UTF-8 C strings: no NUL inside, no lone surrogates.
+frames = st.text(st.characters(blacklist_characters='\x00',
+                               blacklist_categories=('Cs',)), max_size=12)
 vectors = st.tuples(floats, floats, floats)
 
 

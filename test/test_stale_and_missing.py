@@ -1,0 +1,301 @@
+"""
+Stale and missing input, over real DDS: the README's rules hold.
+
+The node (``FeedforwardNode``) and a :class:`node_harness.Probe` share one
+rclpy context and one EventsExecutor; the probe is also the producer. A
+producer streams at about 250 Hz and stops: with ``rate_hz > 0`` the
+outputs stop within ``setpoint_timeout`` (plus one tick and the delivery
+slack) of the last setpoint's arrival and the next ``/diagnostics`` says
+``stale`` (WARN); the producer comes back: the first output carries the
+first fresh setpoint's stamp and the diagnostics return to OK. With
+``rate_hz`` 0 only the diagnostics change. A setpoint missing its twist or
+accel, or whose accel comes later than ``pairing_timeout``, gives no output
+and is counted ``unpaired``; with ``pose_only`` a pose alone is served.
+
+Times are the node's and the probe's ``time.monotonic()`` (one process).
+"""
+
+import os
+import sys
+import time
+from types import SimpleNamespace
+
+import pytest
+from rclpy.experimental import EventsExecutor
+from rclpy.parameter import Parameter
+
+from diagnostic_msgs.msg import DiagnosticStatus
+
+from orthoglide_ros import mechanics
+from orthoglide_ros.feedforward_node import FeedforwardNode
+from orthoglide_ros.robot import Robot
+from orthoglide_ros.trajectory import paper_sample
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from node_harness import (diagnostic_values, header_stamp,  # noqa: E402
+                          Probe, spin_for, spin_until, stamp_of)
+
+WAIT = 15.0         # s for anything to arrive: generous, the machine is shared
+PRODUCER_HZ = 250.0
+STREAM = 1.0        # s of streaming before the producer stops
+SLACK = 0.5         # s: delivery of an output and scheduling, on a busy host
+ZERO = (0.0, 0.0, 0.0)
+
+
+@pytest.fixture
+def graph(ros_context):
+    """Return make(params): node and probe on one executor, matched."""
+    made = []
+
+    def make(params):
+        node = FeedforwardNode(context=ros_context, parameter_overrides=[
+            Parameter(k, value=v) for k, v in params.items()])
+        probe = Probe(ros_context)
+        executor = EventsExecutor(context=ros_context)
+        made.append((executor, node, probe))
+        executor.add_node(node)
+        executor.add_node(probe)
+        assert spin_until(executor, lambda: probe.matched(node), WAIT), (
+            'probe and node did not match')
+        return SimpleNamespace(node=node, probe=probe, executor=executor,
+                               core=node._core)
+
+    yield make
+    for executor, node, probe in made:
+        executor.shutdown()
+        probe.destroy_node()
+        node.destroy_node()
+
+
+def sample(t):
+    """Return the setpoint of time t (s): eq. (6), a slow loop, periodic."""
+    return paper_sample(t % 6.0)
+
+
+def solve(t):
+    """Return mechanics.solve of the setpoint of time t (paper robot)."""
+    return mechanics.solve(Robot(), *sample(t))
+
+
+def send(g, form, t):
+    """Send the setpoint of time t, stamped stamp_of(t), in ``form``."""
+    if form == 'trajectory':
+        g.probe.send_trajectory(stamp_of(t), *sample(t))
+    else:
+        g.probe.send(stamp_of(t), *sample(t))
+
+
+def stream(g, form, first_t, duration=STREAM, until=None):
+    """
+    Publish setpoints at PRODUCER_HZ, spinning in between; return them.
+
+    Setpoint k has t = first_t + k / PRODUCER_HZ. Stops after
+    ``duration`` s, or (if given) once ``until()`` holds. Behind schedule
+    it does not burst: one setpoint, then at least one spin.
+    """
+    period = 1.0 / PRODUCER_HZ
+    start = time.monotonic()
+    due = start
+    sent = []
+    while True:
+        now = time.monotonic()
+        if until is not None:
+            if until():
+                break
+            assert now - start < WAIT, 'stream: condition not reached'
+        elif now - start >= duration:
+            break
+        if now >= due:
+            t = first_t + len(sent) * period
+            send(g, form, t)
+            sent.append(t)
+            due = max(due + period, now)
+        g.executor.spin_once(timeout_sec=max(0.0, min(due - now, period)))
+    return sent
+
+
+def wait_diagnostics_after(g, index):
+    """Spin until a /diagnostics message beyond ``index`` arrives; return it."""
+    probe = g.probe
+    assert spin_until(g.executor, lambda: len(probe.diagnostics) > index,
+                      WAIT), 'no /diagnostics message'
+    return probe.diagnostics[index]
+
+
+def assert_output(g, k, t):
+    """Check the k-th joint state and force against the setpoint of t."""
+    joints = g.probe.joint_states[k]
+    assert header_stamp(joints) == stamp_of(t)
+    expected = solve(t)
+    assert list(joints.position) == list(expected.lambda_)
+    assert list(joints.effort) == list(expected.force)
+
+
+@pytest.mark.parametrize('rate, form', [
+    (100.0, 'trajectory'), (100.0, 'topics'), (0.0, 'trajectory')])
+def test_producer_stops_then_comes_back(graph, rate, form):
+    """Outputs stop after setpoint_timeout, diagnostics say stale; resume."""
+    timeout = 0.2
+    g = graph({'rate_hz': rate, 'setpoint_timeout': timeout})
+    probe, core = g.probe, g.core
+    sent = stream(g, form, 10.0)
+    spin_until(g.executor, lambda: core.latest is not None
+               and core.latest.stamp == stamp_of(sent[-1]), WAIT)
+    assert core.latest.stamp == stamp_of(sent[-1])
+    last_arrival = core.latest_arrival
+    # Let the timeout run out, then note where the diagnostics stand.
+    spin_for(g.executor, last_arrival + timeout + 0.1 - time.monotonic())
+    index = len(probe.diagnostics)
+    spin_for(g.executor, 0.5)
+    n = len(probe.joint_states)
+    stamps = probe.output_stamps()
+    sent_stamps = [stamp_of(t) for t in sent]
+    assert set(stamps) <= set(sent_stamps)
+    assert stamps == sorted(stamps)     # never an older setpoint again
+    assert stamps[-1] == sent_stamps[-1]
+    if rate > 0.0:
+        # The last result at the rate until the timeout, then nothing.
+        assert stamps.count(sent_stamps[-1]) >= 3, stamps[-5:]
+        assert probe.arrivals[-1] - last_arrival <= (
+            timeout + 1.0 / rate + SLACK), (
+            f'outputs went on {probe.arrivals[-1] - last_arrival:.3f} s '
+            'after the last setpoint')
+    else:
+        # One output per setpoint taken, at once.
+        assert len(set(stamps)) == n == core.computed
+        assert probe.arrivals[-1] - last_arrival <= SLACK
+    print(f'rate_hz {rate}, {form}: {len(sent)} setpoints streamed, '
+          f'{core.computed} computed, {n} outputs; last output '
+          f'{probe.arrivals[-1] - last_arrival:.3f} s after the last '
+          'setpoint arrived')
+    for k in range(0, n, max(1, n // 20)):
+        t = sent[sent_stamps.index(stamps[k])]
+        assert_output(g, k, t)
+    # Stale: nothing more, and the next diagnostics say so.
+    msg = wait_diagnostics_after(g, index)
+    status, values = msg.status[0], diagnostic_values(msg)
+    assert status.level == DiagnosticStatus.WARN, status.message
+    assert status.message.startswith('stale'), status.message
+    assert values['stale'] == 'true'
+    assert float(values['time since last setpoint (s)']) > timeout
+    assert len(probe.joint_states) == n, 'outputs after setpoint_timeout'
+
+    # The producer comes back: the first output is the first fresh setpoint.
+    resume = 100.0
+    send(g, form, resume)
+    assert spin_until(g.executor, lambda: len(probe.joint_states) > n,
+                      WAIT), 'no output after the producer came back'
+    assert_output(g, n, resume)
+    index = len(probe.diagnostics)
+    stream(g, form, resume + 1.0,
+           until=lambda: len(probe.diagnostics) > index)
+    msg = probe.diagnostics[index]
+    status, values = msg.status[0], diagnostic_values(msg)
+    assert (status.level, status.message) == (DiagnosticStatus.OK, 'ok'), (
+        status.message)
+    assert values['stale'] == 'false'
+    assert not any(core.rejected.values()), core.rejected
+    assert g.node._internal_errors == 0
+
+
+def received(g, **counts):
+    """Return a predicate: the node received at least these messages."""
+    return lambda: all(g.core.received[k] >= v for k, v in counts.items())
+
+
+@pytest.mark.parametrize('missing', ['twist', 'accel'])
+def test_missing_part_unpaired_after_pairing_timeout(graph, missing):
+    """Pose with only one of twist/accel: no output, unpaired after timeout."""
+    pairing = 1.0
+    g = graph({'setpoint_timeout': 2.0, 'pairing_timeout': pairing})
+    probe, core = g.probe, g.core
+    parts = tuple(p for p in ('pose', 'twist', 'accel') if p != missing)
+    probe.send(stamp_of(1.0), *sample(1.0), order=parts)
+    assert spin_until(g.executor, received(g, **dict.fromkeys(parts, 1)),
+                      WAIT)
+    taken = time.monotonic()
+    assert core.pending == 1
+    assert core.rejected['unpaired'] == 0
+    # The diagnostics timer drops it once pairing_timeout has run out.
+    assert spin_until(g.executor, lambda: core.rejected['unpaired'] == 1,
+                      pairing + WAIT)
+    assert time.monotonic() - taken >= pairing - 0.05
+    assert core.pending == 0
+    msg = wait_diagnostics_after(g, len(probe.diagnostics))
+    values = diagnostic_values(msg)
+    assert values['rejected unpaired'] == '1'
+    assert values['pending partial setpoints'] == '0'
+    assert probe.joint_states == []
+    # The node goes on with the next complete setpoint.
+    probe.send(stamp_of(2.0), *sample(2.0))
+    assert spin_until(g.executor, lambda: probe.joint_states, WAIT)
+    assert_output(g, 0, 2.0)
+    spin_for(g.executor, 0.1)
+    assert len(probe.joint_states) == 1
+    assert core.rejected['unpaired'] == 1
+    assert sum(core.rejected.values()) == 1
+
+
+def test_late_accel_unpaired(graph):
+    """An accel later than pairing_timeout after its pose: no output."""
+    pairing = 0.3
+    g = graph({'setpoint_timeout': 1.0, 'pairing_timeout': pairing})
+    probe, core = g.probe, g.core
+    probe.send(stamp_of(1.0), *sample(1.0), order=('pose', 'twist'))
+    assert spin_until(g.executor, received(g, pose=1, twist=1), WAIT)
+    spin_for(g.executor, pairing + 0.2)
+    probe.send(stamp_of(1.0), *sample(1.0), order=('accel',))
+    assert spin_until(g.executor, received(g, accel=1), WAIT)
+    # The pose and twist are dropped (at the latest when the accel came);
+    # the accel, alone with its stamp, waits and is dropped in turn.
+    assert core.rejected['unpaired'] >= 1
+    assert spin_until(g.executor, lambda: core.rejected['unpaired'] == 2,
+                      pairing + WAIT)
+    assert core.pending == 0
+    spin_for(g.executor, 0.1)
+    assert probe.joint_states == []
+    assert core.computed == 0
+    probe.send(stamp_of(2.0), *sample(2.0))
+    assert spin_until(g.executor, lambda: probe.joint_states, WAIT)
+    assert_output(g, 0, 2.0)
+    assert core.rejected['unpaired'] == 2
+    assert sum(core.rejected.values()) == 2
+
+
+def test_newer_setpoint_drops_partial_at_once(graph):
+    """A partial setpoint is dropped when a newer one completes."""
+    g = graph({'setpoint_timeout': 20.0, 'pairing_timeout': 10.0})
+    probe, core = g.probe, g.core
+    probe.send(stamp_of(1.0), *sample(1.0), order=('pose', 'twist'))
+    assert spin_until(g.executor, received(g, pose=1, twist=1), WAIT)
+    assert core.pending == 1
+    start = time.monotonic()
+    probe.send(stamp_of(2.0), *sample(2.0))
+    assert spin_until(g.executor, lambda: probe.joint_states, WAIT)
+    assert time.monotonic() - start < 10.0
+    assert_output(g, 0, 2.0)
+    assert core.rejected['unpaired'] == 1
+    assert core.pending == 0
+
+
+def test_pose_only_serves_pose_alone(graph):
+    """pose_only: a pose alone is a setpoint (zero rates); others ignored."""
+    g = graph({'pose_only': True})
+    probe, core = g.probe, g.core
+    position = sample(1.0)[0]
+    probe.send(stamp_of(1.0), position, order=('pose',))
+    assert spin_until(g.executor, lambda: probe.joint_states, WAIT)
+    joints = probe.joint_states[0]
+    expected = mechanics.solve(Robot(), position, ZERO, ZERO)
+    assert header_stamp(joints) == stamp_of(1.0)
+    assert list(joints.position) == list(expected.lambda_)
+    assert list(joints.velocity) == [0.0, 0.0, 0.0]
+    assert list(joints.effort) == list(expected.force)
+    # Twist and accel (of this stamp or another) change nothing.
+    probe.send(stamp_of(1.0), *sample(1.0), order=('twist', 'accel'))
+    probe.send(stamp_of(3.0), *sample(3.0), order=('accel', 'twist'))
+    assert spin_until(g.executor, received(g, twist=2, accel=2), WAIT)
+    spin_for(g.executor, 0.1)
+    assert len(probe.joint_states) == 1
+    assert core.pending == 0
+    assert not any(core.rejected.values()), core.rejected
