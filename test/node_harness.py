@@ -225,6 +225,24 @@ def _point(position, velocity, acceleration, orientation, time_from_start,
     return point
 
 
+# Outputs are checked against mechanics.solve to this (relative above 1,
+# absolute below): the node publishes the core's doubles unchanged.
+TOL = 1e-9
+
+
+def close(actual, expected):
+    """Say whether two floats agree to TOL (relative above 1, else absolute)."""
+    return abs(actual - expected) <= TOL * max(1.0, abs(expected))
+
+
+def assert_vector(actual, expected, what):
+    """Check three received floats against the expected 3-tuple."""
+    actual = list(actual)
+    assert len(actual) == 3 and all(
+        close(a, e) for a, e in zip(actual, expected)), (
+        f'{what}: got {actual}, expected {list(expected)}')
+
+
 def spin_until(executor, predicate, timeout):
     """Spin ``executor`` until ``predicate()`` holds; return whether it did."""
     deadline = time.monotonic() + timeout

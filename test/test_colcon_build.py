@@ -21,7 +21,7 @@ from orthoglide_ros.params_file import load_robot
 from orthoglide_ros.trajectory import paper_sample
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (header_stamp, node_executable,  # noqa: E402
+from node_harness import (close, header_stamp, node_executable,  # noqa: E402
                           Probe, spin_until, start_node_process,
                           stop_process)
 
@@ -33,11 +33,6 @@ WAIT = 40.0
 
 pytestmark = pytest.mark.skipif(not os.path.exists(COLCON),
                                 reason='colcon is not installed next to python')
-
-
-def close(actual, expected):
-    """Whether two floats agree to 1e-9 (relative above 1, else absolute)."""
-    return abs(actual - expected) <= 1e-9 * max(1.0, abs(expected))
 
 
 @pytest.fixture(scope='module')

@@ -33,10 +33,9 @@ from orthoglide_ros.settings import SPECS
 from orthoglide_ros.trajectory import paper_sample, paper_times
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (diagnostic_values, header_stamp,  # noqa: E402
-                          Probe, spin_for, spin_until, stamp_of)
-
-TOL = 1e-9
+from node_harness import (assert_vector, close,  # noqa: E402
+                          diagnostic_values, header_stamp, Probe, spin_for,
+                          spin_until, stamp_of)
 WAIT = 10.0     # s: generous, the machine is shared
 JOINT_NAMES = ['slider_a', 'slider_b', 'slider_c']
 ZERO = (0.0, 0.0, 0.0)
@@ -76,19 +75,6 @@ def graph(ros_context):
         spinner.shutdown()
         probe.destroy_node()
         node.destroy_node()
-
-
-def close(actual, expected):
-    """Whether two floats agree to 1e-9 (relative above 1, else absolute)."""
-    return abs(actual - expected) <= TOL * max(1.0, abs(expected))
-
-
-def assert_vector(actual, expected, what):
-    """Check three received floats against the expected 3-tuple."""
-    actual = list(actual)
-    assert len(actual) == 3, what
-    assert all(close(a, e) for a, e in zip(actual, expected)), (
-        f'{what}: got {actual}, expected {list(expected)}')
 
 
 def assert_layout(msg):

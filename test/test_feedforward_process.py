@@ -19,13 +19,12 @@ from orthoglide_ros.params_file import load_robot
 from orthoglide_ros.trajectory import paper_sample, paper_times
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (header_stamp, node_executable,  # noqa: E402
-                          Probe, spin_until, start_node_process,
-                          stop_process, wait_exit)
+from node_harness import (assert_vector, header_stamp,  # noqa: E402
+                          node_executable, Probe, spin_until,
+                          start_node_process, stop_process, wait_exit)
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config' / 'orthoglide.yaml'
-TOL = 1e-9
 WAIT = 15.0         # s for one answer: generous, the machine is shared
 START_WAIT = 40.0   # s for the process to come up and answer
 PROMPT = 5.0        # s from SIGINT to exit
@@ -51,19 +50,6 @@ def probe_graph(ros_context):
     for executor, probe in made:
         executor.shutdown()
         probe.destroy_node()
-
-
-def close(actual, expected):
-    """Whether two floats agree to 1e-9 (relative above 1, else absolute)."""
-    return abs(actual - expected) <= TOL * max(1.0, abs(expected))
-
-
-def assert_vector(actual, expected, what):
-    """Check three received floats against the expected 3-tuple."""
-    actual = list(actual)
-    assert len(actual) == 3 and all(
-        close(a, e) for a, e in zip(actual, expected)), (
-        f'{what}: got {actual}, expected {list(expected)}')
 
 
 def wait_count(executor, probe, count, timeout=WAIT):

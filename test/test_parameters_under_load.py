@@ -62,12 +62,11 @@ from orthoglide_ros.params_file import load_robot
 from orthoglide_ros.trajectory import paper_sample
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (node_executable, PROBE_QOS,  # noqa: E402
+from node_harness import (close, node_executable, PROBE_QOS,  # noqa: E402
                           start_node_process, stop_process)
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config' / 'orthoglide.yaml'
-TOL = 1e-9
 DISTINCT = 1e-6         # N: the models' forces differ by more, everywhere
 RATE = 1000.0           # setpoints per second
 START_WAIT = 40.0       # s for the process to come up and answer
@@ -113,11 +112,10 @@ def stamp_of(k):
     return (7000 + k // 1000, (k % 1000) * 1_000_000)
 
 
-def close(actual, expected):
-    """Whether floats agree to 1e-9 (relative above 1, else absolute)."""
-    return all(abs(a - e) <= TOL * max(1.0, abs(e))
-               for a, e in zip(actual, expected)) and \
-        len(actual) == len(expected)
+def close_all(actual, expected):
+    """Say whether float sequences agree element by element to TOL."""
+    return len(actual) == len(expected) and all(
+        close(a, e) for a, e in zip(actual, expected))
 
 
 class LoadRig:
@@ -350,9 +348,9 @@ class Checker:
             assert not found or k > found[-1][1], 'outputs out of order'
             got = (list(msg.position), list(msg.velocity), list(msg.effort))
             names = [name for name, s in self.expected(k).items()
-                     if close(got[0], s.lambda_)
-                     and close(got[1], s.lambdadot)
-                     and close(got[2], s.force)]
+                     if close_all(got[0], s.lambda_)
+                     and close_all(got[1], s.lambdadot)
+                     and close_all(got[2], s.force)]
             assert len(names) == 1, (
                 f'setpoint {k}: output {got} matches {names or "no model"}')
             found.append((arrival, k, names[0]))
@@ -370,7 +368,7 @@ class Checker:
                 assert k < len(self.rig.sent_at), (
                     f'{topic} {got} matches no setpoint after the last one')
                 names = [name for name, s in self.expected(k).items()
-                         if close(got, getattr(s, field))]
+                         if close_all(got, getattr(s, field))]
             assert len(names) == 1, (k, names)
             found.append((arrival, k, names[0]))
         return found
