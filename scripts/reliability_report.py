@@ -1,0 +1,220 @@
+#!/usr/bin/env python3
+"""
+Run the full reliability cases of the feedforward node and print a report.
+
+Issue 4's "how it is shown": the full versions of the flood, reliable,
+restart and fuzz tests, with the figures the README quotes. The runs are
+those of ``test/reliability_harness.py`` (the tests run them shorter):
+
+- best-effort floods for ``--duration`` s (trajectory and topics inputs);
+- a reliable stream at 1 kHz for ``--duration`` s, every setpoint matched
+  to its output;
+- ``--cycles`` SIGKILL/restart cycles of the node at 500 Hz, with the Fast
+  DDS profile ``config/fastdds_discovery.xml`` on every process and with
+  Fast DDS defaults;
+- producer restarts (SIGKILL then SIGINT, later then earlier stamps) on
+  both inputs; SIGINT and SIGTERM mid-stream;
+- ``test/test_fuzz_node.py`` and ``test/test_fuzz_mechanics.py`` (when
+  present) through pytest, with ``--hypothesis-seed`` and
+  ``ORTHOGLIDE_FUZZ_EXAMPLES`` when the files read it.
+
+Run it through ``scripts/reliability_report.sh`` (venv, localhost, own
+domain). Exit code 1 on a hard failure (a crash, a non-finite or wrong
+output, a setpoint lost under reliable QoS, a fuzz failure, a run that
+could not be done), else 0; missed time or memory bounds are reported.
+"""
+
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+FUZZ_FILES = ('test/test_fuzz_node.py', 'test/test_fuzz_mechanics.py')
+FUZZ_VARIABLE = 'ORTHOGLIDE_FUZZ_EXAMPLES'
+
+# Before rclpy is imported (by the harness): this host, a domain of our own.
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+os.environ.setdefault('ROS_DOMAIN_ID', os.environ.get(
+    'ORTHOGLIDE_TEST_DOMAIN_ID', str(1 + os.getpid() % 232)))
+os.environ.setdefault('ROS_LOG_DIR',
+                      tempfile.mkdtemp(prefix='orthoglide-ros-log-'))
+sys.path.insert(0, os.path.join(ROOT, 'test'))
+
+import numpy as np  # noqa: E402
+
+import reliability_harness as harness  # noqa: E402
+
+
+def say(text):
+    """Progress on stderr (the report goes to stdout)."""
+    print(text, file=sys.stderr, flush=True)
+
+
+def runs(args):
+    """Yield (label, function, kwargs) of every harness run to do."""
+    d = args.duration
+    yield 'flood trajectory', harness.flood, dict(duration=d)
+    yield 'flood topics', harness.flood, dict(duration=d, kind='topics')
+    yield 'reliable 1 kHz', harness.reliable_stream, dict(rate=1000,
+                                                          duration=d)
+    yield 'kill/restart, profile', harness.kill_restart, dict(
+        cycles=args.cycles)
+    yield 'kill/restart, default', harness.kill_restart, dict(
+        cycles=args.cycles, discovery=None)
+    yield 'producer restarts trajectory', harness.producer_restart, {}
+    yield 'producer restarts topics', harness.producer_restart, dict(
+        kind='topics')
+    yield 'SIGINT/SIGTERM mid-stream', harness.stop_mid_stream, {}
+
+
+def run_fuzz(args, domain):
+    """Run the fuzz test files through pytest; return a result dict."""
+    files = [f for f in FUZZ_FILES if os.path.exists(os.path.join(ROOT, f))]
+    if not files or args.skip_fuzz:
+        return dict(case='fuzz', files=files, skipped=True)
+    env = dict(os.environ, ORTHOGLIDE_TEST_DOMAIN_ID=str(domain))
+    reads = [f for f in files if FUZZ_VARIABLE in open(
+        os.path.join(ROOT, f)).read()]
+    if reads:
+        env[FUZZ_VARIABLE] = str(args.fuzz_examples)
+    command = [sys.executable, '-m', 'pytest', '-q', '-p', 'no:cacheprovider',
+               f'--hypothesis-seed={args.seed}',
+               '--hypothesis-show-statistics'] + files
+    say('fuzz: ' + ' '.join(command[2:]))
+    start = time.monotonic()
+    proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True,
+                          text=True, timeout=args.fuzz_timeout)
+    out = proc.stdout + proc.stderr
+    counts = {word: int(n) for n, word in re.findall(
+        r'(\d+) (passed|failed|error|errors|skipped|xfailed)', out)}
+    # --hypothesis-show-statistics: "400 passing, 0 failing, and 35 invalid
+    # test cases" (older hypothesis: "400 passing examples, 0 failing ...").
+    examples = sum(int(n) for n in re.findall(r'(\d+) passing\b', out))
+    failing = sum(int(n) for n in re.findall(r'(\d+) failing\b', out))
+    return dict(case='fuzz', files=files, skipped=False,
+                code=proc.returncode, counts=counts, examples=examples,
+                failing_examples=failing, seconds=time.monotonic() - start,
+                examples_variable=reads,
+                tail=out.strip().splitlines()[-15:])
+
+
+def report(results, fuzz, args, elapsed):
+    """Return the report's lines and whether a hard failure was seen."""
+    by = {label: r for label, r in results}
+    ok = [r for _, r in results if 'error' not in r]
+    lines = [f'Reliability report: feedforward node, ROS_DOMAIN_ID '
+             f'{os.environ["ROS_DOMAIN_ID"]}, LOCALHOST, {os.cpu_count()} '
+             f'CPUs, load {os.getloadavg()[0]:.2f}, {elapsed:.0f} s', '']
+    sent = sum(r.get('sent', 0) for r in ok)
+    restarts = sum(len(r.get('recovery_s', ())) for r in ok)
+    stops = sum(len(r.get('stops', ())) for r in ok)
+    lines.append(f'cases tried: {len(results)} runs, {sent} setpoints '
+                 f'streamed, {restarts} restarts (node and producer), '
+                 f'{stops} signal stops'
+                 + ('' if fuzz.get('skipped') else
+                    f', fuzz {sum(fuzz["counts"].values())} tests with '
+                    f'{fuzz["examples"]} passing hypothesis examples'))
+    crashes = sum(r.get('crashes', 0) for r in ok)
+    nonfinite = sum(r.get('nonfinite', 0) for r in ok)
+    wrong = sum(r.get('wrong', 0) for r in ok)
+    lines.append(f'crashes: {crashes} (node exits other than 0 on SIGINT/'
+                 'SIGTERM, or unexpected)')
+    lines.append(f'non-finite outputs: {nonfinite}; outputs differing from '
+                 f'mechanics.solve: {wrong}')
+    rel = by.get('reliable 1 kHz', {})
+    if 'missing' in rel:
+        lines.append(f'reliable 1 kHz, {rel["sent"]} setpoints: lost '
+                     f'{rel["missing"]}, duplicates {rel["duplicates"]}, '
+                     f'extra {rel["extra"]}')
+    for label in ('flood trajectory', 'flood topics'):
+        r = by.get(label, {})
+        if 'growth_mb' in r:
+            lines.append(
+                f'{label}: memory growth {r["growth_mb"]:+.2f} MB after '
+                f'warm-up ({r["rss_slope_mb_s"]:+.2f} MB/s), node CPU '
+                f'{r["node_cpu"]:.0%} of a core')
+    for label in ('kill/restart, profile', 'kill/restart, default'):
+        r = by.get(label, {})
+        if 'recovery_s' in r:
+            t = r['recovery_s']
+            lines.append(
+                f'{label}: recovery after kill (start to first output) min '
+                f'{min(t):.2f} / median {float(np.median(t)):.2f} / max '
+                f'{max(t):.2f} s, {sum(x > harness.RECOVERY_LIMIT for x in t)}'
+                f'/{len(t)} over {harness.RECOVERY_LIMIT:g} s')
+    recovery = [x for label, r in results if label.startswith('producer')
+                for x in r.get('recovery_s', ())]
+    if recovery:
+        lost = [n for label, r in results if label.startswith('producer')
+                for n in r.get('lost', ())]
+        lines.append(f'producer-restart recovery: min {min(recovery):.2f} / '
+                     f'median {float(np.median(recovery)):.2f} / max '
+                     f'{max(recovery):.2f} s; setpoints without output per '
+                     f'stopped producer (reliable keep-last 10): {lost}')
+    lines += ['', 'Runs:']
+    hard = crashes or nonfinite or wrong or rel.get('missing', 1) \
+        or rel.get('duplicates', 1)
+    for label, r in results:
+        if 'error' in r:
+            lines.append(f'- {label}: NOT DONE: {r["error"]}')
+            hard = True
+            continue
+        lines += ['- ' + line for line in
+                  harness.summary_lines(r).splitlines()[:1]]
+        lines += ['  ' + line for line in
+                  harness.summary_lines(r).splitlines()[1:]]
+        for problem in harness.problems(r, strict=True):
+            lines.append(f'  MISSED: {problem}')
+    if fuzz.get('skipped'):
+        lines.append(f'- fuzz: skipped (files present: {fuzz["files"]})')
+    else:
+        lines.append(
+            f'- fuzz ({", ".join(fuzz["files"])}; seed {args.seed}; '
+            + (f'{FUZZ_VARIABLE}={args.fuzz_examples}'
+               if fuzz['examples_variable'] else 'their own example counts')
+            + f'): exit {fuzz["code"]}, {fuzz["counts"]}, '
+            f'{fuzz["examples"]} passing / {fuzz["failing_examples"]} '
+            f'failing examples, {fuzz["seconds"]:.0f} s')
+        if fuzz['code'] != 0:
+            hard = True
+            lines += ['    ' + line for line in fuzz['tail']]
+    lines += ['', 'hard failures: ' + ('YES' if hard else 'none')]
+    return lines, bool(hard)
+
+
+def main():
+    """Run everything; print the report; return the exit code."""
+    parser = argparse.ArgumentParser(
+        description=__doc__.strip().split('\n')[0])
+    parser.add_argument('--duration', type=float, default=10.0,
+                        help='seconds of each flood and stream (10)')
+    parser.add_argument('--cycles', type=int, default=5,
+                        help='kill/restart cycles per discovery setting (5)')
+    parser.add_argument('--seed', type=int, default=20240404,
+                        help='hypothesis seed of the fuzz tests')
+    parser.add_argument('--fuzz-examples', type=int, default=2000,
+                        help=f'{FUZZ_VARIABLE} when the fuzz files read it')
+    parser.add_argument('--fuzz-timeout', type=float, default=1800.0)
+    parser.add_argument('--skip-fuzz', action='store_true')
+    args = parser.parse_args()
+    start = time.monotonic()
+    results = []
+    for label, function, kwargs in runs(args):
+        say(f'{label} ...')
+        try:
+            results.append((label, function(say=say, **kwargs)))
+        except harness.HarnessError as error:
+            results.append((label, dict(case=label, error=str(error))))
+    fuzz = run_fuzz(args, int(os.environ['ROS_DOMAIN_ID']))
+    lines, hard = report(results, fuzz, args, time.monotonic() - start)
+    print('\n'.join(lines))
+    return 1 if hard else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,74 @@
+"""
+Restart tests of the feedforward node as a process (issue 4, item 4).
+
+- The node is SIGKILLed while a reliable producer streams at 500 Hz and is
+  started again: its first output comes within 2 s of its start (imports
+  included), the outputs are right, and the producer was not held up while
+  the node was dead. Every process uses ``config/fastdds_discovery.xml``
+  (see the README: with Fast DDS's 3 s announcements a restarted process
+  waits up to 3 s more for its peers).
+- The producer is killed (SIGKILL) or stopped (SIGINT) mid-stream and a new
+  one starts with later, then earlier stamps: the node, not restarted,
+  serves it correctly without internal errors.
+- SIGINT and SIGTERM while setpoints stream in: exit code 0, promptly, with
+  nothing on standard error.
+
+The runs and the bounds are in ``reliability_harness`` (shared with
+``scripts/reliability_report.py``).
+"""
+
+import os
+import sys
+
+import pytest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from node_harness import node_executable  # noqa: E402
+import reliability_harness as harness  # noqa: E402
+
+pytestmark = pytest.mark.skipif(
+    not os.path.exists(node_executable()),
+    reason='the feedforward console script is not installed next to python')
+
+
+def check(result):
+    """Print the figures (shown on failure) and assert every expectation."""
+    print(harness.summary_lines(result), file=sys.stderr)
+    assert not harness.problems(result), harness.problems(result)
+
+
+def test_node_killed_mid_stream_resumes():
+    """
+    SIGKILL mid-stream, restart: first output within 2 s, right outputs.
+
+    Two cycles on a shared machine: the faster within 2 s, neither beyond
+    4 s (the report script holds every restart to 2 s and counts misses).
+    """
+    check(harness.kill_restart(2))
+
+
+@pytest.mark.soak
+def test_node_killed_mid_stream_resumes_soak():
+    """Five kill/restart cycles."""
+    check(harness.kill_restart(5))
+
+
+def test_producer_restarts_later_and_earlier_stamps():
+    """A new producer (SIGKILL, then SIGINT of the old) is served at once."""
+    result = harness.producer_restart(running=0.5)
+    check(result)
+    assert result['outputs_per_producer'][1:] and all(
+        result['outputs_per_producer']), result
+
+
+@pytest.mark.soak
+def test_producer_restarts_topics_input_soak():
+    """The same on the pose/twist/accel input (pairing across producers)."""
+    check(harness.producer_restart('topics'))
+
+
+def test_sigint_sigterm_mid_stream_clean():
+    """Ctrl-C or SIGTERM while streaming: exit 0 within 5 s, stderr clean."""
+    result = harness.stop_mid_stream()
+    check(result)
+    assert result['stderr'] == [], result['stderr']
