@@ -283,6 +283,17 @@ def start_node_process(args, env=None, command=None, cwd=None):
     return proc
 
 
+def interrupt(proc, timeout=STOP_TIMEOUT):
+    """SIGINT ``proc`` if it runs, wait ``timeout`` s, then SIGKILL it."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout)
+
+
 def stop_process(proc, timeout=STOP_TIMEOUT):
     """
     Stop ``proc``: SIGINT, wait ``timeout`` s, then SIGKILL.
@@ -292,13 +303,7 @@ def stop_process(proc, timeout=STOP_TIMEOUT):
     already exited.
     """
     try:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(timeout)
+        interrupt(proc, timeout)
     finally:
         out, err = proc.output_files
         err.seek(0)

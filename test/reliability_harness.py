@@ -53,7 +53,8 @@ sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(ROOT, 'benchmarks'))
 
 import bench_node  # noqa: E402
-from node_harness import start_node_process, stop_process  # noqa: E402
+from node_harness import (interrupt, start_node_process,  # noqa: E402
+                          stop_process)
 
 from orthoglide_ros import mechanics  # noqa: E402
 from orthoglide_ros.params_file import load_robot  # noqa: E402
@@ -389,13 +390,7 @@ class Child:
         """SIGINT, wait, else SIGKILL; return the exit code."""
         proc = self.proc
         try:
-            if proc.poll() is None:
-                proc.send_signal(signal.SIGINT)
-                try:
-                    proc.wait(timeout)
-                except subprocess.TimeoutExpired:
-                    proc.kill()
-                    proc.wait(timeout)
+            interrupt(proc, timeout)
         finally:
             while self.read(0.0):
                 pass
