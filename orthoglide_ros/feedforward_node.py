@@ -194,13 +194,7 @@ class FeedforwardNode(Node):
     def _read(self, reader, data, kind, name):
         """Read a raw message; None (counted, warned) if it is unreadable."""
         try:
-            return reader(data)
-        except cdr.CdrError:
-            pass
-        try:
-            # Not the little-endian CDR the fast reader knows: decode it with
-            # rclpy and read the local encoding.
-            return reader(serialize_message(deserialize_message(data, kind)))
+            return read_raw(reader, data, kind)
         except Exception as error:   # any decoding failure is malformed
             self._take(self._core.reject_malformed, name,
                        f'unreadable {kind.__name__}: {error}')
@@ -235,9 +229,10 @@ class FeedforwardNode(Node):
         header.stamp.sec, header.stamp.nanosec = output.stamp
         self._joints.position = array.array('d', s.lambda_)
         self._joints.velocity = array.array('d', s.lambdadot)
-        self._joints.effort = array.array('d', s.force)
+        force = array.array('d', s.force)
+        self._joints.effort = force
         self._pub_joints.publish(self._joints)
-        self._forces.data = array.array('d', s.force)
+        self._forces.data = force
         self._pub_forces.publish(self._forces)
         self._power.data = array.array('d', s.power)
         self._pub_power.publish(self._power)
@@ -319,6 +314,20 @@ class FeedforwardNode(Node):
         message = DiagnosticArray(status=[status])
         message.header.stamp = self.get_clock().now().to_msg()
         self._pub_diagnostics.publish(message)
+
+
+def read_raw(reader, data, kind):
+    """
+    Read a serialized message of type ``kind`` with a ``cdr`` reader.
+
+    A buffer that is not the little-endian CDR the fast reader knows is
+    decoded by rclpy and read in the local encoding; an unreadable one
+    raises (CdrError or rclpy's error).
+    """
+    try:
+        return reader(data)
+    except cdr.CdrError:
+        return reader(serialize_message(deserialize_message(data, kind)))
 
 
 def _vector_message():

@@ -34,7 +34,7 @@ from hypothesis import given, HealthCheck, settings, strategies as st
 import pytest
 from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
-from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.serialization import serialize_message
 
 from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
                                TwistStamped)
@@ -43,7 +43,7 @@ from trajectory_msgs.msg import (MultiDOFJointTrajectory,
 
 from orthoglide_ros import cdr, mechanics
 from orthoglide_ros.feedforward import INPUTS, ORIENTATION_TOLERANCE
-from orthoglide_ros.feedforward_node import FeedforwardNode
+from orthoglide_ros.feedforward_node import FeedforwardNode, read_raw
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from fuzz_strategies import any_float, inside, states  # noqa: E402
@@ -179,13 +179,8 @@ READERS = {'pose': cdr.pose_stamped, 'twist': cdr.vector3_stamped,
 
 def read_like_node(source, data):
     """Read a (corrupted) buffer the node's way: cdr, else rclpy, else bad."""
-    reader, kind = READERS[source], KINDS[source]
     try:
-        return reader(data)
-    except cdr.CdrError:
-        pass
-    try:
-        return reader(serialize_message(deserialize_message(data, kind)))
+        return read_raw(READERS[source], data, KINDS[source])
     except Exception:
         return MALFORMED
 
