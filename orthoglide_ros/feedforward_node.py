@@ -9,64 +9,39 @@ topics, parameters and rules.
 """
 
 import array
-from copy import copy
-import signal
 import time
 import traceback
 
-import rclpy
-from rclpy.exceptions import (ParameterException,
-                              ParameterUninitializedException)
-from rclpy.executors import ExternalShutdownException
-from rclpy.node import Node
-from rclpy.parameter import Parameter
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.serialization import deserialize_message, serialize_message
-from rclpy.signals import SignalHandlerOptions
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import AccelStamped, PoseStamped, TwistStamped
-from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor,
-                                SetParametersResult)
+from rcl_interfaces.msg import SetParametersResult
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
 from orthoglide_ros import cdr
 from orthoglide_ros.feedforward import Feedforward, REASONS, Rejected
+from orthoglide_ros.node_runtime import (
+    declare_specs, default_qos, diagnostic_array, DIAGNOSTICS_PERIOD,
+    InputNode, run, spec_values)
 from orthoglide_ros.settings import SPECS, settings_from_parameters
 
-# Reliable, keep-last 10 on every input and output; users override it with
-# the standard qos_overrides.<topic>.<publisher|subscription>.* parameters.
-# Each entity gets a copy: rclpy writes the overrides into the profile.
-QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
-                 reliability=ReliabilityPolicy.RELIABLE)
-DIAGNOSTICS_PERIOD = 1.0    # s
-WARNING_PERIOD = 1.0        # s between two warnings of the same reason
 
-_TYPES = {'double': Parameter.Type.DOUBLE,
-          'double_array': Parameter.Type.DOUBLE_ARRAY,
-          'string': Parameter.Type.STRING,
-          'string_array': Parameter.Type.STRING_ARRAY,
-          'bool': Parameter.Type.BOOL}
+class FeedforwardNode(InputNode):
+    """
+    Node ``feedforward``: the Orthoglide's inverse dynamics every tick.
 
-
-class FeedforwardNode(Node):
-    """Node ``feedforward``: the Orthoglide's inverse dynamics every tick."""
+    The setpoint subscriptions are read on the input thread of
+    :class:`InputNode`; the tick and diagnostics timers and the parameter
+    services run on the executor; both hold ``self.lock`` on the core.
+    """
 
     def __init__(self, **kwargs):
         super().__init__('feedforward', **kwargs)
-        for spec in SPECS:
-            descriptor = ParameterDescriptor(
-                description=spec.description,
-                type=_TYPES[spec.type].value)
-            if spec.range is not None:
-                descriptor.floating_point_range = [FloatingPointRange(
-                    from_value=spec.range[0], to_value=spec.range[1])]
-            self.declare_parameter(
-                spec.name, _TYPES[spec.type] if spec.default is None
-                else spec.default, descriptor)
+        declare_specs(self, SPECS)
         # Raises ValueError on an invalid start-up set (main() reports it).
         self._core = Feedforward(settings_from_parameters(self._values()))
         self.add_on_set_parameters_callback(self._validate_parameters)
@@ -74,13 +49,13 @@ class FeedforwardNode(Node):
 
         overrides = QoSOverridingOptions.with_default_policies()
         self._pub_joints = self.create_publisher(
-            JointState, 'feedforward/joint_states', copy(QOS),
+            JointState, 'feedforward/joint_states', default_qos(),
             qos_overriding_options=overrides)
         self._pub_forces = self.create_publisher(
-            Float64MultiArray, 'feedforward/forces', copy(QOS),
+            Float64MultiArray, 'feedforward/forces', default_qos(),
             qos_overriding_options=overrides)
         self._pub_power = self.create_publisher(
-            Float64MultiArray, 'feedforward/power', copy(QOS),
+            Float64MultiArray, 'feedforward/power', default_qos(),
             qos_overriding_options=overrides)
         self._pub_diagnostics = self.create_publisher(
             DiagnosticArray, '/diagnostics', 10)
@@ -88,12 +63,12 @@ class FeedforwardNode(Node):
                                (TwistStamped, self._on_twist),
                                (AccelStamped, self._on_accel)):
             name = kind.__name__.replace('Stamped', '').lower()
-            self.create_subscription(
-                kind, f'setpoint/{name}', callback, copy(QOS),
+            self.create_input_subscription(
+                kind, f'setpoint/{name}', callback, default_qos(),
                 qos_overriding_options=overrides, raw=True)
-        self.create_subscription(
+        self.create_input_subscription(
             MultiDOFJointTrajectory, 'setpoint/trajectory',
-            self._on_trajectory, copy(QOS), qos_overriding_options=overrides,
+            self._on_trajectory, default_qos(), qos_overriding_options=overrides,
             raw=True)
 
         self._joints = JointState()
@@ -104,28 +79,16 @@ class FeedforwardNode(Node):
         self._set_tick()
         self._published = 0
         self._internal_errors = 0
-        self._last_warning = {}
         # Start of the diagnostics period: (time, published, computed,
         # compute ns, rejected) at that moment.
         self._window = (time.monotonic(), 0, 0, 0, 0)
         self.create_timer(DIAGNOSTICS_PERIOD, self._publish_diagnostics)
+        self.start_inputs()
 
     # Parameters -----------------------------------------------------------
     def _values(self, changes=()):
-        """
-        Return the parameter values with ``changes`` applied, as plain types.
-
-        rclpy gives double arrays as ``array.array``; the settings take lists.
-        """
-        values = {}
-        for spec in SPECS:
-            try:
-                values[spec.name] = self.get_parameter(spec.name).value
-            except ParameterUninitializedException:
-                values[spec.name] = None
-        values.update((p.name, p.value) for p in changes)
-        return {name: list(value) if isinstance(value, array.array)
-                else value for name, value in values.items()}
+        """Return the parameter values with ``changes``, as plain types."""
+        return spec_values(self, SPECS, changes)
 
     def _validate_parameters(self, parameters):
         """Accept a change only if the whole resulting set is valid."""
@@ -138,8 +101,13 @@ class FeedforwardNode(Node):
 
     def _apply_parameters(self, parameters):
         """Swap in the new settings at once: the next setpoint uses them."""
+        settings = settings_from_parameters(self._values())
+        with self.lock:
+            self._swap(settings)
+
+    def _swap(self, settings):
         old = self._core.settings
-        self._core.configure(settings_from_parameters(self._values()))
+        self._core.configure(settings)
         if self._core.settings.joint_names != old.joint_names:
             self._set_joint_names()
         if self._core.settings.rate_hz != old.rate_hz:
@@ -209,7 +177,7 @@ class FeedforwardNode(Node):
             return
         except Exception:   # a defect, not bad input: publish nothing, go on
             self._internal_errors += 1
-            if self._throttle('internal'):
+            if self.throttle('internal'):
                 self.get_logger().error(
                     'internal error on a setpoint, nothing published:\n'
                     + traceback.format_exc())
@@ -218,9 +186,10 @@ class FeedforwardNode(Node):
             self._publish(output)
 
     def _on_tick(self):
-        output = self._core.tick(time.monotonic())
-        if output is not None:
-            self._publish(output)
+        with self.lock:
+            output = self._core.tick(time.monotonic())
+            if output is not None:
+                self._publish(output)
 
     # Outputs --------------------------------------------------------------
     def _publish(self, output):
@@ -239,19 +208,16 @@ class FeedforwardNode(Node):
         self._published += 1
 
     def _warn(self, reason, message):
-        if self._throttle(reason):
-            self.get_logger().warning(f'setpoint rejected ({reason}): '
-                                      f'{message}')
-
-    def _throttle(self, reason):
-        """Say whether a message of this reason may be logged now."""
-        now = time.monotonic()
-        if now - self._last_warning.get(reason, -1e9) < WARNING_PERIOD:
-            return False
-        self._last_warning[reason] = now
-        return True
+        self.warn_throttled(reason,
+                            f'setpoint rejected ({reason}): {message}')
 
     def _publish_diagnostics(self):
+        with self.lock:
+            message = self._diagnostics()
+        self._pub_diagnostics.publish(message)
+
+    def _diagnostics(self):
+        """Return the DiagnosticArray of the period ending now."""
         core = self._core
         now = time.monotonic()
         dropped = core.expire(now)
@@ -267,28 +233,22 @@ class FeedforwardNode(Node):
         rejected = sum(core.rejected.values())
         self._window = (now, self._published, core.computed,
                         core.compute_ns_total, rejected)
-        status = DiagnosticStatus(
-            name=f'{self.get_name()}: Orthoglide feedforward',
-            hardware_id='orthoglide')
         age = None if core.latest_arrival is None \
             else now - core.latest_arrival
         if self._internal_errors:
-            status.level = DiagnosticStatus.ERROR
-            status.message = (f'{self._internal_errors} internal error(s): '
-                              'see the log')
+            level = DiagnosticStatus.ERROR
+            text = f'{self._internal_errors} internal error(s): see the log'
         elif age is None:
-            status.level, status.message = DiagnosticStatus.OK, \
-                'waiting for the first setpoint'
+            level, text = DiagnosticStatus.OK, 'waiting for the first setpoint'
         elif not core.fresh(now):
-            status.level = DiagnosticStatus.WARN
-            status.message = (f'stale: no fresh setpoint for {age:.2f} s, '
-                              'outputs stopped')
+            level = DiagnosticStatus.WARN
+            text = f'stale: no fresh setpoint for {age:.2f} s, outputs stopped'
         elif rejected > rejected_before:
-            status.level = DiagnosticStatus.WARN
-            status.message = (f'{rejected - rejected_before} setpoint(s) '
-                              'rejected in the last period')
+            level = DiagnosticStatus.WARN
+            text = (f'{rejected - rejected_before} setpoint(s) rejected in '
+                    'the last period')
         else:
-            status.level, status.message = DiagnosticStatus.OK, 'ok'
+            level, text = DiagnosticStatus.OK, 'ok'
         settings = core.settings
         distance = core.latest.solution.singularity_distance \
             if core.latest is not None else float('nan')
@@ -309,11 +269,9 @@ class FeedforwardNode(Node):
         ]
         values += [(f'received {k}', v) for k, v in core.received.items()]
         values += [(f'rejected {r}', core.rejected[r]) for r in REASONS]
-        status.values = [KeyValue(key=k, value=_text(v)) for k, v in values]
         core.compute_ns_max = 0
-        message = DiagnosticArray(status=[status])
-        message.header.stamp = self.get_clock().now().to_msg()
-        self._pub_diagnostics.publish(message)
+        return diagnostic_array(self, 'Orthoglide feedforward', level, text,
+                                values)
 
 
 def read_raw(reader, data, kind):
@@ -336,60 +294,9 @@ def _vector_message():
     return msg
 
 
-def _text(value):
-    if isinstance(value, bool):
-        return str(value).lower()
-    if isinstance(value, float):
-        return f'{value:.6g}'
-    return str(value)
-
-
 def main(args=None):
     """Run the node until Ctrl-C or shutdown; return the exit code."""
-    logger = rclpy.logging.get_logger('feedforward')
-    # Ctrl-C and SIGTERM only set a flag that the spin loop reads (within
-    # 0.1 s): rclpy's handlers would raise or shut the context down inside a
-    # callback, breaking off a publish (logged FATAL by the executor).
-    stop = []
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda number, frame: stop.append(number))
-    try:
-        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    except RuntimeError as error:   # rcl refuses the arguments or file
-        logger.fatal(f'cannot start: {error}')
-        return 2
-    node = None
-    try:
-        node = FeedforwardNode()
-        executor = _executor()
-        executor.add_node(node)
-        # Not executor.spin(): with the EventsExecutor of the rclpy 7.1.6
-        # wheels it busy-loops without running callbacks or seeing SIGINT.
-        while rclpy.ok() and not stop:
-            executor.spin_once(timeout_sec=0.1)
-    except (ValueError, ParameterException) as error:
-        logger.fatal(f'invalid parameters, not starting: {error}')
-        return 2
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except RuntimeError:
-        if rclpy.ok():
-            raise
-        # Interrupted while starting: rcl calls fail on the shut-down context.
-    finally:
-        if node is not None:
-            node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
-
-
-def _executor():
-    """Return the EventsExecutor (2.5x less CPU per message here) if any."""
-    try:
-        from rclpy.experimental import EventsExecutor
-        return EventsExecutor()
-    except ImportError:
-        return rclpy.executors.SingleThreadedExecutor()
+    return run(FeedforwardNode, 'feedforward', args)
 
 
 if __name__ == '__main__':

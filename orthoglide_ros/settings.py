@@ -84,7 +84,7 @@ def settings_from_parameters(values):
          if k.startswith(ROBOT_PREFIX) and v is not None})
     node = {s.name: values.get(s.name, s.default) for s in NODE_SPECS}
     for spec in NODE_SPECS:
-        _check(spec, node[spec.name])
+        check_value(spec, node[spec.name])
     names = list(node['joint_names'])
     if len(names) != 3 or len(set(names)) != 3 or not all(names):
         raise ValueError(
@@ -100,7 +100,8 @@ def settings_from_parameters(values):
                     node['pose_only'])
 
 
-def _check(spec, value):
+def check_value(spec, value):
+    """Raise ValueError naming ``spec`` unless ``value`` fits its type/range."""
     kind = {'double': float, 'string': str, 'bool': bool}.get(spec.type)
     if kind is not None and type(value) is not kind:
         raise ValueError(f'{spec.name}: must be a {spec.type}, got {value!r}')

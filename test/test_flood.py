@@ -23,16 +23,6 @@ import reliability_harness as harness  # noqa: E402
 SHORT = 2.5         # s of flood / stream in the default run
 FULL = 10.0         # s in the soak run (the issue's)
 RATE = 1000         # Hz: half of what the node sustains (bench_node.py)
-# Known defect: a flood faster than the node computes fills rclpy's
-# EventsExecutor queue with one event per message received (the DDS history
-# keeps 10, the queue all of them): the diagnostics timer and the parameter
-# services wait behind it and memory grows ~1.6 MB/s. Not strict: a node
-# faster than its producer passes.
-BACKLOG = pytest.mark.xfail(
-    reason='rclpy EventsExecutor queue: a flood beyond the node\'s capacity '
-    'delays /diagnostics and parameter services and grows memory',
-    strict=False)
-
 pytestmark = pytest.mark.skipif(
     not os.path.exists(node_executable()),
     reason='the feedforward console script is not installed next to python')
@@ -68,7 +58,6 @@ def test_flood_best_effort(short_flood):
     check(short_flood, skip=('backlog',))
 
 
-@BACKLOG
 def test_flood_best_effort_responsive_bounded(short_flood):
     """
     During the flood: responsive and bounded.
@@ -86,7 +75,6 @@ def test_flood_best_effort_soak(full_flood):
 
 
 @pytest.mark.soak
-@BACKLOG
 def test_flood_best_effort_responsive_bounded_soak(full_flood):
     """Responsiveness and memory during the 10 s flood."""
     check(full_flood, only='backlog')
