@@ -14,6 +14,10 @@ and the same figures for the straightforward ways kept as baselines:
 per-sample Python loop over ``solve``. Targets: single <= 25 us median,
 batch >= 1,000,000 samples/s at N = 10,000. No ROS import.
 
+The same figures for the forward dynamics (``mechanics.forward_dynamics``
+and ``forward_dynamics_batch``, the paper trajectory's feedforward forces
+as input) against the same two baselines; target: single <= 100 us median.
+
 Usage: python benchmarks/bench_mechanics.py [--samples N] [--repeat R]
 """
 
@@ -31,6 +35,8 @@ from orthoglide_ros import mechanics, trajectory  # noqa: E402
 from orthoglide_ros.robot import Robot  # noqa: E402
 
 SINGLE_TARGET_US = 25.0
+FORWARD_TARGET_US = 100.0
+WIDTH = 38      # of the call names in the printed table
 BATCH_TARGET = 1_000_000.0
 BATCH_TARGET_N = 10_000
 
@@ -93,41 +99,22 @@ def main(argv=None):
 
     robot = Robot()
     p, v, a = trajectory.paper_batch(trajectory.paper_times(args.samples))
-    floats = [(robot, tuple(pi), tuple(vi), tuple(ai)) for pi, vi, ai in zip(
-        p.tolist(), v.tolist(), a.tolist())]
-    rows = [(robot, p[i:i + 1], v[i:i + 1], a[i:i + 1])
-            for i in range(min(len(p), 2000))]
 
     print(f'Python {platform.python_version()}, numpy {np.__version__}, '
           f'{platform.machine()}, {os.cpu_count()} CPUs; timer overhead '
           f'{timer_overhead_ns():.0f} ns (included below)')
 
-    single = time_calls(mechanics.solve, floats, args.calls, args.warmup)
-    base_a = time_calls(mechanics.solve_batch, rows, args.calls // 4,
-                        args.warmup // 4)
-    s_med, s_p99 = np.percentile(single, [50, 99]) / 1e3
-    a_med, a_p99 = np.percentile(base_a, [50, 99]) / 1e3
-    print(f'\nSingle sample, paper trajectory points ({args.calls} calls):')
-    print(f'  ours  solve (Python floats)      median {s_med:8.2f} us   '
-          f'p99 {s_p99:8.2f} us')
-    print(f'  base  solve_batch on (1, 3)      median {a_med:8.2f} us   '
-          f'p99 {a_p99:8.2f} us')
-    print(f'  ratio ours/base (time)           median {s_med / a_med:8.3f}'
-          f'      p99 {s_p99 / a_p99:8.3f}')
+    s_med, batch_rate = measure(
+        'Inverse dynamics', mechanics.solve, mechanics.solve_batch,
+        (robot, p, v, a), args.calls, args)
+    # Forward dynamics from the trajectory's feedforward forces.
+    f = mechanics.solve_batch(robot, p, v, a).force
+    forward_med, _ = measure(
+        'Forward dynamics', mechanics.forward_dynamics,
+        mechanics.forward_dynamics_batch, (robot, p, v, f),
+        args.calls // 4, args)
 
     n = len(p)
-    t_batch = best_time(lambda: mechanics.solve_batch(robot, p, v, a),
-                        args.repeat)
-    t_loop = best_time(lambda: [mechanics.solve(*s) for s in floats],
-                       min(3, args.repeat))
-    batch_rate, loop_rate = n / t_batch, n / t_loop
-    print(f'\nBatch, N = {n} (best of {args.repeat}):')
-    print(f'  ours  solve_batch                {batch_rate:14,.0f} samples/s'
-          f'  ({t_batch * 1e3:.2f} ms)')
-    print(f'  base  loop over solve            {loop_rate:14,.0f} samples/s'
-          f'  ({t_loop * 1e3:.2f} ms)')
-    print(f'  ratio ours/base (throughput)     {batch_rate / loop_rate:14.1f}')
-
     print('\nTargets:')
     print(f'  single median <= {SINGLE_TARGET_US:g} us: {s_med:.2f} us  '
           f'{verdict(s_med <= SINGLE_TARGET_US)}')
@@ -138,7 +125,53 @@ def main(argv=None):
     else:
         print(f'  batch target applies at N = {BATCH_TARGET_N:,} only '
               f'(ran N = {n:,})')
+    print(f'  forward single median <= {FORWARD_TARGET_US:g} us: '
+          f'{forward_med:.2f} us  {verdict(forward_med <= FORWARD_TARGET_US)}')
     return 0
+
+
+def measure(title, single_call, batch_call, inputs, calls, args):
+    """
+    Time one single-sample call and its batch twin against the baselines.
+
+    ``inputs``: ``(robot, P, Q, R)`` with three (N, 3) arrays. Single
+    sample: ``single_call`` on Python floats against ``batch_call`` on
+    (1, 3) arrays; batch: ``batch_call`` against a loop over
+    ``single_call``. Prints the figures; returns (single median in us,
+    batch samples/s).
+    """
+    robot, *arrays = inputs
+    floats = [(robot, *(tuple(x) for x in row))
+              for row in zip(*(arr.tolist() for arr in arrays))]
+    rows = [(robot, *(arr[i:i + 1] for arr in arrays))
+            for i in range(min(len(floats), 2000))]
+    single_name, batch_name = single_call.__name__, batch_call.__name__
+    single = time_calls(single_call, floats, calls, args.warmup)
+    base = time_calls(batch_call, rows, calls // 4, args.warmup // 4)
+    s_med, s_p99 = np.percentile(single, [50, 99]) / 1e3
+    b_med, b_p99 = np.percentile(base, [50, 99]) / 1e3
+    print(f'\n{title}, single sample, paper trajectory points '
+          f'({calls} calls):')
+    print(f'  ours  {single_name + " (Python floats)":{WIDTH}s}median '
+          f'{s_med:8.2f} us   p99 {s_p99:8.2f} us')
+    print(f'  base  {batch_name + " on (1, 3)":{WIDTH}s}median '
+          f'{b_med:8.2f} us   p99 {b_p99:8.2f} us')
+    print(f'  {"ratio ours/base (time)":{WIDTH + 6}s}median '
+          f'{s_med / b_med:8.3f}      p99 {s_p99 / b_p99:8.3f}')
+
+    n = len(floats)
+    t_batch = best_time(lambda: batch_call(*inputs), args.repeat)
+    t_loop = best_time(lambda: [single_call(*s) for s in floats],
+                       min(3, args.repeat))
+    batch_rate, loop_rate = n / t_batch, n / t_loop
+    print(f'{title}, batch, N = {n} (best of {args.repeat}):')
+    print(f'  ours  {batch_name:{WIDTH}s}{batch_rate:14,.0f} samples/s'
+          f'  ({t_batch * 1e3:.2f} ms)')
+    print(f'  base  {"loop over " + single_name:{WIDTH}s}{loop_rate:14,.0f} '
+          f'samples/s  ({t_loop * 1e3:.2f} ms)')
+    print(f'  {"ratio ours/base (throughput)":{WIDTH + 6}s}'
+          f'{batch_rate / loop_rate:14.1f}')
+    return s_med, batch_rate
 
 
 if __name__ == '__main__':

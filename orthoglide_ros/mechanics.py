@@ -5,6 +5,8 @@ Plain numpy, no ROS. Every function takes a validated :class:`Robot` first.
 
 - :func:`solve`: one sample (a control tick) -> joint states, forces, powers.
 - :func:`solve_batch`: N samples as arrays, vectorised, the same numbers.
+- :func:`forward_dynamics`: platform state and actuator forces -> platform
+  acceleration (one sample); :func:`forward_dynamics_batch`: N samples.
 - :func:`elements`: position, velocity and acceleration of every body.
 - :func:`forward_kinematics`: actuator displacements -> platform centre.
 - :func:`workspace_status`: reachability and distance to singularity.
@@ -119,10 +121,7 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
     if not math.isfinite(sum(lamdd) + sum(force) + sum(power)) and not all(
             math.isfinite(f) for f in (*lamdd, *force, *power)):
         # (A sum of large finite numbers may overflow: check one by one.)
-        raise WorkspaceError('overflow', (
-            f'the result for position {_fmt(position)} m, velocity '
-            f'{_fmt(velocity)} m/s, acceleration {_fmt(acceleration)} '
-            'm/s^2 is not finite'))
+        raise _overflow_error(position, velocity, acceleration)
     l3 = robot.l3
     ratio = (alphas[0] / l3, alphas[1] / l3, alphas[2] / l3)
     return Solution(lam, lamd, lamdd, force, power, ratio, conditioning,
@@ -188,13 +187,117 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
             f'{margin:g}'), row)
     if not np.isfinite(out[2:5]).all():
         row = int(np.argmin(np.isfinite(out[2:5]).all(axis=(0, 2))))
-        raise WorkspaceError('overflow', (
-            f'the result for position {_fmt(p[row])} m, velocity '
-            f'{_fmt(v[row])} m/s, acceleration {_fmt(a[row])} m/s^2 is not '
-            'finite'), row)
+        raise _overflow_error(p[row], v[row], a[row], row)
     ratio = out[5] / robot.l3
     return Solution(*out[:5], ratio, conditioning,
                     np.minimum(ratio.min(1), conditioning))
+
+
+def forward_dynamics(robot, position, velocity, force,
+                     margin=DEFAULT_SINGULARITY_MARGIN):
+    """
+    Platform acceleration (m/s^2, frame 0) from its state and the forces.
+
+    ``position`` (m) and ``velocity`` (m/s) of the platform centre G in
+    frame 0 and ``force`` (N), the three actuator forces on the sliders
+    along +lambda (A, B, C), each a 3-sequence. Returns ``rddot_G`` as a
+    3-tuple of floats.
+
+    Built on the inverse dynamics (:func:`solve`), which is affine in the
+    acceleration at a fixed state: the virtual-work relation
+    ``J_lambda^T f = Q = M(r_G) rddot_G + h(r_G, rdot_G)`` (eqs. 16 and 25)
+    gives ``f(a) = f(0) + F a`` with ``F = J_lambda^-T M``. The bias
+    ``f(0)`` is the inverse dynamics at zero acceleration (Coriolis,
+    centrifugal and weight terms); column i of ``F`` is the inverse
+    dynamics at zero velocity, without gravity, for the unit acceleration
+    ``e_i`` (exact, no difference taken). Then ``F a = f - f(0)`` is
+    solved by Cramer's rule. Four kernel calls on Python floats, no numpy.
+
+    Refuses what :func:`solve` refuses, with the same reasons: a position
+    out of reach or nearer a singularity than ``margin`` (``unreachable``,
+    ``singular``), a non-finite position, velocity or force
+    (``non_finite``) and a result that is not finite (``overflow``).
+
+    >>> from orthoglide_ros.robot import Robot
+    >>> robot = Robot()
+    >>> f = solve(robot, (0.05, 0.1, -0.2), (0.1, 0.0, 0.3),
+    ...           (1.0, -2.0, 0.5)).force
+    >>> a = forward_dynamics(robot, (0.05, 0.1, -0.2), (0.1, 0.0, 0.3), f)
+    >>> [round(v, 9) for v in a]
+    [1.0, -2.0, 0.5]
+    """
+    fa, fb, fc = force
+    if not math.isfinite(fa + fb + fc):
+        _check_finite_inputs(position, velocity, force, None, 'force')
+    try:
+        bias = solve(robot, position, velocity, ZERO, margin).force
+    except WorkspaceError as error:
+        if error.reason != 'overflow':
+            raise
+        raise _overflow_error(position, velocity, force, None,
+                              'force') from None
+    k = _without_gravity(robot).constants
+    x, y, z = float(position[0]), float(position[1]), float(position[2])
+    sqrt = math.sqrt
+    columns = (kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0,
+                            sqrt)[3],
+               kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0,
+                            sqrt)[3],
+               kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+                            sqrt)[3])
+    rhs = (fa - bias[0], fb - bias[1], fc - bias[2])
+    # det F = det M / det J_lambda is not zero where solve accepts the
+    # position (M >= m5 I): a zero or an infinity can only be a numeric
+    # failure, refused as forward_dynamics_batch refuses it.
+    try:
+        acceleration = _solve3(columns, rhs)
+    except ZeroDivisionError:
+        acceleration = (math.nan,) * 3
+    if not math.isfinite(sum(acceleration)) and not all(
+            math.isfinite(v) for v in acceleration):
+        raise _overflow_error(position, velocity, force, None, 'force')
+    return acceleration
+
+
+def forward_dynamics_batch(robot, positions, velocities, forces,
+                           margin=DEFAULT_SINGULARITY_MARGIN):
+    """
+    Forward dynamics of N samples at once (see :func:`forward_dynamics`).
+
+    ``positions`` (m), ``velocities`` (m/s) and ``forces`` (N): (N, 3)
+    arrays. Returns the platform accelerations, an (N, 3) array (m/s^2,
+    frame 0). The same construction on arrays: the bias and the three
+    columns of ``F = J_lambda^-T M`` from :func:`solve_batch`, then
+    Cramer's rule per sample. The first bad sample raises
+    :class:`WorkspaceError` with its index in ``row``.
+    """
+    p = _as_samples('positions', positions)
+    n = len(p)
+    v = _as_samples('velocities', velocities, n)
+    f = _as_samples('forces', forces, n)
+    if not (np.isfinite(p).all() and np.isfinite(v).all()
+            and np.isfinite(f).all()):
+        row = int(np.argmin(np.isfinite(np.hstack((p, v, f))).all(1)))
+        _check_finite_inputs(p[row], v[row], f[row], row, 'force')
+    try:
+        bias = solve_batch(robot, p, v, None, margin).force
+    except WorkspaceError as error:
+        if error.reason != 'overflow':
+            raise
+        raise _overflow_error(p[error.row], v[error.row], f[error.row],
+                              error.row, 'force') from None
+    inertia = _without_gravity(robot)
+    columns = []
+    for unit in np.eye(3):
+        columns.append(solve_batch(inertia, p, None, np.tile(unit, (n, 1)),
+                                   margin).force.T)
+    with np.errstate(all='ignore'):     # checked below, row by row
+        acceleration = np.column_stack(_solve3(columns, (f - bias).T))
+    good = np.isfinite(acceleration).all(1)
+    if not good.all():
+        row = int(np.argmin(good))
+        raise _overflow_error(p[row], v[row], f[row], row, 'force')
+    return acceleration
 
 
 def workspace_status(robot, position, margin=DEFAULT_SINGULARITY_MARGIN):
@@ -378,12 +481,58 @@ def _as_samples(name, values, n=None):
     return arr
 
 
-def _check_finite_inputs(position, velocity, acceleration, row=None):
+def _check_finite_inputs(position, velocity, third, row=None,
+                         third_name='acceleration'):
     for name, vec in (('position', position), ('velocity', velocity),
-                      ('acceleration', acceleration)):
+                      (third_name, third)):
         if not all(math.isfinite(v) for v in vec):
             raise WorkspaceError(
                 'non_finite', f'{name} {_fmt(vec)} is not finite', row)
+
+
+def _overflow_error(position, velocity, third, row=None,
+                    third_name='acceleration'):
+    """Refuse a sample whose result is not finite (a WorkspaceError)."""
+    unit = 'N' if third_name == 'force' else 'm/s^2'
+    return WorkspaceError('overflow', (
+        f'the result for position {_fmt(position)} m, velocity '
+        f'{_fmt(velocity)} m/s, {third_name} {_fmt(third)} {unit} is not '
+        'finite'), row)
+
+
+# Zero-gravity copies of the robots seen, keyed by their kernel constants:
+# the inverse dynamics at zero velocity without gravity is ``M`` applied.
+_WITHOUT_GRAVITY = {}
+
+
+def _without_gravity(robot):
+    """Return ``robot`` with gravity zero (cached: built once per robot)."""
+    inertia = _WITHOUT_GRAVITY.get(robot.constants)
+    if inertia is None:
+        if len(_WITHOUT_GRAVITY) >= 16:
+            _WITHOUT_GRAVITY.clear()
+        inertia = robot.replace(gravity=ZERO)
+        _WITHOUT_GRAVITY[robot.constants] = inertia
+    return inertia
+
+
+def _solve3(columns, rhs):
+    """
+    Solve ``[c0 c1 c2] a = b`` by Cramer's rule (floats or arrays).
+
+    ``columns``: three 3-sequences ``c0, c1, c2``; ``rhs``: ``b``. With
+    ``r0 = c1 x c2``, ``r1 = c2 x c0``, ``r2 = c0 x c1`` (the rows of
+    ``det * inverse``), ``a_i = b . r_i / det`` and ``det = c0 . r0``.
+    """
+    (p0, p1, p2), (q0, q1, q2), (s0, s1, s2) = columns
+    b0, b1, b2 = rhs
+    r00, r01, r02 = q1 * s2 - q2 * s1, q2 * s0 - q0 * s2, q0 * s1 - q1 * s0
+    r10, r11, r12 = s1 * p2 - s2 * p1, s2 * p0 - s0 * p2, s0 * p1 - s1 * p0
+    r20, r21, r22 = p1 * q2 - p2 * q1, p2 * q0 - p0 * q2, p0 * q1 - p1 * q0
+    inv = 1.0 / (p0 * r00 + p1 * r01 + p2 * r02)
+    return ((b0 * r00 + b1 * r01 + b2 * r02) * inv,
+            (b0 * r10 + b1 * r11 + b2 * r12) * inv,
+            (b0 * r20 + b1 * r21 + b2 * r22) * inv)
 
 
 def _leg_error(robot, position, margin, row=None):
