@@ -42,6 +42,7 @@ setup(
             'feedforward = orthoglide_ros.feedforward_node:main',
             'orthoglide = orthoglide_ros.cli:main',
             'setpoint_publisher = orthoglide_ros.setpoint_publisher:main',
+            'tracking_controller = orthoglide_ros.tracking_controller_node:main',
         ],
     },
     **legacy_kwargs,
