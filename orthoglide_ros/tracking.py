@@ -1,0 +1,292 @@
+"""
+The tracking controller's logic without ROS: joint states in, forces out.
+
+:class:`Tracking` takes the desired joint states (``feedforward/joint_states``:
+lambda_d, lambdadot_d and the feedforward force f_ff) and the measured ones
+(``joint_states``), and computes for each desired state the actuator forces
+
+    f_i = f_ff,i + Kp_i (lambda_d,i - lambda_i) + Kd_i (lambdadot_d,i
+          - lambdadot_i),   clipped to [-force_limit, force_limit]   (N)
+
+for the actuators i = A, B, C, in ``joint_names`` order (f_ff left out when
+``feedforward`` is off). A minimal joint-space PD plus feedforward for tests
+and demos, not a replacement for ros2_control. The ROS node
+(``tracking_controller_node``) only converts messages to the plain values
+used here, so every rule below is testable without DDS.
+
+Rules (the README states them for users):
+
+- Joint states are matched by name, in any order; extra joints are ignored.
+  A message is rejected, counted by input and reason and changes nothing
+  when one of ``joint_names`` is absent (``missing_joint``), its names repeat
+  or an array is neither empty nor as long as the names (``malformed``), an
+  array the rule needs is empty (``missing_position``, ``missing_velocity``,
+  ``missing_effort``), or a value it needs is NaN or infinite
+  (``non_finite``). A measurement needs positions and velocities; a desired
+  state needs them too, and efforts only with ``feedforward`` on.
+- One command per accepted desired state, computed with the newest accepted
+  measurement. When there is none yet, or it arrived more than
+  ``measurement_timeout`` before (monotonic arrival time, never stamps),
+  nothing is computed: the desired state is counted as skipped. New
+  ``joint_names`` forget the measurement read with the old ones.
+- A force that overflows (not finite before clipping) refuses the whole
+  command (``overflow``); a finite one beyond the limit is clipped and
+  counted.
+"""
+
+from collections import namedtuple
+import math
+
+from orthoglide_ros.settings import check_value, Spec
+
+JOINT_NAMES = ('slider_a', 'slider_b', 'slider_c')
+FORCE_LIMIT_MAX = 1.0e6     # N: the largest force_limit accepted
+INPUTS = ('desired', 'measured')
+REASONS = ('missing_joint', 'malformed', 'missing_position',
+           'missing_velocity', 'missing_effort', 'non_finite', 'overflow')
+SKIPS = ('no_measurement', 'stale_measurement')
+
+CONTROLLER_SPECS = (
+    Spec('kp', 'double_array', [20000.0, 20000.0, 20000.0],
+         'proportional gains of actuators A, B, C in joint_names order '
+         '(N/m): three finite values >= 0', None),
+    Spec('kd', 'double_array', [1200.0, 1200.0, 1200.0],
+         'derivative gains of actuators A, B, C in joint_names order '
+         '(N s/m): three finite values >= 0', None),
+    Spec('feedforward', 'bool', True,
+         'add the desired effort (feedforward force, N) to the PD output; '
+         'false: PD alone, desired efforts not needed', None),
+    Spec('force_limit', 'double', 1000.0,
+         'largest force magnitude commanded per actuator (N); larger ones '
+         'are clipped to it and counted', (0.001, FORCE_LIMIT_MAX)),
+    Spec('joint_names', 'string_array', list(JOINT_NAMES),
+         'names of the prismatic joints of actuators A, B, C: the order of '
+         'the command\'s values; joint states are matched by these names '
+         '(three distinct, non-empty)', None),
+    Spec('measurement_timeout', 'double', 0.05,
+         'seconds (by arrival time) after which a measurement is too old '
+         'to compute a command with: nothing is published until a fresh '
+         'one arrives', (0.0001, 3600.0)),
+)
+
+ControllerSettings = namedtuple('ControllerSettings', (
+    'kp', 'kd', 'feedforward', 'force_limit', 'joint_names',
+    'measurement_timeout'))
+ControllerSettings.__doc__ = """Everything the controller reads, swapped as
+one: ``kp`` (N/m), ``kd`` (N s/m) 3-tuples, ``force_limit`` (N),
+``joint_names`` 3-tuple, ``measurement_timeout`` (s)."""
+
+JointValues = namedtuple('JointValues', 'position velocity effort')
+JointValues.__doc__ = """One joint state in joint_names order: 3-tuples of
+lambda (m), lambdadot (m/s) and effort (N, None when not needed)."""
+
+Command = namedtuple('Command', 'force error clipped')
+Command.__doc__ = """One command: ``force`` the 3 forces (N) after
+clipping, ``error`` lambda_d - lambda (m), ``clipped`` how many of the three
+were clipped."""
+
+
+class Rejected(ValueError):
+    """A joint state refused by a rule; ``reason`` is one of REASONS."""
+
+    def __init__(self, reason, message):
+        super().__init__(message)
+        self.reason = reason
+
+
+def default_controller_parameters():
+    """Return ``{name: default}`` of every controller parameter."""
+    return {s.name: s.default for s in CONTROLLER_SPECS}
+
+
+def controller_settings_from_parameters(values):
+    """
+    Validate a complete set of parameter values into ControllerSettings.
+
+    ``values``: ``{name: value}``; an absent name takes its default. Raises
+    ValueError naming the parameter and the rule it breaks.
+    """
+    v = {s.name: values.get(s.name, s.default) for s in CONTROLLER_SPECS}
+    for spec in CONTROLLER_SPECS:
+        if spec.type == 'double_array':
+            v[spec.name] = _gains(spec.name, v[spec.name])
+        else:
+            check_value(spec, v[spec.name])
+    names = tuple(v['joint_names'])
+    if len(names) != 3 or len(set(names)) != 3 or not all(names):
+        raise ValueError(
+            'joint_names: must be three distinct non-empty names, got '
+            f'{list(names)!r}')
+    return ControllerSettings(v['kp'], v['kd'], v['feedforward'],
+                              v['force_limit'], names,
+                              v['measurement_timeout'])
+
+
+def _gains(name, value):
+    if not isinstance(value, (list, tuple)) or len(value) != 3:
+        raise ValueError(
+            f'{name}: must be an array of three doubles (A, B, C), got '
+            f'{value!r}')
+    if not all(type(g) is float for g in value):
+        raise ValueError(f'{name}: must hold doubles, got {value!r}')
+    if not all(math.isfinite(g) and g >= 0.0 for g in value):
+        raise ValueError(
+            f'{name}: must be finite and >= 0, got {list(value)!r}')
+    return tuple(value)
+
+
+def read_joint_state(joint_names, names, position, velocity, effort,
+                     need_effort):
+    """
+    Pick ``joint_names``' values out of one JointState's arrays.
+
+    ``names``, ``position``, ``velocity``, ``effort``: the message's
+    sequences, in the message's order. Returns :class:`JointValues` in
+    ``joint_names`` order (``effort`` None unless ``need_effort``); raises
+    :class:`Rejected` (not counted here) when a rule of the module refuses
+    the message.
+    """
+    count = len(names)
+    index = {name: i for i, name in enumerate(names)}
+    if len(index) != count:
+        raise Rejected('malformed', f'joint names repeat: {list(names)!r}')
+    rows = []
+    for name in joint_names:
+        i = index.get(name)
+        if i is None:
+            raise Rejected('missing_joint', (
+                f'joint {name!r} absent (names: {list(names)!r})'))
+        rows.append(i)
+    fields = [('position', position), ('velocity', velocity)]
+    if need_effort:
+        fields.append(('effort', effort))
+    values = []
+    for field, array in fields:
+        size = len(array)
+        if size == 0:
+            raise Rejected(f'missing_{field}', f'no {field} values')
+        if size != count:
+            raise Rejected('malformed', (
+                f'{size} {field} values for {count} names'))
+        picked = (float(array[rows[0]]), float(array[rows[1]]),
+                  float(array[rows[2]]))
+        if not math.isfinite(picked[0] + picked[1] + picked[2]) and not all(
+                math.isfinite(x) for x in picked):
+            raise Rejected('non_finite', (
+                f'{field} {picked} of {list(joint_names)} is not finite'))
+        values.append(picked)
+    return JointValues(values[0], values[1],
+                       values[2] if need_effort else None)
+
+
+def control_law(settings, desired, measured):
+    """
+    Return the :class:`Command` of one desired state and measurement.
+
+    ``f = f_ff + Kp (lambda_d - lambda) + Kd (lambdadot_d - lambdadot)``
+    per actuator (f_ff omitted when ``settings.feedforward`` is off), then
+    clipped to +-``force_limit``. Raises :class:`Rejected` (``overflow``)
+    if a force before clipping is not finite.
+    """
+    limit = settings.force_limit
+    forces = []
+    errors = []
+    clipped = 0
+    for i in range(3):
+        error = desired.position[i] - measured.position[i]
+        force = settings.kp[i] * error + settings.kd[i] * (
+            desired.velocity[i] - measured.velocity[i])
+        if settings.feedforward:
+            force = desired.effort[i] + force
+        if not math.isfinite(force):
+            raise Rejected('overflow', (
+                f'force of {settings.joint_names[i]!r} overflows: '
+                f'error {error!r} m'))
+        if force > limit:
+            force, clipped = limit, clipped + 1
+        elif force < -limit:
+            force, clipped = -limit, clipped + 1
+        forces.append(force)
+        errors.append(error)
+    return Command(tuple(forces), tuple(errors), clipped)
+
+
+class Tracking:
+    """
+    Inputs, freshness, the law and the counters of the tracking controller.
+
+    Every method takes ``now``, a monotonic time in seconds, so tests can
+    drive time. :meth:`desired` returns a :class:`Command` or None
+    (skipped); both inputs raise :class:`Rejected`, already counted.
+    """
+
+    def __init__(self, settings):
+        self.settings = settings
+        self.measurement = None
+        self.measurement_arrival = None
+        self.latest = None
+        self.received = dict.fromkeys(INPUTS, 0)
+        self.rejected = {(i, r): 0 for i in INPUTS for r in REASONS}
+        self.skipped = dict.fromkeys(SKIPS, 0)
+        self.commands = 0
+        self.clipped = 0
+
+    def configure(self, settings):
+        """
+        Use new settings from the next message on.
+
+        New joint names also forget the measurement, read by the old ones.
+        """
+        if settings.joint_names != self.settings.joint_names:
+            self.measurement = self.measurement_arrival = None
+        self.settings = settings
+
+    def measured(self, names, position, velocity, effort, now):
+        """Take a measured joint state; it becomes the newest measurement."""
+        self.received['measured'] += 1
+        values = self._read('measured', names, position, velocity, effort,
+                            False)
+        self.measurement = values
+        self.measurement_arrival = now
+
+    def desired(self, names, position, velocity, effort, now):
+        """
+        Take a desired joint state; return its Command, or None if skipped.
+
+        Skipped (and counted) when no measurement is fresh: none yet
+        (``no_measurement``) or older than measurement_timeout
+        (``stale_measurement``).
+        """
+        self.received['desired'] += 1
+        settings = self.settings
+        values = self._read('desired', names, position, velocity, effort,
+                            settings.feedforward)
+        if self.measurement is None:
+            self.skipped['no_measurement'] += 1
+            return None
+        if not self.fresh(now):
+            self.skipped['stale_measurement'] += 1
+            return None
+        try:
+            command = control_law(settings, values, self.measurement)
+        except Rejected as rejection:
+            self.rejected['desired', rejection.reason] += 1
+            raise
+        self.commands += 1
+        self.clipped += command.clipped
+        self.latest = command
+        return command
+
+    def fresh(self, now):
+        """Whether the newest measurement arrived within the timeout."""
+        return (self.measurement_arrival is not None
+                and now - self.measurement_arrival
+                <= self.settings.measurement_timeout)
+
+    def _read(self, source, names, position, velocity, effort, need_effort):
+        try:
+            return read_joint_state(self.settings.joint_names, names,
+                                    position, velocity, effort, need_effort)
+        except Rejected as rejection:
+            self.rejected[source, rejection.reason] += 1
+            raise

@@ -1,0 +1,378 @@
+"""
+Tests of the tracking controller's ROS-free logic (orthoglide_ros.tracking).
+
+Time is driven by hand: every call takes ``now`` (s, monotonic). The law is
+checked against an independent computation (math.fsum of the three terms,
+then clipping) to floating-point rounding: a few ulps of the terms' sizes.
+"""
+
+import math
+
+from hypothesis import given, settings as hypothesis_settings, strategies as st
+import numpy as np
+import pytest
+
+from orthoglide_ros import mechanics
+from orthoglide_ros.robot import Robot
+from orthoglide_ros.tracking import (
+    Command, control_law, CONTROLLER_SPECS,
+    controller_settings_from_parameters, default_controller_parameters,
+    FORCE_LIMIT_MAX, INPUTS, JointValues, read_joint_state, REASONS,
+    Rejected, SKIPS, Tracking)
+
+NAMES = ('slider_a', 'slider_b', 'slider_c')
+NAN = float('nan')
+INF = float('inf')
+EPS = 2.0 ** -52
+
+
+def settings(**changes):
+    """Return validated settings: the defaults with ``changes``."""
+    values = default_controller_parameters()
+    values.update(changes)
+    return controller_settings_from_parameters(values)
+
+
+def expected_force(s, desired, measured):
+    """Return (forces, bounds): the law computed apart, with its rounding."""
+    forces, bounds = [], []
+    for i in range(3):
+        terms = [s.kp[i] * (desired.position[i] - measured.position[i]),
+                 s.kd[i] * (desired.velocity[i] - measured.velocity[i])]
+        if s.feedforward:
+            terms.append(desired.effort[i])
+        f = math.fsum(terms)
+        forces.append(min(max(f, -s.force_limit), s.force_limit))
+        # Rounding of the products and of two additions, with margin.
+        bounds.append(8 * EPS * sum(abs(t) for t in terms) + 1e-300)
+    return forces, bounds
+
+
+def assert_law(s, desired, measured, command):
+    """Check the command against the independent law, to rounding."""
+    forces, bounds = expected_force(s, desired, measured)
+    for got, want, bound in zip(command.force, forces, bounds):
+        assert abs(got - want) <= bound, (got, want, bound)
+        assert abs(got) <= s.force_limit
+    assert command.error == tuple(
+        d - m for d, m in zip(desired.position, measured.position))
+
+
+# Parameters ------------------------------------------------------------------
+def test_specs_defaults_and_names():
+    """The table's names, types and defaults are the documented ones."""
+    specs = {s.name: s for s in CONTROLLER_SPECS}
+    assert list(specs) == ['kp', 'kd', 'feedforward', 'force_limit',
+                           'joint_names', 'measurement_timeout']
+    assert specs['kp'].type == specs['kd'].type == 'double_array'
+    assert specs['kp'].default == [20000.0] * 3
+    assert specs['kd'].default == [1200.0] * 3
+    assert specs['feedforward'].default is True
+    assert specs['force_limit'].default == 1000.0
+    assert specs['joint_names'].default == list(NAMES)
+    assert specs['measurement_timeout'].default == 0.05
+    for spec in CONTROLLER_SPECS:
+        assert spec.description
+    s = settings()
+    assert s.kp == (20000.0,) * 3 and s.kd == (1200.0,) * 3
+    assert s.joint_names == NAMES
+    assert (s.feedforward, s.force_limit, s.measurement_timeout) == (
+        True, 1000.0, 0.05)
+
+
+def test_default_gains_about_critically_damped():
+    """Default kd = 1200 N s/m: ~0.95 of critical, 2 sqrt(kp m), m = 20 kg."""
+    s = settings()
+    for kp, kd in zip(s.kp, s.kd):
+        zeta = kd / (2.0 * math.sqrt(kp * 20.0))
+        assert 0.9 < zeta < 1.0, zeta
+
+
+def test_actuator_mass_at_home_and_damping_ratio():
+    """
+    The paper robot's actuator-space mass at home: 24.5 kg, zeta 0.86.
+
+    Mass matrix column j = f(lambdaddot = e_j) - f(0) at home, at rest,
+    from mechanics.solve (platform acceleration J_lambda^-1 e_j). The
+    README quotes these figures.
+    """
+    robot = Robot()
+    home = (0.0, 0.0, 0.0)
+    rest = mechanics.solve(robot, home).force
+    j1, j2 = mechanics.jacobians(robot, home)
+    j_lambda = np.linalg.solve(j1, j2)
+    mass = np.column_stack([
+        np.array(mechanics.solve(robot, home, (0.0, 0.0, 0.0),
+                                 tuple(np.linalg.solve(j_lambda, e))).force)
+        - rest for e in np.eye(3)])
+    assert np.allclose(mass, np.diag(np.diag(mass)), atol=1e-9)
+    assert np.allclose(np.diag(mass), 24.48, atol=0.01)
+    s = settings()
+    zeta = s.kd[0] / (2.0 * math.sqrt(s.kp[0] * mass[0, 0]))
+    assert zeta == pytest.approx(0.857, abs=0.001)
+
+
+@pytest.mark.parametrize('name, value', [
+    ('kp', [1.0]),
+    ('kp', [1.0, 2.0, 3.0, 4.0]),
+    ('kp', [1.0, -2.0, 3.0]),
+    ('kp', [1.0, NAN, 3.0]),
+    ('kp', [1, 2, 3]),
+    ('kp', 5.0),
+    ('kd', [1.0, 2.0, INF]),
+    ('kd', [-0.5, 2.0, 3.0]),
+    ('feedforward', 'yes'),
+    ('feedforward', 1),
+    ('force_limit', 0.0),
+    ('force_limit', -1.0),
+    ('force_limit', 1000),
+    ('force_limit', INF),
+    ('force_limit', FORCE_LIMIT_MAX * 2),
+    ('joint_names', ['a', 'b']),
+    ('joint_names', ['a', 'a', 'c']),
+    ('joint_names', ['a', '', 'c']),
+    ('joint_names', 'abc'),
+    ('measurement_timeout', 0.0),
+    ('measurement_timeout', NAN),
+])
+def test_invalid_parameters_named(name, value):
+    """Each invalid value raises ValueError naming its parameter."""
+    with pytest.raises(ValueError, match=name):
+        settings(**{name: value})
+
+
+def test_valid_parameter_edges():
+    """Zero gains, the range ends and any names are accepted."""
+    s = settings(kp=[0.0, 0.0, 0.0], kd=[0.0, 1e9, 0.0],
+                 force_limit=FORCE_LIMIT_MAX, joint_names=['x', 'y', 'z'],
+                 measurement_timeout=0.0001, feedforward=False)
+    assert s.kd == (0.0, 1e9, 0.0) and s.joint_names == ('x', 'y', 'z')
+    assert settings(force_limit=0.001).force_limit == 0.001
+
+
+# The law ---------------------------------------------------------------------
+def test_law_worked_example():
+    """Law f = f_ff + Kp e + Kd edot per actuator, by hand."""
+    s = settings(kp=[100.0, 200.0, 300.0], kd=[10.0, 20.0, 30.0])
+    desired = JointValues((0.5, 0.25, -0.125), (1.0, 0.0, -2.0),
+                          (5.0, -6.0, 7.0))
+    measured = JointValues((0.25, 0.5, -0.125), (0.5, 1.0, -1.0), None)
+    command = control_law(s, desired, measured)
+    # A: 5 + 100*0.25 + 10*0.5; B: -6 + 200*(-0.25) + 20*(-1);
+    # C: 7 + 0 + 30*(-1).
+    assert command == Command((35.0, -76.0, -23.0), (0.25, -0.25, 0.0), 0)
+    off = control_law(s._replace(feedforward=False), desired, measured)
+    assert off.force == (30.0, -70.0, -30.0)
+
+
+def test_law_clips_to_limit_and_counts():
+    """Beyond +-force_limit: clipped; exactly at it: not counted."""
+    s = settings(kp=[1000.0] * 3, kd=[0.0] * 3, force_limit=100.0)
+    zero = (0.0, 0.0, 0.0)
+    desired = JointValues((1.0, -1.0, 0.1), zero, zero)
+    measured = JointValues(zero, zero, None)
+    command = control_law(s, desired, measured)
+    assert command.force == (100.0, -100.0, 100.0)
+    assert command.clipped == 2
+    assert command.error == (1.0, -1.0, 0.1)
+
+
+def test_law_overflow_refused():
+    """A force that is not finite before clipping refuses the command."""
+    s = settings(kp=[1e300] * 3)
+    zero = (0.0, 0.0, 0.0)
+    with pytest.raises(Rejected) as info:
+        control_law(s, JointValues((1e10, 0.0, 0.0), zero, zero),
+                    JointValues(zero, zero, None))
+    assert info.value.reason == 'overflow'
+
+
+finite = st.floats(-1e3, 1e3, allow_nan=False, allow_infinity=False)
+triple = st.tuples(finite, finite, finite)
+gain = st.floats(0.0, 1e6, allow_nan=False, allow_infinity=False)
+gains = st.lists(gain, min_size=3, max_size=3)
+
+
+@hypothesis_settings(max_examples=300, deadline=None)
+@given(kp=gains, kd=gains, feedforward=st.booleans(),
+       limit=st.floats(0.001, FORCE_LIMIT_MAX),
+       lam_d=triple, dlam_d=triple, f_ff=triple, lam=triple, dlam=triple)
+def test_law_property(kp, kd, feedforward, limit, lam_d, dlam_d, f_ff, lam,
+                      dlam):
+    """The output is f_ff + Kp e + Kd edot clipped to the limit."""
+    s = settings(kp=kp, kd=kd, feedforward=feedforward, force_limit=limit)
+    desired = JointValues(lam_d, dlam_d, f_ff if feedforward else None)
+    measured = JointValues(lam, dlam, None)
+    command = control_law(s, desired, measured)
+    assert_law(s, desired, measured, command)
+    # Clipped: the forces beyond the limit, give or take rounding at it.
+    raw = [math.fsum([ff if feedforward else 0.0, p * (a - b), d * (c - e)])
+           for ff, p, a, b, d, c, e in zip(f_ff, kp, lam_d, lam, kd, dlam_d,
+                                           dlam)]
+    surely = sum(abs(f) > limit * (1 + 1e-9) for f in raw)
+    maybe = sum(abs(f) > limit * (1 - 1e-9) for f in raw)
+    assert surely <= command.clipped <= maybe
+
+
+# Reading joint states --------------------------------------------------------
+def test_read_matches_names_in_any_order_and_ignores_extras():
+    """Values come out in joint_names order whatever the message order."""
+    values = read_joint_state(
+        NAMES, ['other', 'slider_c', 'slider_a', 'slider_b'],
+        [NAN, 3.0, 1.0, 2.0], [INF, 30.0, 10.0, 20.0],
+        [NAN, 300.0, 100.0, 200.0], True)
+    assert values == JointValues((1.0, 2.0, 3.0), (10.0, 20.0, 30.0),
+                                 (100.0, 200.0, 300.0))
+
+
+@pytest.mark.parametrize('names, position, velocity, effort, need, reason', [
+    (['slider_a', 'slider_b'], [1.0, 2.0], [1.0, 2.0], [1.0, 2.0], True,
+     'missing_joint'),
+    (['slider_a', 'slider_b', 'slider_c', 'slider_a'], [0.0] * 4, [0.0] * 4,
+     [0.0] * 4, True, 'malformed'),
+    (list(NAMES), [0.0, 0.0], [0.0] * 3, [0.0] * 3, True, 'malformed'),
+    (list(NAMES), [0.0] * 3, [0.0] * 4, [0.0] * 3, True, 'malformed'),
+    (list(NAMES), [], [0.0] * 3, [0.0] * 3, True, 'missing_position'),
+    (list(NAMES), [0.0] * 3, [], [0.0] * 3, True, 'missing_velocity'),
+    (list(NAMES), [0.0] * 3, [0.0] * 3, [], True, 'missing_effort'),
+    (list(NAMES), [0.0, NAN, 0.0], [0.0] * 3, [0.0] * 3, True, 'non_finite'),
+    (list(NAMES), [0.0] * 3, [0.0, 0.0, -INF], [0.0] * 3, False,
+     'non_finite'),
+    (list(NAMES), [0.0] * 3, [0.0] * 3, [INF, 0.0, 0.0], True, 'non_finite'),
+    (list(NAMES), [1e308] * 3, [0.0] * 3, [0.0] * 3, True, None),
+], ids=['missing_joint', 'repeated_name', 'short_position', 'long_velocity',
+        'no_position', 'no_velocity', 'no_effort', 'nan_position',
+        'inf_velocity', 'inf_effort', 'huge_but_finite'])
+def test_read_rejections(names, position, velocity, effort, need, reason):
+    """Each rule of the module refuses with its reason (or accepts)."""
+    if reason is None:
+        read_joint_state(NAMES, names, position, velocity, effort, need)
+        return
+    with pytest.raises(Rejected) as info:
+        read_joint_state(NAMES, names, position, velocity, effort, need)
+    assert info.value.reason == reason
+    assert info.value.reason in REASONS
+
+
+def test_read_effort_not_needed():
+    """Without the need, efforts may be absent, NaN or of another length."""
+    for effort in ([], [NAN, NAN, NAN], [1.0]):
+        values = read_joint_state(NAMES, list(NAMES), [1.0, 2.0, 3.0],
+                                  [0.0] * 3, effort, False)
+        assert values.effort is None
+
+
+@hypothesis_settings(max_examples=100, deadline=None)
+@given(order=st.permutations(range(3)), lam_d=triple, dlam_d=triple,
+       f_ff=triple, lam=triple, dlam=triple)
+def test_name_order_does_not_matter(order, lam_d, dlam_d, f_ff, lam, dlam):
+    """Permuting a message's joints leaves the command unchanged."""
+    def shuffled(values):
+        return [values[i] for i in order]
+
+    reference = Tracking(settings(measurement_timeout=1.0))
+    reference.measured(NAMES, lam, dlam, [], 0.0)
+    expected = reference.desired(NAMES, lam_d, dlam_d, f_ff, 0.0)
+    core = Tracking(settings(measurement_timeout=1.0))
+    core.measured(shuffled(NAMES), shuffled(lam), shuffled(dlam), [], 0.0)
+    got = core.desired(shuffled(NAMES), shuffled(lam_d), shuffled(dlam_d),
+                       shuffled(f_ff), 0.0)
+    assert got == expected
+
+
+# The core: timing and counters -----------------------------------------------
+def send_measured(core, position, now, velocity=(0.0, 0.0, 0.0)):
+    """Send a measurement in joint_names order."""
+    core.measured(core.settings.joint_names, position, velocity, [], now)
+
+
+def send_desired(core, position, now, velocity=(0.0, 0.0, 0.0),
+                 effort=(0.0, 0.0, 0.0)):
+    """Send a desired state in joint_names order; return the command."""
+    return core.desired(core.settings.joint_names, position, velocity,
+                        effort, now)
+
+
+def test_no_measurement_skips():
+    """Before any measurement a desired state is skipped and counted."""
+    core = Tracking(settings())
+    assert send_desired(core, (0.0, 0.0, 0.0), 1.0) is None
+    assert core.skipped == {'no_measurement': 1, 'stale_measurement': 0}
+    assert core.commands == 0 and core.latest is None
+    assert core.received == {'desired': 1, 'measured': 0}
+
+
+def test_stale_measurement_skips_until_a_fresh_one():
+    """Older than measurement_timeout by arrival time: skipped."""
+    core = Tracking(settings(measurement_timeout=0.0625))   # exact in binary
+    send_measured(core, (0.0, 0.0, 0.0), 10.0)
+    assert send_desired(core, (0.001, 0.0, 0.0), 10.0625) is not None
+    assert core.fresh(10.0625) and not core.fresh(10.0626)
+    assert send_desired(core, (0.001, 0.0, 0.0), 10.0626) is None
+    assert core.skipped == {'no_measurement': 0, 'stale_measurement': 1}
+    send_measured(core, (0.0, 0.0, 0.0), 11.0)
+    command = send_desired(core, (0.001, 0.0, 0.0), 11.01)
+    assert command.force[0] == pytest.approx(20.0)
+    assert core.commands == 2
+
+
+def test_newest_measurement_used():
+    """Each command uses the newest accepted measurement."""
+    core = Tracking(settings(kp=[1.0] * 3, kd=[0.0] * 3, feedforward=False))
+    send_measured(core, (0.0, 0.0, 0.0), 0.0)
+    send_measured(core, (0.5, 0.25, 0.125), 0.01)
+    command = send_desired(core, (1.0, 1.0, 1.0), 0.02)
+    assert command.force == (0.5, 0.75, 0.875)
+
+
+def test_rejected_inputs_counted_and_change_nothing():
+    """A refused measurement keeps the previous one; counts by input."""
+    core = Tracking(settings(kp=[1.0] * 3, kd=[0.0] * 3, feedforward=False))
+    send_measured(core, (0.0, 0.0, 0.0), 0.0)
+    with pytest.raises(Rejected):
+        send_measured(core, (NAN, 0.0, 0.0), 0.01)
+    with pytest.raises(Rejected):
+        core.measured(['slider_a'], [1.0], [0.0], [], 0.01)
+    with pytest.raises(Rejected):
+        core.desired(NAMES, [1.0] * 3, [], [], 0.02)
+    assert core.measurement_arrival == 0.0
+    assert core.rejected['measured', 'non_finite'] == 1
+    assert core.rejected['measured', 'missing_joint'] == 1
+    assert core.rejected['desired', 'missing_velocity'] == 1
+    assert sum(core.rejected.values()) == 3
+    assert core.received == {'desired': 1, 'measured': 3}
+    command = send_desired(core, (1.0, 1.0, 1.0), 0.03)
+    assert command.force == (1.0, 1.0, 1.0)
+    assert set(i for i, _ in core.rejected) == set(INPUTS)
+    assert set(core.skipped) == set(SKIPS)
+
+
+def test_feedforward_on_needs_effort_off_does_not():
+    """Missing desired efforts: rejected with feedforward, fine without."""
+    core = Tracking(settings())
+    send_measured(core, (0.0, 0.0, 0.0), 0.0)
+    with pytest.raises(Rejected) as info:
+        core.desired(NAMES, [0.0] * 3, [0.0] * 3, [], 0.01)
+    assert info.value.reason == 'missing_effort'
+    core.configure(settings(feedforward=False))
+    command = core.desired(NAMES, [0.001] * 3, [0.0] * 3, [], 0.01)
+    assert command.force == pytest.approx((20.0, 20.0, 20.0))
+
+
+def test_clipped_counted_and_configure_applies():
+    """Clipped forces add up; new settings apply from the next message."""
+    core = Tracking(settings(force_limit=10.0))
+    send_measured(core, (0.0, 0.0, 0.0), 0.0)
+    command = send_desired(core, (1.0, -1.0, 0.0), 0.01)
+    assert command.force == (10.0, -10.0, 0.0)
+    assert core.clipped == 2
+    core.configure(settings(force_limit=50000.0, joint_names=['a', 'b', 'c']))
+    # New names: the measurement read by the old ones is forgotten.
+    assert core.desired(['a', 'b', 'c'], [0.0] * 3, [0.0] * 3, [0.0] * 3,
+                        0.02) is None
+    assert core.skipped['no_measurement'] == 1
+    core.measured(['b', 'c', 'a'], [0.0] * 3, [0.0] * 3, [], 0.02)
+    command = core.desired(['c', 'b', 'a'], [0.0, -1.0, 1.0], [0.0] * 3,
+                           [0.0] * 3, 0.02)
+    assert command.force == (20000.0, -20000.0, 0.0)
+    assert core.clipped == 2 and core.commands == 2
