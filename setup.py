@@ -43,6 +43,7 @@ setup(
             'orthoglide = orthoglide_ros.cli:main',
             'setpoint_publisher = orthoglide_ros.setpoint_publisher:main',
             'tracking_controller = orthoglide_ros.tracking_controller_node:main',
+            'simulator = orthoglide_ros.simulator_node:main',
         ],
     },
     **legacy_kwargs,

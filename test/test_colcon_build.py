@@ -71,7 +71,8 @@ def test_install_layout(install):
     """Executables, config, package.xml and the ament index are installed."""
     for relative in ('lib/orthoglide_ros/feedforward',
                      'lib/orthoglide_ros/orthoglide',
-                     'lib/orthoglide_ros/tracking_controller'):
+                     'lib/orthoglide_ros/tracking_controller',
+                     'lib/orthoglide_ros/simulator'):
         path = install / relative
         assert path.is_file() and os.access(path, os.X_OK), relative
     assert (install / 'share' / PACKAGE / 'config' / 'orthoglide.yaml'

@@ -1,0 +1,356 @@
+"""
+The simulator's logic without ROS: actuator forces in, measured state out.
+
+:class:`Simulator` wraps a :class:`simulation.Plant` (RK4 with the command
+held over each step, a zero-order hold: see :mod:`orthoglide_ros.simulation`)
+in the state machine of the ``simulator`` node, and keeps the counters its
+diagnostics report. Its parameters are one table, :data:`SIMULATOR_SPECS`,
+validated as a whole by :func:`simulator_settings_from_parameters`. The ROS
+node (``simulator_node``) only converts messages and runs the timer, so
+every rule below is testable without DDS.
+
+States (the README states them for users):
+
+- ``held``: brakes on, the platform at rest where it is; nothing is
+  integrated and the simulation time stands still. The start state, and the
+  state after a reset. The first valid command switches to ``running``.
+- ``running``: every tick makes one :meth:`Plant.step` of ``1 / rate_hz`` s
+  with the latest valid command held (zero-order hold), clipped to
+  ``[-force_limit, force_limit]`` N per actuator (a step that clips is
+  counted). When no valid command has arrived for ``command_timeout`` s (by
+  arrival time on a monotonic clock), the drive disables and brakes: back to
+  ``held`` with the velocity set to zero, flagged ``timed_out`` until the
+  next valid command resumes ``running``.
+- ``stopped``: a step that the workspace limits refuse (out of reach, nearer
+  a singularity than ``singularity_margin``, or a state that is not finite:
+  :class:`mechanics.WorkspaceError`) freezes the platform at the last good
+  step with the velocity set to zero. Commands are counted and ignored until
+  :meth:`Simulator.reset`.
+
+A command is exactly three finite forces (N, actuators A, B, C); any other
+is rejected and counted by reason (``length``, ``non_finite``) and never
+applied. :meth:`Simulator.reset` puts the platform back at
+``initial_position``, at rest, ``held``, simulation time 0.
+
+Parameters apply as follows: ``force_limit``, ``command_timeout``,
+``rate_hz``, ``joint_names`` and ``base_frame`` at once (the next tick);
+``robot.*``, ``initial_position`` and ``singularity_margin`` describe the
+plant and take effect at the next reset (``pending_reset`` says one is
+waiting), so a running simulation never changes model in mid-motion.
+
+Units: m, m/s, N, s; vectors in the base frame 0.
+"""
+
+from collections import namedtuple
+import math
+import time
+
+from orthoglide_ros import mechanics
+from orthoglide_ros.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
+from orthoglide_ros.params_file import ROBOT_PREFIX, robot_from_parameters
+from orthoglide_ros.settings import check_value, ROBOT_SPECS, Spec
+from orthoglide_ros.simulation import Plant
+
+HELD, RUNNING, STOPPED = 'held', 'running', 'stopped'
+# Why a command was rejected: the keys of Simulator.rejected.
+COMMAND_REASONS = ('length', 'non_finite')
+
+NODE_SPECS = (
+    Spec('rate_hz', 'double', 1000.0,
+         'simulation steps per second (Hz): each step integrates 1/rate_hz s '
+         'of motion (RK4, command held over the step) and publishes the '
+         'joint states and the pose', (1.0, 10000.0)),
+    Spec('initial_position', 'double_array', [0.0, 0.0, 0.0],
+         'position of the platform centre G (m, base frame) at start and '
+         'after ~/reset, at rest; must lie in the workspace (applies at the '
+         'next reset)', None),
+    Spec('command_timeout', 'double', 0.1,
+         'seconds (by arrival time) without a valid command after which a '
+         'running simulation brakes: back to held, velocity zero; at least '
+         'one step (1/rate_hz)', (0.001, 3600.0)),
+    Spec('force_limit', 'double', 1000.0,
+         'largest actuator force magnitude (N, each actuator); commands '
+         'beyond it are clipped and the clipping counted', (0.001, 1.0e6)),
+    Spec('singularity_margin', 'double', DEFAULT_SINGULARITY_MARGIN,
+         'workspace limit: smallest singularity distance a step may reach, '
+         'min(alpha_i / l3, 1 / kappa_F(J_lambda)); a step beyond it stops '
+         'the simulation (applies at the next reset)', (0.01, 0.99)),
+    Spec('joint_names', 'string_array', ['slider_a', 'slider_b', 'slider_c'],
+         'names of the prismatic joints of actuators A, B, C in '
+         'joint_states (three distinct, non-empty)', None),
+    Spec('base_frame', 'string', 'base_link',
+         'frame_id of platform/pose (the paper\'s frame 0)', None),
+)
+
+SIMULATOR_SPECS = ROBOT_SPECS + NODE_SPECS
+
+# The parameters that describe the plant: they apply at the next reset.
+RESET_PARAMETERS = ('robot.*', 'initial_position', 'singularity_margin')
+
+SimulatorSettings = namedtuple('SimulatorSettings', (
+    'robot', 'rate_hz', 'initial_position', 'command_timeout', 'force_limit',
+    'singularity_margin', 'joint_names', 'base_frame'))
+SimulatorSettings.__doc__ = """Everything the simulator reads, validated."""
+
+Tick = namedtuple('Tick', (
+    'state', 'position', 'lambda_', 'lambdadot', 'effort', 'event'))
+Tick.__doc__ = """What one :meth:`Simulator.tick` publishes.
+
+``position``: G (m, frame 0); ``lambda_`` (m) and ``lambdadot`` (m/s): the
+joint state; ``effort``: the forces applied over the step after clipping
+(N), zeros when no step was made; ``event``: None, ``'timeout'`` (this tick
+went back to held) or ``'stopped'`` (this tick's step was refused).
+"""
+
+
+def simulator_settings_from_parameters(values):
+    """
+    Validate a complete set of parameter values into SimulatorSettings.
+
+    ``values``: ``{name: value}``; an absent name takes its default, a
+    robot parameter that is None too (``m4``, ``m6``: ``m2``, ``m3``).
+    Raises ValueError naming the parameter and the rule it breaks; the
+    initial position is checked against the robot and margin of the same
+    set.
+
+    >>> s = simulator_settings_from_parameters({'rate_hz': 500.0})
+    >>> s.rate_hz, s.initial_position, s.force_limit
+    (500.0, (0.0, 0.0, 0.0), 1000.0)
+    """
+    robot = robot_from_parameters(
+        {k: v for k, v in values.items()
+         if k.startswith(ROBOT_PREFIX) and v is not None})
+    node = {s.name: values.get(s.name, s.default) for s in NODE_SPECS}
+    for spec in NODE_SPECS:
+        check_value(spec, node[spec.name])
+    names = node['joint_names']
+    if len(names) != 3 or len(set(names)) != 3 or not all(names):
+        raise ValueError(
+            'joint_names: must be three distinct non-empty names, got '
+            f'{list(names)!r}')
+    position = node['initial_position']
+    if not (isinstance(position, (list, tuple)) and len(position) == 3
+            and all(type(c) is float for c in position)):
+        raise ValueError(
+            'initial_position: must be an array of three doubles (m), such '
+            f'as [0.0, 0.0, 0.0], got {position!r}')
+    if not all(math.isfinite(c) for c in position):
+        raise ValueError(
+            f'initial_position: must be finite, got {list(position)!r}')
+    margin = node['singularity_margin']
+    try:
+        mechanics.solve(robot, position, ZERO, ZERO, margin)
+    except mechanics.WorkspaceError as error:
+        raise ValueError(
+            f'initial_position: {list(position)} m is outside the workspace '
+            f'of singularity_margin {margin:g} ({error.reason}): {error}'
+        ) from None
+    if node['command_timeout'] * node['rate_hz'] < 1.0:
+        raise ValueError(
+            f'command_timeout: must last at least one step, 1/rate_hz = '
+            f'{1.0 / node["rate_hz"]:g} s, got {node["command_timeout"]} s')
+    return SimulatorSettings(
+        robot, node['rate_hz'], tuple(position), node['command_timeout'],
+        node['force_limit'], margin, tuple(names), node['base_frame'])
+
+
+class Rejected(ValueError):
+    """A command refused: ``reason`` is one of COMMAND_REASONS."""
+
+    def __init__(self, reason, message):
+        super().__init__(message)
+        self.reason = reason
+
+
+class Simulator:
+    """
+    The simulated Orthoglide behind the ``simulator`` node: a state machine.
+
+    :meth:`command` takes a command, :meth:`tick` makes one step (or none)
+    and returns what to publish, :meth:`reset` starts over; every method
+    that needs the time takes ``now``, a monotonic time in seconds, so
+    tests drive time. ``plant`` is the :class:`simulation.Plant`; ``state``
+    one of ``held``, ``running``, ``stopped``; ``timed_out`` says that the
+    last ``running`` ended by the command timeout; ``stop_reason`` and
+    ``stop_message`` why the simulation stopped.
+
+    Counters: ``received`` valid commands, ``rejected`` by reason,
+    ``ignored`` (valid, while stopped), ``steps`` (since start),
+    ``clipped`` (steps with at least one force clipped), ``timeouts``,
+    ``step_ns_total`` / ``step_ns_max`` (CPU of :meth:`Plant.step`).
+
+    >>> sim = Simulator(simulator_settings_from_parameters({}))
+    >>> sim.state, sim.tick(0.0).effort
+    ('held', (0.0, 0.0, 0.0))
+    >>> sim.command([0.0, 0.0, 256.5315], 0.0)
+    'running'
+    >>> sim.tick(0.001).effort, sim.plant.time
+    ((0.0, 0.0, 256.5315), 0.001)
+    """
+
+    def __init__(self, settings):
+        self.settings = settings
+        self.received = 0
+        self.rejected = dict.fromkeys(COMMAND_REASONS, 0)
+        self.ignored = 0
+        self.steps = 0
+        self.clipped = 0
+        self.timeouts = 0
+        self.step_ns_total = 0
+        self.step_ns_max = 0
+        self.latest_arrival = None
+        self._model = None
+        self.reset()
+
+    # Settings -------------------------------------------------------------
+    def configure(self, settings):
+        """
+        Use new settings: the live ones at once, the plant's at reset.
+
+        ``force_limit`` applies from the next step; ``robot``,
+        ``initial_position`` and ``singularity_margin`` wait for
+        :meth:`reset` (see :attr:`pending_reset`).
+        """
+        self.settings = settings
+        self.plant.force_limit = (settings.force_limit,) * 3
+
+    @property
+    def pending_reset(self):
+        """Whether plant parameters changed since the last reset."""
+        return _plant_model(self.settings) != self._model
+
+    # Inputs ---------------------------------------------------------------
+    def command(self, forces, now):
+        """
+        Take a command ``[f_A, f_B, f_C]`` (N); return the state after it.
+
+        Raises :class:`Rejected` (counted) unless it is three finite
+        numbers. A valid command becomes the one held over the next steps
+        and starts (or resumes) ``running``; while ``stopped`` it is counted
+        in ``ignored`` and changes nothing.
+        """
+        if len(forces) != 3:
+            self._reject('length', (
+                f'command of {len(forces)} value(s), expected 3 forces '
+                '[f_A, f_B, f_C] (N)'))
+        fa, fb, fc = (float(f) for f in forces)
+        if not math.isfinite(fa + fb + fc):
+            self._reject('non_finite',
+                         f'command {[fa, fb, fc]} N is not finite')
+        if self.state == STOPPED:
+            self.ignored += 1
+            return self.state
+        self.received += 1
+        self._command = (fa, fb, fc)
+        self.latest_arrival = now
+        self.state = RUNNING
+        self.timed_out = False
+        return self.state
+
+    def tick(self, now):
+        """
+        Make this tick's step, if ``running``; return a :class:`Tick`.
+
+        First the timeout: ``running`` with no valid command for more than
+        ``command_timeout`` goes back to ``held`` (velocity zero, no step).
+        A step the plant refuses stops the simulation (the state stays the
+        last good one, velocity zero). The time step is always
+        ``1 / rate_hz``, however late the tick.
+        """
+        event = None
+        effort = ZERO
+        if self.state == RUNNING and (
+                now - self.latest_arrival > self.settings.command_timeout):
+            self._brake(HELD)
+            self.timed_out = True
+            self.timeouts += 1
+            event = 'timeout'
+        elif self.state == RUNNING:
+            plant = self.plant
+            start = time.perf_counter_ns()
+            try:
+                step = plant.step(self._command, 1.0 / self.settings.rate_hz)
+            except mechanics.WorkspaceError as error:
+                self._stop(error)
+                event = 'stopped'
+            else:
+                spent = time.perf_counter_ns() - start
+                self.steps += 1
+                self.step_ns_total += spent
+                if spent > self.step_ns_max:
+                    self.step_ns_max = spent
+                if step.clipped[0] or step.clipped[1] or step.clipped[2]:
+                    self.clipped += 1
+                effort = step.force
+                self._solution = mechanics.solve(
+                    plant.robot, plant.position, plant.velocity, ZERO,
+                    plant.margin)
+        s = self._solution
+        return Tick(self.state, self.plant.position, s.lambda_, s.lambdadot,
+                    effort, event)
+
+    def reset(self):
+        """
+        Start over: initial_position, at rest, ``held``, time 0.
+
+        Applies the pending plant parameters (robot, initial position,
+        margin) and clears ``stopped``; the counters go on. Returns a
+        message saying what was done.
+        """
+        settings = self.settings
+        applied = self._model not in (None, _plant_model(settings))
+        self.plant = Plant(settings.robot, settings.initial_position, ZERO,
+                           0.0, settings.force_limit,
+                           settings.singularity_margin)
+        self._model = _plant_model(settings)
+        self._command = None
+        self.state = HELD
+        self.timed_out = False
+        self.stop_reason = None
+        self.stop_message = None
+        self._refresh()
+        return (f'held at rest at initial_position '
+                f'{list(settings.initial_position)} m, simulation time 0'
+                + ('; new robot, initial_position or singularity_margin '
+                   'applied' if applied else ''))
+
+    @property
+    def singularity_distance(self):
+        """Return the singularity distance of the current position."""
+        return self._solution.singularity_distance
+
+    def _brake(self, state):
+        """Stop the platform where it is (velocity zero) in ``state``."""
+        self.state = state
+        self._command = None
+        self.plant.velocity = ZERO
+        self._refresh()
+
+    def _stop(self, error):
+        position, velocity = self.plant.position, self.plant.velocity
+        self.stop_reason = error.reason
+        self.stop_message = (
+            f'simulation stopped at position {_fmt(position)} m, velocity '
+            f'{_fmt(velocity)} m/s, time {self.plant.time:.6g} s: the next '
+            f'step under force {_fmt(self._command)} N was refused '
+            f'({error.reason}): {error}; call ~/reset to start again')
+        self._brake(STOPPED)
+
+    def _refresh(self):
+        plant = self.plant
+        self._solution = mechanics.solve(plant.robot, plant.position,
+                                         plant.velocity, ZERO, plant.margin)
+
+    def _reject(self, reason, message):
+        self.rejected[reason] += 1
+        raise Rejected(reason, message)
+
+
+def _plant_model(settings):
+    """Return the settings that describe the plant (applied at reset)."""
+    return (settings.robot, settings.initial_position,
+            settings.singularity_margin)
+
+
+def _fmt(vector):
+    return '[' + ', '.join(f'{c:.6g}' for c in vector) + ']'

@@ -1,0 +1,272 @@
+"""
+The ``simulator`` ROS 2 node: actuator forces in, measured joint states out.
+
+A thin layer over :class:`orthoglide_ros.simulator.Simulator`: it declares
+the parameters of :data:`orthoglide_ros.simulator.SIMULATOR_SPECS`, reads
+the commands, runs the step timer, publishes, serves ``~/reset`` and
+reports diagnostics. Run it with ``ros2 run orthoglide_ros simulator``; see
+the README for the topics, parameters and states.
+
+Timing. The step timer runs on the steady (wall) clock at ``rate_hz``;
+every step advances the simulation time by exactly ``1 / rate_hz``. A late
+tick makes a late step, never a longer one: when the machine cannot keep up,
+rcl skips the periods already missed and the simulation runs slower than
+real time (the diagnostics' ``step rate (Hz)`` shows it).
+"""
+
+import array
+import time
+import traceback
+
+from rclpy.clock import Clock, ClockType
+from rclpy.qos_overriding_options import QoSOverridingOptions
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
+from rcl_interfaces.msg import SetParametersResult
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+from std_srvs.srv import Trigger
+
+from orthoglide_ros.node_runtime import (
+    declare_specs, default_qos, diagnostic_array, DIAGNOSTICS_PERIOD,
+    InputNode, run, spec_values)
+from orthoglide_ros.simulator import (
+    COMMAND_REASONS, Rejected, RUNNING, Simulator, SIMULATOR_SPECS, STOPPED,
+    simulator_settings_from_parameters)
+
+
+class SimulatorNode(InputNode):
+    """
+    Node ``simulator``: the Orthoglide's forward dynamics in real time.
+
+    The ``commands`` subscription is read on the input thread of
+    :class:`InputNode`; the step and diagnostics timers, ``~/reset`` and
+    the parameter services run on the executor; all hold ``self.lock`` on
+    the core.
+    """
+
+    def __init__(self, **kwargs):
+        super().__init__('simulator', **kwargs)
+        declare_specs(self, SIMULATOR_SPECS)
+        # Raises ValueError on an invalid start-up set (main() reports it).
+        self._core = Simulator(
+            simulator_settings_from_parameters(self._values()))
+
+        overrides = QoSOverridingOptions.with_default_policies()
+        self._pub_joints = self.create_publisher(
+            JointState, 'joint_states', default_qos(),
+            qos_overriding_options=overrides)
+        self._pub_pose = self.create_publisher(
+            PoseStamped, 'platform/pose', default_qos(),
+            qos_overriding_options=overrides)
+        self._pub_diagnostics = self.create_publisher(
+            DiagnosticArray, '/diagnostics', 10)
+        self.create_input_subscription(
+            Float64MultiArray, 'commands', self._on_command, default_qos(),
+            qos_overriding_options=overrides)
+        self.create_service(Trigger, '~/reset', self._on_reset)
+
+        self._joints = JointState()
+        self._pose = PoseStamped()
+        self._pose.pose.orientation.w = 1.0
+        self._apply_names()
+        self._clock = Clock(clock_type=ClockType.STEADY_TIME)
+        self._step_timer = None
+        self._set_timer()
+        self._published = 0
+        self._internal_errors = 0
+        # Start of the diagnostics period: (time, published, steps, step
+        # ns, rejected) at that moment.
+        self._window = (time.monotonic(), 0, 0, 0, 0)
+        self.create_timer(DIAGNOSTICS_PERIOD, self._publish_diagnostics)
+        # Last: the QoS override parameters declared above are no concern.
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        self.start_inputs()
+
+    # Parameters -----------------------------------------------------------
+    def _values(self, changes=()):
+        """Return the parameter values with ``changes``, as plain types."""
+        return spec_values(self, SIMULATOR_SPECS, changes)
+
+    def _validate_parameters(self, parameters):
+        """Accept a change only if the whole resulting set is valid."""
+        try:
+            simulator_settings_from_parameters(self._values(parameters))
+        except ValueError as error:
+            self.get_logger().warning(f'parameter change refused: {error}')
+            return SetParametersResult(successful=False, reason=str(error))
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, parameters):
+        """Apply the live settings at once; the plant's wait for a reset."""
+        settings = simulator_settings_from_parameters(self._values())
+        with self.lock:
+            old = self._core.settings
+            self._core.configure(settings)
+            self._apply_names()
+            if settings.rate_hz != old.rate_hz:
+                self._set_timer()
+            if self._core.pending_reset:
+                self.get_logger().info(
+                    'new robot, initial_position or singularity_margin: '
+                    'applies at the next ~/reset')
+
+    def _apply_names(self):
+        settings = self._core.settings
+        self._joints.name = list(settings.joint_names)
+        self._joints.header.frame_id = ''
+        self._pose.header.frame_id = settings.base_frame
+
+    def _set_timer(self):
+        if self._step_timer is not None:
+            self.destroy_timer(self._step_timer)
+        self._step_timer = self.create_timer(
+            1.0 / self._core.settings.rate_hz, self._on_step,
+            clock=self._clock)
+
+    # Inputs ---------------------------------------------------------------
+    def _on_command(self, msg):
+        """Take one command (input thread, lock held)."""
+        try:
+            self._core.command(msg.data, time.monotonic())
+        except Rejected as rejection:
+            self.warn_throttled(rejection.reason,
+                                f'command rejected ({rejection.reason}): '
+                                f'{rejection}')
+        else:
+            if self._core.state == STOPPED:
+                self.warn_throttled(
+                    'ignored', 'command ignored: the simulation is stopped '
+                    '(call ~/reset)')
+
+    def on_input_error(self):
+        """Count a defect in the command callback; log it once a second."""
+        self._internal_error('in a command callback')
+
+    def _on_reset(self, request, response):
+        try:
+            with self.lock:
+                response.message = self._core.reset()
+            response.success = True
+            self.get_logger().info(f'reset: {response.message}')
+        except Exception:   # a defect: answer it, keep the node alive
+            self._internal_error('in ~/reset')
+            response.success = False
+            response.message = 'internal error: see the log'
+        return response
+
+    # Steps ----------------------------------------------------------------
+    def _on_step(self):
+        try:
+            with self.lock:
+                tick = self._core.tick(time.monotonic())
+                self._publish(tick)
+        except Exception:   # a defect: count it, the next tick goes on
+            self._internal_error('in a step')
+            return
+        if tick.event == 'stopped':
+            self.get_logger().error(self._core.stop_message)
+        elif tick.event == 'timeout':
+            self.warn_throttled('timeout', (
+                f'no valid command for command_timeout '
+                f'{self._core.settings.command_timeout:g} s: braked, held '
+                'until the next command'))
+
+    def _publish(self, tick):
+        stamp = self.get_clock().now().to_msg()
+        joints, pose = self._joints, self._pose
+        joints.header.stamp = stamp
+        joints.position = array.array('d', tick.lambda_)
+        joints.velocity = array.array('d', tick.lambdadot)
+        joints.effort = array.array('d', tick.effort)
+        pose.header.stamp = stamp
+        p = pose.pose.position
+        p.x, p.y, p.z = tick.position
+        self._pub_joints.publish(joints)
+        self._pub_pose.publish(pose)
+        self._published += 1
+
+    def _internal_error(self, where):
+        self._internal_errors += 1
+        if self.throttle('internal'):
+            self.get_logger().error(f'internal error {where}:\n'
+                                    + traceback.format_exc())
+
+    # Diagnostics ----------------------------------------------------------
+    def _publish_diagnostics(self):
+        try:
+            with self.lock:
+                message = self._diagnostics()
+        except Exception:   # a defect: count it, try again next period
+            self._internal_error('in the diagnostics')
+            return
+        self._pub_diagnostics.publish(message)
+
+    def _diagnostics(self):
+        """Return the DiagnosticArray of the period ending now."""
+        core = self._core
+        now = time.monotonic()
+        start, published, steps, step_ns, rejected_before = self._window
+        period = max(now - start, 1e-9)
+        count = core.steps - steps
+        mean_us = (core.step_ns_total - step_ns) / count / 1e3 \
+            if count else 0.0
+        rejected = sum(core.rejected.values())
+        self._window = (now, self._published, core.steps,
+                        core.step_ns_total, rejected)
+        if self._internal_errors:
+            level = DiagnosticStatus.ERROR
+            text = f'{self._internal_errors} internal error(s): see the log'
+        elif core.state == STOPPED:
+            level = DiagnosticStatus.ERROR
+            text = f'stopped: {core.stop_message}'
+        elif core.timed_out:
+            level = DiagnosticStatus.WARN
+            text = (f'held: no valid command for command_timeout '
+                    f'{core.settings.command_timeout:g} s, braked')
+        elif rejected > rejected_before:
+            level = DiagnosticStatus.WARN
+            text = (f'{rejected - rejected_before} command(s) rejected in '
+                    'the last period')
+        elif core.received == 0 or core.state != RUNNING:
+            level, text = DiagnosticStatus.OK, 'held: waiting for a command'
+        else:
+            level, text = DiagnosticStatus.OK, 'running'
+        plant = core.plant
+        values = [
+            ('state', core.state),
+            ('sim time (s)', plant.time),
+            ('steps', core.steps),
+            ('step rate (Hz)', count / period),
+            ('outputs rate (Hz)', (self._published - published) / period),
+            ('step compute time mean (us)', mean_us),
+            ('step compute time max (us)', core.step_ns_max / 1e3),
+            ('commands received', core.received),
+            ('commands ignored (stopped)', core.ignored),
+            ('clipped steps', core.clipped),
+            ('timeouts', core.timeouts),
+            ('position x (m)', plant.position[0]),
+            ('position y (m)', plant.position[1]),
+            ('position z (m)', plant.position[2]),
+            ('singularity distance', core.singularity_distance),
+            ('singularity margin', plant.margin),
+            ('pending reset', core.pending_reset),
+            ('rate_hz', core.settings.rate_hz),
+            ('internal errors', self._internal_errors),
+        ]
+        values += [(f'rejected {r}', core.rejected[r])
+                   for r in COMMAND_REASONS]
+        core.step_ns_max = 0
+        return diagnostic_array(self, 'Orthoglide simulator', level, text,
+                                values)
+
+
+def main(args=None):
+    """Run the node until Ctrl-C or shutdown; return the exit code."""
+    return run(SimulatorNode, 'simulator', args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,392 @@
+"""
+Tests of the simulator node over real DDS: in-process, then as a process.
+
+In-process, the node (``SimulatorNode``) and a :class:`SimProbe` share one
+rclpy context and the EventsExecutor the node runs on; messages still go
+through Fast DDS. The step timer runs in real time (1 kHz by default), so
+the tests compare by step count: the ``steps`` value of the diagnostics
+says how many steps were integrated, and the same number of
+:meth:`simulation.Plant.step` calls must give the same floats.
+
+As a process, the console script ``simulator`` is started as a user runs
+it and stopped with SIGINT, as Ctrl-C does.
+"""
+
+import math
+import os
+import sys
+import time
+from types import SimpleNamespace
+
+import pytest
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.experimental import EventsExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+from std_srvs.srv import Trigger
+
+from orthoglide_ros import mechanics
+from orthoglide_ros.robot import Robot
+from orthoglide_ros.simulation import Plant
+from orthoglide_ros.simulator_node import SimulatorNode
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from node_harness import (header_stamp, node_executable,  # noqa: E402
+                          PROBE_QOS, spin_for, spin_until,
+                          start_node_process, stop_process, wait_exit)
+
+WAIT = 10.0         # s: generous, the machine is shared
+START_WAIT = 40.0   # s for a process to come up and answer
+PROMPT = 5.0        # s from SIGINT to exit
+ZERO = (0.0, 0.0, 0.0)
+DT = 1e-3           # s: one step at the default rate_hz
+JOINT_NAMES = ['slider_a', 'slider_b', 'slider_c']
+HOLD = mechanics.solve(Robot(), ZERO).force     # the weight, held at home
+DIAGNOSTIC_NAME = 'simulator: Orthoglide simulator'
+
+
+class SimProbe(Node):
+    """
+    Sends commands to the simulator and records its outputs.
+
+    ``joint_states``, ``poses``, ``diagnostics``: every message received,
+    in order; ``reset()`` calls ``/simulator/reset``.
+    """
+
+    def __init__(self, context):
+        super().__init__('simulator_probe', context=context)
+        self.joint_states = []
+        self.poses = []
+        self.diagnostics = []
+        self.commands = self.create_publisher(Float64MultiArray, 'commands',
+                                              PROBE_QOS)
+        self.inputs = [
+            self.create_subscription(JointState, 'joint_states',
+                                     self.joint_states.append, PROBE_QOS),
+            self.create_subscription(PoseStamped, 'platform/pose',
+                                     self.poses.append, PROBE_QOS),
+            self.create_subscription(DiagnosticArray, '/diagnostics',
+                                     self._on_diagnostics, PROBE_QOS)]
+        self.reset_client = self.create_client(Trigger, '/simulator/reset')
+
+    def _on_diagnostics(self, msg):
+        if msg.status[0].name == DIAGNOSTIC_NAME:
+            self.diagnostics.append(msg)
+
+    def send(self, values):
+        """Publish one command (a list of floats, N)."""
+        self.commands.publish(Float64MultiArray(data=list(values)))
+
+    def matched(self):
+        """Whether the command topic and every output are matched."""
+        return (self.commands.get_subscription_count() > 0
+                and all(s.get_publisher_count() > 0 for s in self.inputs))
+
+    def clear(self):
+        """Forget every message recorded so far."""
+        for messages in (self.joint_states, self.poses, self.diagnostics):
+            messages.clear()
+
+
+@pytest.fixture
+def graph(ros_context):
+    """Return make(params): the node and a probe, matched; cleaned up."""
+    made = []
+
+    def make(params=None):
+        overrides = [Parameter(k, value=v) for k, v in (params or {}).items()]
+        node = SimulatorNode(context=ros_context,
+                             parameter_overrides=overrides)
+        probe = SimProbe(ros_context)
+        executor = EventsExecutor(context=ros_context)
+        made.append((executor, node, probe))
+        executor.add_node(node)
+        executor.add_node(probe)
+        assert spin_until(executor, probe.matched, WAIT), (
+            'probe and node did not match')
+        return SimpleNamespace(node=node, probe=probe, executor=executor)
+
+    yield make
+    for executor, node, probe in made:
+        executor.shutdown()
+        probe.destroy_node()
+        node.destroy_node()
+
+
+def wait_diagnostics(g, predicate, timeout=WAIT):
+    """Spin until a diagnostics status satisfies ``predicate(status)``."""
+    def found():
+        return any(predicate(m.status[0]) for m in g.probe.diagnostics)
+    ok = spin_until(g.executor, found, timeout)
+    last = g.probe.diagnostics[-1].status[0] if g.probe.diagnostics else None
+    assert ok, f'no matching diagnostics; last: {last}'
+    return next(m.status[0] for m in g.probe.diagnostics
+                if predicate(m.status[0]))
+
+
+def values(status):
+    """Return the ``{key: value}`` of one DiagnosticStatus."""
+    return {kv.key: kv.value for kv in status.values}
+
+
+def send_for(g, command, seconds, period=0.02):
+    """Send ``command`` every ``period`` s for ``seconds``, spinning."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        g.probe.send(command)
+        spin_for(g.executor, period)
+
+
+def plant_states(force, count, robot=None, start=ZERO):
+    """Return the Plant's (position, lambda, lambdadot) after 1..count."""
+    plant = Plant(robot or Robot(), start, force_limit=1000.0)
+    states = []
+    for _ in range(count):
+        plant.step(force, DT)
+        states.append((plant.position, *plant.joint_state()))
+    return states
+
+
+# In-process ------------------------------------------------------------------
+def test_held_publishes_every_tick_until_the_first_command(graph):
+    """No command: joint states and pose at rest, same stamp, ~rate_hz."""
+    g = graph({'rate_hz': 200.0, 'base_frame': 'world',
+               'initial_position': [0.05, -0.03, 0.02]})
+    g.probe.clear()
+    spin_for(g.executor, 0.5)
+    joints, poses = g.probe.joint_states, g.probe.poses
+    # 100 expected in 0.5 s at 200 Hz; a loaded machine may lose a few.
+    assert len(joints) >= 50, len(joints)
+    expected = mechanics.solve(Robot(), (0.05, -0.03, 0.02))
+    for msg in joints:
+        assert list(msg.name) == JOINT_NAMES
+        assert tuple(msg.position) == expected.lambda_
+        assert tuple(msg.velocity) == ZERO and tuple(msg.effort) == ZERO
+    for msg in poses:
+        assert msg.header.frame_id == 'world'
+        p, q = msg.pose.position, msg.pose.orientation
+        assert (p.x, p.y, p.z) == (0.05, -0.03, 0.02)
+        assert (q.x, q.y, q.z, q.w) == (0.0, 0.0, 0.0, 1.0)
+    # One stamp per tick, the same on both outputs (pairs by stamp: a
+    # message lost on one topic must not shift the comparison).
+    joint_stamps = [header_stamp(m) for m in joints]
+    pose_stamps = {header_stamp(m) for m in poses}
+    assert len(set(joint_stamps)) == len(joint_stamps)
+    shared = pose_stamps.intersection(joint_stamps)
+    assert len(shared) >= 0.9 * min(len(joints), len(poses)), len(shared)
+    status = wait_diagnostics(g, lambda s: True)
+    assert status.level == DiagnosticStatus.OK
+    assert status.message == 'held: waiting for a command'
+    v = values(status)
+    assert (v['state'], v['steps'], v['sim time (s)']) == ('held', '0', '0')
+    assert g.node._core.plant.time == 0.0
+
+
+def test_static_holding_force_keeps_the_platform_at_home(graph):
+    """
+    mechanics.solve's force at rest at home holds the platform there.
+
+    Bound 1e-9 m on lambda: the holding force, sent as float64, gives an
+    acceleration at rounding level (about eps * g = 2e-15 m/s^2), which
+    the open-loop instability (growth e^(3.5 t), x6 over 0.5 s) cannot
+    carry anywhere near 1e-9 m; measured: exactly 0.
+    """
+    g = graph()
+    send_for(g, HOLD, 0.5)
+    wait_diagnostics(g, lambda s: int(values(s)['steps']) > 100)
+    running = [m for m in g.probe.joint_states if tuple(m.effort) == HOLD]
+    assert len(running) > 100, len(running)
+    worst = max(abs(c) for m in running for c in (*m.position, *m.velocity))
+    assert worst <= 1e-9, worst
+    assert g.node._core.clipped == 0
+
+
+def test_constant_command_follows_the_plant_step_for_step(graph):
+    """
+    A command held until the timeout = Plant.step with dt = 1 ms, N times.
+
+    N is the node's step count (diagnostics ``steps``); every published
+    running state equals the Plant's state after as many steps, exactly,
+    in order; after the timeout the last state is held at rest.
+    """
+    g = graph({'command_timeout': 0.2})
+    force = (HOLD[0] + 20.0, HOLD[1] - 10.0, HOLD[2] + 5.0)
+    g.probe.send(force)
+    status = wait_diagnostics(g, lambda s: values(s)['timeouts'] == '1')
+    steps = int(values(status)['steps'])
+    assert status.level == DiagnosticStatus.WARN
+    assert values(status)['state'] == 'held'
+    # 0.2 s of timeout at 1 kHz: about 200 steps, fewer if ticks are late.
+    assert 20 <= steps <= 260, steps
+    assert float(values(status)['sim time (s)']) == pytest.approx(
+        steps * DT, rel=1e-5)
+    states = plant_states(force, steps)
+    index = {state[0]: k for k, state in enumerate(states)}
+    spin_for(g.executor, 0.1)
+    poses = {header_stamp(p): p for p in g.probe.poses}
+    running = [(m, poses[header_stamp(m)]) for m in g.probe.joint_states
+               if tuple(m.effort) == force and header_stamp(m) in poses]
+    assert len(running) >= steps * 0.9, (len(running), steps)
+    previous = -1
+    for joints, pose in running:
+        p = pose.pose.position
+        k = index[(p.x, p.y, p.z)]     # a KeyError: not a Plant state
+        assert k > previous
+        previous = k
+        assert (tuple(joints.position), tuple(joints.velocity)) == \
+            states[k][1:]
+    assert previous == steps - 1
+    held = g.probe.joint_states[-1]
+    assert tuple(held.position) == states[-1][1]
+    assert tuple(held.velocity) == ZERO and tuple(held.effort) == ZERO
+    assert g.node._core.plant.position == states[-1][0]
+
+
+def test_stop_with_clear_error_then_reset(graph, capfd):
+    """Out of the workspace: ERROR once, frozen, ignored; ~/reset restores."""
+    g = graph({'command_timeout': 1.0})
+    push = (1000.0, 0.0, 0.0)
+    g.probe.send(push)
+    status = wait_diagnostics(
+        g, lambda s: s.level == DiagnosticStatus.ERROR)
+    assert status.message.startswith(
+        'stopped: simulation stopped at position [')
+    assert '(singular)' in status.message and '~/reset' in status.message
+    v = values(status)
+    assert v['state'] == 'stopped'
+    core = g.node._core
+    frozen = core.plant.position
+    assert mechanics.workspace_status(Robot(), frozen).ok
+    # Commands are ignored, the frozen state is published at rest.
+    g.probe.send(HOLD)
+    g.probe.send(HOLD)
+    g.probe.clear()
+    status = wait_diagnostics(
+        g, lambda s: values(s)['commands ignored (stopped)'] == '2')
+    assert status.level == DiagnosticStatus.ERROR
+    assert g.probe.joint_states
+    lam = mechanics.solve(Robot(), frozen).lambda_
+    for msg in g.probe.joint_states:
+        assert tuple(msg.position) == lam
+        assert tuple(msg.velocity) == ZERO and tuple(msg.effort) == ZERO
+    log = capfd.readouterr().err
+    assert log.count('simulation stopped at position') == 1, log
+    assert '[ERROR]' in log
+    # ~/reset: back home at rest, held, OK.
+    assert g.probe.reset_client.wait_for_service(timeout_sec=WAIT)
+    future = g.probe.reset_client.call_async(Trigger.Request())
+    assert spin_until(g.executor, future.done, WAIT)
+    answer = future.result()
+    assert answer.success, answer.message
+    assert 'initial_position [0.0, 0.0, 0.0] m' in answer.message
+    g.probe.clear()
+    status = wait_diagnostics(g, lambda s: values(s)['state'] == 'held')
+    assert status.level == DiagnosticStatus.OK
+    assert spin_until(g.executor, lambda: g.probe.joint_states, WAIT)
+    assert tuple(g.probe.joint_states[-1].position) == ZERO
+    assert core.plant.position == ZERO and core.plant.time == 0.0
+    # It runs again.
+    send_for(g, HOLD, 0.1)
+    assert core.state == 'running'
+
+
+def test_bad_commands_rejected_by_reason(graph):
+    """Wrong length or non-finite: counted, warned, never applied."""
+    g = graph()
+    g.probe.send([1.0, 2.0])
+    g.probe.send([math.nan, 0.0, 300.0])
+    g.probe.send([0.0, math.inf, 300.0, 1.0])
+    status = wait_diagnostics(g, lambda s: values(s)['rejected length'] ==
+                              '2' and values(s)['rejected non_finite'] == '1')
+    assert status.level == DiagnosticStatus.WARN
+    assert values(status)['state'] == 'held'
+    assert values(status)['commands received'] == '0'
+    assert g.node._core.steps == 0
+
+
+def test_parameter_changes_live_and_at_reset(graph):
+    """force_limit applies at once, robot.* at ~/reset, bad ones refused."""
+    g = graph()
+    node = g.node
+    results = node.set_parameters([Parameter('rate_hz', value=-1.0)])
+    assert not results[0].successful and 'rate_hz' in results[0].reason
+    results = node.set_parameters([Parameter('initial_position',
+                                             value=[0.9, 0.0, 0.0])])
+    assert not results[0].successful
+    assert 'initial_position' in results[0].reason
+    results = node.set_parameters([Parameter('force_limit', value=100.0),
+                                   Parameter('robot.m5', value=20.0),
+                                   Parameter('rate_hz', value=500.0)])
+    assert all(r.successful for r in results)
+    send_for(g, HOLD, 0.1)
+    core = node._core
+    assert core.plant.robot == Robot() and core.pending_reset
+    clipped = (0.0, 0.0, 100.0)
+    assert any(tuple(m.effort) == clipped for m in g.probe.joint_states)
+    assert core.clipped > 0
+    wait_diagnostics(g, lambda s: values(s)['pending reset'] == 'true'
+                     and values(s)['rate_hz'] == '500')
+    future = g.probe.reset_client.call_async(Trigger.Request())
+    assert spin_until(g.executor, future.done, WAIT)
+    assert future.result().success and 'applied' in future.result().message
+    assert core.plant.robot == Robot(m5=20.0) and not core.pending_reset
+
+
+# As a process ----------------------------------------------------------------
+def simulator_command():
+    """Return the command line of the installed console script."""
+    return [node_executable('simulator')]
+
+
+needs_script = pytest.mark.skipif(
+    not os.path.exists(node_executable('simulator')),
+    reason='the simulator console script is not installed next to python')
+
+
+@needs_script
+def test_process_publishes_joint_states_and_exits_0_on_sigint(ros_context):
+    """``simulator``: joint states at rest, then Ctrl-C -> exit 0."""
+    probe = SimProbe(ros_context)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(probe)
+    proc = start_node_process(['--ros-args', '-p', 'rate_hz:=100.0'],
+                              command=simulator_command())
+    try:
+        assert spin_until(executor, lambda: len(probe.joint_states) >= 10,
+                          START_WAIT), 'no joint states from the process'
+        msg = probe.joint_states[-1]
+        assert list(msg.name) == JOINT_NAMES
+        assert tuple(msg.position) == ZERO and tuple(msg.effort) == ZERO
+        assert proc.poll() is None, 'the node exited by itself'
+    finally:
+        start = time.monotonic()
+        code, stderr = stop_process(proc)
+        elapsed = time.monotonic() - start
+        executor.shutdown()
+        probe.destroy_node()
+    assert code == 0, f'exit code {code} after SIGINT; stderr:\n{stderr}'
+    assert elapsed < PROMPT, f'took {elapsed:.1f} s to exit after SIGINT'
+    assert 'Traceback' not in stderr, stderr
+
+
+@needs_script
+@pytest.mark.parametrize('argument, word', [
+    ('rate_hz:=-1.0', 'rate_hz'),
+    ('initial_position:=[0.9, 0.0, 0.0]', 'initial_position'),
+])
+def test_process_invalid_parameter_exits_2(argument, word):
+    """An invalid start-up parameter: FATAL naming it, exit code 2."""
+    proc = start_node_process(['--ros-args', '-p', argument],
+                              command=simulator_command())
+    try:
+        code = wait_exit(proc, START_WAIT)
+    finally:
+        code, stderr = stop_process(proc)
+    assert code == 2, f'exit code {code}; stderr:\n{stderr}'
+    assert 'FATAL' in stderr and word in stderr, stderr
+    assert 'Traceback' not in stderr, stderr
