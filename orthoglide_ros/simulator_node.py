@@ -7,11 +7,15 @@ the commands, runs the step timer, publishes, serves ``~/reset`` and
 reports diagnostics. Run it with ``ros2 run orthoglide_ros simulator``; see
 the README for the topics, parameters and states.
 
-Timing. The step timer runs on the steady (wall) clock at ``rate_hz``;
-every step advances the simulation time by exactly ``1 / rate_hz``. A late
-tick makes a late step, never a longer one: when the machine cannot keep up,
-rcl skips the periods already missed and the simulation runs slower than
-real time (the diagnostics' ``step rate (Hz)`` shows it).
+Timing: real time on a fixed grid. The steps sit on a grid of period
+``1 / rate_hz`` of the steady (monotonic) clock, and every step advances the
+simulation by exactly that period. Each tick of the step timer makes every
+step of the grid that is due, so a late tick catches up (with the command
+held, as the drive held it) and the simulated time keeps pace with the wall
+clock, up to MAX_CATCH_UP steps per tick; beyond that the missed time is
+dropped (counted in ``overruns``: the plant then runs slower than real
+time). The published stamp is the grid time of the state published (the
+node clock at that instant), not the time of publication.
 """
 
 import array
@@ -19,6 +23,7 @@ import time
 import traceback
 
 from rclpy.clock import Clock, ClockType
+from rclpy.duration import Duration
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -34,6 +39,9 @@ from orthoglide_ros.node_runtime import (
 from orthoglide_ros.simulator import (
     COMMAND_REASONS, Rejected, RUNNING, Simulator, SIMULATOR_SPECS, STOPPED,
     simulator_settings_from_parameters)
+
+# Steps one tick may make to catch up with the grid (10 ms at 1 kHz).
+MAX_CATCH_UP = 10
 
 
 class SimulatorNode(InputNode):
@@ -71,8 +79,10 @@ class SimulatorNode(InputNode):
         self._pose = PoseStamped()
         self._pose.pose.orientation.w = 1.0
         self._apply_names()
-        self._clock = Clock(clock_type=ClockType.STEADY_TIME)
+        self._step_clock = Clock(clock_type=ClockType.STEADY_TIME)
         self._step_timer = None
+        self._grid = None       # monotonic time of the next step due
+        self._overruns = 0
         self._set_timer()
         self._published = 0
         self._internal_errors = 0
@@ -122,9 +132,10 @@ class SimulatorNode(InputNode):
     def _set_timer(self):
         if self._step_timer is not None:
             self.destroy_timer(self._step_timer)
+        self._grid = None
         self._step_timer = self.create_timer(
             1.0 / self._core.settings.rate_hz, self._on_step,
-            clock=self._clock)
+            clock=self._step_clock)
 
     # Inputs ---------------------------------------------------------------
     def _on_command(self, msg):
@@ -159,12 +170,16 @@ class SimulatorNode(InputNode):
 
     # Steps ----------------------------------------------------------------
     def _on_step(self):
+        now = time.monotonic()
         try:
             with self.lock:
-                tick = self._core.tick(time.monotonic())
-                self._publish(tick)
+                tick, lag = self._catch_up(now)
+                if tick is not None:
+                    self._publish(tick, lag)
         except Exception:   # a defect: count it, the next tick goes on
             self._internal_error('in a step')
+            return
+        if tick is None:
             return
         if tick.event == 'stopped':
             self.get_logger().error(self._core.stop_message)
@@ -174,8 +189,32 @@ class SimulatorNode(InputNode):
                 f'{self._core.settings.command_timeout:g} s: braked, held '
                 'until the next command'))
 
-    def _publish(self, tick):
-        stamp = self.get_clock().now().to_msg()
+    def _catch_up(self, now):
+        """
+        Make every step of the grid due at ``now`` (lock held).
+
+        Returns the last step's Tick (None if none was due) and how long
+        before ``now`` its state holds (s). The grid starts half a period
+        before the first tick, so that timer jitter below half a period
+        makes exactly one step per tick.
+        """
+        period = 1.0 / self._core.settings.rate_hz
+        if self._grid is None:
+            self._grid = now - 0.5 * period
+        elif now - self._grid > MAX_CATCH_UP * period:
+            self._overruns += 1
+            self._grid = now - (MAX_CATCH_UP - 0.5) * period
+        tick = None
+        while self._grid <= now:
+            tick = self._core.tick(self._grid)
+            self._grid += period
+            if tick.event is not None:
+                break
+        return tick, now - (self._grid - period)
+
+    def _publish(self, tick, lag):
+        stamp = (self.get_clock().now()
+                 - Duration(nanoseconds=round(lag * 1e9))).to_msg()
         joints, pose = self._joints, self._pose
         joints.header.stamp = stamp
         joints.position = array.array('d', tick.lambda_)
@@ -247,6 +286,7 @@ class SimulatorNode(InputNode):
             ('commands ignored (stopped)', core.ignored),
             ('clipped steps', core.clipped),
             ('timeouts', core.timeouts),
+            ('overruns (time dropped)', self._overruns),
             ('position x (m)', plant.position[0]),
             ('position y (m)', plant.position[1]),
             ('position z (m)', plant.position[2]),

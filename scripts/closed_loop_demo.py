@@ -1,0 +1,137 @@
+"""
+Closed-loop demo: PD alone against PD + feedforward, over DDS, no hardware.
+
+Starts the ``simulator``, ``feedforward`` and ``tracking_controller`` nodes
+as processes, then for the paper's trajectory (eq. 6) and a faster one
+streams one pass per case from a ``setpoint_publisher`` process: PD alone
+and PD + feedforward, on the exact plant and on a plant whose platform is
+20 % heavier than the model. Prints the tracking error of every case and
+writes a PNG of the errors over time. The loop and its error measure are
+in ``test/closed_loop_harness.py`` (shared with ``test_closed_loop.py``).
+
+Run it through ``bash scripts/closed_loop_demo.sh`` (sets up .venv, keeps
+DDS on this host, picks a ROS_DOMAIN_ID); ``--help`` for the options. Exit
+code 0 on success, 1 if a node failed or a pass did not complete, 2 on a
+usage error.
+"""
+
+import argparse
+import os
+from pathlib import Path
+import sys
+
+# DDS stays on this host whoever starts the demo; a domain of its own.
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / 'test'))
+
+import rclpy  # noqa: E402
+
+import closed_loop_harness as harness  # noqa: E402
+
+CASES = ((False, 1.0), (True, 1.0), (False, harness.MISMATCH),
+         (True, harness.MISMATCH))      # (feedforward, plant mass factor)
+
+
+def main(argv=None):
+    """Run every case, print the table, write the PNG; return the code."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--loop-rate', type=float, default=harness.LOOP_RATE,
+                        metavar='HZ', help='setpoints, feedforward and '
+                        f'commands per second (default {harness.LOOP_RATE:g})')
+    parser.add_argument('--plant-rate', type=float,
+                        default=harness.PLANT_RATE, metavar='HZ',
+                        help='simulator steps per second (default '
+                        f'{harness.PLANT_RATE:g})')
+    parser.add_argument('--trajectories', default='paper,fast',
+                        help='comma-separated, of: '
+                        + ', '.join(harness.TRAJECTORIES))
+    parser.add_argument('--plot', default=str(ROOT / 'out' /
+                                              'closed_loop.png'),
+                        metavar='FILE', help='PNG of the tracking errors '
+                        '(default out/closed_loop.png in the repository)')
+    args = parser.parse_args(argv)
+    names = args.trajectories.split(',')
+    unknown = [n for n in names if n not in harness.TRAJECTORIES]
+    if unknown or not (1.0 <= args.loop_rate <= args.plant_rate <= 10000.0):
+        parser.error(f'unknown trajectories {unknown}' if unknown else
+                     'rates: need 1 <= loop rate <= plant rate <= 10000 Hz')
+
+    context = rclpy.context.Context()
+    rclpy.init(context=context)
+    runs = {}
+    try:
+        with harness.ClosedLoop(context, args.loop_rate,
+                                args.plant_rate) as loop:
+            for name in names:
+                for feedforward, mass in CASES:
+                    run = loop.run(name, feedforward, mass_factor=mass)
+                    print(f'  {run.label}: {run.samples} samples, position '
+                          f'error RMS {run.rms_mm:.3f} mm, max '
+                          f'{run.max_mm:.3f} mm', flush=True)
+                    runs[name, feedforward, mass] = run
+        failed = {k: v for k, v in loop.exit_codes.items() if v != 0}
+        if failed:
+            raise harness.LoopError(f'nodes exited with {failed}:\n'
+                                    + '\n'.join(loop.stderr.values()))
+    except harness.LoopError as error:
+        print(f'closed_loop_demo: error: {error}', file=sys.stderr)
+        return 1
+    finally:
+        rclpy.try_shutdown(context=context)
+    print_table(runs, names, args)
+    plot(runs, names, args.plot)
+    print(f'plot: {args.plot}')
+    return 0
+
+
+def print_table(runs, names, args):
+    """Print the RMS and max errors and the PD / PD + FF ratios."""
+    print(f'\nTracking error of the platform centre (mm), loop '
+          f'{args.loop_rate:g} Hz, plant {args.plant_rate:g} Hz:')
+    print(f'{"trajectory":<10} {"plant":<16} {"PD rms":>8} {"PD max":>8} '
+          f'{"PD+FF rms":>10} {"PD+FF max":>10} {"ratio rms":>10}')
+    for name in names:
+        for mass in (1.0, harness.MISMATCH):
+            pd, ff = runs[name, False, mass], runs[name, True, mass]
+            plant = 'exact' if mass == 1.0 else f'm5 x{mass:g}'
+            print(f'{name:<10} {plant:<16} {pd.rms_mm:8.3f} {pd.max_mm:8.3f} '
+                  f'{ff.rms_mm:10.3f} {ff.max_mm:10.3f} '
+                  f'{pd.rms_mm / ff.rms_mm:9.1f}x')
+
+
+def plot(runs, names, path):
+    """Write the error norms over time, one panel per trajectory."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    import numpy as np
+    figure, axes = plt.subplots(1, len(names), figsize=(6 * len(names), 4.5),
+                                squeeze=False)
+    styles = {(False, 1.0): ('tab:red', '-'), (True, 1.0): ('tab:blue', '-'),
+              (False, harness.MISMATCH): ('tab:red', '--'),
+              (True, harness.MISMATCH): ('tab:blue', '--')}
+    for axis, name in zip(axes[0], names):
+        for (feedforward, mass), (color, line) in styles.items():
+            run = runs[name, feedforward, mass]
+            norm = np.linalg.norm(run.position_error, axis=1) * 1e3
+            axis.semilogy(run.times, np.maximum(norm, 1e-4), color=color,
+                          linestyle=line, label=(
+                              f'{"PD + FF" if feedforward else "PD"}, '
+                              f'{"exact plant" if mass == 1.0 else "m5 x%g" % mass}'
+                              f' (rms {run.rms_mm:.3g} mm)'))
+        axis.set_title(f'{name} trajectory')
+        axis.set_xlabel('t (s)')
+        axis.set_ylabel('|r_G - r*| (mm)')
+        axis.grid(True, which='both', alpha=0.3)
+        axis.legend(fontsize=8)
+    figure.suptitle('Orthoglide closed loop over DDS: tracking error')
+    figure.tight_layout()
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=110)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

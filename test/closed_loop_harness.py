@@ -1,0 +1,270 @@
+"""
+The closed loop over DDS, for the closed-loop demo and its tests.
+
+``setpoint_publisher`` (eq. 6) -> ``feedforward`` -> ``tracking_controller``
+-> ``simulator`` -> back to the controller, five processes on real Fast
+DDS, and a recorder node here that keeps the simulator's ``joint_states``
+and the setpoints' stamps. :class:`ClosedLoop` starts the three long-lived
+nodes once; each :meth:`ClosedLoop.run` sets the controller's gains and
+feedforward switch and the plant's platform mass through the standard
+parameter services, resets the simulator (platform at home, at rest, held
+until the first command) and streams one pass of a trajectory from a new
+``setpoint_publisher`` process.
+
+Tracking error. A measured sample of stamp ``s`` (the simulator's clock at
+the end of a step) is compared with the trajectory at the same time,
+``r*(s - start)``, where ``start`` is the stamp of the pass's first
+setpoint: the error includes everything a real loop suffers (the
+controller's sampling, the transport latency, the plant's zero-order hold),
+not only the model. The platform position comes from the measured
+``lambda`` through :func:`mechanics.forward_kinematics`.
+
+Rates. The control loop (setpoints, feedforward, commands) runs at
+``loop_rate`` and the plant at ``plant_rate`` (default 250 Hz and 1 kHz):
+four Python nodes and the recorder at 1 kHz would need more than this
+machine's two cores (see the README).
+
+Import it with the test directory on ``sys.path``.
+"""
+
+from collections import namedtuple
+import math
+import os
+import sys
+import time
+
+import numpy as np
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.parameter_client import AsyncParameterClient
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import MultiDOFJointTrajectory
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from node_harness import (node_executable, start_node_process,  # noqa: E402
+                          stop_process)
+
+from orthoglide_ros import mechanics, trajectory  # noqa: E402
+from orthoglide_ros.robot import Robot  # noqa: E402
+from orthoglide_ros.tracking import CONTROLLER_SPECS  # noqa: E402
+
+LOOP_RATE = 250.0       # Hz: setpoints, feedforward and commands
+PLANT_RATE = 1000.0     # Hz: the simulator's steps
+# The paper's trajectory, eq. (6), and a faster one (1 Hz, 8x the
+# accelerations at the same path length; the target is scaled so that the
+# platform stays in the tested cube, |x|, |y|, |z| <= 0.3 m).
+TRAJECTORIES = {
+    'paper': (trajectory.PAPER_TARGET, trajectory.PAPER_OMEGA,
+              trajectory.PAPER_DURATION),
+    'fast': ((0.04, 0.08, -0.16), 2.0 * math.pi, 2.0),
+}
+DEFAULT_GAINS = {s.name: s.default for s in CONTROLLER_SPECS
+                 if s.name in ('kp', 'kd')}
+MISMATCH = 1.2          # the mismatched plant's platform: 20 % heavier
+START_TIMEOUT = 20.0    # s for the nodes to start and match
+PASS_MARGIN = 15.0      # s beyond a pass's duration before giving up
+CALL_TIMEOUT = 5.0      # s for one service call
+QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
+                 reliability=ReliabilityPolicy.RELIABLE)
+
+Run = namedtuple('Run', (
+    'label', 'times', 'position_error', 'joint_error', 'rms_mm', 'max_mm',
+    'samples'))
+Run.__doc__ = """One pass of the closed loop.
+
+``times`` (s since the pass's first setpoint), ``position_error`` (N, 3)
+of the platform centre and ``joint_error`` (N, 3) of ``lambda`` (m,
+measured minus desired); ``rms_mm`` and ``max_mm`` of the position error's
+norm (mm); ``samples``: N.
+"""
+
+
+class LoopError(Exception):
+    """The loop could not be started or a pass did not complete."""
+
+
+class Recorder(Node):
+    """Keep the plant's joint states and the stamp of the first setpoint."""
+
+    def __init__(self, context):
+        super().__init__('closed_loop_recorder', context=context)
+        self.joints = []        # (stamp ns, lambda (3,))
+        self.first_setpoint = None
+        self.create_subscription(JointState, 'joint_states', self._on_joints,
+                                 QOS)
+        self.create_subscription(MultiDOFJointTrajectory,
+                                 'setpoint/trajectory', self._on_setpoint,
+                                 QOS)
+        self.reset = self.create_client(Trigger, '/simulator/reset')
+        self.plant = AsyncParameterClient(self, 'simulator')
+        self.controller = AsyncParameterClient(self, 'tracking_controller')
+
+    def clear(self):
+        """Forget everything recorded."""
+        self.joints = []
+        self.first_setpoint = None
+
+    def _on_joints(self, msg):
+        stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+        self.joints.append((stamp, tuple(msg.position)))
+
+    def _on_setpoint(self, msg):
+        stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+        if self.first_setpoint is None or stamp < self.first_setpoint:
+            self.first_setpoint = stamp
+
+
+class ClosedLoop:
+    """
+    The simulator, feedforward and tracking controller, started once.
+
+    Use it as a context manager: on exit every process gets SIGINT (SIGKILL
+    after a timeout) and :attr:`exit_codes` and :attr:`stderr` keep what
+    they returned. ``loop_rate`` and ``plant_rate`` in Hz.
+    """
+
+    def __init__(self, context, loop_rate=LOOP_RATE, plant_rate=PLANT_RATE):
+        self.context = context
+        self.loop_rate = loop_rate
+        self.plant_rate = plant_rate
+        self.processes = {}
+        self.exit_codes = {}
+        self.stderr = {}
+        self.recorder = None
+        self.executor = None
+
+    def __enter__(self):
+        """Start the nodes and wait until the recorder reaches them."""
+        from rclpy.experimental import EventsExecutor
+        commands = {
+            'simulator': ['-p', f'rate_hz:={self.plant_rate}'],
+            'feedforward': [],
+            'tracking_controller': [],
+        }
+        try:
+            for name, params in commands.items():
+                self.processes[name] = start_node_process(
+                    ['--ros-args', *params],
+                    command=[node_executable(name)])
+            self.recorder = Recorder(self.context)
+            self.executor = EventsExecutor(context=self.context)
+            self.executor.add_node(self.recorder)
+            self._wait(lambda: (
+                self.recorder.reset.service_is_ready()
+                and self.recorder.plant.services_are_ready()
+                and self.recorder.controller.services_are_ready()
+                and self.recorder.count_publishers('joint_states') >= 1),
+                START_TIMEOUT, 'the simulator and the controller')
+        except BaseException:
+            self.__exit__(None, None, None)
+            raise
+        return self
+
+    def __exit__(self, *exc):
+        """Stop every process (SIGINT) and the recorder."""
+        for name, proc in self.processes.items():
+            self.exit_codes[name], self.stderr[name] = stop_process(proc)
+        self.processes = {}
+        if self.executor is not None:
+            self.executor.shutdown()
+            self.executor = None
+        if self.recorder is not None:
+            self.recorder.destroy_node()
+            self.recorder = None
+        return False
+
+    def run(self, name='paper', feedforward=True, kp=None, kd=None,
+            mass_factor=1.0):
+        """
+        Stream one pass of trajectory ``name`` and return its :class:`Run`.
+
+        ``feedforward``: the controller adds the feedforward force or not;
+        ``kp``, ``kd``: the controller's gains (3 values; None: its
+        defaults); ``mass_factor``: the plant's platform mass over the
+        model's (1.0: the exact model).
+        """
+        target, omega, duration = TRAJECTORIES[name]
+        model = Robot()
+        gains = [Parameter('feedforward', value=feedforward)]
+        for key, values in (('kp', kp), ('kd', kd)):
+            if values is None:
+                values = DEFAULT_GAINS[key]
+            gains.append(Parameter(key, value=[float(v) for v in values]))
+        self._set(self.recorder.controller, gains)
+        self._set(self.recorder.plant, [Parameter(
+            'robot.m5', value=model.m5 * mass_factor)])
+        answer = self._call(self.recorder.reset.call_async(Trigger.Request()))
+        if not answer.success:
+            raise LoopError(f'simulator reset refused: {answer.message}')
+        self.recorder.clear()
+        publisher = start_node_process([
+            '--ros-args', '-p', f'rate_hz:={self.loop_rate}',
+            '-p', f'omega:={float(omega)}', '-p', f'duration:={duration}',
+            '-p', f'target:={[float(c) for c in target]}',
+            '-p', 'start_delay:=10.0',
+            # The feedforward and the recorder.
+            '-p', 'min_subscribers:=2'],
+            command=[node_executable('setpoint_publisher')])
+        try:
+            self._wait(lambda: publisher.poll() is not None,
+                       duration + PASS_MARGIN, 'the end of the pass')
+            self._spin(0.3)     # the last measurements
+        finally:
+            code, err = stop_process(publisher)
+        if code != 0:
+            raise LoopError(f'setpoint_publisher exited {code}:\n{err}')
+        label = (f'{name}, {"PD + feedforward" if feedforward else "PD"}, '
+                 f'plant m5 x{mass_factor:g}')
+        return _tracking(label, self.recorder, target, omega, duration)
+
+    def _set(self, client, parameters):
+        results = self._call(client.set_parameters(parameters)).results
+        refused = [r.reason for r in results if not r.successful]
+        if refused:
+            raise LoopError(f'parameters refused: {refused}')
+
+    def _call(self, future):
+        self._wait(future.done, CALL_TIMEOUT, 'a service answer')
+        return future.result()
+
+    def _wait(self, predicate, timeout, what):
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > deadline:
+                raise LoopError(f'timed out waiting for {what}')
+            self._spin(0.02)
+
+    def _spin(self, seconds):
+        end = time.monotonic() + seconds
+        try:
+            while time.monotonic() < end:
+                self.executor.spin_once(timeout_sec=min(
+                    0.02, max(end - time.monotonic(), 0.0)))
+        except ExternalShutdownException:
+            raise LoopError('the ROS context was shut down') from None
+
+
+def _tracking(label, recorder, target, omega, duration):
+    """Compare the recorded pass with the trajectory: a :class:`Run`."""
+    if recorder.first_setpoint is None:
+        raise LoopError(f'{label}: no setpoint seen')
+    start = recorder.first_setpoint
+    end = start + round(duration * 1e9)
+    samples = [(s, lam) for s, lam in recorder.joints if start <= s <= end]
+    if len(samples) < 10:
+        raise LoopError(f'{label}: only {len(samples)} measurements')
+    times = np.array([(s - start) * 1e-9 for s, _ in samples])
+    lam = np.array([lam for _, lam in samples])
+    model = Robot()
+    desired = np.array([trajectory.paper_sample(t, target, omega)[0]
+                        for t in times])
+    desired_lam = mechanics.solve_batch(model, desired).lambda_
+    position_error = mechanics.forward_kinematics(model, lam) - desired
+    norm_mm = np.linalg.norm(position_error, axis=1) * 1e3
+    return Run(label, times, position_error, lam - desired_lam,
+               float(np.sqrt(np.mean(norm_mm ** 2))), float(norm_mm.max()),
+               len(samples))
