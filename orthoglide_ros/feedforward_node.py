@@ -10,14 +10,12 @@ topics, parameters and rules.
 
 import array
 import time
-import traceback
 
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.serialization import deserialize_message, serialize_message
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import AccelStamped, PoseStamped, TwistStamped
-from rcl_interfaces.msg import SetParametersResult
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from trajectory_msgs.msg import MultiDOFJointTrajectory
@@ -25,8 +23,7 @@ from trajectory_msgs.msg import MultiDOFJointTrajectory
 from orthoglide_ros import cdr
 from orthoglide_ros.feedforward import Feedforward, REASONS, Rejected
 from orthoglide_ros.node_runtime import (
-    declare_specs, default_qos, diagnostic_array, DIAGNOSTICS_PERIOD,
-    InputNode, run, spec_values)
+    default_qos, diagnostic_array, InputNode, run)
 from orthoglide_ros.settings import SPECS, settings_from_parameters
 
 
@@ -41,11 +38,9 @@ class FeedforwardNode(InputNode):
 
     def __init__(self, **kwargs):
         super().__init__('feedforward', **kwargs)
-        declare_specs(self, SPECS)
-        # Raises ValueError on an invalid start-up set (main() reports it).
-        self._core = Feedforward(settings_from_parameters(self._values()))
-        self.add_on_set_parameters_callback(self._validate_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
+        # Raises ValueError on an invalid start-up set (run() reports it).
+        self._core = Feedforward(
+            self.declare_settings(SPECS, settings_from_parameters))
 
         overrides = QoSOverridingOptions.with_default_policies()
         self._pub_joints = self.create_publisher(
@@ -57,8 +52,6 @@ class FeedforwardNode(InputNode):
         self._pub_power = self.create_publisher(
             Float64MultiArray, 'feedforward/power', default_qos(),
             qos_overriding_options=overrides)
-        self._pub_diagnostics = self.create_publisher(
-            DiagnosticArray, '/diagnostics', 10)
         for kind, callback in ((PoseStamped, self._on_pose),
                                (TwistStamped, self._on_twist),
                                (AccelStamped, self._on_accel)):
@@ -78,34 +71,16 @@ class FeedforwardNode(InputNode):
         self._tick_timer = None
         self._set_tick()
         self._published = 0
-        self._internal_errors = 0
         # Start of the diagnostics period: (time, published, computed,
         # compute ns, rejected) at that moment.
         self._window = (time.monotonic(), 0, 0, 0, 0)
-        self.create_timer(DIAGNOSTICS_PERIOD, self._publish_diagnostics)
+        self.publish_diagnostics_with(self._diagnostics)
+        self.apply_changes_with(self._swap)
         self.start_inputs()
 
     # Parameters -----------------------------------------------------------
-    def _values(self, changes=()):
-        """Return the parameter values with ``changes``, as plain types."""
-        return spec_values(self, SPECS, changes)
-
-    def _validate_parameters(self, parameters):
-        """Accept a change only if the whole resulting set is valid."""
-        try:
-            settings_from_parameters(self._values(parameters))
-        except ValueError as error:
-            self.get_logger().warning(f'parameter change refused: {error}')
-            return SetParametersResult(successful=False, reason=str(error))
-        return SetParametersResult(successful=True)
-
-    def _apply_parameters(self, parameters):
-        """Swap in the new settings at once: the next setpoint uses them."""
-        settings = settings_from_parameters(self._values())
-        with self.lock:
-            self._swap(settings)
-
     def _swap(self, settings):
+        """Swap in the new settings (lock held): the next setpoint uses them."""
         old = self._core.settings
         self._core.configure(settings)
         if self._core.settings.joint_names != old.joint_names:
@@ -176,11 +151,7 @@ class FeedforwardNode(InputNode):
             self._warn(rejection.reason, str(rejection))
             return
         except Exception:   # a defect, not bad input: publish nothing, go on
-            self._internal_errors += 1
-            if self.throttle('internal'):
-                self.get_logger().error(
-                    'internal error on a setpoint, nothing published:\n'
-                    + traceback.format_exc())
+            self.report_defect('on a setpoint, nothing published')
             return
         if output is not None and self._tick_timer is None:
             self._publish(output)
@@ -211,11 +182,6 @@ class FeedforwardNode(InputNode):
         self.warn_throttled(reason,
                             f'setpoint rejected ({reason}): {message}')
 
-    def _publish_diagnostics(self):
-        with self.lock:
-            message = self._diagnostics()
-        self._pub_diagnostics.publish(message)
-
     def _diagnostics(self):
         """Return the DiagnosticArray of the period ending now."""
         core = self._core
@@ -235,9 +201,9 @@ class FeedforwardNode(InputNode):
                         core.compute_ns_total, rejected)
         age = None if core.latest_arrival is None \
             else now - core.latest_arrival
-        if self._internal_errors:
+        if self.internal_errors:
             level = DiagnosticStatus.ERROR
-            text = f'{self._internal_errors} internal error(s): see the log'
+            text = f'{self.internal_errors} internal error(s): see the log'
         elif age is None:
             level, text = DiagnosticStatus.OK, 'waiting for the first setpoint'
         elif not core.fresh(now):
@@ -265,7 +231,7 @@ class FeedforwardNode(InputNode):
             ('singularity margin', settings.singularity_margin),
             ('pending partial setpoints', core.pending),
             ('rate_hz', settings.rate_hz),
-            ('internal errors', self._internal_errors),
+            ('internal errors', self.internal_errors),
         ]
         values += [(f'received {k}', v) for k, v in core.received.items()]
         values += [(f'rejected {r}', core.rejected[r]) for r in REASONS]

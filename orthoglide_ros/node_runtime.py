@@ -5,7 +5,9 @@ The ROS glue shared by the package's nodes: inputs, parameters, main loop.
   of their own from an rcl wait set, so a flood cannot pile up work;
 - :func:`declare_specs` and :func:`spec_values`: ROS parameters declared
   from a table of :class:`orthoglide_ros.settings.Spec` and read back as
-  plain Python values;
+  plain Python values; :meth:`InputNode.declare_settings` and
+  :meth:`InputNode.apply_changes_with`: run-time changes validated as a
+  whole set and applied at once;
 - :func:`default_qos`: the reliable keep-last 10 profile of every topic;
 - :func:`diagnostic_array`: one node's status for ``/diagnostics``;
 - :func:`run`: ``main()`` of a node: start-up errors, signals, spinning.
@@ -41,7 +43,8 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
+from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor,
+                                SetParametersResult)
 
 # Reliable, keep-last 10 on every input and output; users override it with
 # the standard qos_overrides.<topic>.<publisher|subscription>.* parameters.
@@ -118,6 +121,7 @@ class InputNode(Node):
     def __init__(self, name, **kwargs):
         super().__init__(name, **kwargs)
         self.lock = threading.Lock()
+        self._internal_errors = 0
         self._last_warning = {}
         self._inputs = []
         self._input_thread = None
@@ -142,6 +146,45 @@ class InputNode(Node):
             daemon=True)
         self._input_thread.start()
 
+    def declare_settings(self, specs, parse):
+        """
+        Declare the parameters of ``specs``; return ``parse(their values)``.
+
+        ``parse`` validates a complete ``{name: value}`` set into the
+        node's settings, raising ValueError that names the parameter (an
+        invalid start-up set: :func:`run` exits 2).
+        """
+        declare_specs(self, specs)
+        self._specs, self._parse = specs, parse
+        return parse(spec_values(self, specs))
+
+    def apply_changes_with(self, apply):
+        """
+        Take run-time parameter changes: validated whole, applied at once.
+
+        A change is refused, with the parse error as the reason, unless the
+        whole resulting set parses; an accepted one calls ``apply(new
+        settings)`` with :attr:`lock` held, so the next input sees all the
+        new values and none of the old. Call it once the entities that
+        ``apply`` touches exist.
+        """
+        self._apply_settings = apply
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+
+    def _validate_parameters(self, parameters):
+        try:
+            self._parse(spec_values(self, self._specs, parameters))
+        except ValueError as error:
+            self.get_logger().warning(f'parameter change refused: {error}')
+            return SetParametersResult(successful=False, reason=str(error))
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, parameters):
+        settings = self._parse(spec_values(self, self._specs))
+        with self.lock:
+            self._apply_settings(settings)
+
     def throttle(self, reason):
         """Say whether a message of this reason may be logged now."""
         now = time.monotonic()
@@ -155,14 +198,46 @@ class InputNode(Node):
         if self.throttle(reason):
             self.get_logger().warning(message)
 
-    def on_input_error(self):
-        """
-        Handle an exception escaping an input callback (a defect).
+    @property
+    def internal_errors(self):
+        """Return how many defects :meth:`report_defect` has counted."""
+        return self._internal_errors
 
-        Logged with its traceback; the thread goes on. Nodes count it.
+    def report_defect(self, where):
         """
-        self.get_logger().error('internal error in an input callback:\n'
-                                + traceback.format_exc())
+        Count an exception that escaped a callback (a defect, not bad input).
+
+        Logged with its traceback at most once a WARNING_PERIOD; the node
+        goes on and its diagnostics turn ERROR. Call it from an ``except``.
+        """
+        self._internal_errors += 1
+        if self.throttle('internal'):
+            self.get_logger().error(f'internal error {where}:\n'
+                                    + traceback.format_exc())
+
+    def on_input_error(self):
+        """Handle an exception escaping an input callback: a defect."""
+        self.report_defect('in an input callback')
+
+    def publish_diagnostics_with(self, build):
+        """
+        Publish ``build()`` on ``/diagnostics`` every DIAGNOSTICS_PERIOD.
+
+        ``build`` returns a DiagnosticArray (see :func:`diagnostic_array`)
+        and runs with :attr:`lock` held; a defect in it is reported and the
+        next period tries again.
+        """
+        publisher = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+
+        def publish():
+            try:
+                with self.lock:
+                    message = build()
+            except Exception:   # a defect: counted, next period again
+                self.report_defect('in the diagnostics')
+                return
+            publisher.publish(message)
+        self.create_timer(DIAGNOSTICS_PERIOD, publish)
 
     def destroy_node(self):
         """Stop the input thread, then destroy the node."""

@@ -21,10 +21,18 @@ Spec.__doc__ = """One parameter: ``type`` is one of ``double``,
 means declared without a value; ``range`` an inclusive ``(low, high)`` or
 None."""
 
+JOINT_NAMES = ('slider_a', 'slider_b', 'slider_c')
+
+
+def joint_names_spec(description):
+    """Return the ``joint_names`` Spec every node shares (its own text)."""
+    return Spec('joint_names', 'string_array', list(JOINT_NAMES),
+                description + ' (three distinct, non-empty)', None)
+
+
 NODE_SPECS = (
-    Spec('joint_names', 'string_array', ['slider_a', 'slider_b', 'slider_c'],
-         'names of the prismatic joints of actuators A, B, C in '
-         'feedforward/joint_states (three distinct, non-empty)', None),
+    joint_names_spec('names of the prismatic joints of actuators A, B, C '
+                     'in feedforward/joint_states'),
     Spec('base_frame', 'string', 'base_link',
          'frame of the setpoints (the paper\'s frame 0); a setpoint stamped '
          'with another non-empty frame is rejected', None),
@@ -85,16 +93,12 @@ def settings_from_parameters(values):
     node = {s.name: values.get(s.name, s.default) for s in NODE_SPECS}
     for spec in NODE_SPECS:
         check_value(spec, node[spec.name])
-    names = list(node['joint_names'])
-    if len(names) != 3 or len(set(names)) != 3 or not all(names):
-        raise ValueError(
-            'joint_names: must be three distinct non-empty names, got '
-            f'{names!r}')
+    names = check_joint_names(node['joint_names'])
     if node['pairing_timeout'] > node['setpoint_timeout']:
         raise ValueError(
             f'pairing_timeout: must not exceed setpoint_timeout '
             f'({node["pairing_timeout"]} > {node["setpoint_timeout"]} s)')
-    return Settings(robot, tuple(names), node['base_frame'],
+    return Settings(robot, names, node['base_frame'],
                     node['rate_hz'], node['setpoint_timeout'],
                     node['pairing_timeout'], node['singularity_margin'],
                     node['pose_only'])
@@ -115,3 +119,30 @@ def check_value(spec, value):
         if not (math.isfinite(value) and low <= value <= high):
             raise ValueError(
                 f'{spec.name}: must lie in [{low}, {high}], got {value!r}')
+
+
+def check_joint_names(names):
+    """Return ``joint_names`` as a tuple; ValueError unless 3 distinct."""
+    names = tuple(names)
+    if len(names) != 3 or len(set(names)) != 3 or not all(names):
+        raise ValueError(
+            'joint_names: must be three distinct non-empty names, got '
+            f'{list(names)!r}')
+    return names
+
+
+def check_triple(name, value, what, example='[0.0, 0.0, 0.0]'):
+    """
+    Return ``value`` as a 3-tuple of finite doubles, else raise ValueError.
+
+    ``what`` says what the three values are (e.g. ``'(m)'``); doubles as
+    rcl types them: ``0`` is an integer, ``0.0`` a double.
+    """
+    if not (isinstance(value, (list, tuple)) and len(value) == 3
+            and all(type(c) is float for c in value)):
+        raise ValueError(
+            f'{name}: must be an array of three doubles {what}, such as '
+            f'{example}, got {value!r}')
+    if not all(math.isfinite(c) for c in value):
+        raise ValueError(f'{name}: must be finite, got {list(value)!r}')
+    return tuple(value)

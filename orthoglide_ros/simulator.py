@@ -48,7 +48,9 @@ import time
 from orthoglide_ros import mechanics
 from orthoglide_ros.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
 from orthoglide_ros.params_file import ROBOT_PREFIX, robot_from_parameters
-from orthoglide_ros.settings import check_value, ROBOT_SPECS, Spec
+from orthoglide_ros.settings import (check_joint_names, check_triple,
+                                     check_value, joint_names_spec,
+                                     ROBOT_SPECS, Spec)
 from orthoglide_ros.simulation import Plant
 
 HELD, RUNNING, STOPPED = 'held', 'running', 'stopped'
@@ -75,9 +77,8 @@ NODE_SPECS = (
          'workspace limit: smallest singularity distance a step may reach, '
          'min(alpha_i / l3, 1 / kappa_F(J_lambda)); a step beyond it stops '
          'the simulation (applies at the next reset)', (0.01, 0.99)),
-    Spec('joint_names', 'string_array', ['slider_a', 'slider_b', 'slider_c'],
-         'names of the prismatic joints of actuators A, B, C in '
-         'joint_states (three distinct, non-empty)', None),
+    joint_names_spec('names of the prismatic joints of actuators A, B, C '
+                     'in joint_states'),
     Spec('base_frame', 'string', 'base_link',
          'frame_id of platform/pose (the paper\'s frame 0)', None),
 )
@@ -123,20 +124,9 @@ def simulator_settings_from_parameters(values):
     node = {s.name: values.get(s.name, s.default) for s in NODE_SPECS}
     for spec in NODE_SPECS:
         check_value(spec, node[spec.name])
-    names = node['joint_names']
-    if len(names) != 3 or len(set(names)) != 3 or not all(names):
-        raise ValueError(
-            'joint_names: must be three distinct non-empty names, got '
-            f'{list(names)!r}')
-    position = node['initial_position']
-    if not (isinstance(position, (list, tuple)) and len(position) == 3
-            and all(type(c) is float for c in position)):
-        raise ValueError(
-            'initial_position: must be an array of three doubles (m), such '
-            f'as [0.0, 0.0, 0.0], got {position!r}')
-    if not all(math.isfinite(c) for c in position):
-        raise ValueError(
-            f'initial_position: must be finite, got {list(position)!r}')
+    names = check_joint_names(node['joint_names'])
+    position = check_triple('initial_position', node['initial_position'],
+                            '(m)')
     margin = node['singularity_margin']
     try:
         mechanics.solve(robot, position, ZERO, ZERO, margin)

@@ -20,22 +20,19 @@ node clock at that instant), not the time of publication.
 
 import array
 import time
-import traceback
 
 from rclpy.clock import Clock, ClockType
 from rclpy.duration import Duration
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
-from rcl_interfaces.msg import SetParametersResult
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
 from orthoglide_ros.node_runtime import (
-    declare_specs, default_qos, diagnostic_array, DIAGNOSTICS_PERIOD,
-    InputNode, run, spec_values)
+    default_qos, diagnostic_array, InputNode, run)
 from orthoglide_ros.simulator import (
     COMMAND_REASONS, Rejected, RUNNING, Simulator, SIMULATOR_SPECS, STOPPED,
     simulator_settings_from_parameters)
@@ -56,10 +53,9 @@ class SimulatorNode(InputNode):
 
     def __init__(self, **kwargs):
         super().__init__('simulator', **kwargs)
-        declare_specs(self, SIMULATOR_SPECS)
-        # Raises ValueError on an invalid start-up set (main() reports it).
-        self._core = Simulator(
-            simulator_settings_from_parameters(self._values()))
+        # Raises ValueError on an invalid start-up set (run() reports it).
+        self._core = Simulator(self.declare_settings(
+            SIMULATOR_SPECS, simulator_settings_from_parameters))
 
         overrides = QoSOverridingOptions.with_default_policies()
         self._pub_joints = self.create_publisher(
@@ -68,8 +64,6 @@ class SimulatorNode(InputNode):
         self._pub_pose = self.create_publisher(
             PoseStamped, 'platform/pose', default_qos(),
             qos_overriding_options=overrides)
-        self._pub_diagnostics = self.create_publisher(
-            DiagnosticArray, '/diagnostics', 10)
         self.create_input_subscription(
             Float64MultiArray, 'commands', self._on_command, default_qos(),
             qos_overriding_options=overrides)
@@ -85,43 +79,26 @@ class SimulatorNode(InputNode):
         self._overruns = 0
         self._set_timer()
         self._published = 0
-        self._internal_errors = 0
         # Start of the diagnostics period: (time, published, steps, step
         # ns, rejected) at that moment.
         self._window = (time.monotonic(), 0, 0, 0, 0)
-        self.create_timer(DIAGNOSTICS_PERIOD, self._publish_diagnostics)
+        self.publish_diagnostics_with(self._diagnostics)
         # Last: the QoS override parameters declared above are no concern.
-        self.add_on_set_parameters_callback(self._validate_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
+        self.apply_changes_with(self._configure)
         self.start_inputs()
 
     # Parameters -----------------------------------------------------------
-    def _values(self, changes=()):
-        """Return the parameter values with ``changes``, as plain types."""
-        return spec_values(self, SIMULATOR_SPECS, changes)
-
-    def _validate_parameters(self, parameters):
-        """Accept a change only if the whole resulting set is valid."""
-        try:
-            simulator_settings_from_parameters(self._values(parameters))
-        except ValueError as error:
-            self.get_logger().warning(f'parameter change refused: {error}')
-            return SetParametersResult(successful=False, reason=str(error))
-        return SetParametersResult(successful=True)
-
-    def _apply_parameters(self, parameters):
-        """Apply the live settings at once; the plant's wait for a reset."""
-        settings = simulator_settings_from_parameters(self._values())
-        with self.lock:
-            old = self._core.settings
-            self._core.configure(settings)
-            self._apply_names()
-            if settings.rate_hz != old.rate_hz:
-                self._set_timer()
-            if self._core.pending_reset:
-                self.get_logger().info(
-                    'new robot, initial_position or singularity_margin: '
-                    'applies at the next ~/reset')
+    def _configure(self, settings):
+        """Apply the live settings at once (lock held); the plant's wait."""
+        old = self._core.settings
+        self._core.configure(settings)
+        self._apply_names()
+        if settings.rate_hz != old.rate_hz:
+            self._set_timer()
+        if self._core.pending_reset:
+            self.get_logger().info(
+                'new robot, initial_position or singularity_margin: '
+                'applies at the next ~/reset')
 
     def _apply_names(self):
         settings = self._core.settings
@@ -152,10 +129,6 @@ class SimulatorNode(InputNode):
                     'ignored', 'command ignored: the simulation is stopped '
                     '(call ~/reset)')
 
-    def on_input_error(self):
-        """Count a defect in the command callback; log it once a second."""
-        self._internal_error('in a command callback')
-
     def _on_reset(self, request, response):
         try:
             with self.lock:
@@ -163,7 +136,7 @@ class SimulatorNode(InputNode):
             response.success = True
             self.get_logger().info(f'reset: {response.message}')
         except Exception:   # a defect: answer it, keep the node alive
-            self._internal_error('in ~/reset')
+            self.report_defect('in ~/reset')
             response.success = False
             response.message = 'internal error: see the log'
         return response
@@ -173,11 +146,11 @@ class SimulatorNode(InputNode):
         now = time.monotonic()
         try:
             with self.lock:
-                tick, lag = self._catch_up(now)
+                tick, instant = self._catch_up(now)
                 if tick is not None:
-                    self._publish(tick, lag)
+                    self._publish(tick, instant)
         except Exception:   # a defect: count it, the next tick goes on
-            self._internal_error('in a step')
+            self.report_defect('in a step')
             return
         if tick is None:
             return
@@ -193,8 +166,8 @@ class SimulatorNode(InputNode):
         """
         Make every step of the grid due at ``now`` (lock held).
 
-        Returns the last step's Tick (None if none was due) and how long
-        before ``now`` its state holds (s). The grid starts half a period
+        Returns the last step's Tick (None if none was due) and the
+        monotonic time its state holds at (s). The grid starts half a period
         before the first tick, so that timer jitter below half a period
         makes exactly one step per tick.
         """
@@ -210,9 +183,11 @@ class SimulatorNode(InputNode):
             self._grid += period
             if tick.event is not None:
                 break
-        return tick, now - (self._grid - period)
+        return tick, self._grid - period
 
-    def _publish(self, tick, lag):
+    def _publish(self, tick, instant):
+        """Publish a state, stamped with the node-clock time of ``instant``."""
+        lag = time.monotonic() - instant
         stamp = (self.get_clock().now()
                  - Duration(nanoseconds=round(lag * 1e9))).to_msg()
         joints, pose = self._joints, self._pose
@@ -227,22 +202,7 @@ class SimulatorNode(InputNode):
         self._pub_pose.publish(pose)
         self._published += 1
 
-    def _internal_error(self, where):
-        self._internal_errors += 1
-        if self.throttle('internal'):
-            self.get_logger().error(f'internal error {where}:\n'
-                                    + traceback.format_exc())
-
     # Diagnostics ----------------------------------------------------------
-    def _publish_diagnostics(self):
-        try:
-            with self.lock:
-                message = self._diagnostics()
-        except Exception:   # a defect: count it, try again next period
-            self._internal_error('in the diagnostics')
-            return
-        self._pub_diagnostics.publish(message)
-
     def _diagnostics(self):
         """Return the DiagnosticArray of the period ending now."""
         core = self._core
@@ -255,9 +215,9 @@ class SimulatorNode(InputNode):
         rejected = sum(core.rejected.values())
         self._window = (now, self._published, core.steps,
                         core.step_ns_total, rejected)
-        if self._internal_errors:
+        if self.internal_errors:
             level = DiagnosticStatus.ERROR
-            text = f'{self._internal_errors} internal error(s): see the log'
+            text = f'{self.internal_errors} internal error(s): see the log'
         elif core.state == STOPPED:
             level = DiagnosticStatus.ERROR
             text = f'stopped: {core.stop_message}'
@@ -294,7 +254,7 @@ class SimulatorNode(InputNode):
             ('singularity margin', plant.margin),
             ('pending reset', core.pending_reset),
             ('rate_hz', core.settings.rate_hz),
-            ('internal errors', self._internal_errors),
+            ('internal errors', self.internal_errors),
         ]
         values += [(f'rejected {r}', core.rejected[r])
                    for r in COMMAND_REASONS]

@@ -37,9 +37,10 @@ Rules (the README states them for users):
 from collections import namedtuple
 import math
 
-from orthoglide_ros.settings import check_value, Spec
+from orthoglide_ros.settings import (check_joint_names, check_triple,
+                                     check_value, joint_names_spec,
+                                     Spec)
 
-JOINT_NAMES = ('slider_a', 'slider_b', 'slider_c')
 FORCE_LIMIT_MAX = 1.0e6     # N: the largest force_limit accepted
 INPUTS = ('desired', 'measured')
 REASONS = ('missing_joint', 'malformed', 'missing_position',
@@ -59,10 +60,9 @@ CONTROLLER_SPECS = (
     Spec('force_limit', 'double', 1000.0,
          'largest force magnitude commanded per actuator (N); larger ones '
          'are clipped to it and counted', (0.001, FORCE_LIMIT_MAX)),
-    Spec('joint_names', 'string_array', list(JOINT_NAMES),
-         'names of the prismatic joints of actuators A, B, C: the order of '
-         'the command\'s values; joint states are matched by these names '
-         '(three distinct, non-empty)', None),
+    joint_names_spec(
+        'names of the prismatic joints of actuators A, B, C: the order of '
+        'the command\'s values; joint states are matched by these names'),
     Spec('measurement_timeout', 'double', 0.05,
          'seconds (by arrival time) after which a measurement is too old '
          'to compute a command with: nothing is published until a fresh '
@@ -112,27 +112,18 @@ def controller_settings_from_parameters(values):
             v[spec.name] = _gains(spec.name, v[spec.name])
         else:
             check_value(spec, v[spec.name])
-    names = tuple(v['joint_names'])
-    if len(names) != 3 or len(set(names)) != 3 or not all(names):
-        raise ValueError(
-            'joint_names: must be three distinct non-empty names, got '
-            f'{list(names)!r}')
+    names = check_joint_names(v['joint_names'])
     return ControllerSettings(v['kp'], v['kd'], v['feedforward'],
                               v['force_limit'], names,
                               v['measurement_timeout'])
 
 
 def _gains(name, value):
-    if not isinstance(value, (list, tuple)) or len(value) != 3:
-        raise ValueError(
-            f'{name}: must be an array of three doubles (A, B, C), got '
-            f'{value!r}')
-    if not all(type(g) is float for g in value):
-        raise ValueError(f'{name}: must hold doubles, got {value!r}')
-    if not all(math.isfinite(g) and g >= 0.0 for g in value):
-        raise ValueError(
-            f'{name}: must be finite and >= 0, got {list(value)!r}')
-    return tuple(value)
+    gains = check_triple(name, value, '(A, B, C)', '[20000.0, 20000.0, '
+                         '20000.0]')
+    if not all(g >= 0.0 for g in gains):
+        raise ValueError(f'{name}: must be >= 0, got {list(gains)!r}')
+    return gains
 
 
 def read_joint_state(joint_names, names, position, velocity, effort,

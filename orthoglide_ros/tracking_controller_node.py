@@ -10,18 +10,15 @@ tracking_controller``; see the README for the topics, parameters and rules.
 
 import array
 import time
-import traceback
 
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from rcl_interfaces.msg import SetParametersResult
+from diagnostic_msgs.msg import DiagnosticStatus
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from orthoglide_ros.node_runtime import (
-    declare_specs, default_qos, diagnostic_array, DIAGNOSTICS_PERIOD,
-    InputNode, run, spec_values)
+    default_qos, diagnostic_array, InputNode, run)
 from orthoglide_ros.tracking import (
     CONTROLLER_SPECS, controller_settings_from_parameters, INPUTS, REASONS,
     Rejected, SKIPS, Tracking)
@@ -38,19 +35,14 @@ class TrackingControllerNode(InputNode):
 
     def __init__(self, **kwargs):
         super().__init__('tracking_controller', **kwargs)
-        declare_specs(self, CONTROLLER_SPECS)
         # Raises ValueError on an invalid start-up set (run() reports it).
-        self._core = Tracking(
-            controller_settings_from_parameters(self._values()))
-        self.add_on_set_parameters_callback(self._validate_parameters)
-        self.add_post_set_parameters_callback(self._apply_parameters)
+        self._core = Tracking(self.declare_settings(
+            CONTROLLER_SPECS, controller_settings_from_parameters))
 
         overrides = QoSOverridingOptions.with_default_policies()
         self._pub_commands = self.create_publisher(
             Float64MultiArray, 'commands', default_qos(),
             qos_overriding_options=overrides)
-        self._pub_diagnostics = self.create_publisher(
-            DiagnosticArray, '/diagnostics', 10)
         # Measured first: when both inputs are ready in one wake-up of the
         # input thread, the measurements are taken before the desired
         # states, so a command uses the newest measurement.
@@ -64,32 +56,13 @@ class TrackingControllerNode(InputNode):
         self._command = Float64MultiArray()
         self._command.layout.dim = [
             MultiArrayDimension(label='actuator', size=3, stride=3)]
-        self._internal_errors = 0
         # Start of the diagnostics period: (time, commands, skipped,
         # rejected) at that moment.
         self._window = (time.monotonic(), 0, 0, 0)
-        self.create_timer(DIAGNOSTICS_PERIOD, self._publish_diagnostics)
+        self.publish_diagnostics_with(self._diagnostics)
+        # The core swaps its settings at once (under the lock).
+        self.apply_changes_with(self._core.configure)
         self.start_inputs()
-
-    # Parameters -----------------------------------------------------------
-    def _values(self, changes=()):
-        """Return the parameter values with ``changes``, as plain types."""
-        return spec_values(self, CONTROLLER_SPECS, changes)
-
-    def _validate_parameters(self, parameters):
-        """Accept a change only if the whole resulting set is valid."""
-        try:
-            controller_settings_from_parameters(self._values(parameters))
-        except ValueError as error:
-            self.get_logger().warning(f'parameter change refused: {error}')
-            return SetParametersResult(successful=False, reason=str(error))
-        return SetParametersResult(successful=True)
-
-    def _apply_parameters(self, parameters):
-        """Swap in the new settings at once: the next message uses them."""
-        settings = controller_settings_from_parameters(self._values())
-        with self.lock:
-            self._core.configure(settings)
 
     # Inputs (input thread, self.lock held) --------------------------------
     def _on_measured(self, msg):
@@ -112,19 +85,11 @@ class TrackingControllerNode(InputNode):
                 f'{source} joint state rejected ({rejection.reason}): '
                 f'{rejection}')
         except Exception:   # a defect, not bad input: publish nothing, go on
-            self._internal_errors += 1
-            if self.throttle('internal'):
-                self.get_logger().error(
-                    f'internal error on a {source} joint state, nothing '
-                    'published:\n' + traceback.format_exc())
+            self.report_defect(f'on a {source} joint state, nothing '
+                               'published')
         return None
 
     # Diagnostics ----------------------------------------------------------
-    def _publish_diagnostics(self):
-        with self.lock:
-            message = self._diagnostics()
-        self._pub_diagnostics.publish(message)
-
     def _diagnostics(self):
         """Return the DiagnosticArray of the period ending now."""
         core = self._core
@@ -136,9 +101,9 @@ class TrackingControllerNode(InputNode):
         self._window = (now, core.commands, skipped, rejected)
         age = None if core.measurement_arrival is None \
             else now - core.measurement_arrival
-        if self._internal_errors:
+        if self.internal_errors:
             level = DiagnosticStatus.ERROR
-            text = f'{self._internal_errors} internal error(s): see the log'
+            text = f'{self.internal_errors} internal error(s): see the log'
         elif skipped > skipped_before:
             level = DiagnosticStatus.WARN
             what = 'no measurement yet' if age is None \
@@ -173,7 +138,7 @@ class TrackingControllerNode(InputNode):
         values += [
             ('feedforward', settings.feedforward),
             ('force_limit (N)', settings.force_limit),
-            ('internal errors', self._internal_errors),
+            ('internal errors', self.internal_errors),
         ]
         return diagnostic_array(self, 'Orthoglide tracking controller',
                                 level, text, values)

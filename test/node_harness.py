@@ -5,25 +5,35 @@ Helpers for the feedforward node's DDS tests: a probe node, spinning, processes.
   one trajectory point) and records every message on the node's outputs and
   on ``/diagnostics``;
 - :func:`spin_until`: spin an executor until a predicate holds or time runs
-  out;
+  out; :func:`wait_diagnostics`: until a diagnostics message matches;
+- :func:`node_graphs`: a node under test and its probe on one executor,
+  matched, destroyed afterwards (the in-process tests' fixture);
 - :func:`start_node_process` / :func:`stop_process`: run the node as a
   separate process and stop it the way a user does (Ctrl-C = SIGINT), then
-  kill it if it does not stop.
+  kill it if it does not stop; :func:`timed_stop` and
+  :func:`assert_clean_exit`: it must stop promptly with code 0;
+  :func:`run_to_exit`: a process expected to end by itself;
+- :func:`call` and :func:`parameter_client`: services from a probe.
 
 Import it with the test directory on ``sys.path`` (the tests insert it).
 """
 
+from contextlib import contextmanager
 import os
 import signal
 import subprocess
 import sys
 import tempfile
 import time
+from types import SimpleNamespace
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
                                TwistStamped)
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
@@ -254,6 +264,71 @@ def spin_until(executor, predicate, timeout):
     return True
 
 
+def wait_diagnostics(executor, messages, predicate, timeout):
+    """
+    Spin until a DiagnosticArray in ``messages`` satisfies ``predicate``.
+
+    ``messages``: the list a probe appends to; ``predicate`` takes the
+    first status's ``{key: value}``. Returns the first such message;
+    fails the test (with the last values seen) when ``timeout`` s pass.
+    """
+    def found():
+        return any(predicate(diagnostic_values(m)) for m in messages)
+    ok = spin_until(executor, found, timeout)
+    last = diagnostic_values(messages[-1]) if messages else None
+    assert ok, f'no matching diagnostics; last: {last}'
+    return next(m for m in messages if predicate(diagnostic_values(m)))
+
+
+@contextmanager
+def node_graphs(context, node_class, probe_class, ready, timeout):
+    """
+    Yield ``make(params=None, executor='events')`` for in-process tests.
+
+    ``make`` builds ``node_class`` with ``params`` as parameter overrides
+    and ``probe_class(context)``, adds both to an EventsExecutor (or a
+    SingleThreadedExecutor for ``executor='single'``), spins until
+    ``ready(probe, node)`` and returns ``SimpleNamespace(node, probe,
+    executor)``. Everything made is shut down and destroyed on exit.
+    """
+    from rclpy.experimental import EventsExecutor
+    made = []
+
+    def make(params=None, executor='events'):
+        overrides = [Parameter(k, value=v) for k, v in (params or {}).items()]
+        node = node_class(context=context, parameter_overrides=overrides)
+        probe = probe_class(context)
+        spinner = (EventsExecutor if executor == 'events'
+                   else SingleThreadedExecutor)(context=context)
+        made.append((spinner, node, probe))
+        spinner.add_node(node)
+        spinner.add_node(probe)
+        assert spin_until(spinner, lambda: ready(probe, node), timeout), (
+            'probe and node did not match')
+        return SimpleNamespace(node=node, probe=probe, executor=spinner)
+
+    try:
+        yield make
+    finally:
+        for spinner, node, probe in made:
+            spinner.shutdown()
+            probe.destroy_node()
+            node.destroy_node()
+
+
+def call(g, future, timeout=10.0):
+    """Spin ``g.executor`` until a service future is done; return its result."""
+    assert spin_until(g.executor, future.done, timeout), 'no service response'
+    return future.result()
+
+
+def parameter_client(g, node_name, timeout=10.0):
+    """Return an AsyncParameterClient of ``node_name``, services ready."""
+    client = AsyncParameterClient(g.probe, node_name)
+    assert spin_until(g.executor, client.services_are_ready, timeout)
+    return client
+
+
 def spin_for(executor, seconds):
     """Spin ``executor`` for ``seconds``, whatever happens."""
     spin_until(executor, lambda: False, seconds)
@@ -315,6 +390,30 @@ def stop_process(proc, timeout=STOP_TIMEOUT):
     if text_out:
         text += '\n[stdout]\n' + text_out
     return proc.returncode, text
+
+
+def timed_stop(proc):
+    """Stop ``proc`` (:func:`stop_process`); return (code, stderr, seconds)."""
+    start = time.monotonic()
+    code, stderr = stop_process(proc)
+    return code, stderr, time.monotonic() - start
+
+
+def assert_clean_exit(code, stderr, seconds, prompt):
+    """Assert an exit code 0 within ``prompt`` s and no traceback."""
+    assert code == 0, f'exit code {code} after SIGINT; stderr:\n{stderr}'
+    assert seconds < prompt, f'took {seconds:.1f} s to exit after SIGINT'
+    assert 'Traceback' not in stderr, stderr
+
+
+def run_to_exit(args, command, timeout):
+    """Start ``command`` + ``args``, wait for its exit: (code, stderr)."""
+    proc = start_node_process(args, command=command)
+    try:
+        wait_exit(proc, timeout)
+    finally:
+        code, stderr = stop_process(proc)
+    return code, stderr
 
 
 def wait_exit(proc, timeout):

@@ -14,13 +14,9 @@ import math
 import os
 import sys
 import time
-from types import SimpleNamespace
 
 import pytest
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
-from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import ReliabilityPolicy
 
 from diagnostic_msgs.msg import DiagnosticStatus
@@ -33,9 +29,10 @@ from orthoglide_ros.settings import SPECS
 from orthoglide_ros.trajectory import paper_sample, paper_times
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (assert_vector, close,  # noqa: E402
-                          diagnostic_values, header_stamp, Probe, spin_for,
-                          spin_until, stamp_of)
+from node_harness import (  # noqa: E402
+    assert_vector, call, close, diagnostic_values, header_stamp, node_graphs,
+    parameter_client, Probe, spin_for, spin_until, stamp_of,
+    wait_diagnostics as harness_wait_diagnostics)
 WAIT = 10.0     # s: generous, the machine is shared
 JOINT_NAMES = ['slider_a', 'slider_b', 'slider_c']
 ZERO = (0.0, 0.0, 0.0)
@@ -47,34 +44,10 @@ DIAGNOSTIC_NAME = 'feedforward: Orthoglide feedforward'
 
 @pytest.fixture
 def graph(ros_context):
-    """
-    Return make(params, executor): the node and a probe, matched.
-
-    Everything made is shut down and destroyed after the test.
-    """
-    made = []
-
-    def make(params=None, executor='events'):
-        overrides = [Parameter(k, value=v) for k, v in (params or {}).items()]
-        node = FeedforwardNode(context=ros_context,
-                               parameter_overrides=overrides)
-        probe = Probe(ros_context)
-        if executor == 'events':
-            spinner = EventsExecutor(context=ros_context)
-        else:
-            spinner = SingleThreadedExecutor(context=ros_context)
-        made.append((spinner, node, probe))
-        spinner.add_node(node)
-        spinner.add_node(probe)
-        assert spin_until(spinner, lambda: probe.matched(node), WAIT), (
-            'probe and node did not match')
-        return SimpleNamespace(node=node, probe=probe, executor=spinner)
-
-    yield make
-    for spinner, node, probe in made:
-        spinner.shutdown()
-        probe.destroy_node()
-        node.destroy_node()
+    """Return make(params, executor): the node and a probe, matched."""
+    with node_graphs(ros_context, FeedforwardNode, Probe,
+                     lambda probe, node: probe.matched(node), WAIT) as make:
+        yield make
 
 
 def assert_layout(msg):
@@ -111,15 +84,8 @@ def wait_outputs(g, count, timeout=WAIT):
 
 def wait_diagnostics(g, predicate, timeout=WAIT):
     """Spin until a diagnostics message satisfies ``predicate(values)``."""
-    def found():
-        return any(predicate(diagnostic_values(m))
-                   for m in g.probe.diagnostics)
-    ok = spin_until(g.executor, found, timeout)
-    last = diagnostic_values(g.probe.diagnostics[-1]) \
-        if g.probe.diagnostics else None
-    assert ok, f'no matching diagnostics; last: {last}'
-    return next(m for m in g.probe.diagnostics
-                if predicate(diagnostic_values(m)))
+    return harness_wait_diagnostics(g.executor, g.probe.diagnostics,
+                                    predicate, timeout)
 
 
 def duration(t):
@@ -417,24 +383,11 @@ def test_fixed_rate_stale_and_resume(graph):
 
 
 # Parameters ------------------------------------------------------------------
-def call(g, future):
-    """Spin until a service future is done; return its result."""
-    assert spin_until(g.executor, future.done, WAIT), 'no service response'
-    return future.result()
-
-
-def parameter_client(g):
-    """Return an AsyncParameterClient of the node, its services ready."""
-    client = AsyncParameterClient(g.probe, 'feedforward')
-    assert spin_until(g.executor, client.services_are_ready, WAIT)
-    return client
-
-
 def test_invalid_parameter_changes_refused(graph):
     """Invalid changes are refused with a reason and change nothing."""
     g = graph()
     probe = g.probe
-    client = parameter_client(g)
+    client = parameter_client(g, 'feedforward')
     refused = [
         ([Parameter('robot.m5', value=-1.0)], 'robot.m5'),
         ([Parameter('pairing_timeout', value=0.5)], 'pairing_timeout'),
@@ -476,7 +429,7 @@ def test_valid_atomic_change_applies_to_next_setpoint(graph):
     """robot.m5 with robot.gravity, atomically: the next output uses both."""
     g = graph()
     probe = g.probe
-    client = parameter_client(g)
+    client = parameter_client(g, 'feedforward')
     p, v, a = paper_sample(1.2)
     probe.send(stamp_of(1.2), p, v, a)
     wait_outputs(g, 1)
@@ -497,7 +450,7 @@ def test_valid_changes_apply_to_next_setpoint(graph):
     """Mass, joint names and singularity margin, one by one."""
     g = graph()
     probe = g.probe
-    client = parameter_client(g)
+    client = parameter_client(g, 'feedforward')
     names = ['ax', 'by', 'cz']
     response = call(g, client.set_parameters([
         Parameter('robot.m5', value=18.0),

@@ -404,7 +404,7 @@ class Run:
             self.expected.append((stamp, outcome[2]))
         else:
             assert published == 0, (source, fields, outcome)
-        assert node._internal_errors == 0
+        assert node.internal_errors == 0
         core = node._core
         assert core.received == self.model.received, (source, fields)
         assert core.rejected == self.model.rejected, (source, fields,
@@ -550,7 +550,7 @@ def test_fuzzed_setpoints(rig):
         totals['outputs'] += len(run.expected)
 
     check()
-    assert rig.node._internal_errors == 0
+    assert rig.node.internal_errors == 0
     assert totals['outputs'] > 0
     print(f'fuzzed node: {sum(rig.node._core.received.values())} inputs, '
           f'{rig.node._published} outputs, rejected '
@@ -570,5 +570,5 @@ def test_random_bytes_on_every_input(rig):
         assert_outputs(rig, run.expected, names)
 
     check()
-    assert rig.node._internal_errors == 0
+    assert rig.node.internal_errors == 0
     assert rig.node._core.rejected['malformed'] > 0

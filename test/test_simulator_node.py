@@ -16,11 +16,9 @@ import math
 import os
 import sys
 import time
-from types import SimpleNamespace
 
 import pytest
 from rclpy.executors import SingleThreadedExecutor
-from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
@@ -36,15 +34,17 @@ from orthoglide_ros.simulation import Plant
 from orthoglide_ros.simulator_node import SimulatorNode
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (header_stamp, node_executable,  # noqa: E402
-                          PROBE_QOS, spin_for, spin_until,
-                          start_node_process, stop_process, wait_exit)
+from node_harness import (  # noqa: E402
+    assert_clean_exit, header_stamp, node_executable, node_graphs, PROBE_QOS,
+    run_to_exit, spin_for, spin_until, start_node_process, timed_stop,
+    wait_diagnostics as harness_wait_diagnostics)
 
 WAIT = 10.0         # s: generous, the machine is shared
 START_WAIT = 40.0   # s for a process to come up and answer
 PROMPT = 5.0        # s from SIGINT to exit
 ZERO = (0.0, 0.0, 0.0)
 DT = 1e-3           # s: one step at the default rate_hz
+STAMP_SLACK = 1e5   # ns: two clock reads per stamp, microseconds apart
 JOINT_NAMES = ['slider_a', 'slider_b', 'slider_c']
 HOLD = mechanics.solve(Robot(), ZERO).force     # the weight, held at home
 DIAGNOSTIC_NAME = 'simulator: Orthoglide simulator'
@@ -96,37 +96,15 @@ class SimProbe(Node):
 @pytest.fixture
 def graph(ros_context):
     """Return make(params): the node and a probe, matched; cleaned up."""
-    made = []
-
-    def make(params=None):
-        overrides = [Parameter(k, value=v) for k, v in (params or {}).items()]
-        node = SimulatorNode(context=ros_context,
-                             parameter_overrides=overrides)
-        probe = SimProbe(ros_context)
-        executor = EventsExecutor(context=ros_context)
-        made.append((executor, node, probe))
-        executor.add_node(node)
-        executor.add_node(probe)
-        assert spin_until(executor, probe.matched, WAIT), (
-            'probe and node did not match')
-        return SimpleNamespace(node=node, probe=probe, executor=executor)
-
-    yield make
-    for executor, node, probe in made:
-        executor.shutdown()
-        probe.destroy_node()
-        node.destroy_node()
+    with node_graphs(ros_context, SimulatorNode, SimProbe,
+                     lambda probe, node: probe.matched(), WAIT) as make:
+        yield make
 
 
 def wait_diagnostics(g, predicate, timeout=WAIT):
-    """Spin until a diagnostics status satisfies ``predicate(status)``."""
-    def found():
-        return any(predicate(m.status[0]) for m in g.probe.diagnostics)
-    ok = spin_until(g.executor, found, timeout)
-    last = g.probe.diagnostics[-1].status[0] if g.probe.diagnostics else None
-    assert ok, f'no matching diagnostics; last: {last}'
-    return next(m.status[0] for m in g.probe.diagnostics
-                if predicate(m.status[0]))
+    """Return the first diagnostics status whose values satisfy predicate."""
+    return harness_wait_diagnostics(g.executor, g.probe.diagnostics,
+                                    predicate, timeout).status[0]
 
 
 def values(status):
@@ -179,7 +157,7 @@ def test_held_publishes_every_tick_until_the_first_command(graph):
     assert len(set(joint_stamps)) == len(joint_stamps)
     shared = pose_stamps.intersection(joint_stamps)
     assert len(shared) >= 0.9 * min(len(joints), len(poses)), len(shared)
-    status = wait_diagnostics(g, lambda s: True)
+    status = wait_diagnostics(g, lambda v: True)
     assert status.level == DiagnosticStatus.OK
     assert status.message == 'held: waiting for a command'
     v = values(status)
@@ -198,7 +176,7 @@ def test_static_holding_force_keeps_the_platform_at_home(graph):
     """
     g = graph()
     send_for(g, HOLD, 0.5)
-    wait_diagnostics(g, lambda s: int(values(s)['steps']) > 100)
+    wait_diagnostics(g, lambda v: int(v['steps']) > 100)
     running = [m for m in g.probe.joint_states if tuple(m.effort) == HOLD]
     assert len(running) > 100, len(running)
     worst = max(abs(c) for m in running for c in (*m.position, *m.velocity))
@@ -217,7 +195,7 @@ def test_constant_command_follows_the_plant_step_for_step(graph):
     g = graph({'command_timeout': 0.2})
     force = (HOLD[0] + 20.0, HOLD[1] - 10.0, HOLD[2] + 5.0)
     g.probe.send(force)
-    status = wait_diagnostics(g, lambda s: values(s)['timeouts'] == '1')
+    status = wait_diagnostics(g, lambda v: v['timeouts'] == '1')
     steps = int(values(status)['steps'])
     assert status.level == DiagnosticStatus.WARN
     assert values(status)['state'] == 'held'
@@ -241,6 +219,22 @@ def test_constant_command_follows_the_plant_step_for_step(graph):
         assert (tuple(joints.position), tuple(joints.velocity)) == \
             states[k][1:]
     assert previous == steps - 1
+    # Real time on a grid: each stamp is its state's instant, so stamps
+    # differ by whole steps (to the microseconds between the clock reads);
+    # only an overrun (a stall over 10 steps, time dropped) adds more.
+    stamps = [(index[(p.pose.position.x, p.pose.position.y,
+                      p.pose.position.z)], header_stamp(p))
+              for _, p in running]
+    gaps = [(s2 - s1) * 10**9 + (n2 - n1) - (k2 - k1) * DT * 1e9
+            for (k1, (s1, n1)), (k2, (s2, n2)) in zip(stamps, stamps[1:])]
+    assert min(gaps) >= -STAMP_SLACK, min(gaps)
+    on_grid = sum(abs(gap) <= STAMP_SLACK for gap in gaps)
+    overruns = int(values(wait_diagnostics(g, lambda v: True))[
+        'overruns (time dropped)'])
+    assert on_grid >= len(gaps) - overruns, (on_grid, len(gaps), overruns)
+    now = g.node.get_clock().now().nanoseconds
+    last = stamps[-1][1]
+    assert 0 < now - (last[0] * 10**9 + last[1]) < 10 * 10**9
     held = g.probe.joint_states[-1]
     assert tuple(held.position) == states[-1][1]
     assert tuple(held.velocity) == ZERO and tuple(held.effort) == ZERO
@@ -252,8 +246,8 @@ def test_stop_with_clear_error_then_reset(graph, capfd):
     g = graph({'command_timeout': 1.0})
     push = (1000.0, 0.0, 0.0)
     g.probe.send(push)
-    status = wait_diagnostics(
-        g, lambda s: s.level == DiagnosticStatus.ERROR)
+    status = wait_diagnostics(g, lambda v: v['state'] == 'stopped')
+    assert status.level == DiagnosticStatus.ERROR
     assert status.message.startswith(
         'stopped: simulation stopped at position [')
     assert '(singular)' in status.message and '~/reset' in status.message
@@ -267,7 +261,7 @@ def test_stop_with_clear_error_then_reset(graph, capfd):
     g.probe.send(HOLD)
     g.probe.clear()
     status = wait_diagnostics(
-        g, lambda s: values(s)['commands ignored (stopped)'] == '2')
+        g, lambda v: v['commands ignored (stopped)'] == '2')
     assert status.level == DiagnosticStatus.ERROR
     assert g.probe.joint_states
     lam = mechanics.solve(Robot(), frozen).lambda_
@@ -285,7 +279,7 @@ def test_stop_with_clear_error_then_reset(graph, capfd):
     assert answer.success, answer.message
     assert 'initial_position [0.0, 0.0, 0.0] m' in answer.message
     g.probe.clear()
-    status = wait_diagnostics(g, lambda s: values(s)['state'] == 'held')
+    status = wait_diagnostics(g, lambda v: v['state'] == 'held')
     assert status.level == DiagnosticStatus.OK
     assert spin_until(g.executor, lambda: g.probe.joint_states, WAIT)
     assert tuple(g.probe.joint_states[-1].position) == ZERO
@@ -301,8 +295,8 @@ def test_bad_commands_rejected_by_reason(graph):
     g.probe.send([1.0, 2.0])
     g.probe.send([math.nan, 0.0, 300.0])
     g.probe.send([0.0, math.inf, 300.0, 1.0])
-    status = wait_diagnostics(g, lambda s: values(s)['rejected length'] ==
-                              '2' and values(s)['rejected non_finite'] == '1')
+    status = wait_diagnostics(g, lambda v: v['rejected length'] ==
+                              '2' and v['rejected non_finite'] == '1')
     assert status.level == DiagnosticStatus.WARN
     assert values(status)['state'] == 'held'
     assert values(status)['commands received'] == '0'
@@ -329,8 +323,8 @@ def test_parameter_changes_live_and_at_reset(graph):
     clipped = (0.0, 0.0, 100.0)
     assert any(tuple(m.effort) == clipped for m in g.probe.joint_states)
     assert core.clipped > 0
-    wait_diagnostics(g, lambda s: values(s)['pending reset'] == 'true'
-                     and values(s)['rate_hz'] == '500')
+    wait_diagnostics(g, lambda v: v['pending reset'] == 'true'
+                     and v['rate_hz'] == '500')
     future = g.probe.reset_client.call_async(Trigger.Request())
     assert spin_until(g.executor, future.done, WAIT)
     assert future.result().success and 'applied' in future.result().message
@@ -364,14 +358,10 @@ def test_process_publishes_joint_states_and_exits_0_on_sigint(ros_context):
         assert tuple(msg.position) == ZERO and tuple(msg.effort) == ZERO
         assert proc.poll() is None, 'the node exited by itself'
     finally:
-        start = time.monotonic()
-        code, stderr = stop_process(proc)
-        elapsed = time.monotonic() - start
+        stopped = timed_stop(proc)
         executor.shutdown()
         probe.destroy_node()
-    assert code == 0, f'exit code {code} after SIGINT; stderr:\n{stderr}'
-    assert elapsed < PROMPT, f'took {elapsed:.1f} s to exit after SIGINT'
-    assert 'Traceback' not in stderr, stderr
+    assert_clean_exit(*stopped, PROMPT)
 
 
 @needs_script
@@ -381,12 +371,8 @@ def test_process_publishes_joint_states_and_exits_0_on_sigint(ros_context):
 ])
 def test_process_invalid_parameter_exits_2(argument, word):
     """An invalid start-up parameter: FATAL naming it, exit code 2."""
-    proc = start_node_process(['--ros-args', '-p', argument],
-                              command=simulator_command())
-    try:
-        code = wait_exit(proc, START_WAIT)
-    finally:
-        code, stderr = stop_process(proc)
+    code, stderr = run_to_exit(['--ros-args', '-p', argument],
+                               simulator_command(), START_WAIT)
     assert code == 2, f'exit code {code}; stderr:\n{stderr}'
     assert 'FATAL' in stderr and word in stderr, stderr
     assert 'Traceback' not in stderr, stderr

@@ -195,7 +195,7 @@ def test_producer_stops_then_comes_back(graph, rate, form):
         status.message)
     assert values['stale'] == 'false'
     assert not any(core.rejected.values()), core.rejected
-    assert g.node._internal_errors == 0
+    assert g.node.internal_errors == 0
 
 
 def received(g, **counts):

@@ -14,13 +14,10 @@ import math
 import os
 import sys
 import time
-from types import SimpleNamespace
 
 import pytest
-from rclpy.experimental import EventsExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.parameter_client import AsyncParameterClient
 from rclpy.executors import SingleThreadedExecutor
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -31,9 +28,11 @@ from orthoglide_ros.tracking import CONTROLLER_SPECS, INPUTS, REASONS
 from orthoglide_ros.tracking_controller_node import TrackingControllerNode
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (diagnostic_values, node_executable,  # noqa: E402
-                          PROBE_QOS, spin_for, spin_until,
-                          start_node_process, stop_process, wait_exit)
+from node_harness import (  # noqa: E402
+    assert_clean_exit, call, diagnostic_values, node_executable, node_graphs,
+    parameter_client, PROBE_QOS, run_to_exit, spin_for, spin_until,
+    start_node_process, timed_stop,
+    wait_diagnostics as harness_wait_diagnostics)
 
 WAIT = 10.0         # s: generous, the machine is shared
 START_WAIT = 40.0   # s for a process to come up and answer
@@ -83,30 +82,18 @@ class TrackingProbe(Node):
          else self.pub_measured).publish(msg)
 
 
+def _matched(probe, node):
+    return probe.matched() and all(
+        p.get_subscription_count() > 0 for p in node.publishers
+        if p.topic_name != '/parameter_events')
+
+
 @pytest.fixture
 def graph(ros_context):
     """Return make(params): the node and a probe, matched; cleaned up after."""
-    made = []
-
-    def make(params=None):
-        overrides = [Parameter(k, value=v) for k, v in (params or {}).items()]
-        node = TrackingControllerNode(context=ros_context,
-                                      parameter_overrides=overrides)
-        probe = TrackingProbe(ros_context)
-        executor = EventsExecutor(context=ros_context)
-        made.append((executor, node, probe))
-        executor.add_node(node)
-        executor.add_node(probe)
-        assert spin_until(executor, lambda: probe.matched() and all(
-            p.get_subscription_count() > 0 for p in node.publishers
-            if p.topic_name != '/parameter_events'), WAIT), 'no match'
-        return SimpleNamespace(node=node, probe=probe, executor=executor)
-
-    yield make
-    for executor, node, probe in made:
-        executor.shutdown()
-        probe.destroy_node()
-        node.destroy_node()
+    with node_graphs(ros_context, TrackingControllerNode, TrackingProbe,
+                     _matched, WAIT) as make:
+        yield make
 
 
 def received(g, source):
@@ -171,15 +158,8 @@ def assert_command(msg, expected):
 
 def wait_diagnostics(g, predicate, timeout=WAIT):
     """Spin until a diagnostics message satisfies ``predicate(values)``."""
-    def found():
-        return any(predicate(diagnostic_values(m))
-                   for m in g.probe.diagnostics)
-    ok = spin_until(g.executor, found, timeout)
-    last = diagnostic_values(g.probe.diagnostics[-1]) \
-        if g.probe.diagnostics else None
-    assert ok, f'no matching diagnostics; last: {last}'
-    return next(m for m in g.probe.diagnostics
-                if predicate(diagnostic_values(m)))
+    return harness_wait_diagnostics(g.executor, g.probe.diagnostics,
+                                    predicate, timeout)
 
 
 # The law ---------------------------------------------------------------------
@@ -292,7 +272,7 @@ def test_bad_inputs_rejected_counted_and_node_goes_on(graph):
     msg = wait_diagnostics(
         g, lambda d: d['rejected measured non_finite'] == '1')
     assert msg.status[0].level == DiagnosticStatus.WARN
-    assert g.node._internal_errors == 0
+    assert g.node.internal_errors == 0
 
 
 def test_internal_error_reported_and_node_goes_on(graph):
@@ -345,23 +325,10 @@ def test_diagnostics_values(graph):
 
 
 # Parameters ------------------------------------------------------------------
-def call(g, future):
-    """Spin until a service future is done; return its result."""
-    assert spin_until(g.executor, future.done, WAIT), 'no service response'
-    return future.result()
-
-
-def parameter_client(g):
-    """Return an AsyncParameterClient of the node, its services ready."""
-    client = AsyncParameterClient(g.probe, 'tracking_controller')
-    assert spin_until(g.executor, client.services_are_ready, WAIT)
-    return client
-
-
 def test_invalid_parameter_changes_refused(graph):
     """Invalid changes are refused with a reason and change nothing."""
     g = graph(PATIENT)
-    client = parameter_client(g)
+    client = parameter_client(g, 'tracking_controller')
     refused = [
         (Parameter('kp', value=[1.0]), 'kp'),
         (Parameter('kd', value=[1.0, -2.0, 3.0]), 'kd'),
@@ -400,7 +367,7 @@ def test_invalid_parameter_changes_refused(graph):
 def test_valid_change_applied_to_next_command(graph):
     """Gains, feedforward and limit, atomically: the next command uses all."""
     g = graph(PATIENT)
-    client = parameter_client(g)
+    client = parameter_client(g, 'tracking_controller')
     measure(g, ZERO)
     command(g, (0.001, 0.0, 0.0))
     result = call(g, client.set_parameters_atomically([
@@ -468,25 +435,17 @@ def test_process_answers_and_exits_0_on_sigint(ros_context):
             [21.0, 2.0, 3.0])
         assert proc.poll() is None, 'the node exited by itself'
     finally:
-        start = time.monotonic()
-        code, stderr = stop_process(proc)
-        elapsed = time.monotonic() - start
+        stopped = timed_stop(proc)
         executor.shutdown()
         probe.destroy_node()
-    assert code == 0, f'exit code {code}; stderr:\n{stderr}'
-    assert elapsed < PROMPT, f'took {elapsed:.1f} s to exit after SIGINT'
-    assert 'Traceback' not in stderr, stderr
+    assert_clean_exit(*stopped, PROMPT)
 
 
 @needs_script
 def test_process_exits_2_on_invalid_parameter():
     """-p kp:=[1.0]: exit 2 and a fatal line naming kp, no traceback."""
-    proc = start_node_process(['--ros-args', '-p', 'kp:=[1.0]'],
-                              command=[EXECUTABLE])
-    try:
-        code = wait_exit(proc, START_WAIT)
-    finally:
-        code, stderr = stop_process(proc)
+    code, stderr = run_to_exit(['--ros-args', '-p', 'kp:=[1.0]'],
+                               [EXECUTABLE], START_WAIT)
     assert code == 2, f'exit code {code}; stderr:\n{stderr}'
     assert 'kp' in stderr, stderr
     assert 'Traceback' not in stderr, stderr
