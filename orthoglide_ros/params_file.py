@@ -5,9 +5,9 @@ The node and the ``orthoglide`` tool share one file (``config/orthoglide.yaml``)
 rcl starts a node only if every value has the declared type, so the tools
 apply the same rules here:
 
-- the node's section is keyed ``feedforward``, ``/feedforward`` or ``/**``
-  (several may be present: ``/**`` first, then the node's own name, the later
-  overriding), with its values under ``ros__parameters``;
+- a node's section is keyed by its name (``feedforward``, ``/feedforward``)
+  or ``/**`` (several may be present: ``/**`` first, then the node's own
+  name, the later overriding), with its values under ``ros__parameters``;
 - parameters may be nested mappings (``robot: {l3: 0.85}``) or dotted keys
   (``robot.l3: 0.85``);
 - a double needs a decimal point or an exponent (``0.0``, not ``0``), an array
@@ -22,8 +22,7 @@ import yaml
 
 from orthoglide_ros.robot import Robot, RobotParameterError
 
-NODE_NAME = 'feedforward'
-SECTION_KEYS = ('/**', NODE_NAME, '/' + NODE_NAME)
+NODE_NAME = 'feedforward'     # the node whose robot the tools read
 ROBOT_PREFIX = 'robot.'
 
 
@@ -41,9 +40,9 @@ _RclLoader.add_implicit_resolver(
     list('-+0123456789.'))
 
 
-def load_parameters(path):
+def load_parameters(path, node=NODE_NAME):
     """
-    Return the node's parameters in ``path`` as a flat ``{name: value}``.
+    Return node ``node``'s parameters in ``path`` as a flat ``{name: value}``.
 
     Raises :class:`ParametersFileError` if the file cannot be read, is not
     YAML, or has no section for the node.
@@ -57,11 +56,12 @@ def load_parameters(path):
         raise ParametersFileError(f'{path}: not valid YAML: {error}') from None
     if not isinstance(document, dict):
         raise ParametersFileError(f'{path}: not a ROS 2 parameters file')
-    sections = [document[key] for key in SECTION_KEYS if key in document]
+    keys = ('/**', node, '/' + node)
+    sections = [document[key] for key in keys if key in document]
     if not sections:
         raise ParametersFileError(
             f'{path}: no section for the node: expected one of '
-            + ', '.join(repr(k) for k in SECTION_KEYS))
+            + ', '.join(repr(k) for k in keys))
     params = {}
     for section in sections:
         values = section.get('ros__parameters') if isinstance(

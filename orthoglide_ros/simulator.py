@@ -33,7 +33,8 @@ applied. :meth:`Simulator.reset` puts the platform back at
 ``initial_position``, at rest, ``held``, simulation time 0.
 
 Parameters apply as follows: ``force_limit``, ``command_timeout``,
-``rate_hz``, ``joint_names`` and ``base_frame`` at once (the next tick);
+``rate_hz``, ``publish_rate_hz``, ``joint_names`` and ``base_frame`` at
+once (the next tick);
 ``robot.*``, ``initial_position`` and ``singularity_margin`` describe the
 plant and take effect at the next reset (``pending_reset`` says one is
 waiting), so a running simulation never changes model in mid-motion.
@@ -60,8 +61,11 @@ COMMAND_REASONS = ('length', 'non_finite')
 NODE_SPECS = (
     Spec('rate_hz', 'double', 1000.0,
          'simulation steps per second (Hz): each step integrates 1/rate_hz s '
-         'of motion (RK4, command held over the step) and publishes the '
-         'joint states and the pose', (1.0, 10000.0)),
+         'of motion (RK4, command held over the step)', (1.0, 10000.0)),
+    Spec('publish_rate_hz', 'double', 0.0,
+         'joint states and poses published per second (Hz), at most '
+         'rate_hz: the state of the first step at or after each 1 / '
+         'publish_rate_hz; 0.0: every step', (0.0, 10000.0)),
     Spec('initial_position', 'double_array', [0.0, 0.0, 0.0],
          'position of the platform centre G (m, base frame) at start and '
          'after ~/reset, at rest; must lie in the workspace (applies at the '
@@ -89,7 +93,8 @@ SIMULATOR_SPECS = ROBOT_SPECS + NODE_SPECS
 RESET_PARAMETERS = ('robot.*', 'initial_position', 'singularity_margin')
 
 SimulatorSettings = namedtuple('SimulatorSettings', (
-    'robot', 'rate_hz', 'initial_position', 'command_timeout', 'force_limit',
+    'robot', 'rate_hz', 'publish_rate_hz', 'initial_position',
+    'command_timeout', 'force_limit',
     'singularity_margin', 'joint_names', 'base_frame'))
 SimulatorSettings.__doc__ = """Everything the simulator reads, validated."""
 
@@ -135,12 +140,17 @@ def simulator_settings_from_parameters(values):
             f'initial_position: {list(position)} m is outside the workspace '
             f'of singularity_margin {margin:g} ({error.reason}): {error}'
         ) from None
+    if node['publish_rate_hz'] > node['rate_hz']:
+        raise ValueError(
+            f'publish_rate_hz: must not exceed rate_hz '
+            f'({node["publish_rate_hz"]} > {node["rate_hz"]} Hz)')
     if node['command_timeout'] * node['rate_hz'] < 1.0:
         raise ValueError(
             f'command_timeout: must last at least one step, 1/rate_hz = '
             f'{1.0 / node["rate_hz"]:g} s, got {node["command_timeout"]} s')
     return SimulatorSettings(
-        robot, node['rate_hz'], tuple(position), node['command_timeout'],
+        robot, node['rate_hz'], node['publish_rate_hz'], tuple(position),
+        node['command_timeout'],
         node['force_limit'], margin, tuple(names), node['base_frame'])
 
 

@@ -15,7 +15,10 @@ held, as the drive held it) and the simulated time keeps pace with the wall
 clock, up to MAX_CATCH_UP steps per tick; beyond that the missed time is
 dropped (counted in ``overruns``: the plant then runs slower than real
 time). The published stamp is the grid time of the state published (the
-node clock at that instant), not the time of publication.
+node clock at that instant), not the time of publication. With
+``publish_rate_hz`` the states are published on a coarser grid than the
+steps (a sampled encoder): the physics keeps its step, the subscribers get
+fewer messages.
 """
 
 import array
@@ -76,6 +79,7 @@ class SimulatorNode(InputNode):
         self._step_clock = Clock(clock_type=ClockType.STEADY_TIME)
         self._step_timer = None
         self._grid = None       # monotonic time of the next step due
+        self._next_publish = None   # grid time of the next state published
         self._overruns = 0
         self._set_timer()
         self._published = 0
@@ -95,6 +99,8 @@ class SimulatorNode(InputNode):
         self._apply_names()
         if settings.rate_hz != old.rate_hz:
             self._set_timer()
+        if settings.publish_rate_hz != old.publish_rate_hz:
+            self._next_publish = None
         if self._core.pending_reset:
             self.get_logger().info(
                 'new robot, initial_position or singularity_margin: '
@@ -110,6 +116,7 @@ class SimulatorNode(InputNode):
         if self._step_timer is not None:
             self.destroy_timer(self._step_timer)
         self._grid = None
+        self._next_publish = None
         self._step_timer = self.create_timer(
             1.0 / self._core.settings.rate_hz, self._on_step,
             clock=self._step_clock)
@@ -118,7 +125,7 @@ class SimulatorNode(InputNode):
     def _on_command(self, msg):
         """Take one command (input thread, lock held)."""
         try:
-            self._core.command(msg.data, time.monotonic())
+            self._core.command(msg.data, self.arrival)
         except Rejected as rejection:
             self.warn_throttled(rejection.reason,
                                 f'command rejected ({rejection.reason}): '
@@ -147,7 +154,7 @@ class SimulatorNode(InputNode):
         try:
             with self.lock:
                 tick, instant = self._catch_up(now)
-                if tick is not None:
+                if tick is not None and self._publish_due(tick, instant):
                     self._publish(tick, instant)
         except Exception:   # a defect: count it, the next tick goes on
             self.report_defect('in a step')
@@ -184,6 +191,30 @@ class SimulatorNode(InputNode):
             if tick.event is not None:
                 break
         return tick, self._grid - period
+
+    def _publish_due(self, tick, instant):
+        """
+        Say whether to publish the state at grid time ``instant`` (lock held).
+
+        Every tick with ``publish_rate_hz`` 0.0; else the first state at or
+        after each instant of the publish grid (period 1/publish_rate_hz,
+        instants a late tick skipped are dropped), and always a state that
+        ends in an event (a timeout, a stop).
+        """
+        settings = self._core.settings
+        if settings.publish_rate_hz == 0.0 or tick.event is not None:
+            return True
+        # Half a step of slack: the two grids' float sums drift apart.
+        slack = 0.5 / settings.rate_hz
+        due = self._next_publish
+        if due is not None and instant < due - slack:
+            return False
+        period = 1.0 / settings.publish_rate_hz
+        due = instant if due is None else due
+        while due <= instant + slack:
+            due += period
+        self._next_publish = due
+        return True
 
     def _publish(self, tick, instant):
         """Publish a state, stamped with the node-clock time of ``instant``."""
@@ -254,6 +285,7 @@ class SimulatorNode(InputNode):
             ('singularity margin', plant.margin),
             ('pending reset', core.pending_reset),
             ('rate_hz', core.settings.rate_hz),
+            ('publish_rate_hz', core.settings.publish_rate_hz),
             ('internal errors', self.internal_errors),
         ]
         values += [(f'rejected {r}', core.rejected[r])

@@ -162,3 +162,40 @@ def test_robot_from_parameters_on_a_flat_dict():
     assert robot.l3 == 0.9 and robot.gravity == (0.0, 0.0, -1.62)
     with pytest.raises(RobotParameterError):
         robot_from_parameters({'robot.m2': 1})
+
+
+@pytest.mark.parametrize('node', ['simulator', 'tracking_controller'])
+def test_shipped_config_sections_hold_the_defaults(node):
+    """
+    The other nodes' sections parse by rcl's rules and are the defaults.
+
+    So the file documents the defaults and cannot drift from them; the
+    simulator's robot is absent from its section (the paper's by default).
+    """
+    if node == 'simulator':
+        from orthoglide_ros.simulator import (
+            SIMULATOR_SPECS as specs, simulator_settings_from_parameters as
+            parse)
+    else:
+        from orthoglide_ros.tracking import (
+            CONTROLLER_SPECS as specs, controller_settings_from_parameters
+            as parse)
+    values = load_parameters(CONFIG, node)
+    assert values and set(values) <= {s.name for s in specs}
+    defaults = {s.name: s.default for s in specs if s.default is not None}
+    assert all(values[name] == defaults[name] for name in values)
+    assert parse(values) == parse({})
+
+
+def test_node_section_by_name(tmp_path):
+    """load_parameters(path, node) picks that node's section over /**."""
+    path = write(tmp_path, """\
+        /**:
+          ros__parameters:
+            rate_hz: 100.0
+        simulator:
+          ros__parameters:
+            rate_hz: 500.0
+        """)
+    assert load_parameters(path, 'simulator') == {'rate_hz': 500.0}
+    assert load_parameters(path, 'tracking_controller') == {'rate_hz': 100.0}

@@ -58,7 +58,8 @@ def test_spec_table_is_the_robot_table_plus_the_simulator_contract():
     """Names are the issue's contract; robot.* is the feedforward's table."""
     assert SIMULATOR_SPECS[:len(ROBOT_SPECS)] == ROBOT_SPECS
     own = [s.name for s in SIMULATOR_SPECS[len(ROBOT_SPECS):]]
-    assert own == ['rate_hz', 'initial_position', 'command_timeout',
+    assert own == ['rate_hz', 'publish_rate_hz', 'initial_position',
+                   'command_timeout',
                    'force_limit', 'singularity_margin', 'joint_names',
                    'base_frame']
     for spec in SIMULATOR_SPECS:
@@ -72,6 +73,7 @@ def test_default_settings():
     s = settings()
     assert s.robot == Robot()
     assert s.rate_hz == 1000.0
+    assert s.publish_rate_hz == 0.0     # every step
     assert s.initial_position == ZERO
     assert s.command_timeout == 0.1
     assert s.force_limit == 1000.0
@@ -83,6 +85,8 @@ def test_default_settings():
 @pytest.mark.parametrize('name, value', [
     ('rate_hz', 0.5), ('rate_hz', -1.0), ('rate_hz', 20000.0),
     ('rate_hz', NAN), ('rate_hz', 1000),
+    ('publish_rate_hz', -1.0), ('publish_rate_hz', NAN),
+    ('publish_rate_hz', 250), ('publish_rate_hz', 2000.0),  # > rate_hz
     ('initial_position', [0.9, 0.0, 0.0]),      # out of reach
     ('initial_position', [0.8, 0.0, 0.0]),      # too near a singularity
     ('initial_position', [0.0, 0.0]), ('initial_position', [0, 0, 0]),
@@ -117,6 +121,9 @@ def test_settings_checked_as_a_whole():
     settings(rate_hz=10.0, command_timeout=0.1)
     with pytest.raises(ValueError, match='command_timeout'):
         settings(rate_hz=10.0, command_timeout=0.05)
+    settings(rate_hz=250.0, publish_rate_hz=250.0)
+    with pytest.raises(ValueError, match='^publish_rate_hz: .*rate_hz'):
+        settings(rate_hz=250.0, publish_rate_hz=250.5)
 
 
 # States ---------------------------------------------------------------------

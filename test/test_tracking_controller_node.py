@@ -34,6 +34,8 @@ from node_harness import (  # noqa: E402
     start_node_process, timed_stop,
     wait_diagnostics as harness_wait_diagnostics)
 
+CONFIG = os.path.join(os.path.dirname(os.path.abspath(__file__)),
+                      os.pardir, 'config', 'orthoglide.yaml')
 WAIT = 10.0         # s: generous, the machine is shared
 START_WAIT = 40.0   # s for a process to come up and answer
 PROMPT = 5.0        # s from SIGINT to exit
@@ -419,7 +421,9 @@ def test_process_answers_and_exits_0_on_sigint(ros_context):
     probe = TrackingProbe(ros_context)
     executor = SingleThreadedExecutor(context=ros_context)
     executor.add_node(probe)
-    proc = start_node_process(['--ros-args', '-p', 'measurement_timeout:=30.0'],
+    # The shipped parameters file, then an override, as a user would.
+    proc = start_node_process(['--ros-args', '--params-file', CONFIG, '-p',
+                               'measurement_timeout:=30.0'],
                               command=[EXECUTABLE])
     try:
         assert spin_until(executor, probe.matched, START_WAIT), \
