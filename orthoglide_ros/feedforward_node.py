@@ -146,7 +146,7 @@ class FeedforwardNode(InputNode):
     def _take(self, method, *args):
         """Call the core; publish a completed setpoint, warn on a rejection."""
         try:
-            output = method(*args, time.monotonic())
+            output = method(*args, self.arrival)
         except Rejected as rejection:
             self._warn(rejection.reason, str(rejection))
             return
@@ -155,6 +155,13 @@ class FeedforwardNode(InputNode):
             return
         if output is not None and self._tick_timer is None:
             self._publish(output)
+
+    def on_inputs_idle(self):
+        """Drop the partial setpoints whose partners did not come in time."""
+        dropped = self._core.expire(time.monotonic())
+        if dropped:
+            self._warn('unpaired', f'{dropped} partial setpoint(s) dropped '
+                       'without partners within pairing_timeout')
 
     def _on_tick(self):
         with self.lock:
@@ -186,10 +193,6 @@ class FeedforwardNode(InputNode):
         """Return the DiagnosticArray of the period ending now."""
         core = self._core
         now = time.monotonic()
-        dropped = core.expire(now)
-        if dropped:
-            self._warn('unpaired', f'{dropped} partial setpoint(s) dropped '
-                       'without partners within pairing_timeout')
         start, published, computed, compute_ns, rejected_before = \
             self._window
         period = max(now - start, 1e-9)

@@ -36,6 +36,7 @@ from trajectory_msgs.msg import (MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
 from orthoglide_ros import trajectory
+from orthoglide_ros.node_runtime import freeze_start_up_objects
 
 # The feedforward's inputs are reliable, keep-last 10: match them (users
 # override it with the qos_overrides.<topic>.publisher.* parameters).
@@ -245,6 +246,7 @@ def main(args=None):
         node = SetpointPublisher()
         executor = rclpy.executors.SingleThreadedExecutor()
         executor.add_node(node)
+        freeze_start_up_objects()
         executor.spin_until_future_complete(node.done)
         node.finish()
     except (ValueError, ParameterException) as error:

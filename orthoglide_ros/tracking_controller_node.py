@@ -78,7 +78,7 @@ class TrackingControllerNode(InputNode):
         """Hand one joint state to the core; warn on a rejection."""
         try:
             return method(msg.name, msg.position, msg.velocity, msg.effort,
-                          time.monotonic())
+                          self.arrival)
         except Rejected as rejection:
             self.warn_throttled(
                 (source, rejection.reason),

@@ -19,6 +19,7 @@ Import it with the test directory on ``sys.path`` (the tests insert it).
 """
 
 from contextlib import contextmanager
+import gc
 import os
 import signal
 import subprocess
@@ -116,8 +117,13 @@ class Probe(Node):
         """
         Publish one setpoint as pose, twist and accel (in ``order``).
 
-        ``stamp`` is (sec, nanosec); ``order`` may leave parts out.
+        ``stamp`` is (sec, nanosec); ``order`` may leave parts out. The
+        messages are built first and published back to back with the
+        garbage collector off: a full collection of this test process
+        (tens of ms) between two parts would make them arrive farther
+        apart than ``pairing_timeout``, which the node rightly refuses.
         """
+        messages = []
         for part in order:
             if part == 'pose':
                 msg = PoseStamped()
@@ -134,7 +140,13 @@ class Probe(Node):
                 a.x, a.y, a.z = (float(c) for c in acceleration)
             msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
             msg.header.frame_id = frame
-            self.publishers_by_input[part].publish(msg)
+            messages.append((self.publishers_by_input[part], msg))
+        gc.disable()
+        try:
+            for publisher, msg in messages:
+                publisher.publish(msg)
+        finally:
+            gc.enable()
 
     def send_trajectory(self, stamp, position, velocity=ZERO,
                         acceleration=ZERO, frame='', orientation=IDENTITY,

@@ -10,7 +10,8 @@ huge, tiny, NaN; positions, velocities and accelerations of
 ``fuzz_strategies``; empty points, transforms, velocities), serializes them
 with rclpy, may cut them, overwrite a byte or replace them with random
 bytes, and hands the bytes to the node's raw callbacks exactly as DDS
-delivers them (``node._on_pose(data)``...).
+delivers them (``node._on_pose(data)``..., with ``node.arrival`` set as the
+input thread sets it).
 
 Properties: every callback returns None (nothing escapes), the node counts
 no internal error, every output the probe receives is finite and equals
@@ -389,6 +390,7 @@ class Run:
         """Call one raw callback; check the node's reaction and counters."""
         node = self.rig.node
         before = node.get_clock().now().nanoseconds
+        node.arrival = time.monotonic()     # as the input thread sets it
         assert self.callbacks[source](data) is None
         after = node.get_clock().now().nanoseconds
         window = None

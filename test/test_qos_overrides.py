@@ -8,9 +8,13 @@ publisher.reliability: best_effort``) leaks into every topic created after
 it, and into every later node of the process.
 """
 
+import time
+
+from geometry_msgs.msg import PoseStamped
 import pytest
+from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import ReliabilityPolicy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from orthoglide_ros.feedforward_node import FeedforwardNode
 from orthoglide_ros.setpoint_publisher import SetpointPublisher
@@ -73,4 +77,29 @@ def test_setpoint_publisher_override_stays_on_its_topic(ros_context):
         for topic in ('/setpoint/twist', '/setpoint/accel'):
             assert reliability(node, topic, 'publisher') == RELIABLE, topic
     finally:
+        node.destroy_node()
+
+
+def test_incompatible_publisher_warned_by_the_input_thread(ros_context,
+                                                           capfd):
+    """
+    A best-effort publisher on a reliable input: the node says so.
+
+    The inputs' QoS events are served by the node's input thread (not by
+    an executor, see ``node_runtime.InputNode.waitables``): rclpy's default
+    handler logs the incompatible offer, here with no executor spinning.
+    """
+    node = FeedforwardNode(context=ros_context)
+    other = Node('qos_offer', context=ros_context)
+    try:
+        other.create_publisher(PoseStamped, 'setpoint/pose', QoSProfile(
+            depth=1, reliability=BEST_EFFORT))
+        deadline = time.monotonic() + 10.0
+        log = ''
+        while 'incompatible QoS' not in log and time.monotonic() < deadline:
+            time.sleep(0.1)
+            log += capfd.readouterr().err
+        assert 'incompatible QoS' in log and 'setpoint/pose' in log, log
+    finally:
+        other.destroy_node()
         node.destroy_node()

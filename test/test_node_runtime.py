@@ -1,0 +1,66 @@
+"""
+The input thread of ``node_runtime.InputNode``, over real DDS.
+
+Its contract: input callbacks run with ``arrival`` set to the time the
+middleware received the message (monotonic clock), not the time the
+callback happens to run, so a slow callback or a busy machine does not make
+the inputs behind it look late (the feedforward pairs pose, twist and
+accel within ``pairing_timeout`` of arrival; the simulator and the tracking
+controller judge their timeouts by it too).
+"""
+
+import time
+
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from std_msgs.msg import Float64
+
+from node_harness import spin_until
+from orthoglide_ros.node_runtime import default_qos, InputNode
+
+SLOW = 0.1      # s spent in each callback
+
+
+class SlowReader(InputNode):
+    """An InputNode whose one input callback takes SLOW seconds."""
+
+    def __init__(self, context):
+        super().__init__('slow_reader', context=context)
+        self.seen = []      # (value, arrival, monotonic time of the call)
+        self.create_input_subscription(Float64, 'values', self._on_value,
+                                       default_qos())
+        self.start_inputs()
+
+    def _on_value(self, msg):
+        self.seen.append((msg.data, self.arrival, time.monotonic()))
+        time.sleep(SLOW)
+
+
+def test_arrival_is_reception_time_not_callback_time(ros_context):
+    """Three messages sent at once, handled SLOW apart: same arrival."""
+    reader = SlowReader(ros_context)
+    writer = Node('writer', context=ros_context)
+    publisher = writer.create_publisher(Float64, 'values', default_qos())
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(writer)
+    try:
+        assert spin_until(executor, lambda: publisher.get_subscription_count()
+                          == 1, 10.0)
+        sent = time.monotonic()
+        for value in (1.0, 2.0, 3.0):
+            publisher.publish(Float64(data=value))
+        assert spin_until(executor, lambda: len(reader.seen) == 3, 10.0)
+        values, arrivals, calls = zip(*reader.seen)
+        assert values == (1.0, 2.0, 3.0)
+        # The callbacks ran SLOW apart, later than the messages arrived ...
+        assert calls[2] - calls[0] >= 2 * SLOW
+        # ... but each arrival lies between its publish and its callback,
+        # in order, and all three arrived before the second callback ran.
+        assert sent <= arrivals[0] <= arrivals[1] <= arrivals[2]
+        for arrival, call in zip(arrivals, calls):
+            assert arrival <= call
+        assert arrivals[2] < calls[1], (sent, arrivals, calls)
+    finally:
+        executor.shutdown()
+        writer.destroy_node()
+        reader.destroy_node()
