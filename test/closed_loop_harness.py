@@ -53,7 +53,7 @@ from orthoglide_ros.robot import Robot  # noqa: E402
 from orthoglide_ros.tracking import CONTROLLER_SPECS  # noqa: E402
 
 LOOP_RATE = 250.0       # Hz: setpoints, feedforward and commands
-PLANT_RATE = 1000.0     # Hz: the simulator's steps
+PLANT_RATE = 500.0      # Hz: the simulator's steps
 # The paper's trajectory, eq. (6), and a faster one (1 Hz, 8x the
 # accelerations at the same path length; the target is scaled so that the
 # platform stays in the tested cube, |x|, |y|, |z| <= 0.3 m).

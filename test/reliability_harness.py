@@ -84,6 +84,11 @@ BEST_EFFORT_INPUT = '-p', (
 DEEP_OUTPUT = ('-p', 'qos_overrides./feedforward/joint_states.publisher.'
                'depth:=1000')
 INPUT_TOPICS = bench_node.INPUT_TOPICS
+# History of the node's inputs for "nothing lost" under reliable QoS: 100
+# setpoints cover a 100 ms stall at 1 kHz. The default keep-last 10 covers
+# 10 ms, and a process on two busy cores is stalled that long now and then
+# (measured: 2-79 of 2001 lost in most 2 s runs at 1 kHz; 0 with 100).
+LOSSLESS_DEPTH = 100
 
 
 class HarnessError(RuntimeError):
@@ -806,12 +811,24 @@ def flood(duration, kind='trajectory', qos='best_effort', say=None):
     return result
 
 
-def reliable_stream(rate, duration, kind='trajectory', say=None):
-    """Stream at ``rate`` Hz, reliable; match every setpoint to its output."""
+def reliable_stream(rate, duration, kind='trajectory', depth=LOSSLESS_DEPTH,
+                    say=None):
+    """
+    Stream at ``rate`` Hz, reliable; match every setpoint to its output.
+
+    ``depth``: the history of the node's input subscriptions (the README's
+    ``qos_overrides./setpoint/<input>.subscription.depth``); the producer
+    keeps its own keep-last 10.
+    """
     say = say or (lambda text: None)
-    result = dict(case='reliable', kind=kind, rate=rate, duration=duration)
+    result = dict(case='reliable', kind=kind, rate=rate, duration=duration,
+                  depth=depth)
+    deep_input = tuple(
+        arg for topic in INPUT_TOPICS[kind] for arg in (
+            '-p', f'qos_overrides./setpoint/{topic}.subscription.depth:='
+            f'{depth}'))
     with Run() as run:
-        node = run.start_node(DEEP_OUTPUT)
+        node = run.start_node(DEEP_OUTPUT + deep_input)
         recorder = run.start_recorder()
         producer = run.start_producer(kind, 'reliable', rate=rate, epoch=100,
                                       duration=duration)
@@ -1088,7 +1105,10 @@ def problems(result, strict=False, only=None, skip=()):
         expect(result['internal_errors'] == 0,
                f'{result["internal_errors"]} internal error(s)')
     elif case == 'reliable':
-        for key in ('missing', 'duplicates', 'extra'):
+        # Lossless is promised with a history covering the stalls only.
+        keys = ('missing', 'duplicates', 'extra') \
+            if result['depth'] >= LOSSLESS_DEPTH else ('duplicates', 'extra')
+        for key in keys:
             expect(result[key] == 0, f'{result[key]} {key} output(s)')
     elif case == 'kill_restart':
         recovery = result['recovery_s']
@@ -1146,7 +1166,8 @@ def summary_lines(result):
             f'{r["parameter_unanswered"]} unanswered')
     elif case == 'reliable':
         r = result
-        text = (f'reliable {r["kind"]} {r["rate"]} Hz {r["duration"]:g} s: '
+        text = (f'reliable {r["kind"]} {r["rate"]} Hz {r["duration"]:g} s, '
+                f'input depth {r["depth"]}: '
                 f'{r["sent"]} sent, {r["outputs"]} outputs, missing '
                 f'{r["missing"]}, duplicates {r["duplicates"]}, extra '
                 f'{r["extra"]}; node CPU {r["node_cpu"]:.0%} of a core')

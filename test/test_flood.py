@@ -5,8 +5,11 @@ A producer process publishes setpoints on ``setpoint/trajectory`` as fast
 as it can, or at a steady 1 kHz, to the node started from its console
 script; a recorder process keeps every output. With best-effort input
 (overridden by ``qos_overrides``) the node must stay up and responsive,
-keep its memory, and end on the newest setpoint; with the default reliable
-input every setpoint must give exactly one output. The runs and the bounds
+keep its memory, and end on the newest setpoint; with reliable input and
+an input history that covers the stalls of a busy machine
+(``harness.LOSSLESS_DEPTH``, 100 ms at 1 kHz: the README's recipe for
+"nothing lost") every setpoint must give exactly one output. The runs and
+the bounds
 are in ``reliability_harness`` (shared with
 ``scripts/reliability_report.py``); the soak versions last 10 s.
 """
