@@ -320,9 +320,10 @@ class InputNode(Node):
 
     def on_inputs_idle(self):
         """
-        Override: run when no input arrived for INPUT_WAIT (lock held).
+        Override: run when a wait of the input thread ends with no input.
 
-        Every message the middleware had received is handled by then, so
+        That is after INPUT_WAIT without input, or a QoS event alone; the
+        lock is held. Every message the middleware had received is handled by then, so
         a timeout judged here by ``time.monotonic()`` cannot drop what a
         message still waiting in a queue would have completed (a timer on
         the executor could: its thread may run while this one is stalled).
