@@ -2,11 +2,12 @@
 Restart tests of the feedforward node as a process (issue 4, item 4).
 
 - The node is SIGKILLed while a reliable producer streams at 500 Hz and is
-  started again: its first output comes within 2 s of its start (imports
-  included), the outputs are right, and the producer was not held up while
-  the node was dead. Every process uses ``config/fastdds_discovery.xml``
-  (see the README: with Fast DDS's 3 s announcements a restarted process
-  waits up to 3 s more for its peers).
+  started again: every restart's first output comes within 2 s of its
+  start (imports included), the outputs are right, and the producer was
+  not held up while the node was dead. Every process uses
+  ``config/fastdds_discovery.xml`` (see the README: with Fast DDS's
+  defaults a restarted process takes over its killed predecessor's
+  shared-memory port, and its peers reach it 1-3 s late).
 - The producer is killed (SIGKILL) or stopped (SIGINT) mid-stream and a new
   one starts with later, then earlier stamps: the node, not restarted,
   serves it correctly without internal errors.
@@ -38,13 +39,8 @@ def check(result):
 
 
 def test_node_killed_mid_stream_resumes():
-    """
-    SIGKILL mid-stream, restart: first output within 2 s, right outputs.
-
-    Two cycles on a shared machine: the faster within 2 s, neither beyond
-    4 s (the report script holds every restart to 2 s and counts misses).
-    """
-    check(harness.kill_restart(2))
+    """SIGKILL mid-stream, restart, three times: each within 2 s, right."""
+    check(harness.kill_restart(3))
 
 
 @pytest.mark.soak
