@@ -22,8 +22,10 @@ setup(
         ('share/ament_index/resource_index/packages',
             ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        # config/orthoglide.yaml (and any other config/*.yaml).
-        ('share/' + package_name + '/config', sorted(glob('config/*.yaml'))),
+        # config/orthoglide.yaml and the Fast DDS profile (any config/*.yaml
+        # and config/*.xml).
+        ('share/' + package_name + '/config',
+            sorted(glob('config/*.yaml') + glob('config/*.xml'))),
     ],
     # ROS packages (rclpy, *_msgs) are deliberately absent: they come from
     # apt ROS or from the ros-jazzy-* wheels in requirements.txt.

@@ -75,8 +75,9 @@ def test_install_layout(install):
                      'lib/orthoglide_ros/simulator'):
         path = install / relative
         assert path.is_file() and os.access(path, os.X_OK), relative
-    assert (install / 'share' / PACKAGE / 'config' / 'orthoglide.yaml'
-            ).read_text() == (ROOT / 'config' / 'orthoglide.yaml').read_text()
+    for name in ('orthoglide.yaml', 'fastdds_discovery.xml'):
+        assert (install / 'share' / PACKAGE / 'config' / name
+                ).read_text() == (ROOT / 'config' / name).read_text()
     assert (install / 'share' / PACKAGE / 'package.xml').is_file()
     assert (install / 'share' / 'ament_index' / 'resource_index'
             / 'packages' / PACKAGE).is_file()
