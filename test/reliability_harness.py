@@ -1061,8 +1061,8 @@ def problems(result, only=None, skip=()):
 
     Every node restart must give its first output within RECOVERY_LIMIT
     of its start. Expectations carry a tag: ``backlog`` for what a flood
-    beyond the node's capacity upsets through the EventsExecutor's queue
-    (diagnostics, parameter answers, memory), else ``main``; ``only`` keeps
+    beyond the node's capacity could upset (diagnostics, parameter
+    answers, memory), else ``main``; ``only`` keeps
     one tag, ``skip`` leaves tags out.
     """
     out = []
