@@ -43,7 +43,7 @@ setup(
         'console_scripts': [
             'feedforward = orthoglide_ros.feedforward_node:main',
             'orthoglide = orthoglide_ros.cli:main',
-            'setpoint_publisher = orthoglide_ros.setpoint_publisher:main',
+            'setpoint_publisher = orthoglide_ros.setpoint_publisher_node:main',
             'tracking_controller = orthoglide_ros.tracking_controller_node:main',
             'simulator = orthoglide_ros.simulator_node:main',
         ],

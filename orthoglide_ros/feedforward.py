@@ -7,7 +7,7 @@ the counters the diagnostics report. The ROS node (``feedforward_node``)
 only converts messages to and from the plain values used here, so every rule
 below is testable without DDS.
 
-Rules (the README states them for users):
+Rules (``doc/feedforward.md`` states them for users):
 
 - A setpoint is complete when a pose, a twist and an accel with the same
   stamp have arrived (or a pose alone with ``pose_only``), or when one
@@ -33,13 +33,15 @@ import math
 import time
 
 from orthoglide_ros import mechanics
+from orthoglide_ros.inputs import check_stamp, Rejected
+from orthoglide_ros.parameters import joint_names_spec, ParameterError, \
+    Spec, Table
+from orthoglide_ros.status import first, OK, Period, Status, WARN
 
 # Largest rotation of the platform accepted as "the identity" (rad).
 ORIENTATION_TOLERANCE = 1e-3
 # Most partial setpoints held at once; beyond, the oldest is dropped.
 MAX_PENDING = 1000
-# Largest stamp seconds an output can carry (builtin_interfaces/Time: int32).
-STAMP_SEC_MAX = 2**31 - 1
 
 REASONS = ('non_finite', 'unreachable', 'singular', 'overflow', 'frame',
            'orientation', 'stamp', 'malformed', 'unpaired')
@@ -52,12 +54,40 @@ the :class:`mechanics.Solution`."""
 _ZERO = (0.0, 0.0, 0.0)
 
 
-class Rejected(ValueError):
-    """A setpoint refused by a rule; ``reason`` is one of REASONS."""
+def _pairing_within_setpoint_timeout(settings):
+    if settings.pairing_timeout > settings.setpoint_timeout:
+        raise ParameterError('pairing_timeout', (
+            f'must not exceed setpoint_timeout ({settings.pairing_timeout} '
+            f'> {settings.setpoint_timeout} s)'))
 
-    def __init__(self, reason, message):
-        super().__init__(message)
-        self.reason = reason
+
+PARAMETERS = Table('Settings', (
+    joint_names_spec('names of the prismatic joints of actuators A, B, C '
+                     'in feedforward/joint_states'),
+    Spec('base_frame', 'string', 'base_link',
+         'frame of the setpoints (the paper\'s frame 0); a setpoint stamped '
+         'with another non-empty frame is rejected'),
+    Spec('rate_hz', 'double', 0.0,
+         'control tick in Hz: 0.0 computes and publishes once per new '
+         'setpoint; a positive value publishes the newest setpoint\'s '
+         'result at this fixed rate', (0.0, 10000.0)),
+    Spec('setpoint_timeout', 'double', 0.1,
+         'seconds (by arrival time) without a fresh setpoint after which '
+         'the node stops publishing until the next fresh setpoint',
+         (0.001, 3600.0)),
+    Spec('pairing_timeout', 'double', 0.05,
+         'seconds a partial setpoint (pose, twist or accel of one stamp) '
+         'waits for its partners before it is dropped; at most '
+         'setpoint_timeout', (0.0001, 3600.0)),
+    Spec('singularity_margin', 'double', mechanics.DEFAULT_SINGULARITY_MARGIN,
+         'smallest accepted singularity distance, min(alpha_i / l3, '
+         '1 / kappa_F(J_lambda)), both 1 at home and 0 at a singularity of '
+         'J1 or J2', (0.0, 0.99)),
+    Spec('pose_only', 'bool', False,
+         'serve each pose alone as a setpoint with zero velocity and '
+         'acceleration (twist and accel topics ignored); trajectory points '
+         'may then omit velocities and accelerations'),
+), rules=(_pairing_within_setpoint_timeout,), robot=True)
 
 
 class Feedforward:
@@ -69,7 +99,7 @@ class Feedforward:
     or raise :class:`Rejected`; the rejection is already counted.
     """
 
-    def __init__(self, settings):
+    def __init__(self, settings, now=0.0):
         self.settings = settings
         self.latest = None
         self.latest_arrival = None
@@ -78,7 +108,9 @@ class Feedforward:
         self.computed = 0
         self.compute_ns_total = 0
         self.compute_ns_max = 0
+        self.published = 0
         self._pending = {}
+        self._period = Period(now)
 
     def configure(self, settings):
         """Use new settings from the next setpoint on (one assignment)."""
@@ -161,15 +193,60 @@ class Feedforward:
         """Count the partial setpoints waiting for partners."""
         return len(self._pending)
 
+    def status(self, now, internal_errors=0):
+        """
+        Return the :class:`Status` of the period ending at ``now``.
+
+        ERROR after an internal error; WARN when stale or when setpoints
+        were rejected in the period; else OK (``waiting for the first
+        setpoint`` until there is one). The values: rates over the period,
+        compute times (the maximum restarts with each period), counters.
+        """
+        rejected = sum(self.rejected.values())
+        seconds, new = self._period.advance(
+            now, published=self.published, computed=self.computed,
+            compute_ns=self.compute_ns_total, rejected=rejected)
+        age = None if self.latest_arrival is None \
+            else now - self.latest_arrival
+        fresh = self.fresh(now)
+        level, message = first(
+            internal_errors,
+            (age is None, OK, 'waiting for the first setpoint'),
+            (not fresh, WARN,
+             f'stale: no fresh setpoint for {age or 0.0:.2f} s, outputs '
+             'stopped'),
+            (new['rejected'], WARN,
+             f'{new["rejected"]} setpoint(s) rejected in the last period'))
+        mean_us = new['compute_ns'] / new['computed'] / 1e3 \
+            if new['computed'] else 0.0
+        distance = self.latest.solution.singularity_distance \
+            if self.latest is not None else math.nan
+        values = [
+            ('tick rate (Hz)', new['published'] / seconds),
+            ('compute time mean (us)', mean_us),
+            ('compute time max (us)', self.compute_ns_max / 1e3),
+            ('setpoints computed', self.computed),
+            ('outputs published', self.published),
+            ('stale', not fresh),
+            ('time since last setpoint (s)',
+             age if age is not None else math.nan),
+            ('singularity distance', distance),
+            ('singularity margin', self.settings.singularity_margin),
+            ('pending partial setpoints', self.pending),
+            ('rate_hz', self.settings.rate_hz),
+            ('internal errors', internal_errors),
+        ]
+        values += [(f'received {k}', v) for k, v in self.received.items()]
+        values += [(f'rejected {r}', self.rejected[r]) for r in REASONS]
+        self.compute_ns_max = 0
+        return Status(level, message, values)
+
     def _check_stamp(self, stamp):
-        if stamp[0] < 0 or stamp == (0, 0):
-            self._reject('stamp', (
-                f'stamp {stamp[0]}.{stamp[1]:09d} cannot pair pose, twist and '
-                'accel: stamp setpoints with their time'))
-        if stamp[0] > STAMP_SEC_MAX:
-            self._reject('stamp', (
-                f'stamp {stamp[0]}.{stamp[1]:09d} is beyond the int32 seconds '
-                'of builtin_interfaces/Time'))
+        try:
+            check_stamp(stamp)
+        except Rejected as rejection:
+            self.rejected[rejection.reason] += 1
+            raise
 
     def _part(self, stamp, slot, value, now):
         self._check_stamp(stamp)

@@ -2,10 +2,11 @@
 The ``feedforward`` ROS 2 node: setpoints in, joint states and forces out.
 
 A thin layer over :class:`orthoglide_ros.feedforward.Feedforward`: it declares
-the parameters of :mod:`orthoglide_ros.settings`, converts messages to plain
-values and back, publishes, logs throttled warnings and reports diagnostics.
-Run it with ``ros2 run orthoglide_ros feedforward``; see the README for the
-topics, parameters and rules.
+the parameters of :data:`orthoglide_ros.feedforward.PARAMETERS`, converts
+messages to plain values and back, publishes, logs throttled warnings and
+publishes the core's status on ``/diagnostics``. Run it with ``ros2 run
+orthoglide_ros feedforward``; ``doc/feedforward.md`` has the topics,
+parameters and rules.
 """
 
 import array
@@ -14,17 +15,15 @@ import time
 from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.serialization import deserialize_message, serialize_message
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import AccelStamped, PoseStamped, TwistStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
 from orthoglide_ros import cdr
-from orthoglide_ros.feedforward import Feedforward, REASONS, Rejected
-from orthoglide_ros.node_runtime import (
-    default_qos, diagnostic_array, InputNode, run)
-from orthoglide_ros.settings import SPECS, settings_from_parameters
+from orthoglide_ros.feedforward import Feedforward, PARAMETERS
+from orthoglide_ros.inputs import Rejected
+from orthoglide_ros.node_runtime import default_qos, InputNode, run
 
 
 class FeedforwardNode(InputNode):
@@ -39,8 +38,8 @@ class FeedforwardNode(InputNode):
     def __init__(self, **kwargs):
         super().__init__('feedforward', **kwargs)
         # Raises ValueError on an invalid start-up set (run() reports it).
-        self._core = Feedforward(
-            self.declare_settings(SPECS, settings_from_parameters))
+        self._core = Feedforward(self.declare_settings(PARAMETERS),
+                                 time.monotonic())
 
         overrides = QoSOverridingOptions.with_default_policies()
         self._pub_joints = self.create_publisher(
@@ -70,11 +69,7 @@ class FeedforwardNode(InputNode):
         self._set_joint_names()
         self._tick_timer = None
         self._set_tick()
-        self._published = 0
-        # Start of the diagnostics period: (time, published, computed,
-        # compute ns, rejected) at that moment.
-        self._window = (time.monotonic(), 0, 0, 0, 0)
-        self.publish_diagnostics_with(self._diagnostics)
+        self.publish_status('Orthoglide feedforward', self._core)
         self.apply_changes_with(self._swap)
         self.start_inputs()
 
@@ -183,64 +178,11 @@ class FeedforwardNode(InputNode):
         self._pub_forces.publish(self._forces)
         self._power.data = array.array('d', s.power)
         self._pub_power.publish(self._power)
-        self._published += 1
+        self._core.published += 1
 
     def _warn(self, reason, message):
         self.warn_throttled(reason,
                             f'setpoint rejected ({reason}): {message}')
-
-    def _diagnostics(self):
-        """Return the DiagnosticArray of the period ending now."""
-        core = self._core
-        now = time.monotonic()
-        start, published, computed, compute_ns, rejected_before = \
-            self._window
-        period = max(now - start, 1e-9)
-        count = core.computed - computed
-        mean_us = (core.compute_ns_total - compute_ns) / count / 1e3 \
-            if count else 0.0
-        rejected = sum(core.rejected.values())
-        self._window = (now, self._published, core.computed,
-                        core.compute_ns_total, rejected)
-        age = None if core.latest_arrival is None \
-            else now - core.latest_arrival
-        if self.internal_errors:
-            level = DiagnosticStatus.ERROR
-            text = f'{self.internal_errors} internal error(s): see the log'
-        elif age is None:
-            level, text = DiagnosticStatus.OK, 'waiting for the first setpoint'
-        elif not core.fresh(now):
-            level = DiagnosticStatus.WARN
-            text = f'stale: no fresh setpoint for {age:.2f} s, outputs stopped'
-        elif rejected > rejected_before:
-            level = DiagnosticStatus.WARN
-            text = (f'{rejected - rejected_before} setpoint(s) rejected in '
-                    'the last period')
-        else:
-            level, text = DiagnosticStatus.OK, 'ok'
-        settings = core.settings
-        distance = core.latest.solution.singularity_distance \
-            if core.latest is not None else float('nan')
-        values = [
-            ('tick rate (Hz)', (self._published - published) / period),
-            ('compute time mean (us)', mean_us),
-            ('compute time max (us)', core.compute_ns_max / 1e3),
-            ('setpoints computed', core.computed),
-            ('outputs published', self._published),
-            ('stale', age is None or not core.fresh(now)),
-            ('time since last setpoint (s)',
-             age if age is not None else float('nan')),
-            ('singularity distance', distance),
-            ('singularity margin', settings.singularity_margin),
-            ('pending partial setpoints', core.pending),
-            ('rate_hz', settings.rate_hz),
-            ('internal errors', self.internal_errors),
-        ]
-        values += [(f'received {k}', v) for k, v in core.received.items()]
-        values += [(f'rejected {r}', core.rejected[r]) for r in REASONS]
-        core.compute_ns_max = 0
-        return diagnostic_array(self, 'Orthoglide feedforward', level, text,
-                                values)
 
 
 def read_raw(reader, data, kind):

@@ -2,7 +2,7 @@
 The arithmetic kernel of the paper's recursive matrix method.
 
 One implementation of the recursion of sections 2 and 3 of the paper
-(Chablat, Wenger, Staicu), corrected as ``MODEL.md`` lists, written as scalar
+(Chablat, Wenger, Staicu), corrected as ``doc/model.md`` lists, written as scalar
 arithmetic on the components of the paper's vectors with the zeros of the
 constant matrices ``a1 ... a6`` exploited. Only ``+ - * /`` and a ``sqrt``
 passed in are used, so the same code runs on Python floats (one control tick,

@@ -111,11 +111,11 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
         # Only exactly on a singularity: det J_lambda = 0 (J2 singular, as
         # at x = y = z = l3/sqrt(3)), or a cosine's square rounded below 0.
         raise WorkspaceError('singular', (
-            f'position {_fmt(position)} m is on a singularity')) from None
+            f'position {format_vector(position)} m is on a singularity')) from None
     lam, lamd, lamdd, force, power, alphas, conditioning = out
     if conditioning < margin:
         raise WorkspaceError('singular', (
-            f'position {_fmt(position)} m is too near a singularity of '
+            f'position {format_vector(position)} m is too near a singularity of '
             f'J2: 1/kappa_F(J_lambda) = {conditioning:.3g} < margin '
             f'{margin:g}'))
     if not math.isfinite(sum(lamdd) + sum(force) + sum(power)) and not all(
@@ -180,9 +180,9 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
         row = int(np.argmin(accepted))
         if conditioning[row] == 0.0:
             raise WorkspaceError('singular', (
-                f'position {_fmt(p[row])} m is on a singularity'), row)
+                f'position {format_vector(p[row])} m is on a singularity'), row)
         raise WorkspaceError('singular', (
-            f'position {_fmt(p[row])} m is too near a singularity of J2: '
+            f'position {format_vector(p[row])} m is too near a singularity of J2: '
             f'1/kappa_F(J_lambda) = {conditioning[row]:.3g} < margin '
             f'{margin:g}'), row)
     if not np.isfinite(out[2:5]).all():
@@ -362,7 +362,7 @@ def forward_kinematics(robot, lam):
     if not np.all(good):
         row = int(np.argmin(np.atleast_1d(good)))
         raise WorkspaceError('unreachable', (
-            f'lambda {_fmt(np.atleast_2d(lam)[row])} m has no platform '
+            f'lambda {format_vector(np.atleast_2d(lam)[row])} m has no platform '
             'position on the home branch'), row if lam.ndim == 2 else None)
     return r
 
@@ -403,7 +403,7 @@ def elements(robot, position, velocity=ZERO, acceleration=ZERO,
     (``a_k0``, 3x3, frame 0 -> frame k), ``origin`` (joint A_k, frame 0, m),
     ``omega``, ``epsilon`` (rad/s, rad/s^2) and ``velocity``,
     ``acceleration`` of A_k (m/s, m/s^2), all four in frame 0. Bodies 1 to 6
-    follow MODEL.md (5 is the platform as seen from this leg; 6 the second
+    follow doc/model.md (5 is the platform as seen from this leg; 6 the second
     bar A6A7). The rates come from the kernel's recursion (10)-(12), (19).
     """
     record = {}
@@ -487,7 +487,7 @@ def _check_finite_inputs(position, velocity, third, row=None,
                       (third_name, third)):
         if not all(math.isfinite(v) for v in vec):
             raise WorkspaceError(
-                'non_finite', f'{name} {_fmt(vec)} is not finite', row)
+                'non_finite', f'{name} {format_vector(vec)} is not finite', row)
 
 
 def _overflow_error(position, velocity, third, row=None,
@@ -495,8 +495,8 @@ def _overflow_error(position, velocity, third, row=None,
     """Refuse a sample whose result is not finite (a WorkspaceError)."""
     unit = 'N' if third_name == 'force' else 'm/s^2'
     return WorkspaceError('overflow', (
-        f'the result for position {_fmt(position)} m, velocity '
-        f'{_fmt(velocity)} m/s, {third_name} {_fmt(third)} {unit} is not '
+        f'the result for position {format_vector(position)} m, velocity '
+        f'{format_vector(velocity)} m/s, {third_name} {format_vector(third)} {unit} is not '
         'finite'), row)
 
 
@@ -543,23 +543,24 @@ def _leg_error(robot, position, margin, row=None):
     for leg, rho in legs:
         if rho >= l3 * l3:
             return WorkspaceError('unreachable', (
-                f'position {_fmt(position)} m is out of reach of leg {leg}: '
+                f'position {format_vector(position)} m is out of reach of leg {leg}: '
                 f'its distance {math.sqrt(rho):.4g} m from the leg\'s axis '
                 f'is not below l3 = {l3:g} m'), row)
         ratio = math.sqrt(1.0 - rho / (l3 * l3))
         if ratio < margin:
             return WorkspaceError('singular', (
-                f'position {_fmt(position)} m is too near a singularity of '
+                f'position {format_vector(position)} m is too near a singularity of '
                 f'J1: leg {leg} has alpha/l3 = {ratio:.3g} < margin '
                 f'{margin:g}'), row)
     # On the margin's very edge the callers' test and the ones above can
     # round apart: the leg nearest its singularity refuses it.
     leg, rho = max(legs, key=lambda item: item[1])
     return WorkspaceError('singular', (
-        f'position {_fmt(position)} m is on the edge of the singularity '
+        f'position {format_vector(position)} m is on the edge of the singularity '
         f'margin {margin:g} of J1: leg {leg} has alpha/l3 = '
         f'{math.sqrt(1.0 - rho / (l3 * l3)):.3g}'), row)
 
 
-def _fmt(vec):
+def format_vector(vec):
+    """Return a vector as ``[x, y, z]`` with 6 significant digits."""
     return '[' + ', '.join(f'{float(v):.6g}' for v in vec) + ']'

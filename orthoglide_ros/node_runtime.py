@@ -4,12 +4,13 @@ The ROS glue shared by the package's nodes: inputs, parameters, main loop.
 - :class:`InputNode`: a Node whose input subscriptions are read on a thread
   of their own from an rcl wait set, so a flood cannot pile up work;
 - :func:`declare_specs` and :func:`spec_values`: ROS parameters declared
-  from a table of :class:`orthoglide_ros.settings.Spec` and read back as
+  from a node's :class:`orthoglide_ros.parameters.Table` and read back as
   plain Python values; :meth:`InputNode.declare_settings` and
   :meth:`InputNode.apply_changes_with`: run-time changes validated as a
   whole set and applied at once;
 - :func:`default_qos`: the reliable keep-last 10 profile of every topic;
-- :func:`diagnostic_array`: one node's status for ``/diagnostics``;
+- :meth:`InputNode.publish_status`: a core's
+  :class:`orthoglide_ros.status.Status` on ``/diagnostics`` once a second;
 - :func:`run`: ``main()`` of a node: start-up errors, signals, spinning;
 - :func:`freeze_start_up_objects`: no garbage-collector stalls over the
   start-up objects (called by :func:`run`).
@@ -35,7 +36,8 @@ import time
 import traceback
 
 import rclpy
-from rclpy.exceptions import (ParameterException,
+from rclpy.exceptions import (InvalidParameterValueException,
+                              ParameterException,
                               ParameterUninitializedException)
 from rclpy.executors import ExternalShutdownException
 from rclpy.guard_condition import GuardCondition
@@ -46,8 +48,10 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.signals import SignalHandlerOptions
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from rcl_interfaces.msg import (FloatingPointRange, ParameterDescriptor,
-                                SetParametersResult)
+from rcl_interfaces.msg import (FloatingPointRange, IntegerRange,
+                                ParameterDescriptor, SetParametersResult)
+
+from orthoglide_ros.parameters import ParameterError
 
 # Reliable, keep-last 10 on every input and output; users override it with
 # the standard qos_overrides.<topic>.<publisher|subscription>.* parameters.
@@ -62,6 +66,7 @@ WARNING_PERIOD = 1.0        # s between two warnings of the same reason
 
 _TYPES = {'double': Parameter.Type.DOUBLE,
           'double_array': Parameter.Type.DOUBLE_ARRAY,
+          'integer': Parameter.Type.INTEGER,
           'string': Parameter.Type.STRING,
           'string_array': Parameter.Type.STRING_ARRAY,
           'bool': Parameter.Type.BOOL}
@@ -78,16 +83,28 @@ def default_qos():
 
 
 def declare_specs(node, specs):
-    """Declare one ROS parameter per Spec (type, default, range, text)."""
+    """
+    Declare one ROS parameter per Spec (type, default, range, text).
+
+    A start-up value that rclpy refuses against its descriptor (out of
+    range) raises :class:`ParameterError` naming it, as the table would.
+    """
     for spec in specs:
         descriptor = ParameterDescriptor(
-            description=spec.description, type=_TYPES[spec.type].value)
-        if spec.range is not None:
+            description=spec.description, type=_TYPES[spec.type].value,
+            read_only=spec.read_only)
+        if spec.range is not None and spec.type == 'double':
             descriptor.floating_point_range = [FloatingPointRange(
                 from_value=spec.range[0], to_value=spec.range[1])]
-        node.declare_parameter(
-            spec.name, _TYPES[spec.type] if spec.default is None
-            else spec.default, descriptor)
+        elif spec.range is not None and spec.type == 'integer':
+            descriptor.integer_range = [IntegerRange(
+                from_value=spec.range[0], to_value=spec.range[1])]
+        try:
+            node.declare_parameter(
+                spec.name, _TYPES[spec.type] if spec.default is None
+                else spec.default, descriptor)
+        except InvalidParameterValueException as error:
+            raise ParameterError(spec.name, str(error.args[0])) from None
 
 
 def spec_values(node, specs, changes=()):
@@ -172,17 +189,17 @@ class InputNode(Node):
             daemon=True)
         self._input_thread.start()
 
-    def declare_settings(self, specs, parse):
+    def declare_settings(self, table):
         """
-        Declare the parameters of ``specs``; return ``parse(their values)``.
+        Declare the parameters of ``table``; return its parsed settings.
 
-        ``parse`` validates a complete ``{name: value}`` set into the
-        node's settings, raising ValueError that names the parameter (an
-        invalid start-up set: :func:`run` exits 2).
+        ``table``: the node's :class:`orthoglide_ros.parameters.Table`. An
+        invalid start-up set raises ValueError naming the parameter
+        (:func:`run` exits 2).
         """
-        declare_specs(self, specs)
-        self._specs, self._parse = specs, parse
-        return parse(spec_values(self, specs))
+        declare_specs(self, table.specs)
+        self._table = table
+        return table.parse(spec_values(self, table.specs))
 
     def apply_changes_with(self, apply):
         """
@@ -200,14 +217,15 @@ class InputNode(Node):
 
     def _validate_parameters(self, parameters):
         try:
-            self._parse(spec_values(self, self._specs, parameters))
+            self._table.parse(spec_values(self, self._table.specs,
+                                          parameters))
         except ValueError as error:
             self.get_logger().warning(f'parameter change refused: {error}')
             return SetParametersResult(successful=False, reason=str(error))
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, parameters):
-        settings = self._parse(spec_values(self, self._specs))
+        settings = self._table.parse(spec_values(self, self._table.specs))
         with self.lock:
             self._apply_settings(settings)
 
@@ -241,16 +259,29 @@ class InputNode(Node):
             self.get_logger().error(f'internal error {where}:\n'
                                     + traceback.format_exc())
 
+    @property
+    def finished(self):
+        """Override: whether the node's work is over (:func:`run` stops)."""
+        return False
+
+    def on_stop(self, interrupted):
+        """
+        Override: run by :func:`run` before the node is destroyed.
+
+        ``interrupted``: stopped by a signal (else the node finished).
+        """
+
     def on_input_error(self):
         """Handle an exception escaping an input callback: a defect."""
         self.report_defect('in an input callback')
 
-    def publish_diagnostics_with(self, build):
+    def publish_status(self, title, core):
         """
-        Publish ``build()`` on ``/diagnostics`` every DIAGNOSTICS_PERIOD.
+        Publish ``core.status(now, internal errors)`` on ``/diagnostics``.
 
-        ``build`` returns a DiagnosticArray (see :func:`diagnostic_array`)
-        and runs with :attr:`lock` held; a defect in it is reported and the
+        Every DIAGNOSTICS_PERIOD, as one DiagnosticStatus named
+        ``'<node name>: <title>'`` (:func:`diagnostic_array`); ``status``
+        runs with :attr:`lock` held. A defect in it is reported and the
         next period tries again.
         """
         publisher = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
@@ -258,7 +289,9 @@ class InputNode(Node):
         def publish():
             try:
                 with self.lock:
-                    message = build()
+                    status = core.status(time.monotonic(),
+                                         self.internal_errors)
+                message = diagnostic_array(self, title, status)
             except Exception:   # a defect: counted, next period again
                 self.report_defect('in the diagnostics')
                 return
@@ -381,19 +414,20 @@ class InputNode(Node):
                     self.on_input_error()
 
 
-def diagnostic_array(node, title, level, message, values):
+def diagnostic_array(node, title, status):
     """
-    Return a DiagnosticArray holding one status of ``node``.
+    Return a DiagnosticArray holding one :class:`Status` of ``node``.
 
-    Named ``'<node name>: <title>'``, hardware id ``orthoglide``; ``level``
-    a DiagnosticStatus level; ``values`` ``(key, value)`` pairs, shown as
-    text (booleans in lower case, floats with 6 significant digits).
+    Named ``'<node name>: <title>'``, hardware id ``orthoglide``; the
+    values shown as text (booleans in lower case, floats with 6
+    significant digits).
     """
-    status = DiagnosticStatus(
+    level, message, values = status
+    diagnostic = DiagnosticStatus(
         name=f'{node.get_name()}: {title}', hardware_id='orthoglide',
-        level=level, message=message,
+        level=bytes((level,)), message=message,
         values=[KeyValue(key=k, value=_text(v)) for k, v in values])
-    array_message = DiagnosticArray(status=[status])
+    array_message = DiagnosticArray(status=[diagnostic])
     array_message.header.stamp = node.get_clock().now().to_msg()
     return array_message
 
@@ -433,8 +467,9 @@ def run(node_class, name, args=None):
         freeze_start_up_objects()
         # Not executor.spin(): with the EventsExecutor of the rclpy 7.1.6
         # wheels it busy-loops without running callbacks or seeing SIGINT.
-        while rclpy.ok() and not stop:
+        while rclpy.ok() and not stop and not node.finished:
             executor.spin_once(timeout_sec=SPIN_PERIOD)
+        node.on_stop(interrupted=bool(stop) or not rclpy.ok())
     except (ValueError, ParameterException) as error:
         logger.fatal(f'invalid parameters, not starting: {error}')
         return 2

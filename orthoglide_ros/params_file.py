@@ -20,10 +20,9 @@ import re
 
 import yaml
 
-from orthoglide_ros.robot import Robot, RobotParameterError
+from orthoglide_ros.parameters import robot_from_parameters
 
 NODE_NAME = 'feedforward'     # the node whose robot the tools read
-ROBOT_PREFIX = 'robot.'
 
 
 class ParametersFileError(ValueError):
@@ -73,46 +72,14 @@ def load_parameters(path, node=NODE_NAME):
     return params
 
 
-def robot_from_parameters(params):
-    """
-    Build a :class:`Robot` from the ``robot.*`` entries of ``params``.
-
-    Other entries are ignored. An unknown ``robot.*`` name, a value of the
-    wrong type (by rcl's rules) or a value the :class:`Robot` refuses raises
-    :class:`RobotParameterError` naming the parameter.
-    """
-    names = Robot.parameter_names()
-    values = {}
-    for key, value in params.items():
-        if not key.startswith(ROBOT_PREFIX):
-            continue
-        name = key[len(ROBOT_PREFIX):]
-        if name not in names:
-            raise RobotParameterError(
-                name, 'unknown parameter; known: ' + ', '.join(names))
-        values[name] = _typed(name, value)
-    return Robot(**values)
-
-
 def load_robot(path):
-    """Return the :class:`Robot` described by the parameters file ``path``."""
+    """
+    Return the :class:`Robot` of the ``robot.*`` keys in the file ``path``.
+
+    Read with :func:`load_parameters` and validated by the one parameter
+    mechanism (:func:`orthoglide_ros.parameters.robot_from_parameters`).
+    """
     return robot_from_parameters(load_parameters(path))
-
-
-def _typed(name, value):
-    """Check a value against rcl's typing of the declared parameter."""
-    if name == 'gravity':
-        if not isinstance(value, list) or not all(
-                type(v) is float for v in value):
-            raise RobotParameterError(name, (
-                f'must be an array of doubles such as [0.0, 0.0, -9.81] '
-                f'(rcl refuses integers or mixed arrays), got {value!r}'))
-        return value
-    if type(value) is not float:
-        raise RobotParameterError(name, (
-            f'must be a double written with a decimal point (rcl refuses '
-            f'{value!r} of type {type(value).__name__})'))
-    return value
 
 
 def _flatten(mapping, prefix, out):

@@ -6,7 +6,7 @@ the package takes it as its first argument (in the manner of Pinocchio's
 ``Model``) and never validates it again on the hot path.
 
 The parameter names are the paper's (section 2) and those of the
-``robot.*`` ROS parameters of ``config/orthoglide.yaml``; see ``MODEL.md``
+``robot.*`` ROS parameters of ``config/orthoglide.yaml``; see ``doc/model.md``
 for the bodies they describe.
 """
 
@@ -22,11 +22,23 @@ PAPER_VALUES = {
 }
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 
-# Units of every parameter, for messages, descriptions and the README.
+# Units of every parameter, for messages, descriptions and the docs.
 UNITS = {
     'l': 'm', 'l1': 'm', 'l2': 'm', 'l3': 'm', 'alpha': 'rad',
     'm1': 'kg', 'm2': 'kg', 'm3': 'kg', 'm4': 'kg', 'm5': 'kg', 'm6': 'kg',
     'gravity': 'm/s^2',
+}
+
+# Bounds of every value (inclusive): far beyond any Orthoglide, they keep
+# every derived quantity of the kernel finite (a length of 1e200 m would
+# overflow its l3^2). alpha lies in (0, pi/2) rad, checked apart.
+LENGTH_LIMITS = (1e-4, 100.0)       # m
+MASS_LIMITS = (1e-6, 1e6)           # kg
+GRAVITY_LIMITS = (-100.0, 100.0)    # m/s^2, each component
+LIMITS = {
+    **dict.fromkeys(('l', 'l1', 'l2', 'l3'), LENGTH_LIMITS),
+    **dict.fromkeys(('m1', 'm2', 'm3', 'm4', 'm5', 'm6'), MASS_LIMITS),
+    'gravity': GRAVITY_LIMITS,
 }
 
 DESCRIPTIONS = {
@@ -61,8 +73,9 @@ class Robot:
 
     ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the paper's
     ``m4 = m2``, ``m6 = m3``). Every value must be finite, lengths and
-    masses positive, ``alpha`` in (0, pi/2) and ``gravity`` a 3-vector;
-    otherwise :class:`RobotParameterError` names the parameter.
+    masses positive and within :data:`LIMITS`, ``alpha`` in (0, pi/2) and
+    ``gravity`` a 3-vector within :data:`GRAVITY_LIMITS`; otherwise
+    :class:`RobotParameterError` names the parameter.
 
     >>> Robot().l3
     0.85
@@ -84,14 +97,13 @@ class Robot:
     gravity: tuple = field(default=DEFAULT_GRAVITY)
 
     def __post_init__(self):
-        for name in ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm5'):
-            _check_positive(name, getattr(self, name))
         if self.m4 is None:
             object.__setattr__(self, 'm4', self.m2)
         if self.m6 is None:
             object.__setattr__(self, 'm6', self.m3)
-        _check_positive('m4', self.m4)
-        _check_positive('m6', self.m6)
+        for name in ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm4',
+                     'm5', 'm6'):
+            _check_positive(name, getattr(self, name))
         if not self.alpha < math.pi / 2:
             raise RobotParameterError('alpha', 'must lie in (0, pi/2) rad')
         object.__setattr__(self, 'gravity', _check_gravity(self.gravity))
@@ -124,6 +136,10 @@ def _check_positive(name, value):
         raise RobotParameterError(name, f'must be finite, got {value!r}')
     if not value > 0.0:
         raise RobotParameterError(name, f'must be positive, got {value!r}')
+    low, high = LIMITS.get(name, (0.0, math.inf))
+    if not low <= value <= high:
+        raise RobotParameterError(name, (
+            f'must lie in [{low:g}, {high:g}] {UNITS[name]}, got {value!r}'))
 
 
 def _check_gravity(value):
@@ -140,4 +156,9 @@ def _check_gravity(value):
     if not all(math.isfinite(v) for v in vector):
         raise RobotParameterError(
             'gravity', f'must be finite, got {value!r}')
+    low, high = GRAVITY_LIMITS
+    if not all(low <= v <= high for v in vector):
+        raise RobotParameterError('gravity', (
+            f'each component must lie in [{low:g}, {high:g}] m/s^2, got '
+            f'{value!r}'))
     return tuple(float(v) for v in vector)

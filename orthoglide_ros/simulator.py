@@ -4,12 +4,11 @@ The simulator's logic without ROS: actuator forces in, measured state out.
 :class:`Simulator` wraps a :class:`simulation.Plant` (RK4 with the command
 held over each step, a zero-order hold: see :mod:`orthoglide_ros.simulation`)
 in the state machine of the ``simulator`` node, and keeps the counters its
-diagnostics report. Its parameters are one table, :data:`SIMULATOR_SPECS`,
-validated as a whole by :func:`simulator_settings_from_parameters`. The ROS
+status reports. Its parameters are one table, :data:`PARAMETERS`. The ROS
 node (``simulator_node``) only converts messages and runs the timer, so
 every rule below is testable without DDS.
 
-States (the README states them for users):
+States (``doc/simulator.md`` states them for users):
 
 - ``held``: brakes on, the platform at rest where it is; nothing is
   integrated and the simulation time stands still. The start state, and the
@@ -47,18 +46,47 @@ import math
 import time
 
 from orthoglide_ros import mechanics
-from orthoglide_ros.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
-from orthoglide_ros.params_file import ROBOT_PREFIX, robot_from_parameters
-from orthoglide_ros.settings import (check_joint_names, check_triple,
-                                     check_value, joint_names_spec,
-                                     ROBOT_SPECS, Spec)
+from orthoglide_ros.inputs import Rejected
+from orthoglide_ros.mechanics import DEFAULT_SINGULARITY_MARGIN, \
+    format_vector, ZERO
+from orthoglide_ros.parameters import joint_names_spec, ParameterError, \
+    Spec, Table, triple
 from orthoglide_ros.simulation import Plant
+from orthoglide_ros.status import ERROR, first, OK, Period, Status, WARN
 
 HELD, RUNNING, STOPPED = 'held', 'running', 'stopped'
 # Why a command was rejected: the keys of Simulator.rejected.
 COMMAND_REASONS = ('length', 'non_finite')
 
-NODE_SPECS = (
+
+def _initial_position_in_workspace(settings):
+    """Refuse an initial position outside its own set's workspace."""
+    try:
+        mechanics.solve(settings.robot, settings.initial_position, ZERO,
+                        ZERO, settings.singularity_margin)
+    except mechanics.WorkspaceError as error:
+        raise ParameterError('initial_position', (
+            f'{list(settings.initial_position)} m is outside the workspace '
+            f'of singularity_margin {settings.singularity_margin:g} '
+            f'({error.reason}): {error}')) from None
+
+
+def _publish_rate_within_rate(settings):
+    if settings.publish_rate_hz > settings.rate_hz:
+        raise ParameterError('publish_rate_hz', (
+            f'must not exceed rate_hz ({settings.publish_rate_hz} > '
+            f'{settings.rate_hz} Hz)'))
+
+
+def _timeout_of_a_step_at_least(settings):
+    if settings.command_timeout * settings.rate_hz < 1.0:
+        raise ParameterError('command_timeout', (
+            f'must last at least one step, 1/rate_hz = '
+            f'{1.0 / settings.rate_hz:g} s, got {settings.command_timeout} '
+            's'))
+
+
+PARAMETERS = Table('SimulatorSettings', (
     Spec('rate_hz', 'double', 1000.0,
          'simulation steps per second (Hz): each step integrates 1/rate_hz s '
          'of motion (RK4, command held over the step)', (1.0, 10000.0)),
@@ -69,7 +97,7 @@ NODE_SPECS = (
     Spec('initial_position', 'double_array', [0.0, 0.0, 0.0],
          'position of the platform centre G (m, base frame) at start and '
          'after ~/reset, at rest; must lie in the workspace (applies at the '
-         'next reset)', None),
+         'next reset)', check=triple),
     Spec('command_timeout', 'double', 0.1,
          'seconds (by arrival time) without a valid command after which a '
          'running simulation brakes: back to held, velocity zero; at least '
@@ -84,19 +112,9 @@ NODE_SPECS = (
     joint_names_spec('names of the prismatic joints of actuators A, B, C '
                      'in joint_states'),
     Spec('base_frame', 'string', 'base_link',
-         'frame_id of platform/pose (the paper\'s frame 0)', None),
-)
-
-SIMULATOR_SPECS = ROBOT_SPECS + NODE_SPECS
-
-# The parameters that describe the plant: they apply at the next reset.
-RESET_PARAMETERS = ('robot.*', 'initial_position', 'singularity_margin')
-
-SimulatorSettings = namedtuple('SimulatorSettings', (
-    'robot', 'rate_hz', 'publish_rate_hz', 'initial_position',
-    'command_timeout', 'force_limit',
-    'singularity_margin', 'joint_names', 'base_frame'))
-SimulatorSettings.__doc__ = """Everything the simulator reads, validated."""
+         'frame_id of platform/pose (the paper\'s frame 0)'),
+), rules=(_initial_position_in_workspace, _publish_rate_within_rate,
+          _timeout_of_a_step_at_least), robot=True)
 
 Tick = namedtuple('Tick', (
     'state', 'position', 'lambda_', 'lambdadot', 'effort', 'event'))
@@ -107,59 +125,6 @@ joint state; ``effort``: the forces applied over the step after clipping
 (N), zeros when no step was made; ``event``: None, ``'timeout'`` (this tick
 went back to held) or ``'stopped'`` (this tick's step was refused).
 """
-
-
-def simulator_settings_from_parameters(values):
-    """
-    Validate a complete set of parameter values into SimulatorSettings.
-
-    ``values``: ``{name: value}``; an absent name takes its default, a
-    robot parameter that is None too (``m4``, ``m6``: ``m2``, ``m3``).
-    Raises ValueError naming the parameter and the rule it breaks; the
-    initial position is checked against the robot and margin of the same
-    set.
-
-    >>> s = simulator_settings_from_parameters({'rate_hz': 500.0})
-    >>> s.rate_hz, s.initial_position, s.force_limit
-    (500.0, (0.0, 0.0, 0.0), 1000.0)
-    """
-    robot = robot_from_parameters(
-        {k: v for k, v in values.items()
-         if k.startswith(ROBOT_PREFIX) and v is not None})
-    node = {s.name: values.get(s.name, s.default) for s in NODE_SPECS}
-    for spec in NODE_SPECS:
-        check_value(spec, node[spec.name])
-    names = check_joint_names(node['joint_names'])
-    position = check_triple('initial_position', node['initial_position'],
-                            '(m)')
-    margin = node['singularity_margin']
-    try:
-        mechanics.solve(robot, position, ZERO, ZERO, margin)
-    except mechanics.WorkspaceError as error:
-        raise ValueError(
-            f'initial_position: {list(position)} m is outside the workspace '
-            f'of singularity_margin {margin:g} ({error.reason}): {error}'
-        ) from None
-    if node['publish_rate_hz'] > node['rate_hz']:
-        raise ValueError(
-            f'publish_rate_hz: must not exceed rate_hz '
-            f'({node["publish_rate_hz"]} > {node["rate_hz"]} Hz)')
-    if node['command_timeout'] * node['rate_hz'] < 1.0:
-        raise ValueError(
-            f'command_timeout: must last at least one step, 1/rate_hz = '
-            f'{1.0 / node["rate_hz"]:g} s, got {node["command_timeout"]} s')
-    return SimulatorSettings(
-        robot, node['rate_hz'], node['publish_rate_hz'], tuple(position),
-        node['command_timeout'],
-        node['force_limit'], margin, tuple(names), node['base_frame'])
-
-
-class Rejected(ValueError):
-    """A command refused: ``reason`` is one of COMMAND_REASONS."""
-
-    def __init__(self, reason, message):
-        super().__init__(message)
-        self.reason = reason
 
 
 class Simulator:
@@ -179,7 +144,7 @@ class Simulator:
     ``clipped`` (steps with at least one force clipped), ``timeouts``,
     ``step_ns_total`` / ``step_ns_max`` (CPU of :meth:`Plant.step`).
 
-    >>> sim = Simulator(simulator_settings_from_parameters({}))
+    >>> sim = Simulator(PARAMETERS.parse({}))
     >>> sim.state, sim.tick(0.0).effort
     ('held', (0.0, 0.0, 0.0))
     >>> sim.command([0.0, 0.0, 256.5315], 0.0)
@@ -188,7 +153,7 @@ class Simulator:
     ((0.0, 0.0, 256.5315), 0.001)
     """
 
-    def __init__(self, settings):
+    def __init__(self, settings, now=0.0):
         self.settings = settings
         self.received = 0
         self.rejected = dict.fromkeys(COMMAND_REASONS, 0)
@@ -198,8 +163,11 @@ class Simulator:
         self.timeouts = 0
         self.step_ns_total = 0
         self.step_ns_max = 0
+        self.published = 0
+        self.overruns = 0
         self.latest_arrival = None
         self._model = None
+        self._period = Period(now)
         self.reset()
 
     # Settings -------------------------------------------------------------
@@ -319,6 +287,60 @@ class Simulator:
         """Return the singularity distance of the current position."""
         return self._solution.singularity_distance
 
+    def status(self, now, internal_errors=0):
+        """
+        Return the :class:`Status` of the period ending at ``now``.
+
+        ERROR after an internal error or when stopped; WARN when held by
+        the command timeout or when commands were rejected in the period;
+        else OK (``held: waiting for a command`` or ``running``).
+        """
+        rejected = sum(self.rejected.values())
+        seconds, new = self._period.advance(
+            now, published=self.published, steps=self.steps,
+            step_ns=self.step_ns_total, rejected=rejected)
+        level, message = first(
+            internal_errors,
+            (self.state == STOPPED, ERROR, f'stopped: {self.stop_message}'),
+            (self.timed_out, WARN,
+             f'held: no valid command for command_timeout '
+             f'{self.settings.command_timeout:g} s, braked'),
+            (new['rejected'], WARN,
+             f'{new["rejected"]} command(s) rejected in the last period'),
+            (self.received == 0 or self.state != RUNNING, OK,
+             'held: waiting for a command'),
+            (True, OK, 'running'))
+        mean_us = new['step_ns'] / new['steps'] / 1e3 if new['steps'] \
+            else 0.0
+        plant = self.plant
+        values = [
+            ('state', self.state),
+            ('sim time (s)', plant.time),
+            ('steps', self.steps),
+            ('step rate (Hz)', new['steps'] / seconds),
+            ('outputs rate (Hz)', new['published'] / seconds),
+            ('step compute time mean (us)', mean_us),
+            ('step compute time max (us)', self.step_ns_max / 1e3),
+            ('commands received', self.received),
+            ('commands ignored (stopped)', self.ignored),
+            ('clipped steps', self.clipped),
+            ('timeouts', self.timeouts),
+            ('overruns (time dropped)', self.overruns),
+            ('position x (m)', plant.position[0]),
+            ('position y (m)', plant.position[1]),
+            ('position z (m)', plant.position[2]),
+            ('singularity distance', self.singularity_distance),
+            ('singularity margin', plant.margin),
+            ('pending reset', self.pending_reset),
+            ('rate_hz', self.settings.rate_hz),
+            ('publish_rate_hz', self.settings.publish_rate_hz),
+            ('internal errors', internal_errors),
+        ]
+        values += [(f'rejected {r}', self.rejected[r])
+                   for r in COMMAND_REASONS]
+        self.step_ns_max = 0
+        return Status(level, message, values)
+
     def _brake(self, state):
         """Stop the platform where it is (velocity zero) in ``state``."""
         self.state = state
@@ -330,9 +352,9 @@ class Simulator:
         position, velocity = self.plant.position, self.plant.velocity
         self.stop_reason = error.reason
         self.stop_message = (
-            f'simulation stopped at position {_fmt(position)} m, velocity '
-            f'{_fmt(velocity)} m/s, time {self.plant.time:.6g} s: the next '
-            f'step under force {_fmt(self._command)} N was refused '
+            f'simulation stopped at position {format_vector(position)} m, velocity '
+            f'{format_vector(velocity)} m/s, time {self.plant.time:.6g} s: the next '
+            f'step under force {format_vector(self._command)} N was refused '
             f'({error.reason}): {error}; call ~/reset to start again')
         self._brake(STOPPED)
 
@@ -350,7 +372,3 @@ def _plant_model(settings):
     """Return the settings that describe the plant (applied at reset)."""
     return (settings.robot, settings.initial_position,
             settings.singularity_margin)
-
-
-def _fmt(vector):
-    return '[' + ', '.join(f'{c:.6g}' for c in vector) + ']'

@@ -2,10 +2,11 @@
 The ``simulator`` ROS 2 node: actuator forces in, measured joint states out.
 
 A thin layer over :class:`orthoglide_ros.simulator.Simulator`: it declares
-the parameters of :data:`orthoglide_ros.simulator.SIMULATOR_SPECS`, reads
+the parameters of :data:`orthoglide_ros.simulator.PARAMETERS`, reads
 the commands, runs the step timer, publishes, serves ``~/reset`` and
-reports diagnostics. Run it with ``ros2 run orthoglide_ros simulator``; see
-the README for the topics, parameters and states.
+publishes the core's status on ``/diagnostics``. Run it with ``ros2 run
+orthoglide_ros simulator``; ``doc/simulator.md`` has the topics,
+parameters and states.
 
 Timing: real time on a fixed grid. The steps sit on a grid of period
 ``1 / rate_hz`` of the steady (monotonic) clock, and every step advances the
@@ -28,17 +29,14 @@ from rclpy.clock import Clock, ClockType
 from rclpy.duration import Duration
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
-from orthoglide_ros.node_runtime import (
-    default_qos, diagnostic_array, InputNode, run)
-from orthoglide_ros.simulator import (
-    COMMAND_REASONS, Rejected, RUNNING, Simulator, SIMULATOR_SPECS, STOPPED,
-    simulator_settings_from_parameters)
+from orthoglide_ros.inputs import Rejected
+from orthoglide_ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.simulator import PARAMETERS, Simulator, STOPPED
 
 # Steps one tick may make to catch up with the grid (10 ms at 1 kHz).
 MAX_CATCH_UP = 10
@@ -57,8 +55,8 @@ class SimulatorNode(InputNode):
     def __init__(self, **kwargs):
         super().__init__('simulator', **kwargs)
         # Raises ValueError on an invalid start-up set (run() reports it).
-        self._core = Simulator(self.declare_settings(
-            SIMULATOR_SPECS, simulator_settings_from_parameters))
+        self._core = Simulator(self.declare_settings(PARAMETERS),
+                               time.monotonic())
 
         overrides = QoSOverridingOptions.with_default_policies()
         self._pub_joints = self.create_publisher(
@@ -80,13 +78,8 @@ class SimulatorNode(InputNode):
         self._step_timer = None
         self._grid = None       # monotonic time of the next step due
         self._next_publish = None   # grid time of the next state published
-        self._overruns = 0
         self._set_timer()
-        self._published = 0
-        # Start of the diagnostics period: (time, published, steps, step
-        # ns, rejected) at that moment.
-        self._window = (time.monotonic(), 0, 0, 0, 0)
-        self.publish_diagnostics_with(self._diagnostics)
+        self.publish_status('Orthoglide simulator', self._core)
         # Last: the QoS override parameters declared above are no concern.
         self.apply_changes_with(self._configure)
         self.start_inputs()
@@ -182,7 +175,7 @@ class SimulatorNode(InputNode):
         if self._grid is None:
             self._grid = now - 0.5 * period
         elif now - self._grid > MAX_CATCH_UP * period:
-            self._overruns += 1
+            self._core.overruns += 1
             self._grid = now - (MAX_CATCH_UP - 0.5) * period
         tick = None
         while self._grid <= now:
@@ -231,68 +224,7 @@ class SimulatorNode(InputNode):
         p.x, p.y, p.z = tick.position
         self._pub_joints.publish(joints)
         self._pub_pose.publish(pose)
-        self._published += 1
-
-    # Diagnostics ----------------------------------------------------------
-    def _diagnostics(self):
-        """Return the DiagnosticArray of the period ending now."""
-        core = self._core
-        now = time.monotonic()
-        start, published, steps, step_ns, rejected_before = self._window
-        period = max(now - start, 1e-9)
-        count = core.steps - steps
-        mean_us = (core.step_ns_total - step_ns) / count / 1e3 \
-            if count else 0.0
-        rejected = sum(core.rejected.values())
-        self._window = (now, self._published, core.steps,
-                        core.step_ns_total, rejected)
-        if self.internal_errors:
-            level = DiagnosticStatus.ERROR
-            text = f'{self.internal_errors} internal error(s): see the log'
-        elif core.state == STOPPED:
-            level = DiagnosticStatus.ERROR
-            text = f'stopped: {core.stop_message}'
-        elif core.timed_out:
-            level = DiagnosticStatus.WARN
-            text = (f'held: no valid command for command_timeout '
-                    f'{core.settings.command_timeout:g} s, braked')
-        elif rejected > rejected_before:
-            level = DiagnosticStatus.WARN
-            text = (f'{rejected - rejected_before} command(s) rejected in '
-                    'the last period')
-        elif core.received == 0 or core.state != RUNNING:
-            level, text = DiagnosticStatus.OK, 'held: waiting for a command'
-        else:
-            level, text = DiagnosticStatus.OK, 'running'
-        plant = core.plant
-        values = [
-            ('state', core.state),
-            ('sim time (s)', plant.time),
-            ('steps', core.steps),
-            ('step rate (Hz)', count / period),
-            ('outputs rate (Hz)', (self._published - published) / period),
-            ('step compute time mean (us)', mean_us),
-            ('step compute time max (us)', core.step_ns_max / 1e3),
-            ('commands received', core.received),
-            ('commands ignored (stopped)', core.ignored),
-            ('clipped steps', core.clipped),
-            ('timeouts', core.timeouts),
-            ('overruns (time dropped)', self._overruns),
-            ('position x (m)', plant.position[0]),
-            ('position y (m)', plant.position[1]),
-            ('position z (m)', plant.position[2]),
-            ('singularity distance', core.singularity_distance),
-            ('singularity margin', plant.margin),
-            ('pending reset', core.pending_reset),
-            ('rate_hz', core.settings.rate_hz),
-            ('publish_rate_hz', core.settings.publish_rate_hz),
-            ('internal errors', self.internal_errors),
-        ]
-        values += [(f'rejected {r}', core.rejected[r])
-                   for r in COMMAND_REASONS]
-        core.step_ns_max = 0
-        return diagnostic_array(self, 'Orthoglide simulator', level, text,
-                                values)
+        self._core.published += 1
 
 
 def main(args=None):

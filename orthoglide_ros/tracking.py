@@ -14,7 +14,7 @@ and demos, not a replacement for ros2_control. The ROS node
 (``tracking_controller_node``) only converts messages to the plain values
 used here, so every rule below is testable without DDS.
 
-Rules (the README states them for users):
+Rules (``doc/tracking_controller.md`` states them for users):
 
 - Joint states are matched by name, in any order; extra joints are ignored.
   A message is rejected, counted by input and reason and changes nothing
@@ -37,9 +37,10 @@ Rules (the README states them for users):
 from collections import namedtuple
 import math
 
-from orthoglide_ros.settings import (check_joint_names, check_triple,
-                                     check_value, joint_names_spec,
-                                     Spec)
+from orthoglide_ros.inputs import Rejected
+from orthoglide_ros.parameters import joint_names_spec, \
+    nonnegative_triple, Spec, Table
+from orthoglide_ros.status import first, OK, Period, Status, WARN
 
 FORCE_LIMIT_MAX = 1.0e6     # N: the largest force_limit accepted
 INPUTS = ('desired', 'measured')
@@ -47,16 +48,16 @@ REASONS = ('missing_joint', 'malformed', 'missing_position',
            'missing_velocity', 'missing_effort', 'non_finite', 'overflow')
 SKIPS = ('no_measurement', 'stale_measurement')
 
-CONTROLLER_SPECS = (
+PARAMETERS = Table('ControllerSettings', (
     Spec('kp', 'double_array', [20000.0, 20000.0, 20000.0],
          'proportional gains of actuators A, B, C in joint_names order '
-         '(N/m): three finite values >= 0', None),
+         '(N/m): three finite values >= 0', check=nonnegative_triple),
     Spec('kd', 'double_array', [1200.0, 1200.0, 1200.0],
          'derivative gains of actuators A, B, C in joint_names order '
-         '(N s/m): three finite values >= 0', None),
+         '(N s/m): three finite values >= 0', check=nonnegative_triple),
     Spec('feedforward', 'bool', True,
          'add the desired effort (feedforward force, N) to the PD output; '
-         'false: PD alone, desired efforts not needed', None),
+         'false: PD alone, desired efforts not needed'),
     Spec('force_limit', 'double', 1000.0,
          'largest force magnitude commanded per actuator (N); larger ones '
          'are clipped to it and counted', (0.001, FORCE_LIMIT_MAX)),
@@ -67,14 +68,7 @@ CONTROLLER_SPECS = (
          'seconds (by arrival time) after which a measurement is too old '
          'to compute a command with: nothing is published until a fresh '
          'one arrives', (0.0001, 3600.0)),
-)
-
-ControllerSettings = namedtuple('ControllerSettings', (
-    'kp', 'kd', 'feedforward', 'force_limit', 'joint_names',
-    'measurement_timeout'))
-ControllerSettings.__doc__ = """Everything the controller reads, swapped as
-one: ``kp`` (N/m), ``kd`` (N s/m) 3-tuples, ``force_limit`` (N),
-``joint_names`` 3-tuple, ``measurement_timeout`` (s)."""
+))
 
 JointValues = namedtuple('JointValues', 'position velocity effort')
 JointValues.__doc__ = """One joint state in joint_names order: 3-tuples of
@@ -84,46 +78,6 @@ Command = namedtuple('Command', 'force error clipped')
 Command.__doc__ = """One command: ``force`` the 3 forces (N) after
 clipping, ``error`` lambda_d - lambda (m), ``clipped`` how many of the three
 were clipped."""
-
-
-class Rejected(ValueError):
-    """A joint state refused by a rule; ``reason`` is one of REASONS."""
-
-    def __init__(self, reason, message):
-        super().__init__(message)
-        self.reason = reason
-
-
-def default_controller_parameters():
-    """Return ``{name: default}`` of every controller parameter."""
-    return {s.name: s.default for s in CONTROLLER_SPECS}
-
-
-def controller_settings_from_parameters(values):
-    """
-    Validate a complete set of parameter values into ControllerSettings.
-
-    ``values``: ``{name: value}``; an absent name takes its default. Raises
-    ValueError naming the parameter and the rule it breaks.
-    """
-    v = {s.name: values.get(s.name, s.default) for s in CONTROLLER_SPECS}
-    for spec in CONTROLLER_SPECS:
-        if spec.type == 'double_array':
-            v[spec.name] = _gains(spec.name, v[spec.name])
-        else:
-            check_value(spec, v[spec.name])
-    names = check_joint_names(v['joint_names'])
-    return ControllerSettings(v['kp'], v['kd'], v['feedforward'],
-                              v['force_limit'], names,
-                              v['measurement_timeout'])
-
-
-def _gains(name, value):
-    gains = check_triple(name, value, '(A, B, C)', '[20000.0, 20000.0, '
-                         '20000.0]')
-    if not all(g >= 0.0 for g in gains):
-        raise ValueError(f'{name}: must be >= 0, got {list(gains)!r}')
-    return gains
 
 
 def read_joint_state(joint_names, names, position, velocity, effort,
@@ -211,7 +165,7 @@ class Tracking:
     (skipped); both inputs raise :class:`Rejected`, already counted.
     """
 
-    def __init__(self, settings):
+    def __init__(self, settings, now=0.0):
         self.settings = settings
         self.measurement = None
         self.measurement_arrival = None
@@ -221,6 +175,7 @@ class Tracking:
         self.skipped = dict.fromkeys(SKIPS, 0)
         self.commands = 0
         self.clipped = 0
+        self._period = Period(now)
 
     def configure(self, settings):
         """
@@ -273,6 +228,56 @@ class Tracking:
         return (self.measurement_arrival is not None
                 and now - self.measurement_arrival
                 <= self.settings.measurement_timeout)
+
+    def status(self, now, internal_errors=0):
+        """
+        Return the :class:`Status` of the period ending at ``now``.
+
+        ERROR after an internal error; WARN when desired states were
+        skipped (no fresh measurement) or joint states rejected in the
+        period; else OK (``waiting for desired states`` until one came).
+        """
+        skipped = sum(self.skipped.values())
+        rejected = sum(self.rejected.values())
+        seconds, new = self._period.advance(
+            now, commands=self.commands, skipped=skipped, rejected=rejected)
+        age = None if self.measurement_arrival is None \
+            else now - self.measurement_arrival
+        what = 'no measurement yet' if age is None \
+            else f'newest measurement {age:.3f} s old'
+        level, message = first(
+            internal_errors,
+            (new['skipped'], WARN,
+             f'{new["skipped"]} desired state(s) without a fresh '
+             f'measurement ({what}): nothing commanded'),
+            (new['rejected'], WARN,
+             f'{new["rejected"]} joint state(s) rejected in the last '
+             'period'),
+            (self.received['desired'] == 0, OK,
+             'waiting for desired states'))
+        settings = self.settings
+        errors = self.latest.error if self.latest is not None \
+            else (math.nan,) * 3
+        values = [
+            ('command rate (Hz)', new['commands'] / seconds),
+            ('commands published', self.commands),
+            ('clipped forces', self.clipped),
+            ('time since last measurement (s)',
+             age if age is not None else math.nan),
+            ('measurement fresh', self.fresh(now)),
+        ]
+        values += [(f'tracking error {name} (m)', e)
+                   for name, e in zip(settings.joint_names, errors)]
+        values += [(f'skipped {s}', self.skipped[s]) for s in SKIPS]
+        values += [(f'received {i}', self.received[i]) for i in INPUTS]
+        values += [(f'rejected {i} {r}', self.rejected[i, r])
+                   for i in INPUTS for r in REASONS]
+        values += [
+            ('feedforward', settings.feedforward),
+            ('force_limit (N)', settings.force_limit),
+            ('internal errors', internal_errors),
+        ]
+        return Status(level, message, values)
 
     def _read(self, source, names, position, velocity, effort, need_effort):
         try:

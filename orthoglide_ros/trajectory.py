@@ -17,8 +17,8 @@ def paper_sample(t, target=PAPER_TARGET, omega=PAPER_OMEGA):
     Returns three 3-tuples. ``omega`` (rad/s) scales the speed: the paper's
     is pi/3; a larger one gives the fast trajectories the tests use.
 
-    >>> paper_sample(0.0)[0]
-    (0.0, 0.0, 0.0)
+    >>> paper_sample(0.0)[0] == (0.0, 0.0, 0.0)
+    True
     """
     c = 1.0 - math.cos(omega * t)
     s = omega * math.sin(omega * t)

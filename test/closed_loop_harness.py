@@ -22,15 +22,13 @@ not only the model. The platform position comes from the measured
 Rates. The control loop (setpoints, feedforward, commands) runs at
 ``loop_rate`` and the plant at ``plant_rate`` (default 250 Hz and 1 kHz):
 four Python nodes and the recorder at 1 kHz would need more than this
-machine's two cores (see the README).
+machine's two cores (see doc/measurements.md).
 
 Import it with the test directory on ``sys.path``.
 """
 
 from collections import namedtuple
 import math
-import os
-import sys
 import time
 
 import numpy as np
@@ -44,13 +42,12 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (node_executable, start_node_process,  # noqa: E402
+from node_harness import (node_executable, start_node_process,
                           stop_process)
 
-from orthoglide_ros import mechanics, trajectory  # noqa: E402
-from orthoglide_ros.robot import Robot  # noqa: E402
-from orthoglide_ros.tracking import CONTROLLER_SPECS  # noqa: E402
+from orthoglide_ros import mechanics, trajectory
+from orthoglide_ros.robot import Robot
+from orthoglide_ros.tracking import PARAMETERS
 
 LOOP_RATE = 250.0       # Hz: setpoints, feedforward and commands
 PLANT_RATE = 500.0      # Hz: the simulator's steps
@@ -62,7 +59,7 @@ TRAJECTORIES = {
               trajectory.PAPER_DURATION),
     'fast': ((0.04, 0.08, -0.16), 2.0 * math.pi, 2.0),
 }
-DEFAULT_GAINS = {s.name: s.default for s in CONTROLLER_SPECS
+DEFAULT_GAINS = {s.name: s.default for s in PARAMETERS.specs
                  if s.name in ('kp', 'kd')}
 MISMATCH = 1.2          # the mismatched plant's platform: 20 % heavier
 START_TIMEOUT = 20.0    # s for the nodes to start and match

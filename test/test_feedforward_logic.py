@@ -13,13 +13,17 @@ import pytest
 
 from orthoglide_ros import mechanics
 from orthoglide_ros.feedforward import (Feedforward, INPUTS, MAX_PENDING,
-                                        ORIENTATION_TOLERANCE, REASONS,
-                                        Rejected)
+                                        ORIENTATION_TOLERANCE, PARAMETERS,
+                                        REASONS)
+from orthoglide_ros.inputs import Rejected
+from orthoglide_ros.parameters import ROBOT_SPECS
 from orthoglide_ros.robot import Robot
-from orthoglide_ros.settings import (default_parameters, NODE_SPECS,
-                                     ROBOT_SPECS, Settings,
-                                     settings_from_parameters, SPECS)
 from orthoglide_ros.trajectory import paper_sample
+
+default_parameters, settings_from_parameters = (PARAMETERS.defaults,
+                                                PARAMETERS.parse)
+SPECS, NODE_SPECS, Settings = (PARAMETERS.specs, PARAMETERS.own_specs,
+                               PARAMETERS.Settings)
 
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
 ZERO = (0.0, 0.0, 0.0)

@@ -11,8 +11,6 @@ time except the timers (rate_hz, diagnostics at 1 Hz).
 
 import itertools
 import math
-import os
-import sys
 import time
 
 import pytest
@@ -22,17 +20,17 @@ from rclpy.qos import ReliabilityPolicy
 from diagnostic_msgs.msg import DiagnosticStatus
 
 from orthoglide_ros import mechanics
-from orthoglide_ros.feedforward import REASONS
+from orthoglide_ros.feedforward import PARAMETERS, REASONS
 from orthoglide_ros.feedforward_node import FeedforwardNode
 from orthoglide_ros.robot import Robot
-from orthoglide_ros.settings import SPECS
 from orthoglide_ros.trajectory import paper_sample, paper_times
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (  # noqa: E402
+from node_harness import (
     assert_vector, call, close, diagnostic_values, header_stamp, node_graphs,
     parameter_client, Probe, spin_for, spin_until, stamp_of,
     wait_diagnostics as harness_wait_diagnostics)
+
+pytestmark = pytest.mark.ros  # DDS and node processes
 WAIT = 10.0     # s: generous, the machine is shared
 JOINT_NAMES = ['slider_a', 'slider_b', 'slider_c']
 ZERO = (0.0, 0.0, 0.0)
@@ -485,12 +483,12 @@ def test_valid_changes_apply_to_next_setpoint(graph):
 
 
 def test_declared_parameters_and_qos_override(graph):
-    """Every SPECS parameter is declared; a QoS override is honoured."""
+    """Every PARAMETERS row is declared; a QoS override is honoured."""
     topic = '/setpoint/trajectory'
     g = graph({f'qos_overrides.{topic}.subscription.reliability':
                'best_effort', 'robot.m4': 0.25})
     node = g.node
-    for spec in SPECS:
+    for spec in PARAMETERS.specs:
         assert node.has_parameter(spec.name), spec.name
         descriptor = node.describe_parameter(spec.name)
         assert descriptor.description == spec.description

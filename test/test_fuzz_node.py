@@ -17,7 +17,7 @@ Properties: every callback returns None (nothing escapes), the node counts
 no internal error, every output the probe receives is finite and equals
 ``mechanics.solve`` for its setpoint with the node's robot and margin, and
 the node's ``received`` and ``rejected`` counters equal those of a small
-model of the README's rules (so every input is an output or counted in
+model of doc/feedforward.md's rules (so every input is an output or counted in
 exactly one rejection reason). Each example starts from no partial
 setpoint; at its end the partials left are dropped (``expire`` with a
 time far ahead: ``pairing_timeout`` is long here, so real time never
@@ -26,8 +26,6 @@ expires one) and counted ``unpaired`` by node and model alike.
 
 from collections import namedtuple
 import math
-import os
-import sys
 import time
 from types import SimpleNamespace
 
@@ -46,9 +44,10 @@ from orthoglide_ros import cdr, mechanics
 from orthoglide_ros.feedforward import INPUTS, ORIENTATION_TOLERANCE
 from orthoglide_ros.feedforward_node import FeedforwardNode, read_raw
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from fuzz_strategies import any_float, inside, states  # noqa: E402
-from node_harness import header_stamp, Probe, spin_until  # noqa: E402
+from fuzz_strategies import any_float, inside, states
+from node_harness import header_stamp, Probe, spin_until
+
+pytestmark = pytest.mark.ros  # DDS and node processes
 
 WAIT = 10.0     # s for outputs to arrive: generous, the machine is shared
 BASE_FRAME = 'base_link'
@@ -88,7 +87,7 @@ def rig(ros_context):
 # The model ---------------------------------------------------------------
 class Model:
     """
-    The README's rules, written again for the test (no timers).
+    The rules of doc/feedforward.md, written again for the test (no timers).
 
     ``take`` returns ``('output', stamp, (p, v, a))``, ``('rejected',
     reason)`` or None, and keeps counters like the node's.
@@ -374,7 +373,7 @@ class Run:
         core = node._core
         self.model = Model(core.received, core.rejected, core.settings)
         self.expected = []      # (stamp or Window, Solution), in order
-        self.published = node._published
+        self.published = node._core.published
 
     def stamp(self, spec):
         if spec[0] == 'fresh':
@@ -398,8 +397,8 @@ class Run:
                 fields[2] is not None and fields[0] == (0, 0):
             fields, window = self.now_stamp(fields, before, after)
         outcome = self.model.take(source, fields)
-        published = node._published - self.published
-        self.published = node._published
+        published = node._core.published - self.published
+        self.published = node._core.published
         if outcome is not None and outcome[0] == 'output':
             assert published == 1, (source, fields, outcome)
             stamp = window if outcome[1] is NOW else outcome[1]
@@ -555,7 +554,7 @@ def test_fuzzed_setpoints(rig):
     assert rig.node.internal_errors == 0
     assert totals['outputs'] > 0
     print(f'fuzzed node: {sum(rig.node._core.received.values())} inputs, '
-          f'{rig.node._published} outputs, rejected '
+          f'{rig.node._core.published} outputs, rejected '
           f'{dict(rig.node._core.rejected)}')
 
 

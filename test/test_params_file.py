@@ -13,8 +13,9 @@ import math
 import os
 import textwrap
 
+from orthoglide_ros.parameters import robot_from_parameters
 from orthoglide_ros.params_file import (
-    load_parameters, load_robot, ParametersFileError, robot_from_parameters)
+    load_parameters, load_robot, ParametersFileError)
 from orthoglide_ros.robot import Robot, RobotParameterError
 import pytest
 
@@ -173,13 +174,10 @@ def test_shipped_config_sections_hold_the_defaults(node):
     simulator's robot is absent from its section (the paper's by default).
     """
     if node == 'simulator':
-        from orthoglide_ros.simulator import (
-            SIMULATOR_SPECS as specs, simulator_settings_from_parameters as
-            parse)
+        from orthoglide_ros.simulator import PARAMETERS
     else:
-        from orthoglide_ros.tracking import (
-            CONTROLLER_SPECS as specs, controller_settings_from_parameters
-            as parse)
+        from orthoglide_ros.tracking import PARAMETERS
+    specs, parse = PARAMETERS.specs, PARAMETERS.parse
     values = load_parameters(CONFIG, node)
     assert values and set(values) <= {s.name for s in specs}
     defaults = {s.name: s.default for s in specs if s.default is not None}

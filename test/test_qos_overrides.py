@@ -17,7 +17,9 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from orthoglide_ros.feedforward_node import FeedforwardNode
-from orthoglide_ros.setpoint_publisher import SetpointPublisher
+from orthoglide_ros.setpoint_publisher_node import SetpointPublisher
+
+pytestmark = pytest.mark.ros  # DDS and node processes
 
 BEST_EFFORT, RELIABLE = ReliabilityPolicy.BEST_EFFORT, \
     ReliabilityPolicy.RELIABLE

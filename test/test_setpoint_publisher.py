@@ -6,10 +6,7 @@ every received value must equal :func:`trajectory.paper_sample` at the time
 recovered from the stamps, whatever the timer's jitter.
 """
 
-import os
 from pathlib import Path
-import signal
-import subprocess
 import sys
 import time
 
@@ -28,7 +25,12 @@ from rclpy.qos import (HistoryPolicy, QoSProfile,  # noqa: E402
                        ReliabilityPolicy)
 from trajectory_msgs.msg import MultiDOFJointTrajectory  # noqa: E402
 
-from orthoglide_ros.setpoint_publisher import SetpointPublisher  # noqa: E402
+from orthoglide_ros.setpoint_publisher_node import (  # noqa: E402
+    SetpointPublisher)
+from node_harness import (start_node_process, stop_process,  # noqa: E402
+                          wait_exit)
+
+pytestmark = pytest.mark.ros  # DDS and node processes
 
 EXECUTABLE = Path(sys.executable).parent / 'setpoint_publisher'
 QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
@@ -141,26 +143,19 @@ def test_invalid_input_parameter_is_refused(ros_context):
 
 
 def _run(*parameters):
-    args = [str(EXECUTABLE), '--ros-args']
+    args = ['--ros-args']
     for p in parameters:
         args += ['-p', p]
-    return subprocess.Popen(args, stdin=subprocess.DEVNULL,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                            text=True, env=dict(os.environ))
+    return start_node_process(args, command=[str(EXECUTABLE)])
 
 
 def _finish(process, interrupt_after=None):
     """Return (exit code, output); SIGINT first if ``interrupt_after`` s."""
-    try:
-        if interrupt_after is not None:
-            time.sleep(interrupt_after)
-            process.send_signal(signal.SIGINT)
-        output, _ = process.communicate(timeout=PROCESS_TIMEOUT)
-        return process.returncode, output
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.communicate()
+    if interrupt_after is None:
+        wait_exit(process, PROCESS_TIMEOUT)
+    else:
+        time.sleep(interrupt_after)
+    return stop_process(process)
 
 
 def test_process_exits_0_after_one_pass():
@@ -188,9 +183,7 @@ def test_process_exits_0_on_ctrl_c_while_looping(ros_context):
         assert stamps, 'the looping publisher never published'
         code, output = _finish(process, interrupt_after=0.0)
     finally:
-        if process.poll() is None:
-            process.kill()
-            process.communicate()
+        stop_process(process)
         executor.shutdown()
         listener.destroy_node()
     assert code == 0, output

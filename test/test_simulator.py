@@ -13,11 +13,14 @@ import pytest
 
 from orthoglide_ros import mechanics, simulator
 from orthoglide_ros.robot import Robot
-from orthoglide_ros.settings import ROBOT_SPECS
+from orthoglide_ros.inputs import Rejected
+from orthoglide_ros.parameters import ROBOT_SPECS
 from orthoglide_ros.simulation import rk4_step
 from orthoglide_ros.simulator import (
-    COMMAND_REASONS, HELD, Rejected, RUNNING, Simulator, SIMULATOR_SPECS,
-    simulator_settings_from_parameters, STOPPED)
+    COMMAND_REASONS, HELD, PARAMETERS, RUNNING, Simulator, STOPPED)
+
+SIMULATOR_SPECS = PARAMETERS.specs
+simulator_settings_from_parameters = PARAMETERS.parse
 
 ZERO = (0.0, 0.0, 0.0)
 NAN = float('nan')

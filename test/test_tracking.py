@@ -14,11 +14,14 @@ import pytest
 
 from orthoglide_ros import mechanics
 from orthoglide_ros.robot import Robot
+from orthoglide_ros.inputs import Rejected
 from orthoglide_ros.tracking import (
-    Command, control_law, CONTROLLER_SPECS,
-    controller_settings_from_parameters, default_controller_parameters,
-    FORCE_LIMIT_MAX, INPUTS, JointValues, read_joint_state, REASONS,
-    Rejected, SKIPS, Tracking)
+    Command, control_law, FORCE_LIMIT_MAX, INPUTS, JointValues, PARAMETERS,
+    read_joint_state, REASONS, SKIPS, Tracking)
+
+CONTROLLER_SPECS = PARAMETERS.specs
+controller_settings_from_parameters = PARAMETERS.parse
+default_controller_parameters = PARAMETERS.defaults
 
 NAMES = ('slider_a', 'slider_b', 'slider_c')
 NAN = float('nan')
@@ -94,7 +97,7 @@ def test_actuator_mass_at_home_and_damping_ratio():
 
     Mass matrix column j = f(lambdaddot = e_j) - f(0) at home, at rest,
     from mechanics.solve (platform acceleration J_lambda^-1 e_j). The
-    README quotes these figures.
+    doc/measurements.md quotes these figures.
     """
     robot = Robot()
     home = (0.0, 0.0, 0.0)

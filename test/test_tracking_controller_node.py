@@ -12,7 +12,6 @@ answers, exits 0 on SIGINT and 2 on an invalid parameter.
 
 import math
 import os
-import sys
 import time
 
 import pytest
@@ -24,15 +23,16 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from orthoglide_ros.tracking import CONTROLLER_SPECS, INPUTS, REASONS
+from orthoglide_ros.tracking import INPUTS, PARAMETERS, REASONS
 from orthoglide_ros.tracking_controller_node import TrackingControllerNode
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (  # noqa: E402
+from node_harness import (
     assert_clean_exit, call, diagnostic_values, node_executable, node_graphs,
     parameter_client, PROBE_QOS, run_to_exit, spin_for, spin_until,
     start_node_process, timed_stop,
     wait_diagnostics as harness_wait_diagnostics)
+
+pytestmark = pytest.mark.ros  # DDS and node processes
 
 CONFIG = os.path.join(os.path.dirname(os.path.abspath(__file__)),
                       os.pardir, 'config', 'orthoglide.yaml')
@@ -388,9 +388,9 @@ def test_valid_change_applied_to_next_command(graph):
 
 
 def test_declared_parameters(graph):
-    """Every CONTROLLER_SPECS parameter is declared with its description."""
+    """Every PARAMETERS row is declared with its description."""
     node = graph().node
-    for spec in CONTROLLER_SPECS:
+    for spec in PARAMETERS.specs:
         assert node.has_parameter(spec.name), spec.name
         descriptor = node.describe_parameter(spec.name)
         assert descriptor.description == spec.description

@@ -1,0 +1,243 @@
+"""
+Node parameters: one mechanism for every node of the package, without ROS.
+
+Each node's core module owns one :class:`Table`: its :class:`Spec` rows
+(name, type, default, description, range), the ``robot.*`` rows of
+:data:`ROBOT_SPECS` when the node models the robot, and the rules that
+relate several parameters. Everything else follows from the table:
+
+- the node declares its ROS parameters from ``table.specs``
+  (``node_runtime.declare_specs``: type, default, range, description);
+- :meth:`Table.parse` validates a complete ``{name: value}`` set (at start
+  and for every run-time change) into one immutable settings tuple, or
+  raises :class:`ParameterError` naming the parameter and the rule;
+- the tools read the ``robot.*`` keys of a parameters file with the same
+  rows (:func:`robot_from_parameters`), and ``doc/`` documents each node's
+  table (a test checks that every row is on the node's page).
+
+Types are rcl's: a ``double`` must be a float (``0.0``, not ``0``), an
+array must not mix integers and floats, a bool is not a number.
+
+>>> table = Table('Demo', (Spec('rate_hz', 'double', 10.0, 'rate (Hz)',
+...                             (0.0, 100.0)),))
+>>> table.parse({}).rate_hz
+10.0
+>>> try:
+...     table.parse({'rate_hz': 1})
+... except ParameterError as error:
+...     print(error)
+rate_hz: must be a double, got 1
+"""
+
+from collections import namedtuple
+import math
+
+from orthoglide_ros.robot import DESCRIPTIONS, LIMITS, Robot, \
+    RobotParameterError, UNITS
+
+ROBOT_PREFIX = 'robot.'
+JOINT_NAMES = ('slider_a', 'slider_b', 'slider_c')
+TYPES = ('double', 'double_array', 'integer', 'string', 'string_array',
+         'bool')
+_SCALAR = {'double': float, 'integer': int, 'string': str, 'bool': bool}
+
+
+class ParameterError(ValueError):
+    """A parameter value breaks a rule; the message names both."""
+
+    def __init__(self, name, rule):
+        super().__init__(f'{name}: {rule}')
+        self.name = name
+        self.rule = rule
+
+
+class Spec(namedtuple('Spec', 'name type default description range check '
+                      'read_only')):
+    """
+    One parameter.
+
+    ``type``: one of TYPES. ``default``: None means declared without a
+    value (the rules then supply one). ``range``: an inclusive ``(low,
+    high)`` for a double or an integer (declared in the ROS descriptor
+    too), or None. ``check``: None or a function taking the typed value
+    and returning the value the settings hold, raising ValueError with the
+    rule (the name is added). ``read_only``: fixed once the node runs.
+    """
+
+    __slots__ = ()
+
+    def __new__(cls, name, type, default, description, range=None,
+                check=None, read_only=False):
+        """Make a row; see the class docstring."""
+        if type not in TYPES:
+            raise ValueError(f'{name}: unknown parameter type {type!r}')
+        if range is not None and type not in ('double', 'integer'):
+            raise ValueError(f'{name}: a range needs a double or an '
+                             'integer (use a check for arrays)')
+        return super().__new__(cls, name, type, default, description, range,
+                               check, read_only)
+
+    def validate(self, value):
+        """Return the settings value of ``value``; ParameterError if bad."""
+        try:
+            value = _typed(self.type, value)
+            if self.range is not None:
+                _in_range(self.range, value)
+            return value if self.check is None else self.check(value)
+        except ParameterError:
+            raise
+        except ValueError as error:
+            raise ParameterError(self.name, str(error)) from None
+
+
+class Table:
+    """
+    One node's parameters: rows, settings tuple, rules across rows.
+
+    ``name``: the settings tuple's type name. ``specs``: the node's own
+    rows; with ``robot`` the :data:`ROBOT_SPECS` come first and the
+    settings' first field ``robot`` holds the validated :class:`Robot`.
+    ``rules``: functions ``rule(settings)`` that raise
+    :class:`ParameterError` when several values together break a rule.
+    """
+
+    def __init__(self, name, specs, rules=(), robot=False):
+        """Build the settings type from the rows (see the class docstring)."""
+        self.own_specs = tuple(specs)
+        self.robot = robot
+        self.specs = (ROBOT_SPECS if robot else ()) + self.own_specs
+        self.rules = tuple(rules)
+        names = [s.name for s in self.specs]
+        if len(names) != len(set(names)):
+            raise ValueError(f'{name}: a parameter name repeats')
+        self.Settings = namedtuple(name, (('robot',) if robot else ())
+                                   + tuple(s.name for s in self.own_specs))
+
+    def defaults(self):
+        """Return ``{name: default}`` of every row that has a default."""
+        return {s.name: s.default for s in self.specs
+                if s.default is not None}
+
+    def parse(self, values):
+        """
+        Validate a complete ``{name: value}`` set into the settings tuple.
+
+        An absent name takes its default (a ``robot.*`` name that is None
+        too: ``m4`` and ``m6`` then follow ``m2`` and ``m3``); names of
+        other tables are ignored. Raises :class:`ParameterError` (or, for ``robot.*``,
+        :class:`RobotParameterError`) naming the first bad parameter.
+        """
+        fields = {}
+        if self.robot:
+            fields['robot'] = robot_from_parameters(
+                {k: v for k, v in values.items()
+                 if k.startswith(ROBOT_PREFIX) and v is not None})
+        for spec in self.own_specs:
+            fields[spec.name] = spec.validate(
+                values.get(spec.name, spec.default))
+        settings = self.Settings(**fields)
+        for rule in self.rules:
+            rule(settings)
+        return settings
+
+
+def robot_from_parameters(params):
+    """
+    Build a :class:`Robot` from the ``robot.*`` entries of ``params``.
+
+    Other entries are ignored. An unknown ``robot.*`` name, a value of the
+    wrong type (by rcl's rules) or a value the :class:`Robot` refuses raises
+    :class:`RobotParameterError` naming the parameter.
+    """
+    values = {}
+    for key, value in params.items():
+        if not key.startswith(ROBOT_PREFIX):
+            continue
+        name = key[len(ROBOT_PREFIX):]
+        spec = _ROBOT_BY_NAME.get(name)
+        if spec is None:
+            raise RobotParameterError(
+                name, 'unknown parameter; known: '
+                + ', '.join(Robot.parameter_names()))
+        try:
+            values[name] = _typed(spec.type, value)
+        except ValueError as error:
+            raise RobotParameterError(name, str(error)) from None
+    return Robot(**values)
+
+
+# Checks used by several tables ------------------------------------------------
+def joint_names(value):
+    """Return three distinct non-empty names as a tuple (a Spec check)."""
+    names = tuple(value)
+    if len(names) != 3 or len(set(names)) != 3 or not all(names):
+        raise ValueError(f'must be three distinct non-empty names, got '
+                         f'{list(names)!r}')
+    return names
+
+
+def triple(value):
+    """Return a double array of exactly three values as a tuple."""
+    if len(value) != 3:
+        raise ValueError(f'must be an array of three doubles, such as '
+                         f'[0.0, 0.0, 0.0], got {shorten(list(value))}')
+    return tuple(value)
+
+
+def nonnegative_triple(value):
+    """Return three doubles >= 0 as a tuple (gains, limits)."""
+    value = triple(value)
+    if not all(v >= 0.0 for v in value):
+        raise ValueError(f'must be >= 0, got {list(value)!r}')
+    return value
+
+
+def joint_names_spec(description):
+    """Return the ``joint_names`` row every node shares (its own text)."""
+    return Spec('joint_names', 'string_array', list(JOINT_NAMES),
+                description + ' (three distinct, non-empty)',
+                check=joint_names)
+
+
+def shorten(value, limit=80):
+    """Return ``repr(value)``, cut to ``limit`` characters for a message."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit - 5] + '...' + \
+        text[-2:]
+
+
+def _typed(kind, value):
+    """Check ``value`` against rcl's typing of ``kind``; return it."""
+    scalar = _SCALAR.get(kind)
+    if scalar is not None:
+        if type(value) is not scalar:
+            raise ValueError(f'must be a{"n" if kind == "integer" else ""} '
+                             f'{kind}, got {shorten(value)}')
+        return value
+    element = float if kind == 'double_array' else str
+    if not (isinstance(value, (list, tuple))
+            and all(type(v) is element for v in value)):
+        what = ('doubles such as [0.0, 0.0, -9.81] (rcl refuses integers '
+                'or mixed arrays)' if element is float else 'strings')
+        raise ValueError(f'must be an array of {what}, got '
+                         f'{shorten(value)}')
+    if element is float and not all(math.isfinite(v) for v in value):
+        raise ValueError(f'must be finite, got {shorten(list(value))}')
+    return tuple(value)
+
+
+def _in_range(bounds, value):
+    low, high = bounds
+    if not (math.isfinite(value) and low <= value <= high):
+        raise ValueError(f'must lie in [{low:g}, {high:g}], got '
+                         f'{shorten(value)}')
+
+
+ROBOT_SPECS = tuple(
+    Spec(ROBOT_PREFIX + name,
+         'double_array' if isinstance(default, (list, tuple)) else 'double',
+         None if name in ('m4', 'm6') else default,
+         f'{DESCRIPTIONS[name]} ({UNITS[name]})',
+         None if isinstance(default, (list, tuple)) else LIMITS.get(name))
+    for name, default in Robot().as_parameters().items())
+_ROBOT_BY_NAME = {s.name[len(ROBOT_PREFIX):]: s for s in ROBOT_SPECS}

@@ -1,0 +1,159 @@
+"""
+The ``setpoint_publisher`` ROS 2 node: streams the paper's trajectory, eq. (6).
+
+A thin layer over :class:`orthoglide_ros.setpoint_publisher.Stream`: it
+declares the parameters of
+:data:`orthoglide_ros.setpoint_publisher.PARAMETERS`, waits for its
+subscribers, publishes one setpoint per timer tick and logs a summary at
+the end. With ``input`` ``trajectory`` a setpoint is one
+MultiDOFJointTrajectory on ``setpoint/trajectory`` (one point,
+``time_from_start`` 0); with ``topics`` it is a PoseStamped, TwistStamped
+and AccelStamped of equal stamp on ``setpoint/pose|twist|accel``. After
+one pass the node exits with code 0, or starts the next pass with
+``loop``. Run it with ``ros2 run orthoglide_ros setpoint_publisher
+--ros-args -p input:=topics``; ``doc/setpoint_publisher.md`` has the
+parameters.
+"""
+
+from rclpy.duration import Duration
+from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.task import Future
+
+from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
+                               TwistStamped)
+from trajectory_msgs.msg import (MultiDOFJointTrajectory,
+                                 MultiDOFJointTrajectoryPoint)
+
+from orthoglide_ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.setpoint_publisher import PARAMETERS, Stream
+
+# The platform centre G as the one multi-DOF "joint" of a trajectory.
+JOINT_NAME = 'platform'
+ACK_TIMEOUT = 1.0   # s to wait at the end for subscribers to acknowledge
+# Seeing a subscriber matched here does not mean that it has matched this
+# publisher yet (it drops samples until then): measured, the other side
+# follows within ~60 ms on a busy machine.
+MATCH_SETTLE = 0.25  # s
+
+
+class SetpointPublisher(InputNode):
+    """Node ``setpoint_publisher``: eq. (6) in real time, one pass or more."""
+
+    def __init__(self, **kwargs):
+        super().__init__('setpoint_publisher', **kwargs)
+        # Raises ValueError on an invalid start-up set (run() reports it).
+        settings = self.declare_settings(PARAMETERS)
+        self._stream = Stream(settings)
+        overrides = QoSOverridingOptions.with_default_policies()
+        frame = settings.frame_id
+        if settings.input == 'trajectory':
+            self._trajectory = MultiDOFJointTrajectory(
+                joint_names=[JOINT_NAME],
+                points=[MultiDOFJointTrajectoryPoint(
+                    transforms=[Transform()], velocities=[Twist()],
+                    accelerations=[Twist()])])
+            self._trajectory.header.frame_id = frame
+            self._publishers = [self.create_publisher(
+                MultiDOFJointTrajectory, 'setpoint/trajectory',
+                default_qos(), qos_overriding_options=overrides)]
+        else:
+            # Default orientation: the identity quaternion (w = 1).
+            self._pose, self._twist, self._accel = (
+                PoseStamped(), TwistStamped(), AccelStamped())
+            for msg in (self._pose, self._twist, self._accel):
+                msg.header.frame_id = frame
+            self._publishers = [
+                self.create_publisher(kind, f'setpoint/{name}',
+                                      default_qos(),
+                                      qos_overriding_options=overrides)
+                for kind, name in ((PoseStamped, 'pose'),
+                                   (TwistStamped, 'twist'),
+                                   (AccelStamped, 'accel'))]
+
+        self.done = Future()
+        self._created_ns = self._now_ns()
+        self._matched_ns = None     # when every output got its subscribers
+        self._started = False
+        self.create_timer(1.0 / settings.rate_hz, self._on_timer)
+
+    @property
+    def published(self):
+        """Setpoints published so far."""
+        return self._stream.published
+
+    @property
+    def finished(self):
+        """Whether the last pass is over (:func:`run` then stops)."""
+        return self.done.done()
+
+    def _now_ns(self):
+        return self.get_clock().now().nanoseconds
+
+    def _ready(self, now_ns):
+        """Whether to start: outputs matched and settled, or delay over."""
+        settings = self._stream.settings
+        if (now_ns - self._created_ns) / 1e9 >= settings.start_delay:
+            return True
+        if self._matched_ns is None:
+            if all(p.get_subscription_count() >= settings.min_subscribers
+                   for p in self._publishers):
+                self._matched_ns = now_ns
+            return False
+        return (now_ns - self._matched_ns) / 1e9 >= MATCH_SETTLE
+
+    def _on_timer(self):
+        if self.done.done():
+            return
+        now_ns = self._now_ns()
+        if not self._started:
+            if not self._ready(now_ns):
+                return
+            self._started = True
+        sample = self._stream.next(now_ns)
+        if sample is None:
+            self.done.set_result(True)
+            return
+        self._publish(now_ns, sample)
+
+    def _publish(self, stamp_ns, sample):
+        """Publish one setpoint stamped ``stamp_ns`` (ns)."""
+        (x, y, z), (vx, vy, vz), (ax, ay, az) = sample
+        sec, nanosec = divmod(stamp_ns, 10**9)
+        if self._stream.settings.input == 'trajectory':
+            msg = self._trajectory
+            msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+            point = msg.points[0]
+            p = point.transforms[0].translation
+            v = point.velocities[0].linear
+            a = point.accelerations[0].linear
+            p.x, p.y, p.z = x, y, z
+            v.x, v.y, v.z = vx, vy, vz
+            a.x, a.y, a.z = ax, ay, az
+            self._publishers[0].publish(msg)
+            return
+        for msg in (self._pose, self._twist, self._accel):
+            msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+        p = self._pose.pose.position
+        v = self._twist.twist.linear
+        a = self._accel.accel.linear
+        p.x, p.y, p.z = x, y, z
+        v.x, v.y, v.z = vx, vy, vz
+        a.x, a.y, a.z = ax, ay, az
+        for publisher, msg in zip(self._publishers, (
+                self._pose, self._twist, self._accel)):
+            publisher.publish(msg)
+
+    def on_stop(self, interrupted):
+        """Log the summary, after the subscribers' acknowledgements."""
+        for publisher in () if interrupted else self._publishers:
+            publisher.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT))
+        self.get_logger().info(self._stream.summary())
+
+
+def main(args=None):
+    """Stream setpoints until the pass ends or Ctrl-C; return the exit code."""
+    return run(SetpointPublisher, 'setpoint_publisher', args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
