@@ -41,7 +41,6 @@ import os
 import platform
 import select
 import shutil
-import signal
 import subprocess
 import sys
 import tempfile
@@ -51,18 +50,16 @@ import numpy as np
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
-                               TwistStamped)
 from sensor_msgs.msg import JointState
-from trajectory_msgs.msg import (MultiDOFJointTrajectory,
-                                 MultiDOFJointTrajectoryPoint)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-sys.path.insert(0, ROOT)
+# The DDS test helpers (setpoint producer, process stopping) are shared.
+sys.path.insert(0, os.path.join(ROOT, 'test'))
 
+from node_harness import (cpu_seconds, INPUT_TOPICS, interrupt,  # noqa: E402
+                          Producer, qos_profile)
 from orthoglide_ros.trajectory import PAPER_DURATION  # noqa: E402
 from orthoglide_ros.trajectory import paper_sample  # noqa: E402
 
@@ -70,8 +67,6 @@ TARGETS = ('node', 'echo-single', 'echo-events')
 NODES = ('node',)
 EXECUTORS = {'echo-single': 'single', 'echo-events': 'events'}
 BASELINES = ('echo-single', 'echo-events')
-INPUT_TOPICS = {'trajectory': ('trajectory',),
-                'topics': ('pose', 'twist', 'accel')}
 SUSTAINED_LOSS = 0.001      # fraction of the setpoints sent
 SUSTAINED_P99_MS = 20.0
 ISSUE_RATE, ISSUE_DURATION = 1000, 10.0
@@ -79,15 +74,6 @@ SEGMENT_S = 10000           # stamps of run k start at (k + 1) * SEGMENT_S s
 DRAIN_S = 0.5
 PREROLL_S = 0.5
 START_TIMEOUT_S = 20.0
-CLK_TCK = os.sysconf('SC_CLK_TCK')
-
-
-def qos_profile(name, depth=10):
-    """Keep-last ``depth`` QoS, reliable or best_effort."""
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
-                      reliability=ReliabilityPolicy.RELIABLE
-                      if name == 'reliable'
-                      else ReliabilityPolicy.BEST_EFFORT)
 
 
 # Recorder process --------------------------------------------------------
@@ -153,81 +139,17 @@ def target_command(target, kind, qos):
             '--qos', qos]
 
 
-def cpu_seconds(pid):
-    """Return utime + stime (s) of a process; None if it is gone."""
-    try:
-        with open(f'/proc/{pid}/stat') as f:
-            fields = f.read().rsplit(')', 1)[1].split()
-    except (OSError, IndexError):
-        return None
-    return (int(fields[11]) + int(fields[12])) / CLK_TCK
-
-
-def stop(proc, timeout=3.0):
-    """SIGINT a child, wait, else kill it; return how it ended."""
+def stop(proc):
+    """Stop a child (node_harness.interrupt); return how it ended."""
     if proc.poll() is not None:
         return f'had exited ({proc.returncode})'
-    proc.send_signal(signal.SIGINT)
-    try:
-        return f'exited on SIGINT ({proc.wait(timeout)})'
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait()
-        return f'ignored SIGINT for {timeout:g} s, killed'
+    if interrupt(proc, 3.0):
+        return f'exited on SIGINT ({proc.returncode})'
+    return 'ignored SIGINT for 3 s, killed'
 
 
 class Failed(RuntimeError):
     """A target or the recorder exited or does not answer."""
-
-
-# Producer ----------------------------------------------------------------
-class Producer:
-    """Publishers of one input form, with messages built once and reused."""
-
-    def __init__(self, node, kind, qos):
-        self.kind = kind
-        profile = qos_profile(qos)
-        if kind == 'trajectory':
-            self.msg = MultiDOFJointTrajectory(
-                joint_names=['G'], points=[MultiDOFJointTrajectoryPoint(
-                    transforms=[Transform()], velocities=[Twist()],
-                    accelerations=[Twist()])])
-            self.pubs = [node.create_publisher(
-                MultiDOFJointTrajectory, 'setpoint/trajectory', profile)]
-            point = self.msg.points[0]
-            self.vectors = (point.transforms[0].translation,
-                            point.velocities[0].linear,
-                            point.accelerations[0].linear)
-            self.stamps = (self.msg.header.stamp,)
-        else:
-            self.msgs = (PoseStamped(), TwistStamped(), AccelStamped())
-            self.pubs = [node.create_publisher(type(m), f'setpoint/{t}',
-                                               profile)
-                         for m, t in zip(self.msgs, INPUT_TOPICS[kind])]
-            self.vectors = (self.msgs[0].pose.position,
-                            self.msgs[1].twist.linear,
-                            self.msgs[2].accel.linear)
-            self.stamps = tuple(m.header.stamp for m in self.msgs)
-
-    def matched(self):
-        """Whether every input publisher has matched a subscription."""
-        return all(p.get_subscription_count() > 0 for p in self.pubs)
-
-    def fill(self, stamp_ns, sample):
-        """Set the stamp and the (position, velocity, acceleration)."""
-        sec, nanosec = divmod(stamp_ns, 1000000000)
-        for stamp in self.stamps:
-            stamp.sec, stamp.nanosec = sec, nanosec
-        for vector, values in zip(self.vectors, sample):
-            vector.x, vector.y, vector.z = values
-
-    def publish(self):
-        """Publish the setpoint (pose, twist, accel in that order)."""
-        if self.kind == 'trajectory':
-            self.pubs[0].publish(self.msg)
-        else:
-            for pub, msg in zip(self.pubs, self.msgs):
-                pub.publish(msg)
 
 
 def produce(producer, rate, count, base_ns, check):

@@ -19,7 +19,6 @@ import argparse
 import os
 from pathlib import Path
 import re
-import signal
 import subprocess
 import sys
 import tempfile
@@ -29,6 +28,10 @@ import time
 # DDS stays on this host whoever starts the demo; a domain of its own.
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
+
+ROOT = Path(__file__).resolve().parents[1]
+# The test helpers' process handling is shared (one way to stop a node).
+sys.path.insert(0, str(ROOT / 'test'))
 
 import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
@@ -47,8 +50,8 @@ from trajectory_msgs.msg import MultiDOFJointTrajectory  # noqa: E402
 from orthoglide_ros import mechanics, trajectory  # noqa: E402
 from orthoglide_ros.cli import CSV_COLUMNS  # noqa: E402
 from orthoglide_ros.params_file import load_robot  # noqa: E402
+from node_harness import interrupt  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
 PARAMS = ROOT / 'config' / 'orthoglide.yaml'
 # Deep enough that a slow recorder loses nothing the node publishes.
@@ -298,7 +301,7 @@ def _run(args):
                 progress = (count, time.monotonic())
             elif time.monotonic() - progress[1] > DRAIN_IDLE:
                 break
-        killed = not _stop(processes['feedforward'])
+        killed = not interrupt(processes['feedforward'], STOP_TIMEOUT)
         first = min(recorder.setpoints, default=launched)
         timing = ((first - launched) / 1e9, streamed, time.monotonic())
         recorder.destroy_node()
@@ -312,8 +315,7 @@ def _run(args):
                           for name, log in logs.items()}, failures, timing
     finally:
         for process in processes.values():
-            if process.poll() is None:
-                _stop(process)
+            interrupt(process, STOP_TIMEOUT)
         rclpy.try_shutdown()
         for log in logs.values():
             log.unlink(missing_ok=True)
@@ -331,18 +333,6 @@ def _start(logs, name, command):
     with os.fdopen(handle, 'wb') as log:
         return subprocess.Popen(command, stdin=subprocess.DEVNULL,
                                 stdout=log, stderr=subprocess.STDOUT)
-
-
-def _stop(process):
-    """SIGINT, wait, else SIGKILL; return whether SIGINT stopped it."""
-    try:
-        process.send_signal(signal.SIGINT)
-        process.wait(timeout=STOP_TIMEOUT)
-        return True
-    except subprocess.TimeoutExpired:
-        process.kill()
-        process.wait()
-        return False
 
 
 def _exited(processes):

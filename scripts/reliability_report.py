@@ -3,7 +3,7 @@
 Run the full reliability cases of the feedforward node and print a report.
 
 Issue 4's "how it is shown": the full versions of the flood, reliable,
-restart and fuzz tests, with the figures the README quotes. The runs are
+restart and fuzz tests, with the figures doc/measurements.md quotes. The runs are
 those of ``test/reliability_harness.py`` (the tests run them shorter):
 
 - best-effort floods for ``--duration`` s (trajectory and topics inputs);
@@ -140,7 +140,7 @@ def report(results, fuzz, args, elapsed):
         lines.append(f'reliable 1 kHz, input depth 10 (the default), '
                      f'{shallow["sent"]} setpoints: lost '
                      f'{shallow["missing"]} (measured, not a failure: see '
-                     'the README)')
+                     'doc/measurements.md)')
     for label in ('flood trajectory', 'flood topics'):
         r = by.get(label, {})
         if 'growth_mb' in r:

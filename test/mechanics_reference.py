@@ -1,7 +1,7 @@
 """
 An independent second model of the Orthoglide for the tests.
 
-Written from MODEL.md and the paper alone; it shares nothing with the
+Written from doc/model.md and the paper alone; it shares nothing with the
 package but the values of a :class:`Robot` (read as plain attributes).
 
 - :func:`leg_geometry`: the chain (1)-(8) of one leg with plain 3x3 matrices
@@ -130,7 +130,7 @@ def leg_geometry(robot, leg, position):
     joints['A5'] = joints['A4'] + rot[4].T @ r54
     joints['G'] = joints['A5'] + rot[5].T @ r5g
 
-    # Centres of mass (MODEL.md's table), each from its body's frame.
+    # Centres of mass (doc/model.md's table), each from its body's frame.
     centre = {
         1: joints['A1'] + rot[1].T @ (r21 / 2.0),
         2: joints['A2'],
@@ -149,7 +149,7 @@ def masses(robot):
 
 def central_inertias(robot):
     """
-    Inertia (kg m^2) about the centre of mass, body frame (MODEL.md).
+    Inertia (kg m^2) about the centre of mass, body frame (doc/model.md).
 
     Bodies 1 and 5 only translate; their inertia is given for
     completeness (body 1 as a thin rod, body 5 as the cube).
@@ -332,7 +332,7 @@ def lagrange_forces(robot, position, velocity, acceleration,
 
 # --- Shared helpers of the test suite (no part of the second model) ---
 
-# Half side (m) of the tested workspace cube |x|, |y|, |z| <= CUBE (MODEL.md).
+# Half side (m) of the tested workspace cube |x|, |y|, |z| <= CUBE (doc/model.md).
 CUBE = 0.3
 
 # A robot unlike the paper's in every length, angle and in m4, m6 (which

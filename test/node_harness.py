@@ -13,9 +13,12 @@ Helpers for the feedforward node's DDS tests: a probe node, spinning, processes.
   kill it if it does not stop; :func:`timed_stop` and
   :func:`assert_clean_exit`: it must stop promptly with code 0;
   :func:`run_to_exit`: a process expected to end by itself;
-- :func:`call` and :func:`parameter_client`: services from a probe.
+- :func:`call` and :func:`parameter_client`: services from a probe;
+- :class:`Producer`, :func:`qos_profile`, :func:`cpu_seconds`: a setpoint
+  producer with messages built once, for floods and benchmarks.
 
-Import it with the test directory on ``sys.path`` (the tests insert it).
+pytest puts the test directory on ``sys.path`` (the tests import it by
+name); the scripts and benchmarks that reuse it insert that directory.
 """
 
 from contextlib import contextmanager
@@ -49,6 +52,9 @@ PROBE_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
                        reliability=ReliabilityPolicy.RELIABLE)
 OUTPUTS = ('joint_states', 'forces', 'power')
 STOP_TIMEOUT = 10.0     # s between SIGINT and SIGKILL
+INPUT_TOPICS = {'trajectory': ('trajectory',),
+                'topics': ('pose', 'twist', 'accel')}
+CLK_TCK = os.sysconf('SC_CLK_TCK')
 
 
 def stamp_of(seconds, base=(1000, 0)):
@@ -371,24 +377,35 @@ def start_node_process(args, env=None, command=None, cwd=None):
 
 
 def interrupt(proc, timeout=STOP_TIMEOUT):
-    """SIGINT ``proc`` if it runs, wait ``timeout`` s, then SIGKILL it."""
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(timeout)
+    """
+    Stop ``proc`` as Ctrl-C does: SIGINT, wait ``timeout`` s, then SIGKILL.
+
+    The one process-stopping helper of the tests, scripts and benchmarks.
+    Returns True when it had exited or SIGINT stopped it, False when it
+    had to be killed. Safe on a process that has already exited.
+    """
+    if proc.poll() is not None:
+        return True
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout)
+        return True
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(timeout)
+        return False
 
 
 def stop_process(proc, timeout=STOP_TIMEOUT):
     """
-    Stop ``proc``: SIGINT, wait ``timeout`` s, then SIGKILL.
+    Stop ``proc``: SIGINT, wait ``timeout`` s, then SIGKILL (:func:`interrupt`).
 
     Returns (exit code, standard error text); the exit code is negative for
     a signal (-9 if it had to be killed). Safe on a process that has
-    already exited.
+    already exited, and a second call returns the first one's answer.
     """
+    if getattr(proc, 'stopped', None) is not None:
+        return proc.stopped
     try:
         interrupt(proc, timeout)
     finally:
@@ -401,7 +418,8 @@ def stop_process(proc, timeout=STOP_TIMEOUT):
         err.close()
     if text_out:
         text += '\n[stdout]\n' + text_out
-    return proc.returncode, text
+    proc.stopped = (proc.returncode, text)
+    return proc.stopped
 
 
 def timed_stop(proc):
@@ -434,3 +452,71 @@ def wait_exit(proc, timeout):
         return proc.wait(timeout)
     except subprocess.TimeoutExpired:
         return None
+
+
+# Traffic: setpoints built once, published fast ------------------------------
+def qos_profile(name, depth=10):
+    """Keep-last ``depth`` QoS, ``'reliable'`` or best effort."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
+                      reliability=ReliabilityPolicy.RELIABLE
+                      if name == 'reliable'
+                      else ReliabilityPolicy.BEST_EFFORT)
+
+
+def cpu_seconds(pid):
+    """Return utime + stime (s) of a process; None if it is gone."""
+    try:
+        with open(f'/proc/{pid}/stat') as f:
+            fields = f.read().rsplit(')', 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return (int(fields[11]) + int(fields[12])) / CLK_TCK
+
+
+class Producer:
+    """Publishers of one input form, with messages built once and reused."""
+
+    def __init__(self, node, kind, qos):
+        self.kind = kind
+        profile = qos_profile(qos)
+        if kind == 'trajectory':
+            self.msg = MultiDOFJointTrajectory(
+                joint_names=['G'], points=[MultiDOFJointTrajectoryPoint(
+                    transforms=[Transform()], velocities=[Twist()],
+                    accelerations=[Twist()])])
+            self.pubs = [node.create_publisher(
+                MultiDOFJointTrajectory, 'setpoint/trajectory', profile)]
+            point = self.msg.points[0]
+            self.vectors = (point.transforms[0].translation,
+                            point.velocities[0].linear,
+                            point.accelerations[0].linear)
+            self.stamps = (self.msg.header.stamp,)
+        else:
+            self.msgs = (PoseStamped(), TwistStamped(), AccelStamped())
+            self.pubs = [node.create_publisher(type(m), f'setpoint/{t}',
+                                               profile)
+                         for m, t in zip(self.msgs, INPUT_TOPICS[kind])]
+            self.vectors = (self.msgs[0].pose.position,
+                            self.msgs[1].twist.linear,
+                            self.msgs[2].accel.linear)
+            self.stamps = tuple(m.header.stamp for m in self.msgs)
+
+    def matched(self):
+        """Whether every input publisher has matched a subscription."""
+        return all(p.get_subscription_count() > 0 for p in self.pubs)
+
+    def fill(self, stamp_ns, sample):
+        """Set the stamp and the (position, velocity, acceleration)."""
+        sec, nanosec = divmod(stamp_ns, 1000000000)
+        for stamp in self.stamps:
+            stamp.sec, stamp.nanosec = sec, nanosec
+        for vector, values in zip(self.vectors, sample):
+            vector.x, vector.y, vector.z = values
+
+    def publish(self):
+        """Publish the setpoint (pose, twist, accel in that order)."""
+        if self.kind == 'trajectory':
+            self.pubs[0].publish(self.msg)
+        else:
+            for pub, msg in zip(self.pubs, self.msgs):
+                pub.publish(msg)

@@ -16,7 +16,7 @@ console script, as a user starts it), a producer and a recorder (this file
 run as a script: ``produce`` / ``record``) and this process, which
 orchestrates them, watches ``/diagnostics``, asks the node for a parameter
 and reads its memory and CPU time from ``/proc``. The producer publishes
-with ``benchmarks/bench_node.py``'s :class:`Producer` (messages built once)
+with ``node_harness``'s :class:`Producer` (messages built once)
 on the paper trajectory: the setpoint of stamp ``s`` ns is eq. (6) at
 ``t = (s mod 2 s)``, so an output can be checked from its stamp alone
 (:func:`sample_at`). Stamps are grouped in epochs of 1000 s
@@ -46,19 +46,15 @@ import time
 
 import numpy as np
 
+from node_harness import (cpu_seconds, INPUT_TOPICS, interrupt, Producer,
+                          qos_profile, start_node_process, stop_process)
+from orthoglide_ros import mechanics
+from orthoglide_ros.params_file import load_robot
+from orthoglide_ros.trajectory import paper_sample
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 PARAMS = os.path.join(ROOT, 'config', 'orthoglide.yaml')
-sys.path.insert(0, HERE)
-sys.path.insert(0, os.path.join(ROOT, 'benchmarks'))
-
-import bench_node  # noqa: E402
-from node_harness import (interrupt, start_node_process,  # noqa: E402
-                          stop_process)
-
-from orthoglide_ros import mechanics  # noqa: E402
-from orthoglide_ros.params_file import load_robot  # noqa: E402
-from orthoglide_ros.trajectory import paper_sample  # noqa: E402
 
 EPOCH_NS = 10**12               # stamps of one stream: one epoch of 1000 s
 PERIOD_NS = 2 * 10**9           # eq. (6) repeats every 2 s of stamp
@@ -71,7 +67,7 @@ START_TIMEOUT = 30.0            # s for a process to come up and answer
 TOL = 1e-9                      # relative (above 1) or absolute tolerance
 NODE_ARGS = ('--ros-args', '--params-file', PARAMS)
 # Fast DDS profile: announcements every 0.25 s, user data over loopback UDP
-# (README, "Restarts").
+# (doc/deployment.md, restarts).
 DISCOVERY_PROFILE = os.path.join(ROOT, 'config', 'fastdds_discovery.xml')
 PROFILE_VARIABLE = 'FASTRTPS_DEFAULT_PROFILES_FILE'
 RECOVERY_LIMIT = 2.0            # s from a node's start to its first output
@@ -84,7 +80,6 @@ BEST_EFFORT_INPUT = '-p', (
 # a stall of the recorder (a test tool) cannot lose outputs the node made.
 DEEP_OUTPUT = ('-p', 'qos_overrides./feedforward/joint_states.publisher.'
                'depth:=1000')
-INPUT_TOPICS = bench_node.INPUT_TOPICS
 # History of the node's inputs for "nothing lost" under reliable QoS: 100
 # setpoints cover a 100 ms stall at 1 kHz. The default keep-last 10 covers
 # 10 ms, and a process on two busy cores is stalled that long now and then
@@ -174,7 +169,7 @@ def produce(args):
     stop = _stop_on_sigint()
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = rclpy.create_node(f'reliability_producer_{os.getpid()}')
-    producer = bench_node.Producer(node, args.kind, args.qos)
+    producer = Producer(node, args.kind, args.qos)
     log = array.array('q')
     buffer = bytearray()
     count = 0
@@ -292,7 +287,7 @@ def record(args):
 
     sub = node.create_subscription(
         JointState, 'feedforward/joint_states', on_joints,
-        bench_node.qos_profile('reliable', 1000), raw=True)
+        qos_profile('reliable', 1000), raw=True)
 
     buffer = bytearray()
     started = clock()
@@ -749,7 +744,7 @@ def flood(duration, kind='trajectory', qos='best_effort', say=None):
         run.warm_up(producer, recorder, ready=lambda: (
             monitor.wait_for_service(START_TIMEOUT), monitor.spin(0.5)))
         start = time.monotonic()
-        cpu_start = bench_node.cpu_seconds(node.pid)
+        cpu_start = cpu_seconds(node.pid)
         rss, warm = [], min(0.2 * duration, 2.0)
         rss_warm = None
         next_sample = start
@@ -769,7 +764,7 @@ def flood(duration, kind='trajectory', qos='best_effort', say=None):
                     f[0] == 'done' for f in producer.lines):
                 break
         end = time.monotonic()
-        cpu_end = bench_node.cpu_seconds(node.pid)
+        cpu_end = cpu_seconds(node.pid)
         rss_end = rss_mb(node.pid)
         if rss_warm is None:
             rss_warm = rss[0][1]
@@ -817,7 +812,7 @@ def reliable_stream(rate, duration, kind='trajectory', depth=LOSSLESS_DEPTH,
     """
     Stream at ``rate`` Hz, reliable; match every setpoint to its output.
 
-    ``depth``: the history of the node's input subscriptions (the README's
+    ``depth``: the history of the node's input subscriptions (doc/measurements.md's
     ``qos_overrides./setpoint/<input>.subscription.depth``); the producer
     keeps its own keep-last 10.
     """
@@ -834,9 +829,9 @@ def reliable_stream(rate, duration, kind='trajectory', depth=LOSSLESS_DEPTH,
         producer = run.start_producer(kind, 'reliable', rate=rate, epoch=100,
                                       duration=duration)
         run.warm_up(producer, recorder)
-        cpu_start = bench_node.cpu_seconds(node.pid)
+        cpu_start = cpu_seconds(node.pid)
         done = producer.expect('done', duration + START_TIMEOUT, (node,))
-        cpu_end = bench_node.cpu_seconds(node.pid)
+        cpu_end = cpu_seconds(node.pid)
         drained(recorder, done, node)
         log = run.finish_producer(producer)
         outputs = load_outputs(recorder)
@@ -1049,7 +1044,7 @@ PARAMETER_LIMIT = 2.0           # s for the node to answer a parameter get
 LATENCY_LIMIT_MS = 1000.0
 # Longest publish call of a reliable producer while the node is dead or
 # starting. Fast DDS may stall one call ~0.34 s when it re-opens the dead
-# node's shared-memory port (README); a producer blocked by the dead
+# node's shared-memory port (doc/deployment.md); a producer blocked by the dead
 # reader would stall every call or hang.
 STALL_LIMIT_MS = 500.0
 STOP_LIMIT = 5.0                # s from SIGINT/SIGTERM to exit

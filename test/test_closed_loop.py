@@ -41,7 +41,6 @@ import sys
 import numpy as np
 import pytest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from node_harness import node_executable  # noqa: E402
 
 from orthoglide_ros import trajectory  # noqa: E402
@@ -50,18 +49,18 @@ rclpy = pytest.importorskip('rclpy')
 harness = pytest.importorskip('closed_loop_harness')
 from orthoglide_ros.simulator_node import MAX_CATCH_UP  # noqa: E402
 
-# Measured: see the module docstring and the README (closed loop).
+# Measured: see the module docstring and doc/measurements.md (closed loop).
 OPEN_LOOP_BOUND = 0.025    # m, largest position error in the first second
 OPEN_LOOP_SPAN = 1.0       # s: the first second of the pass
 # Fewest measurements per second of a pass: the simulator publishes once a
 # tick, after at most MAX_CATCH_UP steps when its ticks are late.
 MIN_SAMPLE_RATE = harness.PLANT_RATE / MAX_CATCH_UP
 
-pytestmark = pytest.mark.skipif(
+pytestmark = [pytest.mark.ros, pytest.mark.skipif(
     not all(os.path.exists(node_executable(name)) for name in (
         'simulator', 'feedforward', 'tracking_controller',
         'setpoint_publisher')),
-    reason='the console scripts are not installed next to python')
+    reason='the console scripts are not installed next to python')]
 
 
 @pytest.fixture(scope='module')

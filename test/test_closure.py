@@ -16,7 +16,7 @@ from orthoglide_ros.robot import Robot
 import pytest
 
 ROBOTS = {'paper': Robot(), 'other': Robot(**OTHER_ROBOT_VALUES)}
-# Closure tolerance (m) of MODEL.md: rounding of a chain of ~1 m vectors.
+# Closure tolerance (m) of doc/model.md: rounding of a chain of ~1 m vectors.
 CLOSURE_TOLERANCE = 1e-12
 
 
@@ -46,7 +46,7 @@ def test_platform_orientation_a50_is_constant(name, position):
 
 
 def test_platform_orientation_of_leg_c_is_the_corrected_eq4():
-    # MODEL.md (errata of eq. 4): leg C's own chain gives this c50.
+    # doc/model.md (errata of eq. 4): leg C's own chain gives this c50.
     c50 = np.array([[-1, 0, 0], [0, 0, -1], [0, -1, 0]], dtype=float)
     for position in ((0.0, 0.0, 0.0), (0.2, -0.1, 0.25)):
         a50 = elements(Robot(), position)['C']['bodies'][5]['rotation']

@@ -20,7 +20,6 @@ from orthoglide_ros import mechanics
 from orthoglide_ros.params_file import load_robot
 from orthoglide_ros.trajectory import paper_sample
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from node_harness import (close, header_stamp, node_executable,  # noqa: E402
                           Probe, spin_until, start_node_process,
                           stop_process)
@@ -31,8 +30,9 @@ COLCON = node_executable('colcon')
 BUILD_TIMEOUT = 300.0
 WAIT = 40.0
 
-pytestmark = pytest.mark.skipif(not os.path.exists(COLCON),
-                                reason='colcon is not installed next to python')
+pytestmark = [pytest.mark.ros, pytest.mark.skipif(
+    not os.path.exists(COLCON),
+    reason='colcon is not installed next to python')]
 
 
 @pytest.fixture(scope='module')

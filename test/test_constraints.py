@@ -5,7 +5,7 @@ The package's lambda must satisfy the three sphere constraints (14); its
 lambdadot must satisfy ``J1 lambdadot = J2 rdot_G`` with J1, J2 of eq. (16)
 written here; and the relative rates of every leg (lambdadot, omega21,
 omega32 and their derivatives) must satisfy the connectivity conditions
-(13) and (18) as MODEL.md corrects them, written here with numpy matrices
+(13) and (18) as doc/model.md corrects them, written here with numpy matrices
 from the rotations ``a_k0`` that ``elements`` returns:
 
 (13) ``v10 a10^T u3 - l3 w21 a20^T u3~ a32^T u2 - l3 w32 a30^T u3~ u2

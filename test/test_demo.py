@@ -15,6 +15,8 @@ import pytest
 
 from orthoglide_ros.cli import CSV_COLUMNS
 
+pytestmark = pytest.mark.ros  # DDS and node processes
+
 pytest.importorskip('rclpy')
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -18,7 +18,6 @@ from orthoglide_ros import mechanics
 from orthoglide_ros.params_file import load_robot
 from orthoglide_ros.trajectory import paper_sample, paper_times
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from node_harness import (assert_vector, header_stamp,  # noqa: E402
                           node_executable, Probe, spin_until,
                           start_node_process, stop_process, wait_exit)
@@ -29,9 +28,9 @@ WAIT = 15.0         # s for one answer: generous, the machine is shared
 START_WAIT = 40.0   # s for the process to come up and answer
 PROMPT = 5.0        # s from SIGINT to exit
 
-pytestmark = pytest.mark.skipif(
+pytestmark = [pytest.mark.ros, pytest.mark.skipif(
     not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')
+    reason='the feedforward console script is not installed next to python')]
 
 
 @pytest.fixture

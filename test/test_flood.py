@@ -7,7 +7,7 @@ script; a recorder process keeps every output. With best-effort input
 (overridden by ``qos_overrides``) the node must stay up and responsive,
 keep its memory, and end on the newest setpoint; with reliable input and
 an input history that covers the stalls of a busy machine
-(``harness.LOSSLESS_DEPTH``, 100 ms at 1 kHz: the README's recipe for
+(``harness.LOSSLESS_DEPTH``, 100 ms at 1 kHz: doc/deployment.md's recipe for
 "nothing lost") every setpoint must give exactly one output. The runs and
 the bounds
 are in ``reliability_harness`` (shared with
@@ -19,16 +19,15 @@ import sys
 
 import pytest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from node_harness import node_executable  # noqa: E402
 import reliability_harness as harness  # noqa: E402
 
 SHORT = 2.5         # s of flood / stream in the default run
 FULL = 10.0         # s in the soak run (the issue's)
 RATE = 1000         # Hz: half of what the node sustains (bench_node.py)
-pytestmark = pytest.mark.skipif(
+pytestmark = [pytest.mark.ros, pytest.mark.skipif(
     not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')
+    reason='the feedforward console script is not installed next to python')]
 
 
 def check(result, **which):

@@ -11,25 +11,23 @@ another session in the neighbouring domain cannot be mistaken for it.
 
 import os
 from pathlib import Path
-import sys
 import time
 
 import pytest
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (node_executable, Probe,  # noqa: E402
+from node_harness import (node_executable, Probe,
                           spin_for, start_node_process, stop_process)
-from reliability_harness import process_environment  # noqa: E402
+from reliability_harness import process_environment
 
 PARAMS = Path(__file__).resolve().parents[1] / 'config' / 'orthoglide.yaml'
 START_WAIT = 30.0   # s for the node to come up and answer
 QUIET = 3.0         # s the probe in the other domain listens and sends
 
-pytestmark = pytest.mark.skipif(
+pytestmark = [pytest.mark.ros, pytest.mark.skipif(
     not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')
+    reason='the feedforward console script is not installed next to python')]
 
 
 def _probe(domain, namespace):

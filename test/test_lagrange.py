@@ -97,7 +97,7 @@ def random_states(seed, n):
 
 
 def test_forces_do_not_depend_on_l_l1_l2_alpha():
-    """MODEL.md: only l3, the masses and gravity enter the forces."""
+    """doc/model.md: only l3, the masses and gravity enter the forces."""
     positions, velocities, accelerations = random_states(8, 500)
     paper = Robot()
     changed = paper.replace(l=0.31, l1=0.07, l2=0.19, alpha=1.2)

@@ -11,12 +11,15 @@ controller judge their timeouts by it too).
 
 import time
 
+import pytest
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
 from node_harness import spin_until
 from orthoglide_ros.node_runtime import default_qos, InputNode
+
+pytestmark = pytest.mark.ros  # DDS and node processes
 
 SLOW = 0.1      # s spent in each callback
 

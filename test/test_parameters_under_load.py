@@ -61,7 +61,6 @@ from orthoglide_ros import mechanics
 from orthoglide_ros.params_file import load_robot
 from orthoglide_ros.trajectory import paper_sample
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from node_harness import (close, node_executable, PROBE_QOS,  # noqa: E402
                           start_node_process, stop_process)
 
@@ -97,9 +96,9 @@ INVALID = [
 WATCHED = ['robot.m5', 'robot.l3', 'robot.gravity', 'pairing_timeout',
            'setpoint_timeout', 'joint_names', 'singularity_margin']
 
-pytestmark = pytest.mark.skipif(
+pytestmark = [pytest.mark.ros, pytest.mark.skipif(
     not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')
+    reason='the feedforward console script is not installed next to python')]
 
 
 def setpoint(k):

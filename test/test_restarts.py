@@ -5,7 +5,7 @@ Restart tests of the feedforward node as a process (issue 4, item 4).
   started again: every restart's first output comes within 2 s of its
   start (imports included), the outputs are right, and the producer was
   not held up while the node was dead. Every process uses
-  ``config/fastdds_discovery.xml`` (see the README: with Fast DDS's
+  ``config/fastdds_discovery.xml`` (see doc/deployment.md: with Fast DDS's
   defaults a restarted process takes over its killed predecessor's
   shared-memory port, and its peers reach it 1-3 s late).
 - The producer is killed (SIGKILL) or stopped (SIGINT) mid-stream and a new
@@ -23,13 +23,12 @@ import sys
 
 import pytest
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from node_harness import node_executable  # noqa: E402
 import reliability_harness as harness  # noqa: E402
 
-pytestmark = pytest.mark.skipif(
+pytestmark = [pytest.mark.ros, pytest.mark.skipif(
     not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')
+    reason='the feedforward console script is not installed next to python')]
 
 
 def check(result):

@@ -14,7 +14,6 @@ it and stopped with SIGINT, as Ctrl-C does.
 
 import math
 import os
-import sys
 import time
 
 import pytest
@@ -33,11 +32,12 @@ from orthoglide_ros.robot import Robot
 from orthoglide_ros.simulation import Plant
 from orthoglide_ros.simulator_node import MAX_CATCH_UP, SimulatorNode
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (  # noqa: E402
+from node_harness import (
     assert_clean_exit, header_stamp, node_executable, node_graphs, PROBE_QOS,
     run_to_exit, spin_for, spin_until, start_node_process, timed_stop,
     wait_diagnostics as harness_wait_diagnostics)
+
+pytestmark = pytest.mark.ros  # DDS and node processes
 
 CONFIG = os.path.join(os.path.dirname(os.path.abspath(__file__)),
                       os.pardir, 'config', 'orthoglide.yaml')

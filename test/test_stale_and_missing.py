@@ -1,5 +1,5 @@
 """
-Stale and missing input, over real DDS: the README's rules hold.
+Stale and missing input, over real DDS: doc/feedforward.md's rules hold.
 
 The node (``FeedforwardNode``) and a :class:`node_harness.Probe` share one
 rclpy context and one EventsExecutor; the probe is also the producer. A
@@ -15,8 +15,6 @@ and is counted ``unpaired``; with ``pose_only`` a pose alone is served.
 Times are the node's and the probe's ``time.monotonic()`` (one process).
 """
 
-import os
-import sys
 import time
 from types import SimpleNamespace
 
@@ -31,9 +29,10 @@ from orthoglide_ros.feedforward_node import FeedforwardNode
 from orthoglide_ros.robot import Robot
 from orthoglide_ros.trajectory import paper_sample
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from node_harness import (diagnostic_values, header_stamp,  # noqa: E402
+from node_harness import (diagnostic_values, header_stamp,
                           Probe, spin_for, spin_until, stamp_of)
+
+pytestmark = pytest.mark.ros  # DDS and node processes
 
 WAIT = 15.0         # s for anything to arrive: generous, the machine is shared
 PRODUCER_HZ = 250.0

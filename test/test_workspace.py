@@ -10,7 +10,7 @@ sample's index in ``row`` for batches); nothing else may escape and no
 output may hold a NaN or an infinity. ``workspace_status`` reports the
 same distances, which are checked here against eqs. (9), (16) and (17)
 written independently: over the cube |x|, |y|, |z| <= 0.3 m every
-``alpha_i / l3 >= 0.866`` (MODEL.md).
+``alpha_i / l3 >= 0.866`` (doc/model.md).
 """
 
 import itertools
