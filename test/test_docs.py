@@ -1,0 +1,276 @@
+"""
+The documentation agrees with the code: parameter tables, links, size.
+
+Pure: no DDS, no rclpy (the cores' modules never import it).
+
+**Parameters.** For each node page, every row of the node's
+``PARAMETERS`` table (``spec.name`` for ``spec`` in ``PARAMETERS.specs``,
+the ``robot.*`` rows included) must have a row in a Markdown table of that
+page whose first cell holds the name in backticks (`` `rate_hz` ``) and
+whose ``default`` column holds the default as a ROS 2 parameters file
+writes it, in backticks:
+
+- a float as Python's ``repr`` (`` `0.1` ``, `` `1000.0` ``,
+  `` `0.7853981633974483` ``);
+- an integer as ``str`` (`` `1` ``); a bool in lower case (`` `true` ``,
+  `` `false` ``); a string bare (`` `base_link` ``);
+- a list in flow style with the same rules for its items
+  (`` `[0.0, 0.0, -9.81]` ``, `` `[slider_a, slider_b, slider_c]` ``).
+
+A row declared without a default (``spec.default is None``: ``robot.m4``,
+``robot.m6``) follows another parameter, named in its description in the
+code ("defaults to m2"): its default cell must name that parameter in
+backticks with its prefix (`` `robot.m2` ``). A row whose description names
+no such parameter must say ``none`` in its default cell.
+
+**Links.** Every relative link and image of README.md and doc/*.md
+(outside code) points to an existing file; a ``#fragment`` must match a
+heading of the target page (GitHub's anchors).
+
+**Text.** README.md has at most 250 lines, and no page speaks of the
+machines the project was developed on ("these machines") or links to the
+development-only ``shared/`` directory.
+"""
+
+import importlib
+import os
+import re
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DOC = os.path.join(ROOT, 'doc')
+README = os.path.join(ROOT, 'README.md')
+README_MAX_LINES = 250
+FORBIDDEN = ('these machines', 'shared/')
+
+# Node page -> module holding the node's PARAMETERS table.
+NODE_PAGES = {
+    'feedforward.md': 'orthoglide_ros.feedforward',
+    'simulator.md': 'orthoglide_ros.simulator',
+    'tracking_controller.md': 'orthoglide_ros.tracking',
+    'setpoint_publisher.md': 'orthoglide_ros.setpoint_publisher',
+}
+
+
+def pages():
+    """Return the paths of README.md and every doc/*.md."""
+    return [README] + sorted(
+        os.path.join(DOC, name) for name in os.listdir(DOC)
+        if name.endswith('.md'))
+
+
+def page_id(path):
+    """Return a path relative to the repository, for messages and ids."""
+    return os.path.relpath(path, ROOT)
+
+
+def read(path):
+    with open(path, encoding='utf-8') as stream:
+        return stream.read()
+
+
+def file_default(value):
+    """Write a default as a ROS 2 parameters file does (see the docstring)."""
+    if isinstance(value, bool):
+        return 'true' if value else 'false'
+    if isinstance(value, (int, float, str)):
+        return repr(value) if isinstance(value, float) else str(value)
+    if isinstance(value, (list, tuple)):
+        return '[' + ', '.join(file_default(v) for v in value) + ']'
+    raise TypeError(f'no parameters-file form for {value!r}')
+
+
+def split_row(line):
+    """Split a Markdown table row into its cells; an escaped pipe stays."""
+    body = line.strip()
+    body = body[1:] if body.startswith('|') else body
+    body = body[:-1] if body.endswith('|') and not body.endswith('\\|') \
+        else body
+    return [cell.strip() for cell in re.split(r'(?<!\\)\|', body)]
+
+
+def tables(text):
+    """
+    Yield ``(header, rows)`` of every Markdown table of ``text``.
+
+    A table is a run of lines starting with ``|`` whose second line is the
+    ``|---|`` separator; code blocks are skipped.
+    """
+    lines = strip_code_blocks(text).split('\n')
+    i = 0
+    while i < len(lines):
+        if (lines[i].lstrip().startswith('|') and i + 1 < len(lines)
+                and re.fullmatch(r'\s*\|?[\s:|-]+\|?\s*', lines[i + 1])
+                and '-' in lines[i + 1]):
+            header = [h.lower() for h in split_row(lines[i])]
+            rows = []
+            i += 2
+            while i < len(lines) and lines[i].lstrip().startswith('|'):
+                rows.append(split_row(lines[i]))
+                i += 1
+            yield header, rows
+        else:
+            i += 1
+
+
+def strip_code_blocks(text):
+    """Blank out fenced code blocks, keeping the line count."""
+    out, fenced = [], False
+    for line in text.split('\n'):
+        if line.lstrip().startswith('```'):
+            fenced = not fenced
+            out.append('')
+        else:
+            out.append('' if fenced else line)
+    return '\n'.join(out)
+
+
+def parameter_rows(text, name):
+    """Return the default cells of the table rows documenting ``name``."""
+    found = []
+    for header, rows in tables(text):
+        if 'default' not in header:
+            continue
+        column = header.index('default')
+        for cells in rows:
+            first = re.match(r'`([^`]*)`', cells[0])
+            if first and first.group(1) == name:
+                found.append(cells[column] if column < len(cells) else '')
+    return found
+
+
+def followed_parameter(spec):
+    """Return the ``robot.*`` name a spec without default follows, or None."""
+    match = re.search(r'defaults to (\w+)', spec.description)
+    if match is None:
+        return None
+    prefix = spec.name.rpartition('.')[0]
+    return f'{prefix}.{match.group(1)}' if prefix else match.group(1)
+
+
+def node_specs():
+    """Yield ``(page, spec)`` for every row of every node's table."""
+    for page, module in sorted(NODE_PAGES.items()):
+        table = importlib.import_module(module).PARAMETERS
+        for spec in table.specs:
+            yield page, spec
+
+
+@pytest.mark.parametrize('page,spec', list(node_specs()),
+                         ids=lambda x: x if isinstance(x, str) else x.name)
+def test_every_parameter_is_on_its_page_with_its_default(page, spec):
+    path = os.path.join(DOC, page)
+    assert os.path.exists(path), f'doc/{page}: the page does not exist'
+    cells = parameter_rows(read(path), spec.name)
+    assert cells, (
+        f'doc/{page}: parameter {spec.name} has no row in a table with a '
+        f'"default" column (first cell `{spec.name}`)')
+    if spec.default is None:
+        follows = followed_parameter(spec)
+        expected = f'`{follows}`' if follows else 'none'
+    else:
+        expected = f'`{file_default(spec.default)}`'
+    wrong = [cell for cell in cells if expected not in cell]
+    assert not wrong, (
+        f'doc/{page}: parameter {spec.name}: the default cell says '
+        f'{wrong[0]!r}, expected it to hold {expected} (the code\'s '
+        f'default is {spec.default!r})')
+
+
+def test_rows_with_the_same_name_agree_across_tables():
+    # A parameter documented twice on one page must not say two things.
+    for page in NODE_PAGES:
+        text = read(os.path.join(DOC, page))
+        for header, rows in tables(text):
+            names = [r[0] for r in rows if r and r[0].startswith('`')]
+            repeated = {n for n in names if names.count(n) > 1}
+            assert not repeated, (
+                f'doc/{page}: rows repeat in one table: {sorted(repeated)}')
+
+
+def test_file_default_writes_what_a_parameters_file_holds():
+    assert file_default(0.1) == '0.1'
+    assert file_default(1000.0) == '1000.0'
+    assert file_default(1) == '1'
+    assert file_default(False) == 'false'
+    assert file_default('base_link') == 'base_link'
+    assert file_default([0.0, 0.0, -9.81]) == '[0.0, 0.0, -9.81]'
+    assert file_default(['a', 'b']) == '[a, b]'
+
+
+# Links -----------------------------------------------------------------------
+LINK = re.compile(r'!?\[(?:[^\]\\]|\\.)*\]\(([^)\s]+)(?:\s+"[^"]*")?\)')
+
+
+def links(text):
+    """Yield the targets of the inline links and images outside code."""
+    prose = strip_code_blocks(text)
+    prose = re.sub(r'`[^`\n]*`', '', prose)     # inline code spans
+    for match in LINK.finditer(prose):
+        yield match.group(1)
+
+
+def slug(heading):
+    """Return GitHub's anchor of a heading's text (before de-duplication)."""
+    text = re.sub(r'\[([^\]]*)\]\([^)]*\)', r'\1', heading.strip().lower())
+    text = re.sub(r'[^\w\- ]', '', text)
+    return text.replace(' ', '-')
+
+
+def anchors(path):
+    """Return the anchors of every heading of a Markdown file."""
+    seen = {}
+    result = set()
+    for line in strip_code_blocks(read(path)).split('\n'):
+        match = re.match(r'#{1,6}\s+(.*?)\s*#*\s*$', line)
+        if not match:
+            continue
+        base = slug(match.group(1))
+        count = seen.get(base, 0)
+        seen[base] = count + 1
+        result.add(base if count == 0 else f'{base}-{count}')
+    return result
+
+
+@pytest.mark.parametrize('path', pages(), ids=page_id)
+def test_relative_links_point_to_existing_files(path):
+    broken = []
+    for target in links(read(path)):
+        if re.match(r'[a-z][a-z0-9+.-]*:', target):     # http:, mailto:
+            continue
+        file_part, _, fragment = target.partition('#')
+        resolved = path if not file_part else os.path.normpath(
+            os.path.join(os.path.dirname(path), file_part))
+        if not os.path.exists(resolved):
+            broken.append(f'{target} (no file {page_id(resolved)})')
+        elif fragment and resolved.endswith('.md') and \
+                fragment not in anchors(resolved):
+            broken.append(f'{target} (no heading #{fragment} in '
+                          f'{page_id(resolved)})')
+    assert not broken, f'{page_id(path)}: broken links: ' + '; '.join(broken)
+
+
+def test_slug_follows_github():
+    assert slug('Wiring into ros2_control') == 'wiring-into-ros2_control'
+    assert slug('The `orthoglide` command-line tool') == \
+        'the-orthoglide-command-line-tool'
+    assert slug('`--params`') == '--params'
+    assert slug('Inputs, pairing and time') == 'inputs-pairing-and-time'
+
+
+# Text ------------------------------------------------------------------------
+def test_readme_is_short():
+    count = len(read(README).splitlines())
+    assert count <= README_MAX_LINES, (
+        f'README.md has {count} lines, at most {README_MAX_LINES}: move '
+        'reference text to doc/')
+
+
+@pytest.mark.parametrize('path', pages(), ids=page_id)
+def test_no_development_machine_notes(path):
+    text = read(path).lower()
+    found = [phrase for phrase in FORBIDDEN if phrase in text]
+    assert not found, (
+        f'{page_id(path)}: contains {found}: state facts as "tested with '
+        '..." and link only to files of the repository')
