@@ -41,11 +41,13 @@ setup(
     },
     entry_points={
         'console_scripts': [
-            'feedforward = orthoglide_ros.feedforward_node:main',
+            # The nodes start through console.py: signals are taken over
+            # before anything heavy is imported.
+            'feedforward = orthoglide_ros.console:feedforward',
             'orthoglide = orthoglide_ros.cli:main',
-            'setpoint_publisher = orthoglide_ros.setpoint_publisher_node:main',
-            'tracking_controller = orthoglide_ros.tracking_controller_node:main',
-            'simulator = orthoglide_ros.simulator_node:main',
+            'setpoint_publisher = orthoglide_ros.console:setpoint_publisher',
+            'tracking_controller = orthoglide_ros.console:tracking_controller',
+            'simulator = orthoglide_ros.console:simulator',
         ],
     },
     **legacy_kwargs,

@@ -33,7 +33,7 @@ import math
 import time
 
 from orthoglide_ros import mechanics
-from orthoglide_ros.inputs import check_stamp, Rejected
+from orthoglide_ros.inputs import check_stamp, NANOSECONDS, Rejected
 from orthoglide_ros.parameters import joint_names_spec, ParameterError, \
     Spec, Table
 from orthoglide_ros.status import first, OK, Period, Status, WARN
@@ -42,9 +42,12 @@ from orthoglide_ros.status import first, OK, Period, Status, WARN
 ORIENTATION_TOLERANCE = 1e-3
 # Most partial setpoints held at once; beyond, the oldest is dropped.
 MAX_PENDING = 1000
+# Byte limit of a setpoint/trajectory message (its first point is used):
+# 4 MiB, about 20,000 points.
+TRAJECTORY_MESSAGE_BYTES = 4 * 1024 * 1024
 
 REASONS = ('non_finite', 'unreachable', 'singular', 'overflow', 'frame',
-           'orientation', 'stamp', 'malformed', 'unpaired')
+           'orientation', 'stamp', 'malformed', 'oversize', 'unpaired')
 INPUTS = ('pose', 'twist', 'accel', 'trajectory')
 
 Output = namedtuple('Output', 'stamp solution')
@@ -160,10 +163,39 @@ class Feedforward:
         return self._complete(stamp, (frame,), position, velocity,
                               acceleration, orientation, now)
 
-    def reject_malformed(self, source, message, now):
-        """Count and raise a message on input ``source`` holding no setpoint."""
+    def trajectory_message(self, header_stamp, time_from_start, clock_stamp,
+                           frame, position, orientation, velocity,
+                           acceleration, now):
+        """
+        Take a trajectory message's point: its stamp, then the setpoint.
+
+        The point's stamp is ``header_stamp + time_from_start``, both
+        ``(sec, nanosec)`` with nanoseconds in [0, 1e9); a zero header
+        stamp means "now", ``clock_stamp`` (the node's clock), as for
+        ``trajectory_msgs`` in general. Then as :meth:`trajectory_point`.
+        """
+        try:
+            for what, (sec, nanosec) in (('header stamp', header_stamp),
+                                         ('time_from_start',
+                                          time_from_start)):
+                if not 0 <= nanosec < NANOSECONDS:
+                    raise Rejected('stamp', (
+                        f'{what} {sec} s + {nanosec} ns: nanosec must lie in '
+                        '[0, 1e9)'))
+        except Rejected as rejection:
+            self.reject('trajectory', rejection)
+        if header_stamp == (0, 0):
+            header_stamp = clock_stamp
+        stamp = divmod((header_stamp[0] + time_from_start[0]) * NANOSECONDS
+                       + header_stamp[1] + time_from_start[1], NANOSECONDS)
+        return self.trajectory_point(stamp, frame, position, orientation,
+                                     velocity, acceleration, now)
+
+    def reject(self, source, rejection):
+        """Count a message on input ``source`` refused whole; re-raise."""
         self.received[source] += 1
-        self._reject('malformed', message)
+        self.rejected[rejection.reason] += 1
+        raise rejection
 
     def expire(self, now):
         """Drop the partial setpoints older than pairing_timeout; count them."""

@@ -21,18 +21,25 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
 from orthoglide_ros import cdr
-from orthoglide_ros.feedforward import Feedforward, PARAMETERS
-from orthoglide_ros.inputs import Rejected
+from orthoglide_ros.feedforward import (Feedforward, PARAMETERS,
+                                        TRAJECTORY_MESSAGE_BYTES)
+from orthoglide_ros.inputs import Rejected, SMALL_MESSAGE_BYTES
 from orthoglide_ros.node_runtime import default_qos, InputNode, run
+
+# Longest message of another encoding than little-endian CDR that is read.
+FALLBACK_BYTES = SMALL_MESSAGE_BYTES
+# Period of the tick thread while rate_hz is 0.0 (it then only waits), s.
+IDLE_TICK = 0.1
 
 
 class FeedforwardNode(InputNode):
     """
     Node ``feedforward``: the Orthoglide's inverse dynamics every tick.
 
-    The setpoint subscriptions are read on the input thread of
-    :class:`InputNode`; the tick and diagnostics timers and the parameter
-    services run on the executor; both hold ``self.lock`` on the core.
+    The setpoint inputs are read on the input thread of :class:`InputNode`
+    (raw, decoded by :mod:`cdr` outside the lock); the fixed-rate tick and
+    the diagnostics run on periodic threads; the executor serves only the
+    parameter services. All hold ``self.lock`` on the core.
     """
 
     def __init__(self, **kwargs):
@@ -51,27 +58,33 @@ class FeedforwardNode(InputNode):
         self._pub_power = self.create_publisher(
             Float64MultiArray, 'feedforward/power', default_qos(),
             qos_overriding_options=overrides)
-        for kind, callback in ((PoseStamped, self._on_pose),
-                               (TwistStamped, self._on_twist),
-                               (AccelStamped, self._on_accel)):
-            name = kind.__name__.replace('Stamped', '').lower()
-            self.create_input_subscription(
-                kind, f'setpoint/{name}', callback, default_qos(),
-                qos_overriding_options=overrides, raw=True)
-        self.create_input_subscription(
+        # Raw inputs: cdr reads the few fields used straight from the
+        # serialized message, several times cheaper than rclpy's conversion.
+        for kind, reader, method in (
+                (PoseStamped, cdr.pose_stamped, self._core.pose),
+                (TwistStamped, cdr.vector3_stamped, self._core.twist),
+                (AccelStamped, cdr.vector3_stamped, self._core.accel)):
+            source = kind.__name__.replace('Stamped', '').lower()
+            self.create_input(
+                kind, f'setpoint/{source}',
+                lambda fields, method=method: self._take(method, *fields),
+                default_qos(), source, decode=raw_decoder(reader, kind),
+                qos_overriding_options=overrides)
+        self.create_input(
             MultiDOFJointTrajectory, 'setpoint/trajectory',
-            self._on_trajectory, default_qos(), qos_overriding_options=overrides,
-            raw=True)
+            self._on_trajectory, default_qos(), 'trajectory',
+            decode=raw_decoder(cdr.trajectory_point, MultiDOFJointTrajectory),
+            max_bytes=TRAJECTORY_MESSAGE_BYTES,
+            qos_overriding_options=overrides)
 
         self._joints = JointState()
         self._forces = _vector_message()
         self._power = _vector_message()
         self._set_joint_names()
-        self._tick_timer = None
-        self._set_tick()
+        self.create_periodic(self._tick_period, self._on_tick, 'tick')
         self.publish_status('Orthoglide feedforward', self._core)
         self.apply_changes_with(self._swap)
-        self.start_inputs()
+        self.start_threads()
 
     # Parameters -----------------------------------------------------------
     def _swap(self, settings):
@@ -80,63 +93,29 @@ class FeedforwardNode(InputNode):
         self._core.configure(settings)
         if self._core.settings.joint_names != old.joint_names:
             self._set_joint_names()
-        if self._core.settings.rate_hz != old.rate_hz:
-            self._set_tick()
 
     def _set_joint_names(self):
         self._joints.name = list(self._core.settings.joint_names)
 
-    def _set_tick(self):
-        if self._tick_timer is not None:
-            self.destroy_timer(self._tick_timer)
-            self._tick_timer = None
-        rate = self._core.settings.rate_hz
-        if rate > 0.0:
-            self._tick_timer = self.create_timer(1.0 / rate, self._on_tick)
-
-    # Inputs ---------------------------------------------------------------
-    # Subscriptions are raw: cdr reads the few fields used straight from the
-    # serialized message, several times cheaper than rclpy's conversion.
-    def _on_pose(self, data):
-        fields = self._read(cdr.pose_stamped, data, PoseStamped, 'pose')
-        if fields is not None:
-            self._take(self._core.pose, *fields)
-
-    def _on_twist(self, data):
-        fields = self._read(cdr.vector3_stamped, data, TwistStamped, 'twist')
-        if fields is not None:
-            self._take(self._core.twist, *fields)
-
-    def _on_accel(self, data):
-        fields = self._read(cdr.vector3_stamped, data, AccelStamped, 'accel')
-        if fields is not None:
-            self._take(self._core.accel, *fields)
-
-    def _on_trajectory(self, data):
-        fields = self._read(cdr.trajectory_point, data,
-                            MultiDOFJointTrajectory, 'trajectory')
-        if fields is None:
-            return
+    # Inputs (input thread, lock held) -------------------------------------
+    def _on_trajectory(self, fields):
         stamp, frame, point = fields
         if point is None:
-            self._take(self._core.reject_malformed, 'trajectory',
-                       'trajectory without a point holding a transform')
+            self.on_input_rejected('trajectory', Rejected(
+                'malformed', 'trajectory without a point holding a '
+                'transform'))
             return
         position, orientation, velocity, acceleration, offset = point
-        if stamp == (0, 0):
-            stamp = self.get_clock().now().seconds_nanoseconds()
-        nanoseconds = (stamp[0] + offset[0]) * 10**9 + stamp[1] + offset[1]
-        self._take(self._core.trajectory_point, divmod(nanoseconds, 10**9),
-                   frame, position, orientation, velocity, acceleration)
+        self._take(self._core.trajectory_message, stamp, offset,
+                   self.get_clock().now().seconds_nanoseconds(), frame,
+                   position, orientation, velocity, acceleration)
 
-    def _read(self, reader, data, kind, name):
-        """Read a raw message; None (counted, warned) if it is unreadable."""
+    def on_input_rejected(self, source, rejection):
+        """Count a message refused before it was read (oversize, malformed)."""
         try:
-            return read_raw(reader, data, kind)
-        except Exception as error:   # any decoding failure is malformed
-            self._take(self._core.reject_malformed, name,
-                       f'unreadable {kind.__name__}: {error}')
-            return None
+            self._core.reject(source, rejection)
+        except Rejected:
+            self._warn(rejection.reason, str(rejection))
 
     def _take(self, method, *args):
         """Call the core; publish a completed setpoint, warn on a rejection."""
@@ -148,7 +127,7 @@ class FeedforwardNode(InputNode):
         except Exception:   # a defect, not bad input: publish nothing, go on
             self.report_defect('on a setpoint, nothing published')
             return
-        if output is not None and self._tick_timer is None:
+        if output is not None and self._core.settings.rate_hz == 0.0:
             self._publish(output)
 
     def on_inputs_idle(self):
@@ -158,8 +137,15 @@ class FeedforwardNode(InputNode):
             self._warn('unpaired', f'{dropped} partial setpoint(s) dropped '
                        'without partners within pairing_timeout')
 
+    # Fixed-rate tick (its own thread) -------------------------------------
+    def _tick_period(self):
+        rate = self._core.settings.rate_hz
+        return 1.0 / rate if rate > 0.0 else IDLE_TICK
+
     def _on_tick(self):
         with self.lock:
+            if self._core.settings.rate_hz == 0.0:
+                return
             output = self._core.tick(time.monotonic())
             if output is not None:
                 self._publish(output)
@@ -185,18 +171,27 @@ class FeedforwardNode(InputNode):
                             f'setpoint rejected ({reason}): {message}')
 
 
-def read_raw(reader, data, kind):
+def raw_decoder(reader, kind):
     """
-    Read a serialized message of type ``kind`` with a ``cdr`` reader.
+    Return a decoder of serialized ``kind`` messages with a ``cdr`` reader.
 
     A buffer that is not the little-endian CDR the fast reader knows is
-    decoded by rclpy and read in the local encoding; an unreadable one
-    raises (CdrError or rclpy's error).
+    decoded by rclpy and read in the local encoding, if it is at most
+    FALLBACK_BYTES long (rclpy's conversion costs ~10 us per kB); a longer
+    one is refused (``malformed``). ROS 2 writes little-endian CDR on every
+    little-endian host, so the fallback only serves foreign writers.
     """
-    try:
-        return reader(data)
-    except cdr.CdrError:
-        return reader(serialize_message(deserialize_message(data, kind)))
+    def decode(data):
+        try:
+            return reader(data)
+        except cdr.CdrError as error:
+            if len(data) > FALLBACK_BYTES:
+                raise Rejected('malformed', (
+                    f'{kind.__name__} of {len(data)} bytes that the fast '
+                    f'reader cannot read ({error}): other encodings are '
+                    f'read up to {FALLBACK_BYTES} bytes')) from None
+            return reader(serialize_message(deserialize_message(data, kind)))
+    return decode
 
 
 def _vector_message():

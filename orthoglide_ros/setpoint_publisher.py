@@ -11,10 +11,14 @@ without DDS:
 
 - every setpoint is stamped with the node clock at publication and sampled
   at ``t = (stamp - start) / 1e9`` s exactly, ``start`` being the stamp of
-  the pass's first setpoint, so a subscriber recomputes every value from
-  the stamps alone;
-- a pass lasts ``duration`` s; after it the stream ends, or with ``loop``
-  the next pass starts from t = 0.
+  the first setpoint, so a subscriber recomputes every value from the
+  stamps alone;
+- a pass of eq. (6) lasts ``duration`` s; after it the stream ends, or
+  with ``loop`` the way back follows: :func:`trajectory.quintic` from the
+  pass's end state to its start state (home, at rest, eq. (6)'s initial
+  acceleration) in ``return_duration`` s, then the next pass. The looped
+  motion has period ``duration + return_duration`` and is continuous in
+  position, velocity and acceleration.
 
 >>> stream = Stream(PARAMETERS.parse({'duration': 1.0}))
 >>> stream.next(5 * 10**9)[0] == (0.0, 0.0, 0.0)
@@ -53,8 +57,12 @@ PARAMETERS = Table('SetpointSettings', (
     Spec('omega', 'double', trajectory.PAPER_OMEGA,
          'omega of eq. (6) (rad/s)', (-1000.0, 1000.0), read_only=True),
     Spec('loop', 'bool', False,
-         'repeat the pass, from t = 0 at home again, until Ctrl-C (else '
-         'exit 0 after one pass)', read_only=True),
+         'repeat the pass until Ctrl-C, each followed by a smooth way back '
+         'to its start (else exit 0 after one pass)', read_only=True),
+    Spec('return_duration', 'double', trajectory.RETURN_DURATION,
+         'with loop: time of the way back from the end of a pass to its '
+         'start (s), a quintic continuous in position, velocity and '
+         'acceleration', (0.1, 3600.0), read_only=True),
     Spec('start_delay', 'double', 1.0,
          'longest wait (s) before the first setpoint: it comes earlier, '
          '0.25 s after every output has min_subscribers matched '
@@ -83,32 +91,52 @@ class Stream:
         self.published = 0
         self.passes = 0
         self.largest_gap_ns = 0
-        self._duration_ns = round(settings.duration * 1e9)
-        self._start_ns = None       # stamp of the pass's first setpoint
         self._first_ns = None       # stamp of the very first setpoint
         self._last_ns = None
+        self._way_back = trajectory.quintic(
+            self._pass(settings.duration), self._pass(0.0),
+            settings.return_duration)
 
     def next(self, stamp_ns):
         """Return the setpoint at ``stamp_ns`` (ns), or None when done."""
         if self.done:
             return None
-        if self._start_ns is None:
-            self._start_ns = self._first_ns = stamp_ns
-            self.passes = 1
-        elapsed_ns = stamp_ns - self._start_ns
-        if elapsed_ns > self._duration_ns:
-            if not self.settings.loop:
-                self.done = True
-                return None
-            self._start_ns, elapsed_ns = stamp_ns, 0
-            self.passes += 1
+        if self._first_ns is None:
+            self._first_ns = stamp_ns
+        t = (stamp_ns - self._first_ns) / 1e9
+        sample = self.sample(t)
+        if sample is None:
+            self.done = True
+            return None
         if self._last_ns is not None:
             self.largest_gap_ns = max(self.largest_gap_ns,
                                       stamp_ns - self._last_ns)
         self._last_ns = stamp_ns
         self.published += 1
-        return trajectory.paper_sample(elapsed_ns / 1e9,
-                                       self.settings.target,
+        return sample
+
+    def sample(self, t):
+        """
+        Return the motion at ``t`` s after the first setpoint, or None.
+
+        None past the single pass without ``loop``; with it, the pass and
+        the way back repeat with period ``duration + return_duration``.
+        """
+        settings = self.settings
+        if settings.loop:
+            period = settings.duration + settings.return_duration
+            self.passes = int(t // period) + 1
+            t %= period
+        elif t > settings.duration:
+            return None
+        else:
+            self.passes = 1
+        if t <= settings.duration:
+            return self._pass(t)
+        return self._way_back(t - settings.duration)
+
+    def _pass(self, t):
+        return trajectory.paper_sample(t, self.settings.target,
                                        self.settings.omega)
 
     def summary(self):

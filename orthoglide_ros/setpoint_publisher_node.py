@@ -9,10 +9,11 @@ the end. With ``input`` ``trajectory`` a setpoint is one
 MultiDOFJointTrajectory on ``setpoint/trajectory`` (one point,
 ``time_from_start`` 0); with ``topics`` it is a PoseStamped, TwistStamped
 and AccelStamped of equal stamp on ``setpoint/pose|twist|accel``. After
-one pass the node exits with code 0, or starts the next pass with
-``loop``. Run it with ``ros2 run orthoglide_ros setpoint_publisher
---ros-args -p input:=topics``; ``doc/setpoint_publisher.md`` has the
-parameters.
+one pass the node exits with code 0, or with ``loop`` goes back smoothly
+and starts the next pass. The setpoints are published from a thread of
+their own, on a steady schedule, not from the executor. Run it with
+``ros2 run orthoglide_ros setpoint_publisher --ros-args -p
+input:=topics``; ``doc/setpoint_publisher.md`` has the parameters.
 """
 
 from rclpy.duration import Duration
@@ -74,7 +75,9 @@ class SetpointPublisher(InputNode):
         self._created_ns = self._now_ns()
         self._matched_ns = None     # when every output got its subscribers
         self._started = False
-        self.create_timer(1.0 / settings.rate_hz, self._on_timer)
+        self.create_periodic(lambda: 1.0 / settings.rate_hz,
+                             self._on_timer, 'setpoints')
+        self.start_threads()
 
     @property
     def published(self):

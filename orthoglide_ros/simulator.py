@@ -27,9 +27,22 @@ States (``doc/simulator.md`` states them for users):
   :meth:`Simulator.reset`.
 
 A command is exactly three finite forces (N, actuators A, B, C); any other
-is rejected and counted by reason (``length``, ``non_finite``) and never
-applied. :meth:`Simulator.reset` puts the platform back at
-``initial_position``, at rest, ``held``, simulation time 0.
+is rejected and counted by reason (``length``, ``non_finite``; a message
+that cannot be read or is too long: ``malformed``, ``oversize``) and never
+applied.
+
+Time: the steps sit on a grid of period ``1 / rate_hz`` of a steady
+clock, each advancing the simulation by exactly that period;
+:meth:`Simulator.step_due` makes the next step of the grid once it is due,
+so a caller woken late catches up (with the command held, as a drive holds
+it), up to MAX_CATCH_UP steps; beyond that the missed time is dropped and
+counted (``overruns``: the plant then runs slower than real time, and the
+status says so). :meth:`Simulator.publish_due` says which states to
+publish: every wake-up's last one, or with ``publish_rate_hz`` the first at
+or after each instant of a coarser grid (a sampled encoder).
+
+:meth:`Simulator.reset` puts the platform back at ``initial_position``, at
+rest, ``held``, simulation time 0.
 
 Parameters apply as follows: ``force_limit``, ``command_timeout``,
 ``rate_hz``, ``publish_rate_hz``, ``joint_names`` and ``base_frame`` at
@@ -56,7 +69,13 @@ from orthoglide_ros.status import ERROR, first, OK, Period, Status, WARN
 
 HELD, RUNNING, STOPPED = 'held', 'running', 'stopped'
 # Why a command was rejected: the keys of Simulator.rejected.
-COMMAND_REASONS = ('length', 'non_finite')
+COMMAND_REASONS = ('length', 'non_finite', 'malformed', 'oversize')
+# Steps of the grid made at once to catch up with it (10 ms at 1 kHz);
+# beyond, the missed time is dropped (an overrun: slower than real time).
+MAX_CATCH_UP = 10
+# Share of a status period whose time may be dropped before the status
+# says the simulation runs slower than real time.
+SLOW_FRACTION = 0.1
 
 
 def _initial_position_in_workspace(settings):
@@ -165,7 +184,10 @@ class Simulator:
         self.step_ns_max = 0
         self.published = 0
         self.overruns = 0
+        self.dropped_time = 0.0     # s of the grid skipped by overruns
         self.latest_arrival = None
+        self._grid = None           # time of the next step due (s)
+        self._next_publish = None   # grid time of the next state published
         self._model = None
         self._period = Period(now)
         self.reset()
@@ -179,8 +201,13 @@ class Simulator:
         ``initial_position`` and ``singularity_margin`` wait for
         :meth:`reset` (see :attr:`pending_reset`).
         """
-        self.settings = settings
+        old, self.settings = self.settings, settings
         self.plant.force_limit = (settings.force_limit,) * 3
+        if settings.rate_hz != old.rate_hz:
+            self._grid = None
+        if settings.rate_hz != old.rate_hz or \
+                settings.publish_rate_hz != old.publish_rate_hz:
+            self._next_publish = None
 
     @property
     def pending_reset(self):
@@ -257,6 +284,56 @@ class Simulator:
         return Tick(self.state, self.plant.position, s.lambda_, s.lambdadot,
                     effort, event)
 
+    def step_due(self, now):
+        """
+        Make the grid's next step if it is due at ``now``.
+
+        Returns ``(tick, instant)``, the :class:`Tick` and the grid time
+        (s) its state holds at, or None when no step is due. Call it until
+        None (or an event) to catch up. The grid starts half a period
+        before the first call, so that a caller's jitter below half a
+        period makes exactly one step per wake-up; a grid more than
+        MAX_CATCH_UP periods behind ``now`` drops the missed time
+        (``overruns``).
+        """
+        period = 1.0 / self.settings.rate_hz
+        if self._grid is None:
+            self._grid = now - 0.5 * period
+        elif now - self._grid > MAX_CATCH_UP * period:
+            self.overruns += 1
+            late = now - (MAX_CATCH_UP - 0.5) * period
+            self.dropped_time += late - self._grid
+            self._grid = late
+        if self._grid > now:
+            return None
+        instant = self._grid
+        self._grid += period
+        return self.tick(instant), instant
+
+    def publish_due(self, tick, instant):
+        """
+        Say whether to publish the state at grid time ``instant``.
+
+        Every wake-up's last state with ``publish_rate_hz`` 0.0; else the
+        first state at or after each instant of the publish grid (period
+        1/publish_rate_hz, instants a late wake-up skipped are dropped);
+        always a state that ends in an event (a timeout, a stop).
+        """
+        settings = self.settings
+        if settings.publish_rate_hz == 0.0 or tick.event is not None:
+            return True
+        # Half a step of slack: the two grids' float sums drift apart.
+        slack = 0.5 / settings.rate_hz
+        due = self._next_publish
+        if due is not None and instant < due - slack:
+            return False
+        period = 1.0 / settings.publish_rate_hz
+        due = instant if due is None else due
+        while due <= instant + slack:
+            due += period
+        self._next_publish = due
+        return True
+
     def reset(self):
         """
         Start over: initial_position, at rest, ``held``, time 0.
@@ -291,17 +368,24 @@ class Simulator:
         """
         Return the :class:`Status` of the period ending at ``now``.
 
-        ERROR after an internal error or when stopped; WARN when held by
-        the command timeout or when commands were rejected in the period;
-        else OK (``held: waiting for a command`` or ``running``).
+        ERROR after an internal error or when stopped; WARN when the steps
+        fell behind real time (more than SLOW_FRACTION of the period
+        dropped: a sustained lag, not one hiccup), when held by the command
+        timeout or when commands were rejected in the period; else OK
+        (``held: waiting for a command`` or ``running``).
         """
         rejected = sum(self.rejected.values())
         seconds, new = self._period.advance(
             now, published=self.published, steps=self.steps,
-            step_ns=self.step_ns_total, rejected=rejected)
+            step_ns=self.step_ns_total, rejected=rejected,
+            dropped=self.dropped_time)
         level, message = first(
             internal_errors,
             (self.state == STOPPED, ERROR, f'stopped: {self.stop_message}'),
+            (new['dropped'] > SLOW_FRACTION * seconds, WARN,
+             f'slower than real time: {new["steps"] / seconds:.0f} of '
+             f'{self.settings.rate_hz:g} steps/s, '
+             f'{new["dropped"]:.3g} s of the last {seconds:.3g} s dropped'),
             (self.timed_out, WARN,
              f'held: no valid command for command_timeout '
              f'{self.settings.command_timeout:g} s, braked'),
@@ -326,6 +410,7 @@ class Simulator:
             ('clipped steps', self.clipped),
             ('timeouts', self.timeouts),
             ('overruns (time dropped)', self.overruns),
+            ('time dropped (s)', self.dropped_time),
             ('position x (m)', plant.position[0]),
             ('position y (m)', plant.position[1]),
             ('position z (m)', plant.position[2]),
@@ -363,9 +448,13 @@ class Simulator:
         self._solution = mechanics.solve(plant.robot, plant.position,
                                          plant.velocity, ZERO, plant.margin)
 
+    def reject(self, rejection):
+        """Count a command refused before it was read; re-raise it."""
+        self.rejected[rejection.reason] += 1
+        raise rejection
+
     def _reject(self, reason, message):
-        self.rejected[reason] += 1
-        raise Rejected(reason, message)
+        self.reject(Rejected(reason, message))
 
 
 def _plant_model(settings):

@@ -32,6 +32,23 @@ Rules (``doc/tracking_controller.md`` states them for users):
 - A force that overflows (not finite before clipping) refuses the whole
   command (``overflow``); a finite one beyond the limit is clipped and
   counted.
+- Path tolerance, in the manner of joint_trajectory_controller's: when a
+  desired state is farther than ``path_tolerance`` from the measured
+  position on some actuator (0.0: no limit for it), the controller stops
+  following (``holding``, an ERROR in its status, counted in ``trips``):
+  every command then holds the position measured at that moment,
+
+      f_i = b_i + Kp_i (lambda_hold,i - lambda_i) - Kd_i lambdadot_i,
+
+  clipped as above, with the bias ``b`` the last command sent while
+  following (the force that held the robot there; before any, the desired
+  effort with ``feedforward`` on, else zero). It re-arms by itself, back to
+  following, on the first desired state that starts where the robot holds:
+  within half of ``path_tolerance`` of the measured position and within
+  REARM_SPEED of the measured velocity on every actuator, as a new goal
+  (a motion from the robot's state) re-arms joint_trajectory_controller. So
+  a stream that moved on while a process of the loop stalled is never
+  chased, neither when it is far away nor when it passes by at speed.
 """
 
 from collections import namedtuple
@@ -40,13 +57,18 @@ import math
 from orthoglide_ros.inputs import Rejected
 from orthoglide_ros.parameters import joint_names_spec, \
     nonnegative_triple, Spec, Table
-from orthoglide_ros.status import first, OK, Period, Status, WARN
+from orthoglide_ros.status import ERROR, first, OK, Period, Status, WARN
 
 FORCE_LIMIT_MAX = 1.0e6     # N: the largest force_limit accepted
 INPUTS = ('desired', 'measured')
 REASONS = ('missing_joint', 'malformed', 'missing_position',
-           'missing_velocity', 'missing_effort', 'non_finite', 'overflow')
+           'missing_velocity', 'missing_effort', 'non_finite', 'overflow',
+           'oversize')
 SKIPS = ('no_measurement', 'stale_measurement')
+FOLLOWING, HOLDING = 'following', 'holding'
+# Largest |lambdadot_d - lambdadot| (m/s) of a desired state that re-arms.
+REARM_SPEED = 0.01
+_ZERO = (0.0, 0.0, 0.0)
 
 PARAMETERS = Table('ControllerSettings', (
     Spec('kp', 'double_array', [20000.0, 20000.0, 20000.0],
@@ -68,6 +90,11 @@ PARAMETERS = Table('ControllerSettings', (
          'seconds (by arrival time) after which a measurement is too old '
          'to compute a command with: nothing is published until a fresh '
          'one arrives', (0.0001, 3600.0)),
+    Spec('path_tolerance', 'double_array', [0.05, 0.05, 0.05],
+         'largest |lambda_d - lambda| per actuator A, B, C (m) while '
+         'following; beyond it the controller holds the measured position '
+         '(ERROR) until a desired state comes within half of it; 0.0: no '
+         'limit for that actuator', check=nonnegative_triple),
 ))
 
 JointValues = namedtuple('JointValues', 'position velocity effort')
@@ -175,6 +202,11 @@ class Tracking:
         self.skipped = dict.fromkeys(SKIPS, 0)
         self.commands = 0
         self.clipped = 0
+        self.mode = FOLLOWING
+        self.trips = 0
+        self.hold = None            # JointValues held while holding
+        self.hold_message = None    # why it holds
+        self._bias = None           # the last force sent while following
         self._period = Period(now)
 
     def configure(self, settings):
@@ -186,6 +218,12 @@ class Tracking:
         if settings.joint_names != self.settings.joint_names:
             self.measurement = self.measurement_arrival = None
         self.settings = settings
+
+    def reject(self, source, rejection):
+        """Count a message on ``source`` refused before it was read."""
+        self.received[source] += 1
+        self.rejected[source, rejection.reason] += 1
+        raise rejection
 
     def measured(self, names, position, velocity, effort, now):
         """Take a measured joint state; it becomes the newest measurement."""
@@ -213,8 +251,14 @@ class Tracking:
         if not self.fresh(now):
             self.skipped['stale_measurement'] += 1
             return None
+        self._check_path(values)
         try:
-            command = control_law(settings, values, self.measurement)
+            if self.mode == HOLDING:
+                command = control_law(settings._replace(feedforward=True),
+                                      self.hold, self.measurement)
+            else:
+                command = control_law(settings, values, self.measurement)
+                self._bias = command.force
         except Rejected as rejection:
             self.rejected['desired', rejection.reason] += 1
             raise
@@ -222,6 +266,36 @@ class Tracking:
         self.clipped += command.clipped
         self.latest = command
         return command
+
+    def _check_path(self, desired):
+        """Trip to holding, or re-arm, by the path tolerance (see above)."""
+        settings = self.settings
+        measured = self.measurement.position
+        errors = [d - m for d, m in zip(desired.position, measured)]
+        tolerance = settings.path_tolerance
+        if self.mode == HOLDING:
+            speeds = self.measurement.velocity
+            if all((t == 0.0 or abs(e) <= 0.5 * t)
+                   and abs(v - w) <= REARM_SPEED for e, t, v, w in zip(
+                       errors, tolerance, desired.velocity, speeds)):
+                self.mode, self.hold, self.hold_message = FOLLOWING, None, None
+            return
+        beyond = [i for i, (e, t) in enumerate(zip(errors, tolerance))
+                  if t > 0.0 and abs(e) > t]
+        if not beyond:
+            return
+        i = beyond[0]
+        bias = self._bias or (desired.effort if settings.feedforward
+                              else _ZERO)
+        self.mode, self.trips = HOLDING, self.trips + 1
+        self.hold = JointValues(measured, _ZERO, tuple(bias))
+        self.hold_message = (
+            f'holding: path tolerance exceeded on '
+            f'{settings.joint_names[i]!r} (desired - measured = '
+            f'{errors[i]:.4g} m, path_tolerance {tolerance[i]:g} m); holds '
+            f'lambda = {[round(x, 6) for x in measured]} m, re-arms on a '
+            'desired state within half of path_tolerance and '
+            f'{REARM_SPEED:g} m/s of the measured state')
 
     def fresh(self, now):
         """Whether the newest measurement arrived within the timeout."""
@@ -233,7 +307,8 @@ class Tracking:
         """
         Return the :class:`Status` of the period ending at ``now``.
 
-        ERROR after an internal error; WARN when desired states were
+        ERROR after an internal error or while holding (path tolerance
+        exceeded); WARN when desired states were
         skipped (no fresh measurement) or joint states rejected in the
         period; else OK (``waiting for desired states`` until one came).
         """
@@ -247,6 +322,7 @@ class Tracking:
             else f'newest measurement {age:.3f} s old'
         level, message = first(
             internal_errors,
+            (self.mode == HOLDING, ERROR, self.hold_message),
             (new['skipped'], WARN,
              f'{new["skipped"]} desired state(s) without a fresh '
              f'measurement ({what}): nothing commanded'),
@@ -273,6 +349,8 @@ class Tracking:
         values += [(f'rejected {i} {r}', self.rejected[i, r])
                    for i in INPUTS for r in REASONS]
         values += [
+            ('mode', self.mode),
+            ('path tolerance trips', self.trips),
             ('feedforward', settings.feedforward),
             ('force_limit (N)', settings.force_limit),
             ('internal errors', internal_errors),

@@ -17,18 +17,20 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
+from orthoglide_ros import cdr
 from orthoglide_ros.inputs import Rejected
 from orthoglide_ros.node_runtime import default_qos, InputNode, run
-from orthoglide_ros.tracking import PARAMETERS, Tracking
+from orthoglide_ros.tracking import HOLDING, PARAMETERS, Tracking
 
 
 class TrackingControllerNode(InputNode):
     """
     Node ``tracking_controller``: PD plus feedforward on the three actuators.
 
-    Both joint-state subscriptions are read on the input thread of
-    :class:`InputNode`; the diagnostics timer and the parameter services
-    run on the executor; both hold ``self.lock`` on the core.
+    Both joint-state inputs are read on the input thread of
+    :class:`InputNode` (raw, decoded by :mod:`cdr` outside the lock); the
+    diagnostics run on a periodic thread and the parameter services on the
+    executor; all hold ``self.lock`` on the core.
     """
 
     def __init__(self, **kwargs):
@@ -44,12 +46,14 @@ class TrackingControllerNode(InputNode):
         # Measured first: when both inputs are ready in one wake-up of the
         # input thread, the measurements are taken before the desired
         # states, so a command uses the newest measurement.
-        self.create_input_subscription(
+        self.create_input(
             JointState, 'joint_states', self._on_measured, default_qos(),
+            'measured', decode=cdr.joint_state,
             qos_overriding_options=overrides)
-        self.create_input_subscription(
+        self.create_input(
             JointState, 'feedforward/joint_states', self._on_desired,
-            default_qos(), qos_overriding_options=overrides)
+            default_qos(), 'desired', decode=cdr.joint_state,
+            qos_overriding_options=overrides)
 
         self._command = Float64MultiArray()
         self._command.layout.dim = [
@@ -57,32 +61,47 @@ class TrackingControllerNode(InputNode):
         self.publish_status('Orthoglide tracking controller', self._core)
         # The core swaps its settings at once (under the lock).
         self.apply_changes_with(self._core.configure)
-        self.start_inputs()
+        self.start_threads()
 
     # Inputs (input thread, self.lock held) --------------------------------
-    def _on_measured(self, msg):
-        self._take('measured', self._core.measured, msg)
+    def _on_measured(self, fields):
+        self._take('measured', self._core.measured, fields)
 
-    def _on_desired(self, msg):
-        command = self._take('desired', self._core.desired, msg)
+    def _on_desired(self, fields):
+        mode = self._core.mode
+        command = self._take('desired', self._core.desired, fields)
+        if self._core.mode != mode:
+            self.log('error' if self._core.mode == HOLDING else 'info',
+                     self._core.hold_message or 'path tolerance re-armed: '
+                     'following the desired states again')
         if command is not None:
             self._command.data = array.array('d', command.force)
             self._pub_commands.publish(self._command)
 
-    def _take(self, source, method, msg):
-        """Hand one joint state to the core; warn on a rejection."""
+    def on_input_rejected(self, source, rejection):
+        """Count a joint state refused before it was read."""
         try:
-            return method(msg.name, msg.position, msg.velocity, msg.effort,
-                          self.arrival)
+            self._core.reject(source, rejection)
+        except Rejected:
+            self._warn(source, rejection)
+
+    def _take(self, source, method, fields):
+        """Hand one joint state to the core; warn on a rejection."""
+        _, _, names, position, velocity, effort = fields
+        try:
+            return method(names, position, velocity, effort, self.arrival)
         except Rejected as rejection:
-            self.warn_throttled(
-                (source, rejection.reason),
-                f'{source} joint state rejected ({rejection.reason}): '
-                f'{rejection}')
+            self._warn(source, rejection)
         except Exception:   # a defect, not bad input: publish nothing, go on
             self.report_defect(f'on a {source} joint state, nothing '
                                'published')
         return None
+
+    def _warn(self, source, rejection):
+        self.warn_throttled(
+            (source, rejection.reason),
+            f'{source} joint state rejected ({rejection.reason}): '
+            f'{rejection}')
 
 
 def main(args=None):

@@ -17,6 +17,9 @@ pytest.importorskip('rclpy')
 from geometry_msgs.msg import (AccelStamped, PoseStamped,  # noqa: E402
                                Transform, Twist, TwistStamped)
 from rclpy.serialization import serialize_message  # noqa: E402
+from sensor_msgs.msg import JointState  # noqa: E402
+from std_msgs.msg import (Float64MultiArray,  # noqa: E402
+                          MultiArrayDimension)
 from trajectory_msgs.msg import (MultiDOFJointTrajectory,  # noqa: E402
                                  MultiDOFJointTrajectoryPoint)
 
@@ -129,3 +132,41 @@ def test_unreadable_buffers_raise_cdr_error(reader, msg):
         pytest.fail(f'a buffer cut at {cut} of {len(data)} bytes was read')
     with pytest.raises(cdr.CdrError):
         reader(b'\x00\x00' + data[2:])       # big-endian encapsulation
+
+
+names = st.lists(frames.filter(bool), max_size=6)
+doubles = st.lists(floats, max_size=6)
+
+
+@settings(max_examples=200, deadline=None)
+@given(stamps, frames, names, doubles, doubles, doubles)
+def test_joint_state(stamp, frame, joint_names, position, velocity, effort):
+    msg = header(JointState(), stamp, frame)
+    msg.name = joint_names
+    msg.position, msg.velocity, msg.effort = position, velocity, effort
+    got = cdr.joint_state(serialize_message(msg))
+    assert got[:3] == (stamp, frame, tuple(joint_names))
+    for read, sent in zip(got[3:], (position, velocity, effort)):
+        assert same(read, sent)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.tuples(frames, st.integers(0, 2**32 - 1),
+                          st.integers(0, 2**32 - 1)), max_size=3),
+       st.integers(0, 2**32 - 1), doubles)
+def test_float64_array(dims, data_offset, data):
+    msg = Float64MultiArray(data=data)
+    msg.layout.dim = [MultiArrayDimension(label=label, size=size,
+                                          stride=stride)
+                      for label, size, stride in dims]
+    msg.layout.data_offset = data_offset
+    assert same(cdr.float64_array(serialize_message(msg)), data)
+
+
+def test_too_many_joint_names_is_a_limit_not_a_decoding_failure():
+    names = ['j'] * (cdr.MAX_JOINT_NAMES + 1)
+    msg = MultiDOFJointTrajectory(joint_names=names)
+    with pytest.raises(cdr.LimitError):
+        cdr.trajectory_point(serialize_message(msg))
+    msg.joint_names = msg.joint_names[:cdr.MAX_JOINT_NAMES]
+    assert cdr.trajectory_point(serialize_message(msg))[2] is None

@@ -47,7 +47,7 @@ from orthoglide_ros import trajectory  # noqa: E402
 
 rclpy = pytest.importorskip('rclpy')
 harness = pytest.importorskip('closed_loop_harness')
-from orthoglide_ros.simulator_node import MAX_CATCH_UP  # noqa: E402
+from orthoglide_ros.simulator import MAX_CATCH_UP  # noqa: E402
 
 # Measured: see the module docstring and doc/measurements.md (closed loop).
 OPEN_LOOP_BOUND = 0.025    # m, largest position error in the first second

@@ -395,7 +395,8 @@ def test_trajectory_point_without_velocities_malformed(missing):
 
 def test_reject_malformed_counts():
     ff = core()
-    rejected(ff, 'malformed', lambda: ff.reject_malformed('trajectory', 'empty', 0.0))
+    rejected(ff, 'malformed', lambda: ff.reject(
+        'trajectory', Rejected('malformed', 'empty')))
 
 
 # Freshness -------------------------------------------------------------------

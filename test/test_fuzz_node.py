@@ -42,7 +42,7 @@ from trajectory_msgs.msg import (MultiDOFJointTrajectory,
 
 from orthoglide_ros import cdr, mechanics
 from orthoglide_ros.feedforward import INPUTS, ORIENTATION_TOLERANCE
-from orthoglide_ros.feedforward_node import FeedforwardNode, read_raw
+from orthoglide_ros.feedforward_node import FeedforwardNode, raw_decoder
 
 from fuzz_strategies import any_float, inside, states
 from node_harness import header_stamp, Probe, spin_until
@@ -55,6 +55,7 @@ ZERO = (0.0, 0.0, 0.0)
 INT32_MAX = 2**31 - 1
 MALFORMED = object()      # what a reader gives for an unreadable buffer
 NOW = 'now'               # a trajectory header stamp of zero
+BAD = 'bad'               # a trajectory stamp part with nanosec >= 1e9
 Window = namedtuple('Window', 'low high')   # ns: where "now" + offset lies
 L3 = 0.85                 # the node's robot here: the paper's
 FUZZ = settings(deadline=None,
@@ -105,7 +106,8 @@ class Model:
 
     @staticmethod
     def bad_stamp(stamp):
-        return stamp[0] < 0 or stamp[0] > INT32_MAX or stamp == (0, 0)
+        return (stamp[0] < 0 or stamp[0] > INT32_MAX or stamp == (0, 0)
+                or not 0 <= stamp[1] < 10**9)
 
     def take(self, source, fields):
         """Apply one read message (or MALFORMED) on input ``source``."""
@@ -140,7 +142,7 @@ class Model:
         if point is None:
             return self.reject('malformed')
         p, q, v, a, _ = point
-        if stamp is not NOW and self.bad_stamp(stamp):
+        if stamp is BAD or stamp is not NOW and self.bad_stamp(stamp):
             return self.reject('stamp')
         if v is None or a is None:
             if not self.settings.pose_only:
@@ -180,7 +182,7 @@ READERS = {'pose': cdr.pose_stamped, 'twist': cdr.vector3_stamped,
 def read_like_node(source, data):
     """Read a (corrupted) buffer the node's way: cdr, else rclpy, else bad."""
     try:
-        return read_raw(READERS[source], data, KINDS[source])
+        return raw_decoder(READERS[source], KINDS[source])(data)
     except Exception:
         return MALFORMED
 
@@ -297,8 +299,11 @@ frames = mostly(st.sampled_from(['', BASE_FRAME]), st.one_of(
     st.sampled_from(['world', 'base_link/', 'BASE_LINK', ' base_link']),
     st.text(st.characters(blacklist_categories=('Cs',),
                           blacklist_characters='\x00'), max_size=6)), 8)
+# Nanoseconds of a stamp: mostly valid, now and then not (>= 1e9).
+nanoseconds = mostly(st.integers(0, 10**9 - 1), st.integers(10**9,
+                                                            2**32 - 1), 8)
 # ('fresh', nanosec): a new stamp; 'repeat': the last fresh one again.
-stamps = mostly(st.tuples(st.just('fresh'), st.integers(0, 2**32 - 1)),
+stamps = mostly(st.tuples(st.just('fresh'), nanoseconds),
                 st.one_of(
     st.just(('zero',)), st.just(('repeat',)),
     st.tuples(st.just('negative'), st.integers(-2**31, -1),
@@ -307,9 +312,9 @@ stamps = mostly(st.tuples(st.just('fresh'), st.integers(0, 2**32 - 1)),
               st.integers(0, 2**32 - 1))))
 offsets = mostly(
     st.one_of(st.just((0, 0)),
-              st.tuples(st.integers(0, 3), st.integers(0, 2**32 - 1))),
+              st.tuples(st.integers(0, 3), nanoseconds)),
     st.tuples(st.sampled_from([-2**31, -5, INT32_MAX - 1, INT32_MAX]),
-              st.integers(0, 2**32 - 1)))
+              nanoseconds))
 corruptions = mostly(st.none(), st.one_of(
     st.tuples(st.just('cut'), st.floats(0.0, 0.999), st.none()),
     st.tuples(st.just('flip'), st.floats(0.0, 0.999),
@@ -367,9 +372,6 @@ class Run:
     def __init__(self, rig):
         self.rig = rig
         node = rig.node
-        self.callbacks = {'pose': node._on_pose, 'twist': node._on_twist,
-                          'accel': node._on_accel,
-                          'trajectory': node._on_trajectory}
         core = node._core
         self.model = Model(core.received, core.rejected, core.settings)
         self.expected = []      # (stamp or Window, Solution), in order
@@ -386,16 +388,15 @@ class Run:
         return spec[1:]
 
     def deliver(self, source, data, fields):
-        """Call one raw callback; check the node's reaction and counters."""
+        """Deliver one message as the input thread does; check everything."""
         node = self.rig.node
         before = node.get_clock().now().nanoseconds
-        node.arrival = time.monotonic()     # as the input thread sets it
-        assert self.callbacks[source](data) is None
+        assert node.deliver(source, data, time.monotonic()) is None
         after = node.get_clock().now().nanoseconds
         window = None
         if fields is not MALFORMED and source == 'trajectory' and \
-                fields[2] is not None and fields[0] == (0, 0):
-            fields, window = self.now_stamp(fields, before, after)
+                fields[2] is not None:
+            fields, window = self.point_stamp(fields, before, after)
         outcome = self.model.take(source, fields)
         published = node._core.published - self.published
         self.published = node._core.published
@@ -411,15 +412,24 @@ class Run:
         assert core.rejected == self.model.rejected, (source, fields,
                                                       outcome)
 
-    def now_stamp(self, fields, before, after):
+    @staticmethod
+    def point_stamp(fields, before, after):
         """
-        Resolve a zero trajectory stamp: the node's clock plus the offset.
+        Resolve a trajectory's stamp as the node does: header + offset.
 
-        Returns the fields with the stamp as NOW (valid) or an invalid
-        stamp, and the Window the output's stamp must lie in; the drawn
-        offsets keep both ends on the same side of the int32 limits.
+        A header or offset whose nanosec is not in [0, 1e9) gives BAD; a
+        zero header is the node's clock (between ``before`` and ``after``)
+        plus the offset: NOW (valid) or the invalid stamp, and the Window
+        the output's stamp must lie in (the drawn offsets keep both ends on
+        the same side of the int32 limits). Returns (fields, window).
         """
-        offset = fields[2][4]
+        header, frame, point = fields
+        offset = point[4]
+        if not (0 <= header[1] < 10**9 and 0 <= offset[1] < 10**9):
+            return (BAD, frame, point), None
+        if header != (0, 0):
+            total = (header[0] + offset[0]) * 10**9 + header[1] + offset[1]
+            return (divmod(total, 10**9), frame, point), None
         ends = [t + offset[0] * 10**9 + offset[1] for t in (before, after)]
         bad = [Model.bad_stamp(divmod(t, 10**9)) for t in ends]
         assert bad[0] == bad[1], ends
@@ -447,33 +457,14 @@ class Run:
         t.header = self.stamp(t.stamp)
         data = serialize_message(trajectory_message(t))
         if t.corruption is None:
-            zero = t.header == (0, 0)
-            total = (t.header[0] + t.offset[0]) * 10**9 + t.header[1] \
-                + t.offset[1]
-            fields = trajectory_fields(
-                t, (0, 0) if zero else divmod(total, 10**9))
+            fields = trajectory_fields(t, t.header)
         else:
             data = corrupt(data, t.corruption)
             fields = read_like_node('trajectory', data)
-            if fields is not MALFORMED:
-                fields = self.as_node_stamp(fields)
         self.deliver('trajectory', data, fields)
 
-    @staticmethod
-    def as_node_stamp(fields):
-        """Turn a read trajectory's header stamp into the setpoint's."""
-        stamp, frame, point = fields
-        if point is None or stamp == (0, 0):
-            return fields
-        offset = point[4]
-        total = (stamp[0] + offset[0]) * 10**9 + stamp[1] + offset[1]
-        return (divmod(total, 10**9), frame, point)
-
     def garbage(self, g):
-        fields = read_like_node(g.source, g.data)
-        if g.source == 'trajectory' and fields is not MALFORMED:
-            fields = self.as_node_stamp(fields)
-        self.deliver(g.source, g.data, fields)
+        self.deliver(g.source, g.data, read_like_node(g.source, g.data))
 
     def run(self, items):
         for item in items:

@@ -30,9 +30,9 @@ class SlowReader(InputNode):
     def __init__(self, context):
         super().__init__('slow_reader', context=context)
         self.seen = []      # (value, arrival, monotonic time of the call)
-        self.create_input_subscription(Float64, 'values', self._on_value,
-                                       default_qos())
-        self.start_inputs()
+        self.create_input(Float64, 'values', self._on_value, default_qos(),
+                          'values')
+        self.start_threads()
 
     def _on_value(self, msg):
         self.seen.append((msg.data, self.arrival, time.monotonic()))

@@ -30,7 +30,8 @@ from std_srvs.srv import Trigger
 from orthoglide_ros import mechanics
 from orthoglide_ros.robot import Robot
 from orthoglide_ros.simulation import Plant
-from orthoglide_ros.simulator_node import MAX_CATCH_UP, SimulatorNode
+from orthoglide_ros.simulator import MAX_CATCH_UP
+from orthoglide_ros.simulator_node import SimulatorNode
 
 from node_harness import (
     assert_clean_exit, header_stamp, node_executable, node_graphs, PROBE_QOS,
@@ -253,7 +254,9 @@ def test_publish_rate_samples_the_steps(graph):
 
     The physics keeps its 1 ms step (every published state is the Plant's
     after as many 1 ms steps); at most one state per 4 ms of the publish
-    grid, and at least one per tick (MAX_CATCH_UP steps at most).
+    grid, and at least one per tick (MAX_CATCH_UP steps at most). An
+    overrun (time dropped on a busy machine) moves the grid on without
+    steps: each may put two published states four steps apart or less.
     """
     every = 4
     g = graph({'command_timeout': 0.2, 'publish_rate_hz': 1000.0 / every})
@@ -279,7 +282,9 @@ def test_publish_rate_samples_the_steps(graph):
     assert steps / MAX_CATCH_UP <= len(published) <= steps / every + 2, (
         len(published), steps)
     periods = [(k - published[0]) // every for k in published]
-    assert all(b > a for a, b in zip(periods, periods[1:])), published
+    overruns = int(values(status)['overruns (time dropped)'])
+    close = sum(b <= a for a, b in zip(periods, periods[1:]))
+    assert close <= overruns, (published, overruns)
 
 
 def test_stop_with_clear_error_then_reset(graph, capfd):

@@ -30,8 +30,14 @@ EPS = 2.0 ** -52
 
 
 def settings(**changes):
-    """Return validated settings: the defaults with ``changes``."""
+    """
+    Return validated settings: the defaults with ``changes``.
+
+    The path tolerance is off unless given: the law's tests use errors far
+    beyond it (its own tests below set it).
+    """
     values = default_controller_parameters()
+    values['path_tolerance'] = [0.0] * 3
     values.update(changes)
     return controller_settings_from_parameters(values)
 
@@ -66,7 +72,8 @@ def test_specs_defaults_and_names():
     """The table's names, types and defaults are the documented ones."""
     specs = {s.name: s for s in CONTROLLER_SPECS}
     assert list(specs) == ['kp', 'kd', 'feedforward', 'force_limit',
-                           'joint_names', 'measurement_timeout']
+                           'joint_names', 'measurement_timeout',
+                           'path_tolerance']
     assert specs['kp'].type == specs['kd'].type == 'double_array'
     assert specs['kp'].default == [20000.0] * 3
     assert specs['kd'].default == [1200.0] * 3
@@ -74,6 +81,7 @@ def test_specs_defaults_and_names():
     assert specs['force_limit'].default == 1000.0
     assert specs['joint_names'].default == list(NAMES)
     assert specs['measurement_timeout'].default == 0.05
+    assert specs['path_tolerance'].default == [0.05] * 3
     for spec in CONTROLLER_SPECS:
         assert spec.description
     s = settings()
@@ -379,3 +387,69 @@ def test_clipped_counted_and_configure_applies():
                            [0.0] * 3, 0.02)
     assert command.force == (20000.0, -20000.0, 0.0)
     assert core.clipped == 2 and core.commands == 2
+
+
+# Path tolerance --------------------------------------------------------------
+def test_path_tolerance_trips_holds_and_re_arms():
+    """
+    Beyond path_tolerance: hold the measured position with the last bias.
+
+    The bias is the last command sent while following; the hold law is
+    f = b + Kp (lambda_hold - lambda) - Kd lambdadot; ERROR meanwhile; a
+    desired state within half the tolerance and at the measured speed
+    re-arms (one passing by does not).
+    """
+    s = settings(path_tolerance=[0.05, 0.05, 0.05], kp=[100.0] * 3,
+                 kd=[10.0] * 3)
+    core = Tracking(s)
+    send_measured(core, (0.0, 0.0, 0.0), 0.0)
+    following = send_desired(core, (0.01, 0.0, -0.01), 0.01,
+                             effort=(1.0, 2.0, 250.0))
+    assert core.mode == 'following'
+    assert following.force == (2.0, 2.0, 249.0)      # ff + kp e
+    # The stream moved on while the robot stood: 0.2 m away on B.
+    send_measured(core, (0.005, 0.0, 0.0), 0.02, velocity=(0.1, 0.0, 0.0))
+    held = send_desired(core, (0.01, 0.2, 0.0), 0.03,
+                        effort=(9.0, 9.0, 9.0))
+    assert core.mode == 'holding' and core.trips == 1
+    # b = (2, 2, 249); hold = (0.005, 0, 0); here e = 0, v = 0.1 on A.
+    assert held.force == pytest.approx((2.0 - 10.0 * 0.1, 2.0, 249.0))
+    status = core.status(0.5)
+    assert status.level == 2 and "'slider_b'" in status.message
+    assert dict(status.values)['path tolerance trips'] == 1
+    # Still beyond half the tolerance (0.03 > 0.025): still holding.
+    send_measured(core, (0.0, 0.0, 0.0), 0.04)
+    again = send_desired(core, (0.0, 0.03, 0.0), 0.05)
+    assert core.mode == 'holding'
+    assert again.force == pytest.approx((2.0 + 100.0 * 0.005, 2.0, 249.0))
+    # Within half of it but passing by at speed: still holding.
+    send_desired(core, (0.0, 0.02, 0.0), 0.055, velocity=(0.0, 0.1, 0.0))
+    assert core.mode == 'holding'
+    # Within half of it, at rest: following again, with its law.
+    rearmed = send_desired(core, (0.0, 0.02, 0.0), 0.06,
+                           effort=(1.0, 1.0, 1.0))
+    assert core.mode == 'following' and core.trips == 1
+    assert rearmed.force == pytest.approx((1.0, 1.0 + 100.0 * 0.02, 1.0))
+    assert core.status(1.0).level == 0
+
+
+def test_path_tolerance_zero_disables_an_actuator():
+    """0.0: no limit on that actuator, the others still trip."""
+    core = Tracking(settings(path_tolerance=[0.0, 0.05, 0.05]))
+    send_measured(core, (0.0, 0.0, 0.0), 0.0)
+    send_desired(core, (1.0, 0.0, 0.0), 0.01)
+    assert core.mode == 'following'
+    send_desired(core, (1.0, 0.06, 0.0), 0.02)
+    assert core.mode == 'holding'
+
+
+def test_hold_bias_before_any_command():
+    """A trip on the first desired state holds with its effort (ff on)."""
+    core = Tracking(settings(path_tolerance=[0.05] * 3))
+    send_measured(core, (0.0, 0.0, 0.0), 0.0)
+    held = send_desired(core, (0.0, 0.0, 0.3), 0.01,
+                        effort=(0.0, 0.0, 256.5))
+    assert core.mode == 'holding' and held.force == (0.0, 0.0, 256.5)
+    off = Tracking(settings(path_tolerance=[0.05] * 3, feedforward=False))
+    send_measured(off, (0.0, 0.0, 0.0), 0.0)
+    assert send_desired(off, (0.0, 0.0, 0.3), 0.01).force == (0.0,) * 3

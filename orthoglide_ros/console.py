@@ -1,0 +1,57 @@
+"""
+The nodes' console scripts: signals first, then the imports.
+
+``ros2 run orthoglide_ros feedforward`` runs :func:`feedforward`, and so on
+for each node. The first thing each does, before any import of rclpy, numpy
+or the node's module (about 0.3 s), is :func:`install_signal_handlers`:
+from then on SIGINT (Ctrl-C) and SIGTERM only record that a stop was asked.
+The node's ``run()`` (``node_runtime.run``) looks at :data:`STOP` before it
+starts and while it spins, so a signal at any moment, during the imports
+included, ends the process with exit code 0 and nothing on standard error
+(Python's defaults would print a KeyboardInterrupt traceback or die by the
+signal).
+
+This module imports only the standard library.
+"""
+
+import importlib
+import signal
+
+# The signals received so far (their numbers): a stop was asked if any.
+STOP = []
+
+
+def install_signal_handlers():
+    """Make SIGINT and SIGTERM append to :data:`STOP`; return STOP."""
+    for number in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(number, _record)
+    return STOP
+
+
+def _record(number, frame):
+    STOP.append(number)
+
+
+def _run(module):
+    install_signal_handlers()
+    return importlib.import_module(f'orthoglide_ros.{module}').main()
+
+
+def feedforward():
+    """Run the ``feedforward`` node; return its exit code."""
+    return _run('feedforward_node')
+
+
+def simulator():
+    """Run the ``simulator`` node; return its exit code."""
+    return _run('simulator_node')
+
+
+def tracking_controller():
+    """Run the ``tracking_controller`` node; return its exit code."""
+    return _run('tracking_controller_node')
+
+
+def setpoint_publisher():
+    """Run the ``setpoint_publisher`` node; return its exit code."""
+    return _run('setpoint_publisher_node')

@@ -1,0 +1,70 @@
+"""
+The setpoint publisher's stream without ROS: eq. (6), the way back, loops.
+
+Without ``loop`` one pass of eq. (6), then the end. With it the pass and
+the way back (a quintic from the pass's end state to its start state)
+repeat with period ``duration + return_duration``, and the motion is
+continuous in position, velocity and acceleration at every joint of the
+pieces: the issue-13 defect was a 343.7 mm jump back to home.
+"""
+
+import numpy as np
+import pytest
+
+from orthoglide_ros import trajectory
+from orthoglide_ros.setpoint_publisher import PARAMETERS, Stream
+
+
+def stream(**changes):
+    return Stream(PARAMETERS.parse(changes))
+
+
+def test_one_pass_is_eq6_then_ends():
+    s = stream(duration=1.0)
+    for t in (0.0, 0.3, 1.0):
+        assert s.sample(t) == trajectory.paper_sample(t)
+    assert s.sample(1.0 + 1e-9) is None
+
+
+@pytest.mark.parametrize('duration, back', [(2.0, 4.0), (0.5, 0.5),
+                                            (2.0, 0.2)])
+def test_loop_is_continuous_at_both_joints(duration, back):
+    s = stream(loop=True, duration=duration, return_duration=back)
+    period = duration + back
+    for joint in (duration, period, 2 * period + duration):
+        before, after = s.sample(joint - 1e-12), s.sample(joint + 1e-12)
+        for a, b in zip(before, after):
+            assert np.allclose(a, b, atol=1e-6), (joint, a, b)
+    # Each pass starts where eq. (6) starts: home, at rest.
+    assert s.sample(period) == trajectory.paper_sample(0.0)
+
+
+def test_way_back_meets_both_states_exactly():
+    end = trajectory.paper_sample(2.0)
+    start = trajectory.paper_sample(0.0)
+    way = trajectory.quintic(end, start, 4.0)
+    for got, want in zip(way(0.0), end):
+        assert np.allclose(got, want, rtol=0, atol=1e-15)
+    for got, want in zip(way(4.0), start):
+        assert np.allclose(got, want, rtol=0, atol=1e-12)
+
+
+def test_default_way_back_keeps_the_pass_peaks():
+    """The default 4 s: peak speed and acceleration within 2 % of the pass's."""
+    s = stream(loop=True)
+    times = np.linspace(0.0, 6.0, 6001)
+    samples = [s.sample(t) for t in times]
+    speed = np.linalg.norm([v for _, v, _ in samples], axis=1)
+    accel = np.linalg.norm([a for _, _, a in samples], axis=1)
+    on_pass = times <= 2.0
+    assert speed[~on_pass].max() <= 1.02 * speed[on_pass].max()
+    assert accel[~on_pass].max() <= 1.02 * accel[on_pass].max()
+
+
+def test_stream_counts_passes_and_gaps():
+    s = stream(loop=True, duration=0.5, return_duration=0.5)
+    for k in range(30):
+        assert s.next(10**9 + k * 100_000_000) is not None
+    assert s.passes == 3 and s.published == 30
+    assert s.largest_gap_ns == 100_000_000
+    assert '3 pass(es)' in s.summary()
