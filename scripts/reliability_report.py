@@ -18,7 +18,10 @@ those of ``test/reliability_harness.py`` (the tests run them shorter):
   both inputs; SIGINT and SIGTERM mid-stream;
 - ``test/test_fuzz_node.py`` and ``test/test_fuzz_mechanics.py`` (when
   present) through pytest, with ``--hypothesis-seed`` and
-  ``ORTHOGLIDE_FUZZ_EXAMPLES`` when the files read it.
+  ``ORTHOGLIDE_FUZZ_EXAMPLES`` when the files read it;
+- the hostile peers and stalls of issue 13 (``test/hostile_harness.py``
+  and ``harness.big_messages``), every node, one line each with its
+  figures against the target (``--hostile-only`` runs just these).
 
 Run it through ``scripts/reliability_report.sh`` (venv, localhost, own
 domain). Exit code 1 on a hard failure (a crash, a non-finite or wrong
@@ -49,6 +52,7 @@ sys.path.insert(0, os.path.join(ROOT, 'test'))
 
 import numpy as np  # noqa: E402
 
+import hostile_harness as hostile  # noqa: E402
 import reliability_harness as harness  # noqa: E402
 
 
@@ -197,6 +201,107 @@ def report(results, fuzz, args, elapsed):
     return lines, bool(hard)
 
 
+def hostile_report():
+    """Run the issue-13 cases; return the report's lines and a failure."""
+    lines, hard = ['', 'Hostile peers and stalls (issue 13):'], False
+
+    def line(ok, text):
+        nonlocal hard
+        hard = hard or not ok
+        lines.append(f'- {"ok    " if ok else "MISSED"} {text}')
+
+    def run(label, function, **kwargs):
+        say(f'{label} ...')
+        try:
+            return function(**kwargs)
+        except (hostile.HarnessError, harness.HarnessError) as error:
+            line(False, f'{label}: NOT DONE: {error}')
+            return None
+
+    r = run('malformed parameter requests', hostile.malformed_parameters)
+    if r is not None:
+        line(all(o['refused'] and o['alive'] and o['answers_after']
+                 and o['code'] == 0 for o in r.values()),
+             'malformed parameter request (type 200), set and atomic: '
+             + ', '.join(n + (' refused, up' if o['refused'] and o['alive']
+                              else ' FAILED') for n, o in r.items()))
+    r = run('absurd parameters', hostile.absurd_parameters)
+    if r is not None:
+        refused = all(not ok for changes in r['runtime'].values()
+                      for ok, _ in changes.values())
+        line(refused and all(r['alive'].values()) and all(
+            code == 2 for code, _ in r['startup'].values()),
+             f'absurd values ({", ".join(hostile.ABSURD["simulator"])}, '
+             f'...): refused at run time {refused}, nodes up '
+             f'{all(r["alive"].values())}; -p robot.l3:=1e200 at start: '
+             f'exit {[code for code, _ in r["startup"].values()]}')
+    r = run('big messages', harness.big_messages, say=say)
+    if r is not None:
+        line(r['missing'] == 0 and r['crashes'] == 0
+             and r['latency_during_max'] <= r['latency_outside_max'] + 0.1,
+             f'{r["attacks"]} messages of 3-16 MB on setpoint/trajectory '
+             f'beside a reliable {r["rate"]} Hz stream: {r["sent"]} sent, '
+             f'{r["missing"]} lost; latency max '
+             f'{r["latency_outside_max"] * 1e3:.1f} ms without, '
+             f'{r["latency_during_max"] * 1e3:.1f} ms during '
+             f'the attack (p99 {r["latency_outside_p99"] * 1e3:.1f} / '
+             f'{r["latency_during_p99"] * 1e3:.1f}); {r["rejected"]}')
+    r = run('stall and resume', hostile.stall_resume)
+    if r is not None:
+        worst_f = max(s['max_force'] for s in r['stalls'].values())
+        worst_v = max(s['max_speed'] for s in r['stalls'].values())
+        line(worst_f < r['force_limit'] and worst_v <= 2 * r['peak_speed'],
+             f'2 s SIGSTOP of each process of the closed loop: largest '
+             f'|command| {worst_f:.0f} N (limit {r["force_limit"]:.0f}), '
+             f'largest |lambdadot| {worst_v:.3f} m/s (trajectory peak '
+             f'{r["peak_speed"]:.3f}); per process '
+             + ', '.join(f'{n} {s["max_force"]:.0f} N {s["max_speed"]:.3f} '
+                         f'm/s' for n, s in r['stalls'].items()))
+    r = run('stamps', hostile.stamps)
+    if r is not None:
+        line(r['outputs'] == 0 and r['good'] == 2,
+             f'nanosec >= 1e9 on every input: {r["outputs"]} outputs, '
+             f'{r["rejected_stamp"]} rejected (stamp); the same instants '
+             f'written right: {r["good"]} of 2 served')
+    r = run('signals while starting', hostile.startup_signals)
+    if r is not None:
+        bad = [(n, s, d, c) for n, s, d, c, e in r
+               if c != 0 or not hostile.quiet(e)]
+        line(not bad, f'SIGINT/SIGTERM 0-0.3 s after the first line, every '
+             f'node, and at the end of a pass: {len(r)} tries, '
+             f'{len(bad)} not exit 0 quietly {bad[:3]}')
+    r = run('log amplification', hostile.log_amplification)
+    if r is not None:
+        line(all(o['longest'] <= hostile.LOG_LINE_LIMIT for o in r.values()),
+             'long text and malformed floods: longest log line '
+             + ', '.join(f'{n} {o["longest"]} chars ({o["lines"]} lines)'
+                         for n, o in r.items()))
+    r = run('departed clients', hostile.departed_clients)
+    if r is not None:
+        line(max(r['gaps'].values()) <= 0.2,
+             f'{r["requests"]} requests then gone, x3 (simulator set and '
+             f'~/reset, feedforward set): longest output gap '
+             + ', '.join(f'{n} {g * 1e3:.0f} ms'
+                         for n, g in r['gaps'].items())
+             + f'; replies dropped {r["dropped"]}')
+    r = run('simulator at 10 kHz', hostile.fast_simulator)
+    if r is not None:
+        line(r['received'] == r['sent'] and r['timeouts'] == 1,
+             f'simulator rate_hz 10000, commands at 500 Hz: {r["received"]}'
+             f'/{r["sent"]} taken, {r["timeouts"] - 1} spurious timeouts, '
+             f'{r["step_rate"]:.0f} steps/s, status {r["message"]!r}')
+    r = run('setpoint loop', hostile.setpoint_loop)
+    if r is not None:
+        line(r['jump_p'] <= r['jump_p_bound']
+             and r['jump_v'] <= r['jump_v_bound'],
+             f'looping setpoint publisher, {r["passes"]} passes: largest '
+             f'step {r["jump_p"] * 1e3:.3f} mm (bound '
+             f'{r["jump_p_bound"] * 1e3:.3f}), largest velocity step '
+             f'{r["jump_v"] * 1e3:.3f} mm/s (bound '
+             f'{r["jump_v_bound"] * 1e3:.3f})')
+    return lines, hard
+
+
 def main():
     """Run everything; print the report; return the exit code."""
     parser = argparse.ArgumentParser(
@@ -211,8 +316,14 @@ def main():
                         help=f'{FUZZ_VARIABLE} when the fuzz files read it')
     parser.add_argument('--fuzz-timeout', type=float, default=1800.0)
     parser.add_argument('--skip-fuzz', action='store_true')
+    parser.add_argument('--hostile-only', action='store_true',
+                        help='run only the hostile peers and stalls')
     args = parser.parse_args()
     start = time.monotonic()
+    if args.hostile_only:
+        lines, hard = hostile_report()
+        print('\n'.join(lines))
+        return 1 if hard else 0
     results = []
     for label, function, kwargs in runs(args):
         say(f'{label} ...')
@@ -222,8 +333,9 @@ def main():
             results.append((label, dict(case=label, error=str(error))))
     fuzz = run_fuzz(args, int(os.environ['ROS_DOMAIN_ID']))
     lines, hard = report(results, fuzz, args, time.monotonic() - start)
-    print('\n'.join(lines))
-    return 1 if hard else 0
+    more, worse = hostile_report()
+    print('\n'.join(lines + more))
+    return 1 if hard or worse else 0
 
 
 if __name__ == '__main__':

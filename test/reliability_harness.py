@@ -9,7 +9,9 @@ Shared by the tests (``test_flood.py``, ``test_restarts.py``) and by
   reliable QoS and every setpoint is matched to its output;
 - :func:`kill_restart`: the node is SIGKILLed mid-stream and started again;
 - :func:`producer_restart`: the producer is killed or stopped and another
-  one starts with later or earlier stamps.
+  one starts with later or earlier stamps;
+- :func:`big_messages`: a peer sends 3-16 MB messages on the same input
+  while a reliable 500 Hz stream goes on (issue 13).
 
 Each run is four processes, so that no two share a GIL: the node (its
 console script, as a user starts it), a producer and a recorder (this file
@@ -851,6 +853,146 @@ def reliable_stream(rate, duration, kind='trajectory', depth=LOSSLESS_DEPTH,
     return result
 
 
+# Messages a hostile peer sends on setpoint/trajectory: (label, bytes).
+ATTACKS = ('names 8 MB', 'XCDR2 16 MB', 'names 3.8 MB', 'XCDR2 3.4 MB')
+
+
+def attack_payloads():
+    """
+    Return the serialized attack messages (label, bytes) of ATTACKS.
+
+    Legal MultiDOFJointTrajectory messages made long by their joint names
+    (the node reads them one by one); the XCDR2 ones carry the CDR2_LE
+    encapsulation, which the fast reader does not know (the node would
+    hand them to rclpy's deserializer). Two exceed the input's 4 MiB
+    limit, two stay just under it.
+    """
+    from rclpy.serialization import serialize_message
+    from trajectory_msgs.msg import MultiDOFJointTrajectory
+    payloads = []
+    for label, count, width in zip(ATTACKS, (1_000_000, 1_000_000, 480_000,
+                                             210_000), (1, 9, 1, 9)):
+        data = bytearray(serialize_message(MultiDOFJointTrajectory(
+            joint_names=['j' * width] * count)))
+        if label.startswith('XCDR2'):
+            data[1] = 0x07      # CDR2_LE
+        payloads.append((label, bytes(data)))
+    return payloads
+
+
+def attack(args):
+    """
+    Child process: publish the attack messages raw, round robin.
+
+    Says ``ready`` once matched; on ``go`` publishes one message every
+    1/--rate s until ``stop`` or --duration; says ``done count``.
+    """
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
+    from trajectory_msgs.msg import MultiDOFJointTrajectory
+
+    stop = _stop_on_sigint()
+    payloads = attack_payloads()
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    node = rclpy.create_node(f'hostile_attacker_{os.getpid()}')
+    pub = node.create_publisher(MultiDOFJointTrajectory,
+                                'setpoint/trajectory',
+                                qos_profile('reliable', 1))
+    buffer = bytearray()
+    count = 0
+    try:
+        deadline = time.monotonic() + START_TIMEOUT
+        while pub.get_subscription_count() == 0:
+            if stop[0] or time.monotonic() > deadline:
+                return 1
+            time.sleep(0.01)
+        _say('ready')
+        while not stop[0]:
+            lines = _stdin_lines(buffer)
+            if 'go' in lines or 'eof' in lines:
+                break
+            time.sleep(0.01)
+        start = time.monotonic()
+        while not stop[0] and time.monotonic() - start < args.duration:
+            if {'stop', 'eof'} & set(_stdin_lines(buffer)):
+                break
+            pub.publish(payloads[count % len(payloads)][1])
+            count += 1
+            time.sleep(1.0 / args.rate)
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    _say('done', count)
+    return 0
+
+
+def big_messages(rate=500, duration=6.0, attack_rate=4.0, say=None):
+    """
+    Stream reliably at ``rate`` Hz; send 3-16 MB messages on the same input.
+
+    The producer streams for ``duration`` s; the attacker sends
+    :data:`ATTACKS` round robin at
+    ``attack_rate`` Hz during the middle third. Every setpoint is matched
+    to its output: latency = reception by the recorder - publication.
+    Returns the setpoints lost, the latency (p99, max) of the setpoints
+    published outside and during the attack, the attack messages sent and
+    the node's ``rejected`` counters.
+    """
+    say = say or (lambda text: None)
+    result = dict(case='big messages', rate=rate, duration=duration,
+                  attack_rate=attack_rate)
+    deep_input = ('-p', 'qos_overrides./setpoint/trajectory.subscription.'
+                  f'depth:={LOSSLESS_DEPTH}')
+    with Run() as run:
+        run.monitor = Monitor()
+        node = run.start_node(DEEP_OUTPUT + deep_input)
+        recorder = run.start_recorder()
+        producer = run.start_producer('trajectory', 'reliable', rate=rate,
+                                      epoch=100, duration=duration)
+        attacker = Child('attack', ['--rate', str(attack_rate),
+                                    '--duration', str(duration / 3)],
+                         run.workdir, run.env)
+        run.children.append(attacker)
+        attacker.expect('ready', START_TIMEOUT, (node,))
+        run.warm_up(producer, recorder)
+        began = time.monotonic_ns()
+        time.sleep(duration / 3)
+        attacker.send('go')
+        attack_start = time.monotonic_ns()
+        done_attack = attacker.expect('done', duration + START_TIMEOUT,
+                                      (node,))
+        attack_end = time.monotonic_ns()
+        done = producer.expect('done', duration + START_TIMEOUT, (node,))
+        drained(recorder, done, node)
+        log = run.finish_producer(producer)
+        outputs = load_outputs(recorder)
+        run.monitor.spin(0.3)       # what waited in its queue: old
+        status = _status_after(run.monitor, time.monotonic())
+        run.node_alive()
+        run.stop_node()
+        stream = in_epoch(outputs, 100)
+        missing, duplicates, extra = match_stamps(log[:, 0], stream)
+        received = dict(zip(stream[:, 0].astype(np.int64), stream[:, 1]))
+        latency = np.array([received.get(stamp, np.nan) - published
+                            for stamp, published in log[:, :2]]) / 1e9
+        during = (log[:, 1] >= attack_start) & (log[:, 1] <= attack_end)
+        outside = ~during & (log[:, 1] >= began)
+        result.update(
+            sent=len(log), missing=missing, duplicates=duplicates,
+            attacks=int(done_attack[1]),
+            latency_outside_p99=float(np.nanpercentile(latency[outside], 99)),
+            latency_outside_max=float(np.nanmax(latency[outside])),
+            latency_during_p99=float(np.nanpercentile(latency[during], 99)),
+            latency_during_max=float(np.nanmax(latency[during])),
+            rejected={k: v for k, v in status.items()
+                      if k.startswith('rejected') and v != '0'},
+            internal_errors=int(status.get('internal errors', -1)))
+    result.update(crashes=run.crashes(), exits=run.exits)
+    say(f'big messages: {result["sent"]} sent, {result["missing"]} missing, '
+        f'{result["attacks"]} attack messages')
+    return result
+
+
 def kill_restart(cycles, rate=500, running=1.0, outage=0.5,
                  discovery=DISCOVERY_PROFILE, say=None):
     """
@@ -1201,9 +1343,9 @@ def _status_after(monitor, moment, timeout=5.0):
 
 
 def main(argv=None):
-    """Entry point of the child processes: ``produce`` or ``record``."""
+    """Entry point of the child processes: produce, record or attack."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
-    parser.add_argument('role', choices=('produce', 'record'))
+    parser.add_argument('role', choices=('produce', 'record', 'attack'))
     parser.add_argument('--kind', default='trajectory',
                         choices=tuple(INPUT_TOPICS))
     parser.add_argument('--qos', default='reliable')
@@ -1214,7 +1356,8 @@ def main(argv=None):
     parser.add_argument('--log')
     parser.add_argument('--out')
     args = parser.parse_args(argv)
-    return produce(args) if args.role == 'produce' else record(args)
+    return {'produce': produce, 'record': record, 'attack': attack}[
+        args.role](args)
 
 
 if __name__ == '__main__':

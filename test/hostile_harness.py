@@ -1,0 +1,792 @@
+"""
+Hostile peers and stalls against the installed nodes (issue 13).
+
+Shared by ``test_hostile_peers.py`` and ``scripts/reliability_report.py``.
+Every case starts the nodes from their console scripts (as ``ros2 run``
+does), plays the peer from this process or from a child process of its own
+(this file run as a script: ``burst``), and returns a dict of figures that
+the tests assert on and the report prints:
+
+- :func:`malformed_parameters`: set-parameters requests whose value type
+  is not a ParameterType, to every node;
+- :func:`absurd_parameters`: ``robot.l3 = 1e200`` and friends, at run time
+  and at start-up;
+- :func:`stamps`: a nanosecond field >= 1e9 on every input of the
+  feedforward;
+- :func:`startup_signals`: SIGINT and SIGTERM while a node starts;
+- :func:`log_amplification`: long text inside messages, and a flood of
+  malformed ones;
+- :func:`departed_clients`: 100 requests from a client that then leaves;
+- :func:`fast_simulator`: the simulator at 10 kHz with commands at 500 Hz;
+- :func:`stall_resume`: the closed loop, one process stopped for 2 s;
+- :func:`setpoint_loop`: the looping setpoint publisher's way back.
+
+(Big messages on an input are ``reliability_harness.big_messages``: they
+need its producer and recorder.) Every child process is stopped in a
+``finally``; every wait is bounded.
+"""
+
+import argparse
+import math
+import os
+import signal
+import sys
+import threading
+import time
+
+import numpy as np
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter_client import AsyncParameterClient
+from rclpy.serialization import serialize_message
+
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
+                               TwistStamped)
+from rcl_interfaces.msg import Parameter as ParameterMsg
+from rcl_interfaces.msg import ParameterValue
+from rcl_interfaces.srv import (GetParameters, SetParameters,
+                                SetParametersAtomically)
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64MultiArray
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import (MultiDOFJointTrajectory,
+                                 MultiDOFJointTrajectoryPoint)
+
+from node_harness import (node_executable, qos_profile, start_node_process,
+                          stop_process)
+from orthoglide_ros import mechanics, trajectory
+from orthoglide_ros.robot import Robot
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+PARAMS = os.path.join(ROOT, 'config', 'orthoglide.yaml')
+NODES = ('feedforward', 'simulator', 'tracking_controller',
+         'setpoint_publisher')
+START_TIMEOUT = 20.0    # s for nodes to appear and answer
+LOG_LINE_LIMIT = 10000  # characters: the longest log line accepted
+HOLD = mechanics.solve(Robot(), (0.0, 0.0, 0.0)).force   # N, at home
+
+
+class HarnessError(RuntimeError):
+    """A case could not run (a node did not start, a peer failed)."""
+
+
+# A peer in this process ------------------------------------------------------
+class Peer:
+    """
+    An rclpy node in this process, spun by a thread of its own.
+
+    ``record(topic, kind)`` keeps ``(monotonic s, message)`` of a topic;
+    ``diagnostics[name]`` the newest ``{key: value}`` and level per node.
+    Use it as a context manager.
+    """
+
+    def __init__(self, name='hostile_peer'):
+        self.context = rclpy.context.Context()
+        rclpy.init(context=self.context)
+        self.node = Node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.records = {}
+        self.diagnostics = {}
+        self.lock = threading.Lock()
+        self.node.create_subscription(DiagnosticArray, '/diagnostics',
+                                      self._on_diagnostics,
+                                      qos_profile('reliable', 100))
+        self._stop = False
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self):
+        while not self._stop and self.context.ok():
+            try:
+                self.executor.spin_once(timeout_sec=0.05)
+            except Exception:   # shutting down
+                if self._stop:
+                    return
+                raise
+
+    def _on_diagnostics(self, msg):
+        with self.lock:
+            for status in msg.status:
+                node = status.name.split(':')[0]
+                self.diagnostics[node] = (
+                    status.level[0] if isinstance(status.level, bytes)
+                    else status.level, status.message,
+                    {kv.key: kv.value for kv in status.values},
+                    time.monotonic())
+
+    def record(self, topic, kind, depth=1000):
+        """Record every message of ``topic``: a list of (time, message)."""
+        log = self.records.setdefault(topic, [])
+
+        def on_message(msg):
+            log.append((time.monotonic(), msg))
+        self.node.create_subscription(kind, topic, on_message,
+                                      qos_profile('reliable', depth))
+        return log
+
+    def publisher(self, kind, topic, depth=10):
+        """Return a reliable publisher of ``kind`` on ``topic``."""
+        return self.node.create_publisher(kind, topic,
+                                          qos_profile('reliable', depth))
+
+    def status(self, node, after=None, timeout=5.0):
+        """
+        Return ``(level, message, values)`` of ``node``'s diagnostics.
+
+        The first received after the monotonic time ``after`` (default:
+        now), waiting up to ``timeout`` s; None if none came.
+        """
+        after = time.monotonic() if after is None else after
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with self.lock:
+                found = self.diagnostics.get(node)
+            if found is not None and found[3] > after:
+                return found[:3]
+            time.sleep(0.05)
+        return None
+
+    def call(self, srv_type, name, request, timeout=10.0):
+        """Call a service; return its response (None: no answer)."""
+        client = self.node.create_client(srv_type, name)
+        try:
+            if not client.wait_for_service(timeout_sec=timeout):
+                return None
+            future = client.call_async(request)
+            deadline = time.monotonic() + timeout
+            while not future.done() and time.monotonic() < deadline:
+                time.sleep(0.01)
+            return future.result() if future.done() else None
+        finally:
+            self.node.destroy_client(client)
+
+    def set_parameters(self, node, parameters, timeout=10.0):
+        """Set ``{name: value}`` on ``node``; return the results."""
+        client = AsyncParameterClient(self.node, node)
+        if not client.wait_for_services(timeout_sec=timeout):
+            return None
+        from rclpy.parameter import Parameter
+        future = client.set_parameters(
+            [Parameter(k, value=v) for k, v in parameters.items()])
+        deadline = time.monotonic() + timeout
+        while not future.done() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        return future.result().results if future.done() else None
+
+    def wait(self, predicate, timeout):
+        """Wait until ``predicate()`` holds; return whether it did."""
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > deadline:
+                return predicate()
+            time.sleep(0.02)
+        return True
+
+    def close(self):
+        """Stop spinning, destroy the node, shut the context down."""
+        self._stop = True
+        self._thread.join(5.0)
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+class Nodes:
+    """Node processes started from their console scripts; all stopped."""
+
+    def __init__(self):
+        self.processes = {}
+        self.results = {}
+
+    def start(self, name, *args, params=True):
+        """Start ``name`` with ``args`` (after ``--ros-args``)."""
+        extra = ['--params-file', PARAMS] if params else []
+        self.processes[name] = start_node_process(
+            ['--ros-args', *extra, *args], command=[node_executable(name)])
+        return self.processes[name]
+
+    def alive(self, name):
+        """Whether the process still runs."""
+        return self.processes[name].poll() is None
+
+    def stop(self, name):
+        """Stop one (SIGINT); keep and return (exit code, stderr)."""
+        self.results[name] = stop_process(self.processes.pop(name))
+        return self.results[name]
+
+    def close(self):
+        """Stop every process still running."""
+        for name in list(self.processes):
+            self.stop(name)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def _running(peer, names, timeout=START_TIMEOUT):
+    """Wait until every node answers get_parameters; raise if not."""
+    for name in names:
+        answer = peer.call(GetParameters, f'/{name}/get_parameters',
+                           GetParameters.Request(names=['use_sim_time']),
+                           timeout)
+        if answer is None:
+            raise HarnessError(f'{name} did not answer')
+
+
+def _lines(text):
+    """Return the log lines of a stderr text (stdout part included)."""
+    return [line for line in text.splitlines() if line.strip()]
+
+
+# 1. Malformed parameter requests ----------------------------------------------
+def malformed_parameters(type_code=200):
+    """
+    Send SetParameters and SetParametersAtomically with a bad value type.
+
+    To each node (the setpoint publisher looping, so that it stays up).
+    Returns per node: ``refused`` (every result unsuccessful, the reason
+    naming the malformed request), ``answers_after`` (get_parameters still
+    answered), ``alive`` after 1 s, ``code`` and ``stderr`` of the stop.
+    """
+    bad = ParameterMsg(name='rate_hz',
+                       value=ParameterValue(type=type_code,
+                                            double_value=1.0))
+    result = {}
+    with Nodes() as nodes, Peer() as peer:
+        for name in NODES:
+            nodes.start(name, *(('-p', 'loop:=true') if name ==
+                                'setpoint_publisher' else ()))
+        _running(peer, NODES)
+        for name in NODES:
+            single = peer.call(SetParameters, f'/{name}/set_parameters',
+                               SetParameters.Request(parameters=[bad]))
+            atomic = peer.call(
+                SetParametersAtomically,
+                f'/{name}/set_parameters_atomically',
+                SetParametersAtomically.Request(parameters=[bad]))
+            results = ([] if single is None else list(single.results)) + (
+                [] if atomic is None else [atomic.result])
+            result[name] = dict(
+                answered=single is not None and atomic is not None,
+                refused=len(results) == 2 and all(
+                    not r.successful and 'malformed' in r.reason
+                    for r in results),
+                reasons=[r.reason for r in results])
+        time.sleep(1.0)
+        for name in NODES:
+            result[name]['answers_after'] = peer.call(
+                GetParameters, f'/{name}/get_parameters',
+                GetParameters.Request(names=['use_sim_time']),
+                5.0) is not None
+            result[name]['alive'] = nodes.alive(name)
+        for name in NODES:
+            result[name]['code'], result[name]['stderr'] = nodes.stop(name)
+    return result
+
+
+# 2. Absurd parameter values ---------------------------------------------------
+ABSURD = {
+    'feedforward': {'robot.l3': 1e200, 'robot.m5': 1e300,
+                    'robot.gravity': [1e200, 0.0, 0.0]},
+    'simulator': {'robot.l3': 1e200, 'initial_position': [1e200, 0.0, 0.0],
+                  'robot.gravity': [0.0, 0.0, -1e200]},
+}
+
+
+def absurd_parameters():
+    """
+    Huge but finite values: refused at run time, exit 2 at start-up.
+
+    Returns ``runtime[node][parameter] = (successful, reason)``,
+    ``alive[node]`` after the requests, ``startup[node] = (code, stderr)``
+    for ``-p robot.l3:=1e200``.
+    """
+    runtime, alive, startup = {}, {}, {}
+    with Nodes() as nodes, Peer() as peer:
+        for name in ABSURD:
+            nodes.start(name)
+        _running(peer, ABSURD)
+        for name, changes in ABSURD.items():
+            runtime[name] = {}
+            for key, value in changes.items():
+                results = peer.set_parameters(name, {key: value})
+                runtime[name][key] = (None, 'no answer') if results is None \
+                    else (results[0].successful, results[0].reason)
+        time.sleep(0.5)
+        for name in ABSURD:
+            alive[name] = nodes.alive(name)
+    for name in ABSURD:
+        with Nodes() as nodes:
+            proc = nodes.start(name, '-p', 'robot.l3:=1e200')
+            try:
+                proc.wait(START_TIMEOUT)
+            except Exception:
+                pass
+            startup[name] = nodes.stop(name)
+    return dict(runtime=runtime, alive=alive, startup=startup)
+
+
+# 5. Stamps -------------------------------------------------------------------
+def stamps():
+    """
+    Send setpoints whose nanosec is >= 1e9 on every input; count outputs.
+
+    The same instants written correctly are sent too. Returns ``outputs``
+    (joint states received for the bad ones: should be 0), ``good``
+    (for the good ones: 2), ``rejected_stamp`` from the diagnostics and
+    ``received`` per input.
+    """
+    with Nodes() as nodes, Peer() as peer:
+        nodes.start('feedforward', '-p', 'setpoint_timeout:=10.0')
+        outputs = peer.record('feedforward/joint_states', JointState)
+        pubs = {name: peer.publisher(kind, f'setpoint/{name}') for name, kind
+                in (('pose', PoseStamped), ('twist', TwistStamped),
+                    ('accel', AccelStamped),
+                    ('trajectory', MultiDOFJointTrajectory))}
+        _running(peer, ('feedforward',))
+        if not peer.wait(lambda: all(p.get_subscription_count()
+                                     for p in pubs.values()), START_TIMEOUT):
+            raise HarnessError('the feedforward did not subscribe')
+        time.sleep(0.3)
+
+        def topics(sec, nanosec):
+            for name, kind in (('pose', PoseStamped), ('twist', TwistStamped),
+                               ('accel', AccelStamped)):
+                msg = kind()
+                if name == 'pose':
+                    msg.pose.orientation.w = 1.0
+                msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
+                pubs[name].publish(msg)
+
+        def point(header, offset):
+            pubs['trajectory'].publish(_setpoint('', header, offset))
+
+        topics(100, 1_500_000_000)          # = 101.5 s, written wrong
+        point((200, 2_000_000_000), (0, 0))     # header wrong
+        point((300, 0), (0, 1_000_000_000))     # offset wrong
+        point((0, 1_000_000_000), (0, 0))   # "zero" sec, wrong nanosec
+        time.sleep(0.5)
+        bad = len(outputs)
+        topics(101, 500_000_000)            # the same instant, written right
+        point((400, 5), (1, 999_999_999))
+        peer.wait(lambda: len(outputs) >= bad + 2, 5.0)
+        status = peer.status('feedforward', timeout=3.0)
+        values = status[2] if status else {}
+        return dict(outputs=bad, good=len(outputs) - bad,
+                    rejected_stamp=int(values.get('rejected stamp', -1)),
+                    alive=nodes.alive('feedforward'))
+
+
+def _setpoint(frame, stamp=(5, 0), offset=(0, 0)):
+    """Return a one-point MultiDOFJointTrajectory at home, at rest."""
+    msg = MultiDOFJointTrajectory(points=[MultiDOFJointTrajectoryPoint(
+        transforms=[Transform()], velocities=[Twist()],
+        accelerations=[Twist()])])
+    msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+    msg.header.frame_id = frame
+    point = msg.points[0]
+    point.transforms[0].rotation.w = 1.0
+    point.time_from_start.sec, point.time_from_start.nanosec = offset
+    return msg
+
+
+# 6. Signals while starting ----------------------------------------------------
+def catches_sigterm(pid):
+    """Whether process ``pid`` has a handler for SIGTERM (its SigCgt)."""
+    try:
+        with open(f'/proc/{pid}/status') as status:
+            for line in status:
+                if line.startswith('SigCgt:'):
+                    return bool(int(line.split()[1], 16)
+                                & (1 << (signal.SIGTERM - 1)))
+    except OSError:
+        pass
+    return False
+
+
+def startup_signals(delays=(0.0, 0.05, 0.15, 0.3), names=NODES,
+                    signals=('SIGINT', 'SIGTERM')):
+    """
+    Signal a node ``delay`` s after the package's first line ran.
+
+    That moment is when the console script installs its SIGTERM handler
+    (seen in ``/proc/<pid>/status``): from there on, through the imports
+    (about 0.3 s), rclpy's start and the node's construction, a signal must
+    give exit code 0 and nothing on stderr. (Python's own start-up, before
+    the package's code, is not the package's to guard.) Returns a list of
+    ``(name, signal, delay, code, stderr)``; the last entries are the
+    setpoint publisher signalled as its pass ends (``duration`` 0.3 s).
+    """
+    outcomes = []
+    for name in names:
+        for signame in signals:
+            for delay in delays:
+                proc = start_node_process(['--ros-args'],
+                                          command=[node_executable(name)])
+                try:
+                    deadline = time.monotonic() + START_TIMEOUT
+                    while not catches_sigterm(proc.pid) and \
+                            time.monotonic() < deadline:
+                        time.sleep(0.0005)
+                    time.sleep(delay)
+                    proc.send_signal(getattr(signal, signame))
+                    try:
+                        proc.wait(10.0)
+                    except Exception:
+                        pass
+                finally:
+                    code, stderr = stop_process(proc)
+                outcomes.append((name, signame, delay, code, stderr))
+    for delay in (0.9, 1.0, 1.1, 1.2):
+        proc = start_node_process(
+            ['--ros-args', '-p', 'duration:=0.3', '-p', 'start_delay:=0.0'],
+            command=[node_executable('setpoint_publisher')])
+        try:
+            time.sleep(delay)
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(10.0)
+            except Exception:
+                pass
+        finally:
+            code, stderr = stop_process(proc)
+        outcomes.append(('setpoint_publisher end of pass', 'SIGINT', delay,
+                         code, stderr))
+    return outcomes
+
+
+def quiet(stderr):
+    """Whether a stopped node's stderr holds nothing but INFO lines."""
+    return all(line.startswith('[INFO]') or line == '[stdout]'
+               for line in _lines(stderr))
+
+
+# 7. Log amplification ---------------------------------------------------------
+def log_amplification():
+    """
+    Long text in messages; malformed floods: log lines stay short and few.
+
+    The feedforward gets a trajectory point whose frame_id is 60,000
+    characters (under its input's byte limit: rejected ``frame``) and one
+    of 5 MB (``oversize``); the tracking controller a joint state of 4,000
+    names without its joints (``missing_joint``), one of 100,000 names
+    (``oversize``) and 500 malformed byte strings in 1 s. Returns the
+    longest stderr line of each node, its line count and the counters.
+    """
+    with Nodes() as nodes, Peer() as peer:
+        nodes.start('feedforward')
+        nodes.start('tracking_controller')
+        setpoints = peer.publisher(MultiDOFJointTrajectory,
+                                   'setpoint/trajectory')
+        measured = peer.publisher(JointState, 'joint_states')
+        _running(peer, ('feedforward', 'tracking_controller'))
+        if not peer.wait(lambda: setpoints.get_subscription_count() and
+                         measured.get_subscription_count(), START_TIMEOUT):
+            raise HarnessError('the nodes did not subscribe')
+        time.sleep(0.3)
+        for frame in ('f' * 60000, 'g' * 5_000_000):
+            setpoints.publish(_setpoint(frame))
+        for count in (4000, 100000):
+            state = JointState(name=[f'joint_{i}' for i in range(count)])
+            measured.publish(state)
+        good = serialize_message(JointState(name=['a'], position=[1.0]))
+        for i in range(500):
+            measured.publish(good[:8 + i % 16] + b'\xff' * (i % 7))
+            time.sleep(0.002)
+        time.sleep(1.5)
+        status = {name: peer.status(name, timeout=3.0) for name in
+                  ('feedforward', 'tracking_controller')}
+        result = {}
+        for name in ('feedforward', 'tracking_controller'):
+            alive = nodes.alive(name)
+            code, stderr = nodes.stop(name)
+            lines = _lines(stderr)
+            values = status[name][2] if status[name] else {}
+            result[name] = dict(
+                alive=alive, code=code, lines=len(lines),
+                longest=max((len(line) for line in lines), default=0),
+                counters={k: v for k, v in values.items()
+                          if k.startswith('rejected') and v != '0'})
+        return result
+
+
+# 8. Departed clients ----------------------------------------------------------
+def departed_clients(requests=100):
+    """
+    Let clients send ``requests`` requests each, then leave at once.
+
+    The simulator publishes its held state every step (1 kHz) and the
+    feedforward its newest result at ``rate_hz`` 500 (a looping setpoint
+    publisher keeps it fresh); three bursts from child processes:
+    parameter sets to the simulator, ``~/reset`` to the simulator,
+    parameter sets to the feedforward. Returns the longest gap (s) between
+    the stamps of two consecutive outputs of each stream during each burst
+    (the stamps say when a node published, whatever delays this recording
+    process: the simulator stamps each state with its step's time, the
+    feedforward each output with its setpoint's) over the bursts and their
+    replies, how long that was, and whether the nodes are alive.
+    """
+    result = dict(gaps={}, requests=requests, bursts=BURSTS)
+    with Nodes() as nodes, Peer() as peer:
+        nodes.start('simulator')
+        nodes.start('feedforward', '-p', 'rate_hz:=500.0')
+        nodes.start('setpoint_publisher', '-p', 'loop:=true')
+        states = peer.record('joint_states', JointState)
+        outputs = peer.record('feedforward/joint_states', JointState)
+        _running(peer, ('simulator', 'feedforward'))
+        if not peer.wait(lambda: len(states) > 100 and len(outputs) > 100,
+                         START_TIMEOUT):
+            raise HarnessError('the streams did not start')
+        time.sleep(0.5)
+        start = time.monotonic()
+        children = []
+        try:
+            for what, target in BURSTS:
+                # One after the other: three Python start-ups at once would
+                # take both cores for a second, whatever the nodes do.
+                children.append(start_node_process(
+                    [what, target, str(requests)], command=[
+                        sys.executable, os.path.abspath(__file__),
+                        'burst']))
+                children[-1].wait(START_TIMEOUT)
+        finally:
+            exits = [stop_process(child)[0] for child in children]
+        # The replies: each dropped after REPLY_WAIT (0.1 s) at most.
+        time.sleep(0.12 * requests)
+        end = time.monotonic()
+        for stream, log in (('simulator joint_states', states),
+                            ('feedforward joint_states', outputs)):
+            stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9
+                      for t, m in list(log) if start - 0.5 <= t <= end]
+            result['gaps'][stream] = max(np.diff(stamps), default=math.inf) \
+                if len(stamps) > 1 else math.inf
+        result.update(seconds=end - start, client_exits=exits)
+        result['dropped'] = {}
+        for name in ('simulator', 'feedforward'):
+            status = peer.status(name, timeout=3.0)
+            result['dropped'][name] = int(status[2].get(
+                'replies dropped (client gone)', -1)) if status else -1
+        result['alive'] = {n: nodes.alive(n) for n in
+                           ('simulator', 'feedforward')}
+    return result
+
+
+BURSTS = (('set', 'simulator'), ('reset', 'simulator'),
+          ('set', 'feedforward'))
+
+
+def burst(args):
+    """Child process: ``requests`` requests to ``target``, then leave."""
+    rclpy.init()
+    node = Node(f'departing_client_{os.getpid()}')
+    if args.what == 'reset':
+        client = node.create_client(Trigger, f'/{args.target}/reset')
+        make = Trigger.Request
+    else:
+        client = node.create_client(SetParameters,
+                                    f'/{args.target}/set_parameters')
+        name, value = {'simulator': ('force_limit', 1000.0),
+                       'feedforward': ('singularity_margin', 0.2)}[
+                           args.target]
+
+        def make():
+            return SetParameters.Request(parameters=[ParameterMsg(
+                name=name, value=ParameterValue(type=3, double_value=value))])
+    if not client.wait_for_service(timeout_sec=START_TIMEOUT):
+        return 1
+    for _ in range(args.requests):
+        client.call_async(make())
+    node.destroy_node()
+    rclpy.shutdown()
+    return 0
+
+
+# 9. The simulator at 10 kHz ---------------------------------------------------
+def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
+    """
+    Run the simulator at ``rate_hz``; send ``commands`` at ``command_rate``.
+
+    Returns, from its diagnostics once the commands are over, the commands
+    ``received`` and the ``timeouts`` (one is the brake after the last
+    command: more would be spurious), and the level, message and step rate
+    of a status made while it was commanded.
+    """
+    with Nodes() as nodes, Peer() as peer:
+        nodes.start('simulator', '-p', f'rate_hz:={rate_hz}')
+        pub = peer.publisher(Float64MultiArray, 'commands')
+        _running(peer, ('simulator',))
+        if not peer.wait(lambda: pub.get_subscription_count(),
+                         START_TIMEOUT):
+            raise HarnessError('the simulator did not subscribe')
+        time.sleep(0.3)
+        msg = Float64MultiArray(data=list(HOLD))
+        start = time.monotonic()
+        during = None
+        for i in range(commands):
+            deadline = start + i / command_rate
+            wait = deadline - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+            pub.publish(msg)
+            if during is None and i > commands // 2:
+                with peer.lock:     # the newest status, without waiting
+                    found = peer.diagnostics.get('simulator')
+                if found is not None and found[3] > start + 1.0:
+                    during = found[:3]
+        time.sleep(0.5)
+        after = peer.status('simulator', timeout=3.0)
+        values = after[2] if after else {}
+        level, message, seen = during if during else (None, '', {})
+        return dict(
+            received=int(values.get('commands received', -1)),
+            sent=commands, timeouts=int(values.get('timeouts', -1)),
+            level=level, message=message,
+            step_rate=float(seen.get('step rate (Hz)', 'nan')),
+            alive=nodes.alive('simulator'))
+
+
+# 10. The setpoint publisher's loop --------------------------------------------
+def setpoint_loop(duration=0.6, return_duration=0.6, rate_hz=500.0,
+                  seconds=3.5):
+    """
+    Record a looping setpoint publisher; measure the largest jumps.
+
+    Returns the largest change of position and velocity between two
+    consecutive setpoints, next to what the motion's own peak speed and
+    acceleration allow over the same interval (``*_bound``), and how many
+    passes were seen.
+    """
+    with Nodes() as nodes, Peer() as peer:
+        log = peer.record('setpoint/trajectory', MultiDOFJointTrajectory)
+        nodes.start('setpoint_publisher', '-p', 'loop:=true', '-p',
+                    f'duration:={duration}', '-p',
+                    f'return_duration:={return_duration}', '-p',
+                    f'rate_hz:={rate_hz}', '-p', 'start_delay:=0.0')
+        peer.wait(lambda: len(log) > 0, START_TIMEOUT)
+        time.sleep(seconds)
+        samples = [(m.header.stamp.sec + m.header.stamp.nanosec * 1e-9,
+                    m.points[0]) for _, m in list(log)]
+    t = np.array([s for s, _ in samples])
+    p = np.array([[pt.transforms[0].translation.x,
+                   pt.transforms[0].translation.y,
+                   pt.transforms[0].translation.z] for _, pt in samples])
+    v = np.array([[pt.velocities[0].linear.x, pt.velocities[0].linear.y,
+                   pt.velocities[0].linear.z] for _, pt in samples])
+    dt = np.diff(t)
+    dense = np.linspace(0.0, duration + return_duration, 2001)
+    from orthoglide_ros.setpoint_publisher import PARAMETERS, Stream
+    stream = Stream(PARAMETERS.parse({
+        'loop': True, 'duration': float(duration),
+        'return_duration': float(return_duration)}))
+    motion = [stream.sample(s) for s in dense]
+    speed = max(np.linalg.norm(m[1]) for m in motion)
+    accel = max(np.linalg.norm(m[2]) for m in motion)
+    jumps_p = np.linalg.norm(np.diff(p, axis=0), axis=1)
+    jumps_v = np.linalg.norm(np.diff(v, axis=0), axis=1)
+    return dict(samples=len(t), span=float(t[-1] - t[0]) if len(t) else 0.0,
+                passes=int((t[-1] - t[0]) // (duration + return_duration))
+                + 1 if len(t) else 0,
+                jump_p=float(jumps_p.max()), jump_p_bound=float(
+                    (speed * dt).max() * 1.01 + 1e-12),
+                jump_v=float(jumps_v.max()), jump_v_bound=float(
+                    (accel * dt).max() * 1.01 + 1e-12),
+                peak_speed=speed)
+
+
+# 4. A stall of one process of the closed loop ---------------------------------
+def trajectory_peak_speed(duration=trajectory.PAPER_DURATION,
+                          return_duration=trajectory.RETURN_DURATION):
+    """Largest |lambdadot| (m/s) of the looped paper motion, any slider."""
+    from orthoglide_ros.setpoint_publisher import PARAMETERS, Stream
+    stream = Stream(PARAMETERS.parse({'loop': True}))
+    times = np.linspace(0.0, duration + return_duration, 3001)
+    samples = [stream.sample(t) for t in times]
+    solution = mechanics.solve_batch(
+        Robot(), np.array([s[0] for s in samples]),
+        np.array([s[1] for s in samples]), np.array([s[2] for s in samples]))
+    return float(np.abs(solution.lambdadot).max())
+
+
+def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
+                 loop_rate=250.0, plant_rate=500.0):
+    """
+    Run the closed loop; SIGSTOP one of its processes for ``stall`` s.
+
+    The loop as the closed-loop demo runs it (setpoints and feedforward at
+    ``loop_rate``, the plant at ``plant_rate``, default controller: path
+    tolerance on), started afresh for each process of ``stalled``:
+    ``before`` s following the looping paper trajectory, then SIGSTOP,
+    ``stall`` s, SIGCONT, ``after`` s. Returns per stalled process the
+    largest |command| (N) and |lambdadot| (m/s) from the stall's start to
+    ``after`` s past its end, the controller's mode and trips, and the
+    trajectory's own peak |lambdadot|.
+    """
+    peak = trajectory_peak_speed()
+    result = dict(peak_speed=peak, force_limit=1000.0, stalls={}, alive={})
+    with Peer() as peer:
+        commands = peer.record('commands', Float64MultiArray)
+        states = peer.record('joint_states', JointState)
+        for name in stalled:
+            with Nodes() as nodes:
+                nodes.start('simulator', '-p', f'rate_hz:={plant_rate}')
+                nodes.start('tracking_controller')
+                nodes.start('feedforward')
+                _running(peer, ('simulator', 'tracking_controller',
+                                'feedforward'))
+                first = len(commands)
+                nodes.start('setpoint_publisher', '-p', 'loop:=true', '-p',
+                            f'rate_hz:={loop_rate}', '-p',
+                            'min_subscribers:=1')
+                if not peer.wait(lambda: len(commands) > first + 50,
+                                 START_TIMEOUT):
+                    raise HarnessError('the loop did not close')
+                time.sleep(before)
+                proc = nodes.processes[name]
+                start = time.monotonic()
+                proc.send_signal(signal.SIGSTOP)
+                time.sleep(stall)
+                proc.send_signal(signal.SIGCONT)
+                time.sleep(after)
+                end = time.monotonic()
+                forces = [max(abs(f) for f in m.data)
+                          for t, m in list(commands) if start <= t <= end]
+                speeds = [max(abs(v) for v in m.velocity)
+                          for t, m in list(states)
+                          if start <= t <= end and len(m.velocity)]
+                status = peer.status('tracking_controller', timeout=3.0)
+                values = status[2] if status else {}
+                result['stalls'][name] = dict(
+                    max_force=max(forces, default=0.0),
+                    max_speed=max(speeds, default=0.0),
+                    commands=len(forces),
+                    trips=int(values.get('path tolerance trips', -1)),
+                    mode=values.get('mode'))
+                result['alive'][name] = all(nodes.alive(n) for n in NODES)
+    return result
+
+
+def main(argv=None):
+    """Entry point of the child process: ``burst WHAT TARGET REQUESTS``."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
+    parser.add_argument('role', choices=('burst',))
+    parser.add_argument('what', choices=('set', 'reset'))
+    parser.add_argument('target')
+    parser.add_argument('requests', type=int)
+    return burst(parser.parse_args(argv))
+
+
+if __name__ == '__main__':
+    sys.exit(main())

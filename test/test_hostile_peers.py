@@ -1,0 +1,133 @@
+"""
+Hostile peers and stalls: no other process may stop, starve or fool a node.
+
+Issue 13, over real DDS with the installed executables.
+
+One test per defect the issue lists, each played by a client of this test
+(or a child process of its own), never by the node's code; the cases
+themselves are ``hostile_harness`` and ``reliability_harness`` functions
+that ``scripts/reliability_report.sh`` runs too:
+
+1. a set-parameters request with a value type that does not exist;
+2. huge but finite lengths, at run time and at start-up;
+3. 4-18 MB messages on an input beside a legitimate 500 Hz stream;
+4. a 2 s stall (SIGSTOP) of each process of the closed loop;
+5. stamps whose nanosec is >= 1e9;
+6. SIGINT and SIGTERM while a node starts, and as a pass ends;
+7. long text inside messages, a flood of malformed ones;
+8. a client that sends 100 requests and leaves;
+9. the simulator at 10 kHz, commanded at 500 Hz;
+10. the looping setpoint publisher's way back.
+"""
+
+import os
+
+import pytest
+
+from node_harness import node_executable
+
+pytestmark = [pytest.mark.ros, pytest.mark.skipif(
+    not os.path.exists(node_executable()),
+    reason='the console scripts are not installed next to python')]
+
+harness = pytest.importorskip('hostile_harness')
+import reliability_harness  # noqa: E402
+
+
+def test_malformed_parameter_request_is_refused_and_the_node_stays_up():
+    result = harness.malformed_parameters()
+    for name, outcome in result.items():
+        assert outcome['answered'] and outcome['refused'], (name, outcome)
+        assert outcome['answers_after'] and outcome['alive'], (name, outcome)
+        assert outcome['code'] == 0, (name, outcome['stderr'])
+        assert 'Traceback' not in outcome['stderr'], outcome['stderr']
+
+
+def test_absurd_lengths_refused_at_run_time_exit_2_at_start():
+    result = harness.absurd_parameters()
+    for name, changes in result['runtime'].items():
+        for key, (successful, reason) in changes.items():
+            assert successful is False, (name, key, reason)
+            assert reason, (name, key)
+        assert result['alive'][name], name
+    for name, (code, stderr) in result['startup'].items():
+        assert code == 2, (name, code, stderr)
+        assert 'robot.l3' in stderr and 'Traceback' not in stderr, stderr
+
+
+def test_big_messages_do_not_starve_a_stream_on_the_same_input():
+    result = reliability_harness.big_messages()
+    print(result)
+    assert result['crashes'] == 0 and result['internal_errors'] == 0
+    assert result['attacks'] >= 4
+    assert result['missing'] == 0 and result['duplicates'] == 0, result
+    assert result['latency_during_max'] <= \
+        result['latency_outside_max'] + 0.1, result
+    assert int(result['rejected'].get('rejected oversize', 0)) >= 2, result
+    assert int(result['rejected'].get('rejected malformed', 0)) >= 2, result
+
+
+def test_stalled_process_never_makes_the_loop_saturate_or_race():
+    result = harness.stall_resume()
+    print(result)
+    assert all(result['alive'].values()), result
+    for name, stall in result['stalls'].items():
+        assert stall['commands'] > 0, (name, stall)
+        assert stall['max_force'] < result['force_limit'], (name, stall)
+        assert stall['max_speed'] <= 2.0 * result['peak_speed'], (name, stall)
+
+
+def test_nanoseconds_beyond_a_second_are_rejected_on_every_input():
+    result = harness.stamps()
+    assert result['outputs'] == 0, result
+    assert result['good'] == 2, result
+    # Pose, twist and accel each, and three trajectory messages.
+    assert result['rejected_stamp'] == 6, result
+    assert result['alive']
+
+
+def test_signals_while_starting_exit_0_quietly():
+    for name, signame, delay, code, stderr in harness.startup_signals():
+        assert code == 0, (name, signame, delay, code, stderr)
+        assert harness.quiet(stderr), (name, signame, delay, stderr)
+
+
+def test_text_from_messages_never_makes_long_or_many_log_lines():
+    result = harness.log_amplification()
+    for name, outcome in result.items():
+        assert outcome['alive'] and outcome['code'] == 0, (name, outcome)
+        assert outcome['longest'] <= harness.LOG_LINE_LIMIT, (name, outcome)
+        assert outcome['lines'] <= 20, (name, outcome)
+    assert int(result['feedforward']['counters']['rejected frame']) == 1
+    assert int(result['feedforward']['counters']['rejected oversize']) == 1
+    counters = result['tracking_controller']['counters']
+    assert int(counters['rejected measured oversize']) == 1, counters
+    assert int(counters['rejected measured malformed']) >= 400, counters
+
+
+def test_departed_clients_pause_no_output_stream():
+    result = harness.departed_clients()
+    print(result)
+    assert all(result['alive'].values()), result
+    assert result['client_exits'] == [0, 0, 0], result
+    for stream, gap in result['gaps'].items():
+        assert gap <= 0.2, (stream, gap)
+
+
+def test_simulator_at_10_khz_keeps_taking_commands_and_says_it_is_slow():
+    result = harness.fast_simulator()
+    print(result)
+    assert result['alive']
+    assert result['received'] == result['sent'], result
+    assert result['timeouts'] == 1, result      # the brake at the end
+    if result['step_rate'] < 0.9 * 10000.0:
+        assert result['level'] == 1, result
+        assert 'slower than real time' in result['message'], result
+
+
+def test_looping_setpoints_go_back_smoothly():
+    result = harness.setpoint_loop()
+    print(result)
+    assert result['passes'] >= 2, result
+    assert result['jump_p'] <= result['jump_p_bound'], result
+    assert result['jump_v'] <= result['jump_v_bound'], result
