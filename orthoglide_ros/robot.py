@@ -202,4 +202,3 @@ def _check_vector(name, value):
             f'each component must lie in [{low:g}, {high:g}] '
             f'{UNITS[name]}, got {value!r}'))
     return tuple(float(v) for v in vector)
-

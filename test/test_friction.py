@@ -33,7 +33,7 @@ ROBOTS = {'paper': {}, 'other': OTHER_ROBOT_VALUES}
 
 
 def law(robot, lambdadot):
-    """The friction law of the module docstring (N), one actuator each."""
+    """Return the friction law of the module docstring (N) per actuator."""
     return np.array([
         c * v + f * math.tanh(v / robot.friction_velocity)
         for c, f, v in zip(robot.friction_viscous, robot.friction_coulomb,
