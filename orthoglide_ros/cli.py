@@ -14,10 +14,8 @@ written atomically, only once every sample is solved.
 """
 
 import argparse
-import csv
 import io
 import json
-import math
 import os
 import sys
 import tempfile
@@ -25,6 +23,7 @@ import tempfile
 import numpy as np
 
 from orthoglide_ros import mechanics, trajectory
+from orthoglide_ros.csvfile import CsvError, read_columns
 from orthoglide_ros.params_file import load_robot, ParametersFileError
 from orthoglide_ros.robot import Robot, RobotParameterError
 
@@ -34,8 +33,9 @@ QUANTITIES = ('lambda', 'lambdadot', 'lambdaddot', 'force', 'power')
 # Columns of every CSV the tool writes (SI units).
 CSV_COLUMNS = ('t', 'x', 'y', 'z') + tuple(
     f'{q}_{leg}' for q in QUANTITIES for leg in LEGS)
-# Columns of a trajectory file read by ``batch``: (name, required).
-INPUT_GROUPS = (('position', ('x', 'y', 'z'), True),
+# Columns of a trajectory file read by ``batch``: (group, names, required).
+INPUT_GROUPS = (('time', ('t',), False),
+                ('position', ('x', 'y', 'z'), True),
                 ('velocity', ('vx', 'vy', 'vz'), False),
                 ('acceleration', ('ax', 'ay', 'az'), False))
 UNITS = {'lambda': 'm', 'lambdadot': 'm/s', 'lambdaddot': 'm/s^2',
@@ -187,66 +187,12 @@ def _read_trajectory(path, name):
     acceleration group is None (zero).
     """
     try:
-        if path == '-':
-            text = sys.stdin.read()
-        else:
-            with open(path, encoding='utf-8-sig', newline='') as stream:
-                text = stream.read()
-    except OSError as error:
-        raise CliError(f'cannot read {name}: {error.strerror}') from None
-    except UnicodeDecodeError:
-        raise CliError(f'{name}: not a UTF-8 text file') from None
-    reader = csv.reader(io.StringIO(text, newline=''))
-    header = next(reader, None)
-    if not header:
-        raise CliError(f'{name}: empty file: expected a header line such as '
-                       't,x,y,z,vx,vy,vz,ax,ay,az')
-    header = [h.strip().lower() for h in header]
-    index = {}
-    for i, column in enumerate(header):
-        if column in index and column in _known_columns():
-            raise CliError(f'{name}: column {column!r} appears twice')
-        index.setdefault(column, i)
-    groups = []
-    for group, columns, required in INPUT_GROUPS:
-        present = [c for c in columns if c in index]
-        if present and len(present) < 3 or required and not present:
-            missing = [c for c in columns if c not in index]
-            raise CliError(f'{name}: no {missing[0]!r} column: the '
-                           f'{group} needs all of {", ".join(columns)}')
-        groups.append(columns if present else None)
-    wanted = (['t'] if 't' in index else []) + [
-        c for columns in groups if columns for c in columns]
-    rows, lines = [], []
-    for cells in reader:
-        if not any(cell.strip() for cell in cells):
-            continue        # blank line
-        row, line = len(rows) + 1, reader.line_num
-        values = []
-        for column in wanted:
-            i = index[column]
-            cell = cells[i].strip() if i < len(cells) else ''
-            try:
-                value = float(cell)
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise CliError(
-                    f'{name}: data row {row} (line {line}), column '
-                    f'{column!r}: {cell!r} is not a finite number')
-            values.append(value)
-        rows.append(values)
-        lines.append(line)
-    data = np.array(rows, dtype=float).reshape(len(rows), len(wanted))
-    columns = dict(zip(wanted, data.T))
-    times = columns.get('t')
-    p, v, a = (None if group is None else np.column_stack(
-        [columns[c] for c in group]).reshape(-1, 3) for group in groups)
-    return times, p, v, a, lines
-
-
-def _known_columns():
-    return {'t'} | {c for _, columns, _ in INPUT_GROUPS for c in columns}
+        values, lines = read_columns(path, INPUT_GROUPS, name)
+    except CsvError as error:
+        raise CliError(str(error)) from None
+    times = values['time']
+    return (None if times is None else times[:, 0], values['position'],
+            values['velocity'], values['acceleration'], lines)
 
 
 # -- shared -----------------------------------------------------------------
