@@ -196,7 +196,7 @@ def excitation_sample(motion, t):
 
 
 def excitation_batch(motion, times):
-    """The excitation at an array of times (s): three (N, 3) arrays."""
+    """Return the excitation at an array of times (s): three (N, 3) arrays."""
     w = 2.0 * math.pi / motion.period
     k = w * np.arange(1, motion.sines.shape[1] + 1)
     phase = np.outer(np.asarray(times, dtype=float), k)
