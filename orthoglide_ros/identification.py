@@ -303,8 +303,9 @@ def prepare(robot, log, cutoff=DEFAULT_CUTOFF):
                        f'(0, {0.5 * rate:g}) Hz, half the sampling rate '
                        f'{rate:g} Hz')
     sos = scipy.signal.butter(FILTER_ORDER, cutoff, fs=rate, output='sos')
-    trim = int(math.ceil(rate / cutoff))
-    step = max(1, int(rate / (2.0 * cutoff)))
+    # (1e-9: a median period rounded up must not change these counts.)
+    trim = int(math.ceil(rate / cutoff * (1.0 - 1e-9)))
+    step = max(1, int(rate / (2.0 * cutoff) * (1.0 + 1e-9)))
     breaks = np.flatnonzero(np.diff(times) > GAP_FACTOR * period) + 1
     pieces = []
     for start, end in zip(np.r_[0, breaks], np.r_[breaks, len(times)]):
