@@ -270,7 +270,8 @@ def run_identify(robot, args):
     """Identify the base parameters from a log; print, write the file."""
     joints = tuple(args.joint_names)
     try:
-        log = identification.read_log(args.log, args.topic, joints)
+        log = identification.crop(identification.read_log(
+            args.log, args.topic, joints), args.start, args.end)
         result = identification.identify(robot, log, args.cutoff)
         validation = None
         if args.validate is not None:
@@ -566,6 +567,12 @@ def _parser():
                           default=list(JOINT_NAMES),
                           help='joints of actuators A, B, C in the joint '
                           'states (default ' + ' '.join(JOINT_NAMES) + ')')
+    identify.add_argument('--start', type=float, metavar='S',
+                          help='use the log from S seconds after its first '
+                          'sample (default: from the first)')
+    identify.add_argument('--end', type=float, metavar='S',
+                          help='use the log up to S seconds after its first '
+                          'sample (default: to the last)')
     identify.add_argument('--cutoff', type=_positive_float,
                           default=DEFAULT_CUTOFF, metavar='HZ',
                           help='low-pass cutoff (Hz; default '

@@ -93,9 +93,11 @@ LOG_GROUPS = (('time', ('t',), True),
               ('force', ('force_a', 'force_b', 'force_c'), True))
 JOINT_STATE_TYPE = 'sensor_msgs/msg/JointState'
 
-Log = namedtuple('Log', ('times', 'lambdas', 'forces', 'source'))
+Log = namedtuple('Log', ('times', 'lambdas', 'forces', 'source', 'origin'),
+                 defaults=(0,))
 Log.__doc__ = """A measured log: ``times`` (N,) s, ``lambdas`` (N, 3) m and
-``forces`` (N, 3) N of actuators A, B, C; ``source`` names it."""
+``forces`` (N, 3) N of actuators A, B, C; ``source`` names it; ``times``
+are counted from ``origin`` (ns; a bag's first header stamp, else 0)."""
 
 Samples = namedtuple('Samples', (
     'times', 'positions', 'velocities', 'accelerations', 'forces',
@@ -474,6 +476,33 @@ def condition_number(robot, positions, velocities, accelerations,
 
 # Logs ---------------------------------------------------------------------
 
+def crop(log, start=None, end=None):
+    """
+    Return the samples of ``log`` from ``start`` to ``end`` (s, inclusive).
+
+    Both counted from the log's first sample (its earliest time); None:
+    from the first, to the last. Raises :class:`LogError` when nothing is
+    left.
+
+    >>> log = Log(np.array([5.0, 5.5, 6.0]), np.zeros((3, 3)),
+    ...           np.zeros((3, 3)), 'log')
+    >>> crop(log, 0.5).times.tolist()
+    [5.5, 6.0]
+    """
+    times = np.asarray(log.times, dtype=float)
+    first = times.min() if len(times) else 0.0
+    keep = np.ones(len(times), dtype=bool)
+    if start is not None:
+        keep &= times >= first + start
+    if end is not None:
+        keep &= times <= first + end
+    if not keep.any():
+        raise LogError(f'{log.source}: no sample between {start} s and '
+                       f'{end} s from its first')
+    return Log(times[keep], np.asarray(log.lambdas)[keep],
+               np.asarray(log.forces)[keep], log.source, log.origin)
+
+
 def read_log(path, topic='joint_states', joint_names=JOINT_NAMES):
     """
     Read a log: a rosbag2 bag (:func:`read_bag`) or a CSV file (:func:`read_csv`).
@@ -514,8 +543,8 @@ def read_bag(path, topic='joint_states', joint_names=JOINT_NAMES):
     ``rosbags`` library, without ROS); ``topic`` (a leading ``/`` is
     added); ``joint_names``: the joints of actuators A, B, C, found by name
     in each message. Time is each message's header stamp (the measurement's
-    time); position is lambda (m), effort the force (N). Raises
-    :class:`LogError`.
+    time), in s from the earliest (``origin``, ns); position is lambda
+    (m), effort the force (N). Raises :class:`LogError`.
     """
     try:
         from rosbags.rosbag2 import Reader
@@ -554,8 +583,9 @@ def read_bag(path, topic='joint_states', joint_names=JOINT_NAMES):
     if not times:
         raise LogError(f'{path}: no message on {name}')
     stamps = np.array(times, dtype=np.int64)
-    return Log((stamps - stamps[0]) * 1e-9, np.array(lambdas),
-               np.array(forces), str(path))
+    origin = int(stamps.min())
+    return Log((stamps - origin) * 1e-9, np.array(lambdas), np.array(forces),
+               str(path), origin)
 
 
 def _joint_state(raw):

@@ -244,6 +244,19 @@ def test_identify_refuses_a_log_without_motion(base):
 
 # Logs -------------------------------------------------------------------
 
+def test_crop_keeps_a_window_counted_from_the_first_sample():
+    log = synthetic_log(TRUE, 0, 5.0, 6, duration=1.0)
+    shifted = Log(log.times + 100.0, log.lambdas, log.forces, 'shifted')
+    window = identification.crop(shifted, 0.25, 0.5)
+    assert window.times[0] == pytest.approx(100.25)
+    assert window.times[-1] == pytest.approx(100.5)
+    assert len(window.times) == 251
+    assert np.array_equal(window.forces, log.forces[250:501])
+    assert identification.crop(log).times.tolist() == log.times.tolist()
+    with pytest.raises(LogError, match='no sample'):
+        identification.crop(log, 2.0)
+
+
 def test_csv_log_reads_the_tools_columns(tmp_path):
     log = synthetic_log(TRUE, 0, 5.0, 6, duration=0.5)
     path = tmp_path / 'log.csv'
@@ -297,6 +310,8 @@ def test_bag_log_reads_joint_states(tmp_path, storage):
     write_bag(tmp_path / 'bag', log, storage,
               names=('slider_c', 'slider_a', 'slider_b'))
     read = identification.read_log(tmp_path / 'bag')
+    # Header stamps, from the first (write_bag starts at 1.7e9 s).
+    assert read.origin == 1_700_000_000 * 10**9
     assert np.allclose(read.times, log.times, rtol=0.0, atol=1e-9)
     assert np.array_equal(read.lambdas, log.lambdas)
     assert np.array_equal(read.forces, log.forces)
