@@ -5,7 +5,10 @@ A thin rclpy node over the writer of the ``rosbags`` library. Each topic is
 an input of :class:`node_runtime.InputNode` (a raw subscription read on the
 input thread, with a byte limit), and each message's serialized bytes go
 into the bag unchanged, as rosbag2 stores them (CDR), stamped with the node
-clock at reception. MCAP (the default) or sqlite3 storage, bag format
+clock at reception. The bag is opened, written and closed by one thread of
+its own (:class:`BagThread`; sqlite3 refuses a connection used from
+another thread than its own), fed through a queue, so the input thread
+never waits for the disk. MCAP (the default) or sqlite3 storage, bag format
 version 9 (ROS 2 Jazzy's); ``ros2 bag info`` and ``orthoglide identify``
 read it. The topics' types are taken from the graph (their publishers) and
 must be in the ROS 2 Jazzy type store of ``rosbags``, which writes their
@@ -20,6 +23,8 @@ unknown type or an existing output ends it with exit code 2.
 
 import functools
 import importlib
+import queue
+import threading
 import time
 
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -37,13 +42,62 @@ BAG_VERSION = 9
 GRAPH_POLL = 0.05   # s between two looks at the graph while waiting
 
 
+class BagThread(threading.Thread):
+    """
+    The thread that owns the bag: opens it, writes the queue, closes it.
+
+    :attr:`queue` takes ``(connection index, stamp ns, bytes)`` and None
+    to close. :attr:`ready` is set once the bag is open (or could not be:
+    :attr:`error`); :attr:`failed` counts the writes the writer refused.
+    """
+
+    def __init__(self, output, storage, topics, typestore):
+        """Prepare the thread; ``topics``: ``(topic, type)`` pairs."""
+        super().__init__(name='orthoglide_record bag', daemon=True)
+        self.output = output
+        self.storage = storage
+        self.topics = topics
+        self.typestore = typestore
+        self.queue = queue.SimpleQueue()
+        self.ready = threading.Event()
+        self.error = None
+        self.failed = 0
+
+    def run(self):
+        """Open the bag, write what comes, close it on None."""
+        from rosbags.rosbag2 import StoragePlugin, Writer
+        plugin = {'mcap': StoragePlugin.MCAP,
+                  'sqlite3': StoragePlugin.SQLITE3}[self.storage]
+        try:
+            writer = Writer(self.output, version=BAG_VERSION,
+                            storage_plugin=plugin)
+            writer.open()
+            connections = [writer.add_connection(t, kind,
+                                                 typestore=self.typestore)
+                           for t, kind in self.topics]
+        except Exception as error:  # rosbags' WriterError: exists, etc.
+            self.error = error
+            self.ready.set()
+            return
+        self.ready.set()
+        while True:
+            item = self.queue.get()
+            if item is None:
+                break
+            index, stamp, data = item
+            try:
+                writer.write(connections[index], stamp, data)
+            except Exception:   # the disk, the writer: counted, reported
+                self.failed += 1
+        writer.close()
+
+
 class Recorder(InputNode):
     """Node ``orthoglide_record``: writes ``topics`` into the bag ``output``."""
 
     def __init__(self, output, topics, storage='mcap', duration=None,
                  wait=10.0):
         super().__init__('orthoglide_record')
-        from rosbags.rosbag2 import StoragePlugin, Writer
         from rosbags.typesys import get_typestore, Stores
         typestore = get_typestore(Stores.ROS2_JAZZY)
         found = self._topic_types(topics, wait)
@@ -51,23 +105,20 @@ class Recorder(InputNode):
             if type_name not in typestore.types:
                 raise ValueError(f'{topic}: type {type_name} is not in the '
                                  'ROS 2 Jazzy type store of rosbags')
-        plugin = {'mcap': StoragePlugin.MCAP,
-                  'sqlite3': StoragePlugin.SQLITE3}[storage]
-        writer = Writer(output, version=BAG_VERSION, storage_plugin=plugin)
-        try:
-            writer.open()
-        except Exception as error:  # rosbags' WriterError: exists, etc.
+        self._bag = BagThread(output, storage, list(found.items()),
+                              typestore)
+        self._bag.start()
+        self._bag.ready.wait()
+        if self._bag.error is not None:
             raise ValueError(f'cannot write the bag {output}: '
-                             f'{error}') from None
-        self._writer = writer
+                             f'{self._bag.error}')
+        self._open = True
         self.output = output
         self.counts = dict.fromkeys(found, 0)
-        for topic, type_name in found.items():
-            connection = writer.add_connection(topic, type_name,
-                                               typestore=typestore)
+        for index, (topic, type_name) in enumerate(found.items()):
             self.create_input(
                 _message_class(type_name), topic,
-                functools.partial(self._write, topic, connection),
+                functools.partial(self._write, topic, index),
                 self._qos(topic), topic, decode=bytes,
                 max_bytes=RECORD_MESSAGE_BYTES)
         self._end = None if duration is None else time.monotonic() + duration
@@ -106,12 +157,12 @@ class Recorder(InputNode):
             reliability=ReliabilityPolicy.BEST_EFFORT if best_effort
             else ReliabilityPolicy.RELIABLE)
 
-    def _write(self, topic, connection, data):
-        """Write one message (runs with the lock held)."""
-        if self._writer is None:
+    def _write(self, topic, index, data):
+        """Queue one message for the bag (runs with the lock held)."""
+        if not self._open:
             return
-        self._writer.write(connection, self.get_clock().now().nanoseconds,
-                           data)
+        self._bag.queue.put((index, self.get_clock().now().nanoseconds,
+                             data))
         self.counts[topic] += 1
 
     @property
@@ -122,12 +173,15 @@ class Recorder(InputNode):
     def on_stop(self, interrupted):
         """Close the bag (complete, whatever stopped the recording)."""
         with self.lock:
-            writer, self._writer = self._writer, None
-        writer.close()
+            self._open = False
+            self._bag.queue.put(None)
+        self._bag.join()
+        failed = f'; {self._bag.failed} write(s) failed' \
+            if self._bag.failed else ''
         self.get_logger().info(
             f'recorded {sum(self.counts.values())} message(s) ('
             + ', '.join(f'{t}: {n}' for t, n in self.counts.items())
-            + f') into {self.output}')
+            + f') into {self.output}{failed}')
 
 
 def _message_class(type_name):
