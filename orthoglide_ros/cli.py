@@ -272,11 +272,13 @@ def run_identify(robot, args):
     try:
         log = identification.crop(identification.read_log(
             args.log, args.topic, joints), args.start, args.end)
-        result = identification.identify(robot, log, args.cutoff)
+        result = identification.identify(robot, log, args.cutoff,
+                                         force_lag=args.force_lag)
         validation = None
         if args.validate is not None:
             other = identification.prepare(robot, identification.read_log(
-                args.validate, args.topic, joints), args.cutoff)
+                args.validate, args.topic, joints), args.cutoff,
+                args.force_lag)
             validation = [np.sqrt(np.mean((other.forces - identification
                                            .predict(model, other)) ** 2,
                                           axis=0))
@@ -307,7 +309,7 @@ def _identify_summary(args, log, result):
     lines = [f'Identification from {args.log}: {len(log.times)} samples, '
              f'{len(samples.times)} used ({samples.segments} segment(s), '
              f'low-pass {args.cutoff:g} Hz, decimated to '
-             f'{samples.rate:.4g} Hz)',
+             f'{samples.rate:.4g} Hz, force lag {args.force_lag:g} s)',
              f'{"base parameter":<32}{"identified":>14}{"nominal":>14}'
              f'{"rel. std (%)":>14}']
     for name, carrier, value, nominal, relative in zip(
@@ -578,6 +580,11 @@ def _parser():
                           help='low-pass cutoff (Hz; default '
                           f'{DEFAULT_CUTOFF:g}), below half the log\'s '
                           'sampling rate')
+    identify.add_argument('--force-lag', type=float, default=0.0,
+                          metavar='S', help='the forces were applied S '
+                          'seconds before their stamps (default 0; a '
+                          'simulator or drive that reports the force held '
+                          'over its last step of dt: dt / 2)')
     identify.add_argument('--validate', metavar='PATH',
                           help='another log (another motion): print the '
                           'force error RMS (N) of the nominal and the '

@@ -80,10 +80,14 @@ COMBINATION_TOLERANCE = 1e-9
 # low-pass at DEFAULT_CUTOFF (Hz) run forwards and backwards (zero phase,
 # 8th-order roll-off); samples within 1 / cutoff of a segment's ends are
 # dropped (the filter's edges); a gap longer than GAP_FACTOR times the
-# median sampling period splits the log into segments.
+# median sampling period and longer than GAP_SHARE / cutoff splits the log
+# into segments; shorter gaps are interpolated linearly (for a component
+# at frequency f, an error below (pi f gap)^2 / 2 of it: 5 % at the
+# cutoff, 0.2 % at a fifth of it).
 DEFAULT_CUTOFF = 10.0
 FILTER_ORDER = 4
 GAP_FACTOR = 3.0
+GAP_SHARE = 0.1
 # Fewest samples the least squares may use, per base parameter.
 MIN_SAMPLES_PER_PARAMETER = 10
 # The log's columns in a CSV file: those that `orthoglide batch`,
@@ -256,14 +260,17 @@ def _combination_name(row, carrier):
     return text
 
 
-def prepare(robot, log, cutoff=DEFAULT_CUTOFF):
+def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0):
     """
     Turn a :class:`Log` into :class:`Samples` for the least squares.
 
     Sorted by time (equal stamps: the first kept); split into segments at
-    gaps longer than GAP_FACTOR median periods; each segment interpolated
-    linearly onto a uniform grid of the median period (exact where the
-    stamps are on it); the platform positions from ``lambda``
+    gaps longer than GAP_FACTOR median periods and GAP_SHARE / cutoff;
+    each segment interpolated linearly onto a uniform grid of the median
+    period (exact where the stamps are on it), the forces taken as applied
+    ``force_lag`` s before their stamps (a drive or a simulator that
+    reports with each state the force it held over the last period of
+    ``dt``: ``dt / 2``); the platform positions from ``lambda``
     (:func:`mechanics.forward_kinematics`, ``robot``'s geometry); positions
     and forces through the same zero-phase Butterworth low-pass of
     ``cutoff`` Hz (order FILTER_ORDER, forwards and backwards), so that
@@ -308,7 +315,11 @@ def prepare(robot, log, cutoff=DEFAULT_CUTOFF):
     # (1e-9: a median period rounded up must not change these counts.)
     trim = int(math.ceil(rate / cutoff * (1.0 - 1e-9)))
     step = max(1, int(rate / (2.0 * cutoff) * (1.0 + 1e-9)))
-    breaks = np.flatnonzero(np.diff(times) > GAP_FACTOR * period) + 1
+    if not (math.isfinite(force_lag) and abs(force_lag) < 1.0 / cutoff):
+        raise LogError(f'{log.source}: the force lag {force_lag:g} s must be '
+                       f'shorter than 1 / cutoff = {1.0 / cutoff:g} s')
+    breaks = np.flatnonzero(np.diff(times) > max(
+        GAP_FACTOR * period, GAP_SHARE / cutoff)) + 1
     pieces = []
     for start, end in zip(np.r_[0, breaks], np.r_[breaks, len(times)]):
         t = times[start:end]
@@ -318,7 +329,8 @@ def prepare(robot, log, cutoff=DEFAULT_CUTOFF):
             continue
         lam = np.column_stack([np.interp(grid, t, lambdas[start:end, j])
                                for j in range(3)])
-        force = np.column_stack([np.interp(grid, t, forces[start:end, j])
+        force = np.column_stack([np.interp(grid, t - force_lag,
+                                           forces[start:end, j])
                                  for j in range(3)])
         try:
             position = mechanics.forward_kinematics(robot, lam)
@@ -342,21 +354,22 @@ def prepare(robot, log, cutoff=DEFAULT_CUTOFF):
     return Samples(*columns, len(pieces), rate / step)
 
 
-def identify(robot, log, cutoff=DEFAULT_CUTOFF, base=None):
+def identify(robot, log, cutoff=DEFAULT_CUTOFF, base=None, force_lag=0.0):
     """
     Identify the base parameters from a :class:`Log` (an Identification).
 
     ``robot``: the nominal robot (its geometry, gravity and
     ``friction_velocity`` are taken as known, its masses and friction are
-    the nominal values of the split rule); ``cutoff``: of :func:`prepare`
-    (Hz); ``base``: a :class:`Base` (default :func:`base_parameters`).
+    the nominal values of the split rule); ``cutoff`` (Hz) and
+    ``force_lag`` (s): of :func:`prepare`; ``base``: a :class:`Base`
+    (default :func:`base_parameters`).
     Ordinary least squares on every sample and actuator
     (``numpy.linalg.lstsq`` on unit-norm columns), the standard deviations
     from the residual's variance ``|r|^2 / (3N - n_base)`` and ``(W^T
     W)^-1``. Raises :class:`LogError` or :class:`IdentificationError`.
     """
     base = base or base_parameters(robot)
-    samples = prepare(robot, log, cutoff)
+    samples = prepare(robot, log, cutoff, force_lag)
     count = len(base.independent)
     if len(samples.times) < MIN_SAMPLES_PER_PARAMETER * count:
         raise LogError(f'{log.source}: {len(samples.times)} usable '
@@ -406,9 +419,12 @@ def split(robot, base, values):
     combination is scaled from its nominal values instead, ``theta =
     theta_nominal beta_i / beta_i,nominal`` (when the combination's
     coefficients and both values are positive). A friction coefficient
-    found below zero is set to zero. Each departure from the plain rule is
-    a note. Raises :class:`IdentificationError` when no robot within the
-    bounds has these base parameters.
+    found below zero is set to zero. A combination no robot within the
+    bounds has (a mass combination found below zero: a parameter the log
+    hardly excites) keeps its nominal values. Each departure from the
+    plain rule is a note. Raises :class:`IdentificationError` only when
+    the robot so made is refused (a value beyond a bound of
+    :data:`robot.LIMITS`).
     """
     nominal = standard_parameters(robot)
     theta = nominal.copy()
@@ -429,19 +445,20 @@ def split(robot, base, values):
         nominal_value = row @ nominal
         shared = any(base.matrix[m, others].any()
                      for m in range(len(base.names)) if m != i)
-        if values[i] > 0.0 and nominal_value > 0.0 and (row >= 0.0).all() \
-                and not shared:
-            members = [carrier] + others
-            theta[members] = nominal[members] * (values[i] / nominal_value)
+        members = [carrier] + others
+        ratio = values[i] / nominal_value if nominal_value > 0.0 else 0.0
+        if ratio > 0.0 and (row >= 0.0).all() and not shared and (
+                nominal[members] * ratio >= LOWER[members]).all():
+            theta[members] = nominal[members] * ratio
             notes.append(f'{name} = {values[i]:.6g} {unit} is below its '
                          'other members\' nominal share: the combination '
-                         f'is scaled by {values[i] / nominal_value:.6g} '
-                         'from its nominal values')
+                         f'is scaled by {ratio:.6g} from its nominal '
+                         'values')
             continue
-        raise IdentificationError(
-            f'the base parameter {name} was found {values[i]:.6g} {unit}: '
-            'no robot within the bounds has it (the log may not excite it, '
-            'or the model does not fit the robot)')
+        notes.append(f'{name} was found {values[i]:.4g} {unit}, which no '
+                     'robot within the bounds has: its nominal value '
+                     f'{nominal_value:.4g} {unit} is kept (the log may not '
+                     'excite it enough: see its standard deviation)')
     try:
         return with_parameters(robot, theta), notes
     except ValueError as error:

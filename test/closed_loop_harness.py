@@ -91,6 +91,15 @@ TRAJECTORIES = {
 DEFAULT_GAINS = {s.name: s.default for s in PARAMETERS.specs
                  if s.name in ('kp', 'kd')}
 MISMATCH = 1.2          # the mismatched plant's platform: 20 % heavier
+# A plant the paper's model does not know, for identification: a 25 %
+# heavier platform, bars 15 % heavier, friction on every slider.
+UNKNOWN_PLANT = Robot(m5=18.75, m3=2.875,
+                      friction_viscous=(30.0, 40.0, 50.0),
+                      friction_coulomb=(5.0, 3.0, 4.0))
+# The simulator holds the platform at rest, effort zero, until the first
+# command: a log to identify from starts this long after the first
+# setpoint (s).
+SETTLE = 0.5
 START_TIMEOUT = 20.0    # s for the nodes to start and match
 PASS_MARGIN = 15.0      # s beyond a pass's duration before giving up
 CALL_TIMEOUT = 5.0      # s for one service call
@@ -99,14 +108,18 @@ QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
 
 Run = namedtuple('Run', (
     'label', 'times', 'position_error', 'joint_error', 'rms_mm', 'max_mm',
-    'samples', 'start_ns', 'efforts'))
+    'samples', 'start_ns', 'lambdas', 'efforts', 'braked'))
 Run.__doc__ = """One pass of the closed loop.
 
 ``times`` (s since the pass's first setpoint), ``position_error`` (N, 3)
 of the platform centre and ``joint_error`` (N, 3) of ``lambda`` (m,
 measured minus desired); ``rms_mm`` and ``max_mm`` of the position error's
 norm (mm); ``samples``: N; ``start_ns``: the first setpoint's stamp (ns,
-node clock); ``efforts``: (N, 3) the forces the plant applied (N).
+node clock); ``lambdas`` and ``efforts``: (N, 3) the measured joint
+positions (m) and the forces the plant applied (N): a log to identify
+from (:func:`log_of`); ``braked``: states published while the plant was
+held after it had started (zero effort: no command for the simulator's
+``command_timeout``, a process stalled), which spoil a pass.
 """
 
 
@@ -326,7 +339,26 @@ def _tracking(label, recorder, motion, duration):
     desired_lam = mechanics.solve_batch(model, desired).lambda_
     position_error = mechanics.forward_kinematics(model, lam) - desired
     norm_mm = np.linalg.norm(position_error, axis=1) * 1e3
+    efforts = np.array([effort for _, _, effort in samples])
+    held = ~efforts.any(axis=1)
+    started = int(np.argmin(held)) if not held.all() else len(held)
     return Run(label, times, position_error, lam - desired_lam,
                float(np.sqrt(np.mean(norm_mm ** 2))), float(norm_mm.max()),
-               len(samples), start,
-               np.array([effort for _, _, effort in samples]))
+               len(samples), start, lam, efforts,
+               int(held[started:].sum()))
+
+
+def log_of(run):
+    """Return a run's measurements as an ``identification.Log``."""
+    from orthoglide_ros.identification import Log
+    return Log(run.times, run.lambdas, run.efforts, run.label)
+
+
+def force_lag(plant_rate=PLANT_RATE):
+    """
+    Return how long before its stamp a state's effort was applied (s).
+
+    The simulator publishes with each state the force it held over the
+    step that led to it: on average half a step before the state.
+    """
+    return 0.5 / plant_rate

@@ -182,7 +182,7 @@ def test_split_keeps_nominal_values_where_it_can(base, result):
     assert robot.friction_velocity == NOMINAL.friction_velocity
 
 
-def test_split_scales_a_combination_its_carrier_cannot_take(base):
+def test_split_scales_or_keeps_what_its_carrier_cannot_take(base):
     values = base.matrix @ identification.standard_parameters(NOMINAL)
     values[0] = 0.1                     # m1 + m2 below the nominal m2
     values[3] = -0.2                    # a viscous coefficient below zero
@@ -192,7 +192,12 @@ def test_split_scales_a_combination_its_carrier_cannot_take(base):
     assert robot.friction_viscous[0] == 0.0
     assert len(notes) == 2 and 'scaled' in notes[0] and '0' in notes[1]
     values[2] = -1.0                    # no platform can weigh that
-    with pytest.raises(IdentificationError, match='m5 \\+ 3 m4'):
+    robot, notes = identification.split(NOMINAL, base, values)
+    assert (robot.m4, robot.m5) == (NOMINAL.m4, NOMINAL.m5)
+    assert len(notes) == 3
+    assert 'm5 + 3 m4' in notes[1] and 'nominal value 15.6 kg' in notes[1]
+    values[2] = 2e6                     # beyond the robot's bounds
+    with pytest.raises(IdentificationError, match='robot.m5'):
         identification.split(NOMINAL, base, values)
 
 
