@@ -97,7 +97,7 @@ def main(argv=None):
     print(f'  identify (prepare, regressor, least squares) {identify:8.3f}'
           f'   ({int(used)} samples after the decimation)')
     print(f'  total: imports + base + identify             {total:8.3f}')
-    print(f'  all runs, total (s): '
+    print('  all runs, total (s): '
           + ', '.join(f'{row[4]:.3f}' for row in rows))
     if args.samples == TARGET_SAMPLES:
         verdict = 'PASS' if total <= TARGET_S else 'MISS'
