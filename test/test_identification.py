@@ -355,3 +355,23 @@ def test_identification_from_a_bag_equals_the_one_from_arrays(tmp_path,
     direct = identification.identify(NOMINAL, log, base=base)
     assert np.allclose(from_bag.values, direct.values, rtol=1e-9)
     assert math.isfinite(from_bag.condition)
+
+
+def test_force_lag_realigns_forces_reported_late(base):
+    """Forces stamped 2 ms late: the lag puts them back where they were."""
+    log = synthetic_log(TRUE, 0, 10.0, 12, duration=20.0, noise=0.0)
+    moved = Log(log.times, log.lambdas, np.column_stack(
+        [np.interp(log.times - 0.002, log.times, log.forces[:, j])
+         for j in range(3)]), 'late forces')
+    truth = base.matrix @ identification.standard_parameters(TRUE)
+    aligned = identification.identify(NOMINAL, log, base=base)
+    off = identification.identify(NOMINAL, moved, base=base)
+    fixed = identification.identify(NOMINAL, moved, base=base,
+                                    force_lag=0.002)
+    error = {name: np.abs(r.values - truth) / truth
+             for name, r in (('aligned', aligned), ('off', off),
+                             ('fixed', fixed))}
+    assert error['off'].max() > 5.0 * error['fixed'].max()
+    assert error['fixed'].max() <= 2.0 * error['aligned'].max() + 1e-3
+    with pytest.raises(LogError, match='force lag'):
+        identification.prepare(NOMINAL, log, force_lag=0.2)
