@@ -428,15 +428,19 @@ def _positive_float(text):
     return value
 
 
-def _count(text):
+def _count(text, least=0):
     try:
         value = int(text)
     except ValueError:
-        value = -1
-    if value < 0:
+        value = least - 1
+    if value < least:
         raise argparse.ArgumentTypeError(
-            f'must be an integer >= 0, got {text!r}')
+            f'must be an integer >= {least}, got {text!r}')
     return value
+
+
+def _positive_count(text):
+    return _count(text, 1)
 
 
 def _version():
@@ -453,7 +457,8 @@ def _parser():
         '--params', metavar='FILE',
         help='ROS 2 parameters file with the robot.* parameters (as '
              'config/orthoglide.yaml: lengths m, angle rad, masses kg, '
-             'gravity m/s^2); default: the paper\'s robot')
+             'gravity m/s^2, slider friction N s/m and N); default: the '
+             'paper\'s robot')
     parser = argparse.ArgumentParser(
         prog=PROG, description='Inverse kinematics and dynamics of the '
         'Orthoglide, without ROS. Units: m, m/s, m/s^2, N, W, s. Bad input '
@@ -534,7 +539,8 @@ def _parser():
                             ' (default 0)')
     excitation.add_argument('--duration', type=_positive_float, default=5.0,
                             metavar='S', help='period (s; default 5)')
-    excitation.add_argument('--seeds', type=_count, default=1, metavar='K',
+    excitation.add_argument('--seeds', type=_positive_count, default=1,
+                            metavar='K',
                             help='compare the condition numbers of K seeds '
                             'from --seed on (default 1: describe one)')
     excitation.add_argument('--csv', metavar='FILE', help='write one period '

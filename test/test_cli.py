@@ -344,6 +344,14 @@ def test_excitation_describes_the_motion(capsys):
         assert label in out
 
 
+@pytest.mark.parametrize('argv', [
+    ['--seeds', '0'], ['--seed', '-1'], ['--duration', '0'],
+    ['--duration', 'nan'], ['--rate', '-5']])
+def test_excitation_refuses_bad_arguments(capsys, argv):
+    code, out, err = run(capsys, 'excitation', *argv)
+    assert code == 2 and out == '' and argv[0] in err
+
+
 def test_excitation_compares_seeds(capsys):
     code, out, _ = run(capsys, 'excitation', '--seed', 10, '--seeds', 3)
     assert code == 0
