@@ -28,8 +28,9 @@ setup(
             sorted(glob('config/*.yaml') + glob('config/*.xml'))),
     ],
     # ROS packages (rclpy, *_msgs) are deliberately absent: they come from
-    # apt ROS or from the ros-jazzy-* wheels in requirements.txt.
-    install_requires=['setuptools', 'numpy', 'PyYAML'],
+    # apt ROS or from the ros-jazzy-* wheels in requirements.txt. scipy and
+    # rosbags (orthoglide identify) are plain PyPI libraries, as numpy.
+    install_requires=['setuptools', 'numpy', 'PyYAML', 'scipy', 'rosbags'],
     zip_safe=True,
     maintainer='Orthoglide ROS maintainers',
     maintainer_email='orthoglide@example.com',

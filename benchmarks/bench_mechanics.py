@@ -17,6 +17,9 @@ batch >= 1,000,000 samples/s at N = 10,000. No ROS import.
 The same figures for the forward dynamics (``mechanics.forward_dynamics``
 and ``forward_dynamics_batch``, the paper trajectory's feedforward forces
 as input) against the same two baselines; target: single <= 100 us median.
+And the cost of the sliders' friction: ``solve`` and ``solve_batch`` on a
+robot with viscous and Coulomb friction (the default robot has none, and
+``solve`` then skips it).
 
 Usage: python benchmarks/bench_mechanics.py [--samples N] [--repeat R]
 """
@@ -107,6 +110,10 @@ def main(argv=None):
     s_med, batch_rate = measure(
         'Inverse dynamics', mechanics.solve, mechanics.solve_batch,
         (robot, p, v, a), args.calls, args)
+    friction_single, friction_rate = measure_friction(
+        robot.replace(friction_viscous=(40.0, 40.0, 40.0),
+                      friction_coulomb=(5.0, 5.0, 5.0)),
+        (p, v, a), args)
     # Forward dynamics from the trajectory's feedforward forces.
     f = mechanics.solve_batch(robot, p, v, a).force
     forward_med, _ = measure(
@@ -127,7 +134,28 @@ def main(argv=None):
               f'(ran N = {n:,})')
     print(f'  forward single median <= {FORWARD_TARGET_US:g} us: '
           f'{forward_med:.2f} us  {verdict(forward_med <= FORWARD_TARGET_US)}')
+    print(f'  with friction: single median {friction_single:.2f} us  '
+          f'{verdict(friction_single <= SINGLE_TARGET_US)}, batch '
+          f'{friction_rate:,.0f} samples/s')
     return 0
+
+
+def measure_friction(robot, arrays, args):
+    """Time ``solve`` and ``solve_batch`` on a robot with friction."""
+    floats = [(robot, *(tuple(x) for x in row))
+              for row in zip(*(arr.tolist() for arr in arrays))]
+    single = time_calls(mechanics.solve, floats, args.calls, args.warmup)
+    s_med, s_p99 = np.percentile(single, [50, 99]) / 1e3
+    t_batch = best_time(lambda: mechanics.solve_batch(robot, *arrays),
+                        args.repeat)
+    rate = len(floats) / t_batch
+    print(f'\nInverse dynamics with friction ({args.calls} calls; batch N '
+          f'= {len(floats)}):')
+    print(f'  ours  {"solve (Python floats)":{WIDTH}s}median '
+          f'{s_med:8.2f} us   p99 {s_p99:8.2f} us')
+    print(f'  ours  {"solve_batch":{WIDTH}s}{rate:14,.0f} samples/s'
+          f'  ({t_batch * 1e3:.2f} ms)')
+    return s_med, rate
 
 
 def measure(title, single_call, batch_call, inputs, calls, args):

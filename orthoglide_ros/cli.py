@@ -7,24 +7,33 @@ Subcommands (``orthoglide SUBCOMMAND --help`` for details):
   summary table, a CSV file (``--csv``) and a PNG figure (``--plot``).
 - ``solve``: inverse kinematics and dynamics of one sample.
 - ``batch``: the same for every row of a trajectory CSV file.
+- ``excitation``: a periodic motion for identification, its peaks and the
+  condition number of its regressor (``--csv``: its samples).
+- ``identify``: the robot's masses and friction from a log (a CSV file or
+  a rosbag2 bag), written as a parameters file (``--output``).
+- ``record``: topics into a rosbag2 bag (MCAP or sqlite3); the one
+  subcommand that needs ROS (rclpy).
 
 Units are SI throughout: m, m/s, m/s^2, N, W, s. Bad input exits with code 2
 and one line ``orthoglide: error: ...`` on standard error; output files are
-written atomically, only once every sample is solved.
+written atomically, only once every sample is solved. scipy and rosbags
+are imported by the subcommands that use them, rclpy by ``record`` alone.
 """
 
 import argparse
-import csv
 import io
 import json
-import math
 import os
 import sys
 import tempfile
 
 import numpy as np
 
-from orthoglide_ros import mechanics, trajectory
+from orthoglide_ros import identification, mechanics, params_file, \
+    trajectory
+from orthoglide_ros.csvfile import CsvError, read_columns
+from orthoglide_ros.identification import DEFAULT_CUTOFF
+from orthoglide_ros.parameters import JOINT_NAMES
 from orthoglide_ros.params_file import load_robot, ParametersFileError
 from orthoglide_ros.robot import Robot, RobotParameterError
 
@@ -34,13 +43,17 @@ QUANTITIES = ('lambda', 'lambdadot', 'lambdaddot', 'force', 'power')
 # Columns of every CSV the tool writes (SI units).
 CSV_COLUMNS = ('t', 'x', 'y', 'z') + tuple(
     f'{q}_{leg}' for q in QUANTITIES for leg in LEGS)
-# Columns of a trajectory file read by ``batch``: (name, required).
-INPUT_GROUPS = (('position', ('x', 'y', 'z'), True),
+# Columns of a trajectory file read by ``batch``: (group, names, required).
+INPUT_GROUPS = (('time', ('t',), False),
+                ('position', ('x', 'y', 'z'), True),
                 ('velocity', ('vx', 'vy', 'vz'), False),
                 ('acceleration', ('ax', 'ay', 'az'), False))
 UNITS = {'lambda': 'm', 'lambdadot': 'm/s', 'lambdaddot': 'm/s^2',
          'force': 'N', 'power': 'W'}
 DEFAULT_SAMPLES = 201
+# Samples per second of an excitation for its condition number (the
+# number changes by less than 1 % from 100 Hz to 1 kHz).
+CONDITION_RATE = 100.0
 
 
 class CliError(Exception):
@@ -63,7 +76,7 @@ def main(argv=None):
         parser.print_help(sys.stderr)
         return 2
     try:
-        robot = _robot(args.params)
+        robot = _robot(getattr(args, 'params', None))
         return args.run(robot, args)
     except CliError as error:
         _fail(str(error))
@@ -187,66 +200,147 @@ def _read_trajectory(path, name):
     acceleration group is None (zero).
     """
     try:
-        if path == '-':
-            text = sys.stdin.read()
-        else:
-            with open(path, encoding='utf-8-sig', newline='') as stream:
-                text = stream.read()
-    except OSError as error:
-        raise CliError(f'cannot read {name}: {error.strerror}') from None
-    except UnicodeDecodeError:
-        raise CliError(f'{name}: not a UTF-8 text file') from None
-    reader = csv.reader(io.StringIO(text, newline=''))
-    header = next(reader, None)
-    if not header:
-        raise CliError(f'{name}: empty file: expected a header line such as '
-                       't,x,y,z,vx,vy,vz,ax,ay,az')
-    header = [h.strip().lower() for h in header]
-    index = {}
-    for i, column in enumerate(header):
-        if column in index and column in _known_columns():
-            raise CliError(f'{name}: column {column!r} appears twice')
-        index.setdefault(column, i)
-    groups = []
-    for group, columns, required in INPUT_GROUPS:
-        present = [c for c in columns if c in index]
-        if present and len(present) < 3 or required and not present:
-            missing = [c for c in columns if c not in index]
-            raise CliError(f'{name}: no {missing[0]!r} column: the '
-                           f'{group} needs all of {", ".join(columns)}')
-        groups.append(columns if present else None)
-    wanted = (['t'] if 't' in index else []) + [
-        c for columns in groups if columns for c in columns]
-    rows, lines = [], []
-    for cells in reader:
-        if not any(cell.strip() for cell in cells):
-            continue        # blank line
-        row, line = len(rows) + 1, reader.line_num
-        values = []
-        for column in wanted:
-            i = index[column]
-            cell = cells[i].strip() if i < len(cells) else ''
-            try:
-                value = float(cell)
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise CliError(
-                    f'{name}: data row {row} (line {line}), column '
-                    f'{column!r}: {cell!r} is not a finite number')
-            values.append(value)
-        rows.append(values)
-        lines.append(line)
-    data = np.array(rows, dtype=float).reshape(len(rows), len(wanted))
-    columns = dict(zip(wanted, data.T))
-    times = columns.get('t')
-    p, v, a = (None if group is None else np.column_stack(
-        [columns[c] for c in group]).reshape(-1, 3) for group in groups)
-    return times, p, v, a, lines
+        values, lines = read_columns(path, INPUT_GROUPS, name)
+    except CsvError as error:
+        raise CliError(str(error)) from None
+    times = values['time']
+    return (None if times is None else times[:, 0], values['position'],
+            values['velocity'], values['acceleration'], lines)
 
 
-def _known_columns():
-    return {'t'} | {c for _, columns, _ in INPUT_GROUPS for c in columns}
+# -- excitation -------------------------------------------------------------
+
+def run_excitation(robot, args):
+    """Print an excitation's figures (and its CSV), or compare seeds."""
+    base = identification.base_parameters(robot)
+    seeds = range(args.seed, args.seed + args.seeds)
+    rows = []
+    for seed in seeds:
+        motion = _excitation(robot, seed, args.duration)
+        times = np.arange(0.0, args.duration, 1.0 / CONDITION_RATE)
+        p, v, a = trajectory.excitation_batch(motion, times)
+        rows.append((seed, motion, identification.condition_number(
+            robot, p, v, a, base), (p, v, a)))
+    if args.seeds > 1:
+        best = min(rows, key=lambda row: row[2])
+        print(f'Condition number of the base regressor, period '
+              f'{args.duration:g} s:')
+        for seed, _, condition, _ in rows:
+            print(f'  seed {seed:<10d} {condition:12.4g}'
+                  + ('   (best)' if seed == best[0] else ''))
+        return 0
+    seed, motion, condition, (p, v, a) = rows[0]
+    harmonics = motion.sines.shape[1]
+    distance = mechanics.workspace_status(robot, p).singularity_distance
+    lines = [
+        f'Excitation: seed {seed}, period {args.duration:g} s, '
+        f'{harmonics} harmonics ({1.0 / args.duration:g} to '
+        f'{harmonics / args.duration:g} Hz) per axis',
+        _row('', 'x', 'y', 'z'),
+        _row('peak |position| (m)', *np.abs(p).max(0)),
+        _row('peak |velocity| (m/s)', *np.abs(v).max(0)),
+        _row('peak |acceleration| (m/s^2)', *np.abs(a).max(0)),
+        f'smallest singularity distance: {distance.min():.4g}',
+        f'base parameters: {", ".join(base.names)}',
+        f'condition number of the base regressor: {condition:.4g} '
+        '(unit-norm columns)']
+    print('\n'.join(lines))
+    if args.csv is not None:
+        times = np.arange(0.0, args.duration, 1.0 / args.rate)
+        p, v, a = trajectory.excitation_batch(motion, times)
+        try:
+            sol = mechanics.solve_batch(robot, p, v, a)
+        except mechanics.WorkspaceError as error:
+            raise CliError(f'the excitation at t = {times[error.row]:.6g} '
+                           f's: {_reason(error)}') from None
+        _write_output(args.csv, _csv_text(times, p, sol))
+    return 0
+
+
+def _excitation(robot, seed, duration):
+    try:
+        return trajectory.excitation(seed, duration, robot=robot)
+    except ValueError as error:
+        raise CliError(f'seed {seed}: {error}') from None
+
+
+# -- identify ---------------------------------------------------------------
+
+def run_identify(robot, args):
+    """Identify the base parameters from a log; print, write the file."""
+    joints = tuple(args.joint_names)
+    try:
+        log = identification.crop(identification.read_log(
+            args.log, args.topic, joints), args.start, args.end)
+        result = identification.identify(robot, log, args.cutoff,
+                                         force_lag=args.force_lag)
+        validation = None
+        if args.validate is not None:
+            other = identification.prepare(robot, identification.read_log(
+                args.validate, args.topic, joints), args.cutoff,
+                args.force_lag)
+            validation = [np.sqrt(np.mean((other.forces - identification
+                                           .predict(model, other)) ** 2,
+                                          axis=0))
+                          for model in (robot, result.robot)]
+    except (identification.LogError,
+            identification.IdentificationError) as error:
+        raise CliError(str(error)) from None
+    summary = _identify_summary(args, log, result)
+    print('\n'.join(summary))
+    for note in result.notes:
+        print(f'note: {note}')
+    if validation is not None:
+        print(f'validation on {args.validate}: force error RMS (N)')
+        print(_row('', 'A', 'B', 'C'))
+        print(_row('  nominal robot', *validation[0]))
+        print(_row('  identified robot', *validation[1]))
+    if args.output is not None:
+        comments = [f'Identified by `orthoglide identify` from {args.log}',
+                    *summary[1:]] + [f'note: {n}' for n in result.notes]
+        _write_output(args.output, params_file.robot_file_text(
+            result.robot, comments).encode('utf-8'))
+        print(f'written: {args.output}')
+    return 0
+
+
+def _identify_summary(args, log, result):
+    samples = result.samples
+    lines = [f'Identification from {args.log}: {len(log.times)} samples, '
+             f'{len(samples.times)} used ({samples.segments} segment(s), '
+             f'low-pass {args.cutoff:g} Hz, decimated to '
+             f'{samples.rate:.4g} Hz, force lag {args.force_lag:g} s)',
+             f'{"base parameter":<32}{"identified":>14}{"nominal":>14}'
+             f'{"rel. std (%)":>14}']
+    for name, carrier, value, nominal, relative in zip(
+            result.base.names, result.base.independent, result.values,
+            result.nominal, result.relative_std):
+        unit = identification.UNITS[identification.STANDARD[carrier]]
+        label = f'{name} ({unit})'
+        lines.append(f'{label:<32}{value:14.6g}{nominal:14.6g}'
+                     f'{relative:14.3g}')
+    lines.append(f'condition number of the base regressor: '
+                 f'{result.condition:.4g} (unit-norm columns)')
+    lines.append('residual RMS (N): ' + ', '.join(
+        f'{leg} {r:.4g}' for leg, r in zip('ABC', result.residual_rms))
+        + ' (forces RMS: ' + ', '.join(
+            f'{leg} {r:.4g}' for leg, r in zip('ABC', result.force_rms))
+        + ')')
+    return lines
+
+
+# -- record -----------------------------------------------------------------
+
+def run_record(robot, args):
+    """Record topics into a rosbag2 bag until the duration or Ctrl-C."""
+    from orthoglide_ros import console
+    console.install_signal_handlers()
+    try:
+        from orthoglide_ros import recorder_node
+    except ImportError as error:
+        raise CliError(f'record needs ROS 2 (rclpy): {error}') from None
+    return recorder_node.main(args.output, args.topic or ['joint_states'],
+                              args.storage, args.duration, args.wait)
 
 
 # -- shared -----------------------------------------------------------------
@@ -323,6 +417,32 @@ def _samples(text):
     return value
 
 
+def _positive_float(text):
+    try:
+        value = float(text)
+    except ValueError:
+        value = 0.0
+    if not (np.isfinite(value) and value > 0.0):
+        raise argparse.ArgumentTypeError(
+            f'must be a finite number above 0, got {text!r}')
+    return value
+
+
+def _count(text, least=0):
+    try:
+        value = int(text)
+    except ValueError:
+        value = least - 1
+    if value < least:
+        raise argparse.ArgumentTypeError(
+            f'must be an integer >= {least}, got {text!r}')
+    return value
+
+
+def _positive_count(text):
+    return _count(text, 1)
+
+
 def _version():
     try:
         from importlib.metadata import version
@@ -337,7 +457,8 @@ def _parser():
         '--params', metavar='FILE',
         help='ROS 2 parameters file with the robot.* parameters (as '
              'config/orthoglide.yaml: lengths m, angle rad, masses kg, '
-             'gravity m/s^2); default: the paper\'s robot')
+             'gravity m/s^2, slider friction N s/m and N); default: the '
+             'paper\'s robot')
     parser = argparse.ArgumentParser(
         prog=PROG, description='Inverse kinematics and dynamics of the '
         'Orthoglide, without ROS. Units: m, m/s, m/s^2, N, W, s. Bad input '
@@ -399,6 +520,109 @@ def _parser():
     batch.add_argument('--output', metavar='FILE', help='result CSV file '
                        '(default: standard output)')
     batch.set_defaults(run=run_batch)
+
+    excitation = sub.add_parser(
+        'excitation', parents=[common],
+        help='a periodic motion for identification',
+        description='A finite Fourier series per axis of frame 0, '
+        f'{trajectory.EXCITATION_HARMONICS} harmonics of 1 / duration with '
+        'random coefficients from --seed, starting at home at rest, within '
+        f'{trajectory.EXCITATION_BOX:g} m of home per axis, '
+        f'{trajectory.EXCITATION_MAX_VELOCITY:g} m/s and '
+        f'{trajectory.EXCITATION_MAX_ACCELERATION:g} m/s^2 per axis, inside '
+        'the workspace. Prints its peaks, its smallest singularity distance '
+        'and the condition number of its base regressor (the smaller the '
+        'better: noise in a log is amplified by it). The setpoint_publisher '
+        'streams the same motion (motion: excitation).')
+    excitation.add_argument('--seed', type=_count, default=0, metavar='N',
+                            help='seed of the coefficients, an integer >= 0'
+                            ' (default 0)')
+    excitation.add_argument('--duration', type=_positive_float, default=5.0,
+                            metavar='S', help='period (s; default 5)')
+    excitation.add_argument('--seeds', type=_positive_count, default=1,
+                            metavar='K',
+                            help='compare the condition numbers of K seeds '
+                            'from --seed on (default 1: describe one)')
+    excitation.add_argument('--csv', metavar='FILE', help='write one period '
+                            f'as CSV ({columns}; SI units; the robot of '
+                            '--params): a log that identify reads; - for '
+                            'standard output')
+    excitation.add_argument('--rate', type=_positive_float, default=1000.0,
+                            metavar='HZ', help='samples per second of --csv'
+                            ' (default 1000)')
+    excitation.set_defaults(run=run_excitation)
+
+    identify = sub.add_parser(
+        'identify', parents=[common],
+        help='identify masses and friction from a log',
+        description='Identify the base parameters (the combinations of the '
+        'masses (kg) and of the viscous (N s/m) and Coulomb (N) friction '
+        'of the sliders that the forces depend on) from a log: a CSV file '
+        'with the columns t (s), lambda_a, lambda_b, lambda_c (m), force_a, '
+        'force_b, force_c (N), or a rosbag2 bag (a directory, MCAP or '
+        'sqlite3) of sensor_msgs/JointState (position: lambda, effort: '
+        'force, header stamp: time). Positions and forces go through a '
+        'zero-phase low-pass; least squares; the robot of --params is the '
+        'nominal one (its geometry, gravity and friction_velocity are '
+        'kept). Prints the base parameters with their relative standard '
+        'deviations, the condition number and the residual.')
+    identify.add_argument('--log', required=True, metavar='PATH',
+                          help='CSV file or rosbag2 bag directory')
+    identify.add_argument('--topic', default='joint_states',
+                          help='joint states topic in a bag (default '
+                          'joint_states)')
+    identify.add_argument('--joint-names', nargs=3, metavar='NAME',
+                          default=list(JOINT_NAMES),
+                          help='joints of actuators A, B, C in the joint '
+                          'states (default ' + ' '.join(JOINT_NAMES) + ')')
+    identify.add_argument('--start', type=float, metavar='S',
+                          help='use the log from S seconds after its first '
+                          'sample (default: from the first)')
+    identify.add_argument('--end', type=float, metavar='S',
+                          help='use the log up to S seconds after its first '
+                          'sample (default: to the last)')
+    identify.add_argument('--cutoff', type=_positive_float,
+                          default=DEFAULT_CUTOFF, metavar='HZ',
+                          help='low-pass cutoff (Hz; default '
+                          f'{DEFAULT_CUTOFF:g}), below half the log\'s '
+                          'sampling rate')
+    identify.add_argument('--force-lag', type=float, default=0.0,
+                          metavar='S', help='the forces were applied S '
+                          'seconds before their stamps (default 0; a '
+                          'simulator or drive that reports the force held '
+                          'over its last step of dt: dt / 2)')
+    identify.add_argument('--validate', metavar='PATH',
+                          help='another log (another motion): print the '
+                          'force error RMS (N) of the nominal and the '
+                          'identified robot on it')
+    identify.add_argument('--output', metavar='FILE',
+                          help='write the identified robot as a ROS 2 '
+                          'parameters file (section feedforward, every '
+                          'robot.* parameter) for --params-file and '
+                          '--params')
+    identify.set_defaults(run=run_identify)
+
+    record = sub.add_parser(
+        'record', help='record topics into a rosbag2 bag (needs ROS 2)',
+        description='Record topics (serialized messages, stamped at '
+        'reception) into a new rosbag2 bag directory until --duration or '
+        'Ctrl-C; their types are taken from their publishers. The bag is '
+        'what identify reads (topic joint_states) and what ros2 bag '
+        'reads. Needs rclpy; DDS settings from the environment '
+        '(ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE).')
+    record.add_argument('--output', required=True, metavar='DIR',
+                        help='bag directory to create (must not exist)')
+    record.add_argument('--topic', action='append', metavar='NAME',
+                        help='topic to record, repeatable (default '
+                        'joint_states)')
+    record.add_argument('--storage', choices=('mcap', 'sqlite3'),
+                        default='mcap', help='storage (default mcap)')
+    record.add_argument('--duration', type=_positive_float, metavar='S',
+                        help='stop after S seconds (default: at Ctrl-C)')
+    record.add_argument('--wait', type=_positive_float, default=10.0,
+                        metavar='S', help='longest wait for each topic\'s '
+                        'publisher (s; default 10)')
+    record.set_defaults(run=run_record)
     return parser
 
 

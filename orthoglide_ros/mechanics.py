@@ -4,6 +4,7 @@ Inverse and forward mechanics of the Orthoglide: the package's math API.
 Plain numpy, no ROS. Every function takes a validated :class:`Robot` first.
 
 - :func:`solve`: one sample (a control tick) -> joint states, forces, powers.
+- :func:`friction_force`: the sliders' friction, part of those forces.
 - :func:`solve_batch`: N samples as arrays, vectorised, the same numbers.
 - :func:`forward_dynamics`: platform state and actuator forces -> platform
   acceleration (one sample); :func:`forward_dynamics_batch`: N samples.
@@ -91,8 +92,11 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
 
     ``position``, ``velocity``, ``acceleration``: the platform centre G and
     its derivatives in frame 0 (m, m/s, m/s^2), each a 3-sequence. Returns
-    a :class:`Solution` of 3-tuples. ``record``, if a dict, receives the
-    kernel's per-element quantities (see :func:`elements`).
+    a :class:`Solution` of 3-tuples. The force is the rigid bodies' (the
+    kernel's) plus the sliders' friction (:func:`friction_force`), and the
+    power ``lambdadot * force`` is the total force's. ``record``, if a
+    dict, receives the kernel's per-element quantities (see
+    :func:`elements`).
     """
     x, y, z = position
     vx, vy, vz = velocity
@@ -113,6 +117,10 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
         raise WorkspaceError('singular', (
             f'position {format_vector(position)} m is on a singularity')) from None
     lam, lamd, lamdd, force, power, alphas, conditioning = out
+    if robot.has_friction:
+        fa, fb, fc = _friction(robot, lamd[0], lamd[1], lamd[2], math.tanh)
+        force = (force[0] + fa, force[1] + fb, force[2] + fc)
+        power = (lamd[0] * force[0], lamd[1] * force[1], lamd[2] * force[2])
     if conditioning < margin:
         raise WorkspaceError('singular', (
             f'position {format_vector(position)} m is too near a singularity of '
@@ -135,8 +143,9 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
 
     ``positions``, ``velocities``, ``accelerations``: (N, 3) arrays in frame
     0 (m, m/s, m/s^2); a missing velocity or acceleration means zero.
-    Returns a :class:`Solution` of (N, 3) and (N,) arrays. The first bad
-    sample raises :class:`WorkspaceError` with its index in ``row``.
+    Returns a :class:`Solution` of (N, 3) and (N,) arrays, friction
+    included as in :func:`solve`. The first bad sample raises
+    :class:`WorkspaceError` with its index in ``row``.
     """
     p = _as_samples('positions', positions)
     n = len(p)
@@ -171,6 +180,12 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
         for j, triple in enumerate(values):
             for leg in range(3):
                 out[j, leg, chunk] = triple[leg]
+    if robot.has_friction:
+        with np.errstate(all='ignore'):     # checked below, row by row
+            for leg, friction in enumerate(_friction(robot, *out[1],
+                                                     np.tanh)):
+                out[3, leg] += friction
+            np.multiply(out[1], out[3], out=out[4])
     out = out.transpose(0, 2, 1)
     conditioning = np.nan_to_num(conditioning, nan=0.0)
     # 0 (NaN before): exactly on a singularity, where solve divides by
@@ -193,6 +208,40 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
                     np.minimum(ratio.min(1), conditioning))
 
 
+def friction_force(robot, lambdadot):
+    """
+    Friction the actuators overcome on their sliders (N), per actuator.
+
+    ``f_j = c_j lambdadot_j + F_j tanh(lambdadot_j / v_s)``: viscous
+    friction ``c_j`` (N s/m) and Coulomb friction ``F_j`` (N) smoothed
+    over the speed ``v_s`` (m/s) (``robot.friction_viscous``,
+    ``friction_coulomb``, ``friction_velocity``). The paper neglects
+    friction; :func:`solve` adds this to the rigid bodies' forces, so the
+    forward dynamics (built on it) sees it as a resistance. It vanishes at
+    rest (the smoothing has no sticking) and is odd in ``lambdadot``.
+    ``lambdadot`` (m/s): a 3-sequence (returns a 3-tuple) or an (N, 3)
+    array (returns one).
+
+    >>> from orthoglide_ros.robot import Robot
+    >>> robot = Robot(friction_viscous=(10.0, 0.0, 0.0),
+    ...               friction_coulomb=(0.0, 2.0, 0.0))
+    >>> [round(f, 6) for f in friction_force(robot, (0.1, -1.0, 0.3))]
+    [1.0, -2.0, 0.0]
+    """
+    if isinstance(lambdadot, np.ndarray):
+        return np.column_stack(_friction(robot, *lambdadot.T, np.tanh))
+    return _friction(robot, *(float(v) for v in lambdadot), math.tanh)
+
+
+def _friction(robot, la, lb, lc, tanh):
+    """Friction of :func:`friction_force` on floats or arrays (N)."""
+    ca, cb, cc = robot.friction_viscous
+    fa, fb, fc = robot.friction_coulomb
+    r = 1.0 / robot.friction_velocity
+    return (ca * la + fa * tanh(la * r), cb * lb + fb * tanh(lb * r),
+            cc * lc + fc * tanh(lc * r))
+
+
 def forward_dynamics(robot, position, velocity, force,
                      margin=DEFAULT_SINGULARITY_MARGIN):
     """
@@ -208,10 +257,12 @@ def forward_dynamics(robot, position, velocity, force,
     ``J_lambda^T f = Q = M(r_G) rddot_G + h(r_G, rdot_G)`` (eqs. 16 and 25)
     gives ``f(a) = f(0) + F a`` with ``F = J_lambda^-T M``. The bias
     ``f(0)`` is the inverse dynamics at zero acceleration (Coriolis,
-    centrifugal and weight terms); column i of ``F`` is the inverse
-    dynamics at zero velocity, without gravity, for the unit acceleration
-    ``e_i`` (exact, no difference taken). Then ``F a = f - f(0)`` is
-    solved by Cramer's rule. Four kernel calls on Python floats, no numpy.
+    centrifugal and weight terms, and the sliders' friction, which
+    depends on the velocity only: the friction resists the motion); column
+    i of ``F`` is the inverse dynamics at zero velocity, without gravity
+    or friction, for the unit acceleration ``e_i`` (exact, no difference
+    taken). Then ``F a = f - f(0)`` is solved by Cramer's rule. Four
+    kernel calls on Python floats, no numpy.
 
     Refuses what :func:`solve` refuses, with the same reasons: a position
     out of reach or nearer a singularity than ``margin`` (``unreachable``,
@@ -236,7 +287,7 @@ def forward_dynamics(robot, position, velocity, force,
             raise
         raise _overflow_error(position, velocity, force, None,
                               'force') from None
-    k = _without_gravity(robot).constants
+    k = _inertia(robot).constants
     x, y, z = float(position[0]), float(position[1]), float(position[2])
     sqrt = math.sqrt
     columns = (kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0,
@@ -286,7 +337,7 @@ def forward_dynamics_batch(robot, positions, velocities, forces,
             raise
         raise _overflow_error(p[error.row], v[error.row], f[error.row],
                               error.row, 'force') from None
-    inertia = _without_gravity(robot)
+    inertia = _inertia(robot)
     columns = []
     for unit in np.eye(3):
         columns.append(solve_batch(inertia, p, None, np.tile(unit, (n, 1)),
@@ -500,19 +551,21 @@ def _overflow_error(position, velocity, third, row=None,
         'finite'), row)
 
 
-# Zero-gravity copies of the robots seen, keyed by their kernel constants:
-# the inverse dynamics at zero velocity without gravity is ``M`` applied.
-_WITHOUT_GRAVITY = {}
+# Copies of the robots seen without gravity or friction, keyed by their
+# kernel constants: the inverse dynamics at zero velocity of such a copy is
+# ``M`` applied.
+_INERTIA = {}
 
 
-def _without_gravity(robot):
-    """Return ``robot`` with gravity zero (cached: built once per robot)."""
-    inertia = _WITHOUT_GRAVITY.get(robot.constants)
+def _inertia(robot):
+    """Return ``robot`` less gravity and friction (built once per robot)."""
+    inertia = _INERTIA.get(robot.constants)
     if inertia is None:
-        if len(_WITHOUT_GRAVITY) >= 16:
-            _WITHOUT_GRAVITY.clear()
-        inertia = robot.replace(gravity=ZERO)
-        _WITHOUT_GRAVITY[robot.constants] = inertia
+        if len(_INERTIA) >= 16:
+            _INERTIA.clear()
+        inertia = robot.replace(gravity=ZERO, friction_viscous=ZERO,
+                                friction_coulomb=ZERO)
+        _INERTIA[robot.constants] = inertia
     return inertia
 
 

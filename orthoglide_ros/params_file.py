@@ -1,5 +1,5 @@
 """
-Read ROS 2 parameters files the way rcl does, without ROS.
+Read and write ROS 2 parameters files the way rcl does, without ROS.
 
 The node and the ``orthoglide`` tool share one file (``config/orthoglide.yaml``).
 rcl starts a node only if every value has the declared type, so the tools
@@ -14,6 +14,9 @@ apply the same rules here:
   must not mix integers and floats, booleans are not numbers;
 - a plain scalar such as ``1e-3`` is a double, as in rcl (YAML 1.1, which
   PyYAML implements, would read it as a string).
+
+:func:`robot_file_text` writes a robot as such a file (``orthoglide
+identify`` does), with the same typing.
 """
 
 import re
@@ -89,3 +92,28 @@ def _flatten(mapping, prefix, out):
             _flatten(value, name + '.', out)
         else:
             out[name] = value
+
+
+def robot_file_text(robot, comments=(), node=NODE_NAME):
+    """
+    Return a parameters file holding every ``robot.*`` value of ``robot``.
+
+    One section for ``node`` (the ``feedforward``'s by default, which the
+    tools read too), the values nested under ``robot:`` in the order of
+    :meth:`Robot.parameter_names`, each written as rcl types it: doubles
+    by ``repr`` (always a decimal point or an exponent: ``15.0``,
+    ``1e-06``), arrays of doubles in flow style; ``m4`` and ``m6``
+    explicit. ``comments``: lines put first, each after ``# ``.
+    :func:`load_robot` reads the file back to an equal robot.
+
+    >>> from orthoglide_ros.robot import Robot
+    >>> print(robot_file_text(Robot(m5=18.0)).splitlines()[12])
+          m5: 18.0
+    """
+    lines = [f'# {line}'.rstrip() for line in comments]
+    lines += [f'{node}:', '  ros__parameters:', '    robot:']
+    for name, value in robot.as_parameters().items():
+        text = ('[' + ', '.join(repr(float(v)) for v in value) + ']'
+                if isinstance(value, list) else repr(float(value)))
+        lines.append(f'      {name}: {text}')
+    return '\n'.join(lines) + '\n'

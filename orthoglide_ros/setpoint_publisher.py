@@ -1,13 +1,15 @@
 """
 The setpoint publisher's logic without ROS: which setpoint, when.
 
-:class:`Stream` turns the node clock's time into setpoints of the paper's
-trajectory, eq. (6) (:func:`trajectory.paper_sample`), pass after pass, and
-keeps the counters of the summary the node logs at the end. Its parameters
-are one table, :data:`PARAMETERS` (all read-only: a stream does not change
-its motion while it runs). The ROS node (``setpoint_publisher_node``) only
-publishes what :meth:`Stream.next` returns, so the rules are testable
-without DDS:
+:class:`Stream` turns the node clock's time into setpoints of a motion,
+pass after pass, and keeps the counters of the summary the node logs at
+the end: with ``motion`` ``paper``, the paper's trajectory, eq. (6)
+(:func:`trajectory.paper_sample`); with ``excitation``, the periodic
+motion for identification (:func:`trajectory.excitation` of ``seed``, of
+period ``duration``). Its parameters are one table, :data:`PARAMETERS`
+(all read-only: a stream does not change its motion while it runs). The
+ROS node (``setpoint_publisher_node``) only publishes what
+:meth:`Stream.next` returns, so the rules are testable without DDS:
 
 - every setpoint is stamped with the node clock at publication and sampled
   at ``t = (stamp - start) / 1e9`` s exactly, ``start`` being the stamp of
@@ -18,7 +20,10 @@ without DDS:
   pass's end state to its start state (home, at rest, eq. (6)'s initial
   acceleration) in ``return_duration`` s, then the next pass. The looped
   motion has period ``duration + return_duration`` and is continuous in
-  position, velocity and acceleration.
+  position, velocity and acceleration;
+- the excitation is periodic and starts and ends at home at rest: a pass
+  is one period, and with ``loop`` the passes follow each other directly
+  (no way back), continuous in position, velocity and acceleration.
 
 >>> stream = Stream(PARAMETERS.parse({'duration': 1.0}))
 >>> stream.next(5 * 10**9)[0] == (0.0, 0.0, 0.0)
@@ -28,9 +33,11 @@ True
 """
 
 from orthoglide_ros import trajectory
-from orthoglide_ros.parameters import Spec, Table, triple
+from orthoglide_ros.parameters import ParameterError, Spec, Table, triple
 
 INPUTS = ('trajectory', 'topics')
+MOTIONS = ('paper', 'excitation')
+SEED_RANGE = (0, 2**31 - 1)
 
 
 def _one_of(choices):
@@ -42,6 +49,13 @@ def _one_of(choices):
     return check
 
 
+def _excitation_has_a_period(settings):
+    if settings.motion == 'excitation' and not settings.duration > 0.0:
+        raise ParameterError('duration', (
+            'the period of the excitation must be above 0 s, got '
+            f'{settings.duration}'))
+
+
 PARAMETERS = Table('SetpointSettings', (
     Spec('rate_hz', 'double', 500.0, 'setpoints per second (Hz)',
          (0.1, 10000.0), read_only=True),
@@ -49,20 +63,29 @@ PARAMETERS = Table('SetpointSettings', (
          "'trajectory': one MultiDOFJointTrajectory on setpoint/trajectory; "
          "'topics': pose, twist and accel of equal stamp on "
          'setpoint/pose|twist|accel', check=_one_of(INPUTS), read_only=True),
+    Spec('motion', 'string', 'paper',
+         "'paper': eq. (6) (target, omega); 'excitation': the periodic "
+         'motion for identification (seed; period duration)',
+         check=_one_of(MOTIONS), read_only=True),
     Spec('duration', 'double', trajectory.PAPER_DURATION,
-         'length of one pass of eq. (6) (s)', (0.0, 3600.0), read_only=True),
+         'length of one pass (s): of eq. (6), or the period of the '
+         'excitation (then above 0)', (0.0, 3600.0), read_only=True),
     Spec('target', 'double_array', list(trajectory.PAPER_TARGET),
          'r* of eq. (6): three coordinates (m) in frame_id', check=triple,
          read_only=True),
     Spec('omega', 'double', trajectory.PAPER_OMEGA,
          'omega of eq. (6) (rad/s)', (-1000.0, 1000.0), read_only=True),
+    Spec('seed', 'integer', 0,
+         'seed of the excitation\'s coefficients (the same seed, the same '
+         'motion)', SEED_RANGE, read_only=True),
     Spec('loop', 'bool', False,
-         'repeat the pass until Ctrl-C, each followed by a smooth way back '
-         'to its start (else exit 0 after one pass)', read_only=True),
+         'repeat the pass until Ctrl-C (else exit 0 after one pass); each '
+         'pass of eq. (6) is followed by a smooth way back to its start, '
+         'the excitation\'s passes follow each other', read_only=True),
     Spec('return_duration', 'double', trajectory.RETURN_DURATION,
-         'with loop: time of the way back from the end of a pass to its '
-         'start (s), a quintic continuous in position, velocity and '
-         'acceleration', (0.1, 3600.0), read_only=True),
+         'with loop and motion paper: time of the way back from the end '
+         'of a pass to its start (s), a quintic continuous in position, '
+         'velocity and acceleration', (0.1, 3600.0), read_only=True),
     Spec('start_delay', 'double', 1.0,
          'longest wait (s) before the first setpoint: it comes earlier, '
          '0.25 s after every output has min_subscribers matched '
@@ -72,7 +95,7 @@ PARAMETERS = Table('SetpointSettings', (
          'early', (0, 1000), read_only=True),
     Spec('frame_id', 'string', 'base_link',
          'frame of the setpoints (header.frame_id)', read_only=True),
-))
+), rules=(_excitation_has_a_period,))
 
 
 class Stream:
@@ -93,9 +116,15 @@ class Stream:
         self.largest_gap_ns = 0
         self._first_ns = None       # stamp of the very first setpoint
         self._last_ns = None
-        self._way_back = trajectory.quintic(
-            self._pass(settings.duration), self._pass(0.0),
-            settings.return_duration)
+        self._excitation = None
+        self._way_back = None
+        if settings.motion == 'excitation':
+            self._excitation = trajectory.excitation(settings.seed,
+                                                     settings.duration)
+        else:
+            self._way_back = trajectory.quintic(
+                self._pass(settings.duration), self._pass(0.0),
+                settings.return_duration)
 
     def next(self, stamp_ns):
         """Return the setpoint at ``stamp_ns`` (ns), or None when done."""
@@ -120,11 +149,13 @@ class Stream:
         Return the motion at ``t`` s after the first setpoint, or None.
 
         None past the single pass without ``loop``; with it, the pass and
-        the way back repeat with period ``duration + return_duration``.
+        the way back repeat with period ``duration + return_duration``, or
+        the excitation's passes with period ``duration``.
         """
         settings = self.settings
         if settings.loop:
-            period = settings.duration + settings.return_duration
+            period = settings.duration + (
+                0.0 if self._excitation else settings.return_duration)
             self.passes = int(t // period) + 1
             t %= period
         elif t > settings.duration:
@@ -136,6 +167,8 @@ class Stream:
         return self._way_back(t - settings.duration)
 
     def _pass(self, t):
+        if self._excitation is not None:
+            return trajectory.excitation_sample(self._excitation, t)
         return trajectory.paper_sample(t, self.settings.target,
                                        self.settings.omega)
 

@@ -1,8 +1,9 @@
 """
-The ``setpoint_publisher`` ROS 2 node: streams the paper's trajectory, eq. (6).
+The ``setpoint_publisher`` ROS 2 node: streams eq. (6) or the excitation.
 
-A thin layer over :class:`orthoglide_ros.setpoint_publisher.Stream`: it
-declares the parameters of
+A thin layer over :class:`orthoglide_ros.setpoint_publisher.Stream` (the
+paper's trajectory or, with ``motion: excitation``, the periodic motion
+for identification): it declares the parameters of
 :data:`orthoglide_ros.setpoint_publisher.PARAMETERS`, waits for its
 subscribers, publishes one setpoint per timer tick and logs a summary at
 the end. With ``input`` ``trajectory`` a setpoint is one
@@ -38,7 +39,7 @@ MATCH_SETTLE = 0.25  # s
 
 
 class SetpointPublisher(InputNode):
-    """Node ``setpoint_publisher``: eq. (6) in real time, one pass or more."""
+    """Node ``setpoint_publisher``: a motion in real time, one pass or more."""
 
     def __init__(self, **kwargs):
         super().__init__('setpoint_publisher', **kwargs)

@@ -1,15 +1,22 @@
 """
-The paper's test trajectory, eq. (6), its sampling, and the way back.
+Platform trajectories: the paper's, eq. (6), the way back, an excitation.
 
 - :func:`paper_sample`, :func:`paper_batch`, :func:`paper_times`: eq. (6);
 - :func:`quintic`: the polynomial of degree 5 between two states
   (position, velocity, acceleration), the smooth way from one to another
-  (the ``setpoint_publisher`` loops eq. (6) with it).
+  (the ``setpoint_publisher`` loops eq. (6) with it);
+- :func:`excitation`, :func:`excitation_sample`, :func:`excitation_batch`:
+  a periodic motion for identifying the robot's masses and friction
+  (``doc/identification.md``), a finite Fourier series per axis.
 """
 
+from collections import namedtuple
 import math
 
 import numpy as np
+
+from orthoglide_ros import mechanics
+from orthoglide_ros.robot import Robot
 
 # Eq. (6): r_G(t) = r* (1 - cos(pi t / 3)), over 2 s from rest at home.
 PAPER_TARGET = (0.05, 0.10, -0.20)
@@ -85,3 +92,116 @@ def quintic(start, end, duration):
         a = 2 * c2 + t * (6 * c3 + t * (12 * c4 + t * 20 * c5))
         return tuple(p.tolist()), tuple(v.tolist()), tuple(a.tolist())
     return sample
+
+
+# The excitation: EXCITATION_HARMONICS harmonics of 1 / period per axis,
+# kept within a box around home (m, each coordinate) and within a speed
+# (m/s) and an acceleration (m/s^2) per axis: inside the paper's tested
+# cube (|x|, |y|, |z| <= 0.3 m, singularity distance >= 0.274), at rates a
+# PD-controlled Orthoglide follows closely.
+EXCITATION_HARMONICS = 5
+EXCITATION_BOX = 0.15
+EXCITATION_MAX_VELOCITY = 0.4
+EXCITATION_MAX_ACCELERATION = 4.0
+# Fraction of each bound the sampled peaks are scaled to (the true peak
+# between two of the PEAK_SAMPLES samples per period is a little higher).
+_BOUND_SHARE = 0.99
+_PEAK_SAMPLES = 4000
+
+Excitation = namedtuple('Excitation', (
+    'period', 'offset', 'sines', 'cosines', 'seed'))
+Excitation.__doc__ = """A periodic excitation motion (see :func:`excitation`).
+
+Per axis i of frame 0: ``r_i(t) = offset_i + sum_k (sines[i, k-1] sin(k w
+t) + cosines[i, k-1] cos(k w t))``, ``w = 2 pi / period`` (m, s);
+``seed`` made it.
+"""
+
+
+def excitation(seed, period, harmonics=EXCITATION_HARMONICS,
+               box=EXCITATION_BOX, max_velocity=EXCITATION_MAX_VELOCITY,
+               max_acceleration=EXCITATION_MAX_ACCELERATION, robot=None,
+               margin=mechanics.DEFAULT_SINGULARITY_MARGIN):
+    """
+    Return an :class:`Excitation`: a finite Fourier series per axis.
+
+    ``harmonics`` multiples of the fundamental ``1 / period`` (s) with
+    random coefficients drawn from ``seed`` (an integer >= 0; the same
+    seed gives the same motion), falling off as ``1 / k``. Corrected
+    (least change) so that the motion starts at home at rest with zero
+    acceleration (``sum_k k A_k = 0``, ``sum_k k^2 B_k = 0``, the offset
+    ``-sum_k B_k``): a robot held at home follows it from its first
+    sample, and it repeats without a jump. Then each axis is scaled down
+    until its position stays within ``box`` (m), its speed within
+    ``max_velocity`` (m/s) and its acceleration within
+    ``max_acceleration`` (m/s^2), each to 99 % on a grid of 4000 samples
+    per period, and the path is checked against ``robot``'s workspace
+    (default the paper's) with the singularity ``margin``
+    (:func:`mechanics.workspace_status`): a path outside raises
+    ValueError, as do a period or bound that is not positive.
+
+    >>> motion = excitation(7, 5.0)
+    >>> position, velocity, acceleration = excitation_sample(motion, 0.0)
+    >>> max(abs(c) for c in position + velocity + acceleration) < 1e-15
+    True
+    """
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ValueError(f'seed must be an integer >= 0, got {seed!r}')
+    if isinstance(harmonics, bool) or not isinstance(harmonics, int) \
+            or harmonics < 1:
+        raise ValueError(f'harmonics must be an integer >= 1, got '
+                         f'{harmonics!r}')
+    for name, value in (('period', period), ('box', box),
+                        ('max_velocity', max_velocity),
+                        ('max_acceleration', max_acceleration)):
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f'{name} must be finite and positive, got '
+                             f'{value!r}')
+    rng = np.random.default_rng(seed)
+    k = np.arange(1, harmonics + 1, dtype=float)
+    sines = rng.standard_normal((3, harmonics)) / k
+    cosines = rng.standard_normal((3, harmonics)) / k
+    if harmonics > 1:
+        # At rest with zero acceleration at t = 0 (one harmonic cannot).
+        sines -= np.outer(sines @ k, k) / (k @ k)
+        cosines -= np.outer(cosines @ k ** 2, k ** 2) / (k ** 2 @ k ** 2)
+    motion = Excitation(float(period), -cosines.sum(axis=1), sines,
+                        cosines, seed)
+    times = np.linspace(0.0, period, _PEAK_SAMPLES, endpoint=False)
+    peaks = [np.abs(x).max(axis=0) for x in excitation_batch(motion, times)]
+    with np.errstate(divide='ignore'):
+        scale = _BOUND_SHARE * np.min([
+            box / peaks[0], max_velocity / peaks[1],
+            max_acceleration / peaks[2]], axis=0)
+    scale = np.where(np.isfinite(scale), scale, 0.0)
+    motion = Excitation(motion.period, motion.offset * scale,
+                        sines * scale[:, None], cosines * scale[:, None],
+                        seed)
+    positions = excitation_batch(motion, times)[0]
+    status = mechanics.workspace_status(robot or Robot(), positions, margin)
+    if not status.ok.all():
+        worst = int(np.argmin(status.singularity_distance))
+        raise ValueError(
+            f'the excitation leaves the workspace of margin {margin:g} at '
+            f'{mechanics.format_vector(positions[worst])} m (singularity '
+            f'distance {status.singularity_distance[worst]:.3g}): choose a '
+            f'smaller box than {box:g} m')
+    return motion
+
+
+def excitation_sample(motion, t):
+    """Position (m), velocity (m/s), acceleration (m/s^2) at t (s): 3-tuples."""
+    p, v, a = excitation_batch(motion, np.array([float(t)]))
+    return tuple(p[0].tolist()), tuple(v[0].tolist()), tuple(a[0].tolist())
+
+
+def excitation_batch(motion, times):
+    """Return the excitation at an array of times (s): three (N, 3) arrays."""
+    w = 2.0 * math.pi / motion.period
+    k = w * np.arange(1, motion.sines.shape[1] + 1)
+    phase = np.outer(np.asarray(times, dtype=float), k)
+    sin, cos = np.sin(phase), np.cos(phase)
+    ks, kc = motion.sines * k, motion.cosines * k
+    return (motion.offset + sin @ motion.sines.T + cos @ motion.cosines.T,
+            cos @ ks.T - sin @ kc.T,
+            -(sin @ (ks * k).T + cos @ (kc * k).T))

@@ -6,10 +6,12 @@ The closed loop over DDS, for the closed-loop demo and its tests.
 DDS, and a recorder node here that keeps the simulator's ``joint_states``
 and the setpoints' stamps. :class:`ClosedLoop` starts the three long-lived
 nodes once; each :meth:`ClosedLoop.run` sets the controller's gains and
-feedforward switch and the plant's platform mass through the standard
-parameter services, resets the simulator (platform at home, at rest, held
-until the first command) and streams one pass of a trajectory from a new
-``setpoint_publisher`` process.
+feedforward switch, the plant's robot (the simulator's ``robot.*``) and
+the model (the feedforward's ``robot.*``) through the standard parameter
+services, resets the simulator (platform at home, at rest, held until the
+first command) and streams one pass (or several, looped) of a motion from
+a new ``setpoint_publisher`` process: the paper's trajectory, a faster
+one, or an excitation (:func:`excitation_motion`, for identification).
 
 Tracking error. A measured sample of stamp ``s`` (the simulator's clock at
 the end of a step) is compared with the trajectory at the same time,
@@ -51,17 +53,53 @@ from orthoglide_ros.tracking import PARAMETERS
 
 LOOP_RATE = 250.0       # Hz: setpoints, feedforward and commands
 PLANT_RATE = 500.0      # Hz: the simulator's steps
+
+Motion = namedtuple('Motion', ('args', 'duration', 'sample'))
+Motion.__doc__ = """A motion the setpoint publisher streams.
+
+``args``: its ``setpoint_publisher`` parameters (``-p name:=value`` ...);
+``duration``: one pass (s); ``sample(t)``: position, velocity and
+acceleration at ``t`` s after the first setpoint (passes repeat).
+"""
+
+
+def paper_motion(target, omega, duration):
+    """Return eq. (6) with ``target`` (m), ``omega`` (rad/s) as a Motion."""
+    return Motion(
+        ['-p', f'omega:={float(omega)}', '-p', f'duration:={duration}',
+         '-p', f'target:={[float(c) for c in target]}'], duration,
+        lambda t: trajectory.paper_sample(t, target, omega))
+
+
+def excitation_motion(seed, period):
+    """Return the excitation of ``seed`` and ``period`` (s) as a Motion."""
+    motion = trajectory.excitation(seed, period)
+    return Motion(
+        ['-p', 'motion:=excitation', '-p', f'seed:={seed}',
+         '-p', f'duration:={float(period)}'], period,
+        lambda t: trajectory.excitation_sample(motion, t % period))
+
+
 # The paper's trajectory, eq. (6), and a faster one (1 Hz, 8x the
 # accelerations at the same path length; the target is scaled so that the
 # platform stays in the tested cube, |x|, |y|, |z| <= 0.3 m).
 TRAJECTORIES = {
-    'paper': (trajectory.PAPER_TARGET, trajectory.PAPER_OMEGA,
-              trajectory.PAPER_DURATION),
-    'fast': ((0.04, 0.08, -0.16), 2.0 * math.pi, 2.0),
+    'paper': paper_motion(trajectory.PAPER_TARGET, trajectory.PAPER_OMEGA,
+                          trajectory.PAPER_DURATION),
+    'fast': paper_motion((0.04, 0.08, -0.16), 2.0 * math.pi, 2.0),
 }
 DEFAULT_GAINS = {s.name: s.default for s in PARAMETERS.specs
                  if s.name in ('kp', 'kd')}
 MISMATCH = 1.2          # the mismatched plant's platform: 20 % heavier
+# A plant the paper's model does not know, for identification: a 25 %
+# heavier platform, bars 15 % heavier, friction on every slider.
+UNKNOWN_PLANT = Robot(m5=18.75, m3=2.875,
+                      friction_viscous=(30.0, 40.0, 50.0),
+                      friction_coulomb=(5.0, 3.0, 4.0))
+# The simulator holds the platform at rest, effort zero, until the first
+# command: a log to identify from starts this long after the first
+# setpoint (s).
+SETTLE = 0.5
 START_TIMEOUT = 20.0    # s for the nodes to start and match
 PASS_MARGIN = 15.0      # s beyond a pass's duration before giving up
 CALL_TIMEOUT = 5.0      # s for one service call
@@ -70,13 +108,18 @@ QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
 
 Run = namedtuple('Run', (
     'label', 'times', 'position_error', 'joint_error', 'rms_mm', 'max_mm',
-    'samples'))
+    'samples', 'start_ns', 'lambdas', 'efforts', 'braked'))
 Run.__doc__ = """One pass of the closed loop.
 
 ``times`` (s since the pass's first setpoint), ``position_error`` (N, 3)
 of the platform centre and ``joint_error`` (N, 3) of ``lambda`` (m,
 measured minus desired); ``rms_mm`` and ``max_mm`` of the position error's
-norm (mm); ``samples``: N.
+norm (mm); ``samples``: N; ``start_ns``: the first setpoint's stamp (ns,
+node clock); ``lambdas`` and ``efforts``: (N, 3) the measured joint
+positions (m) and the forces the plant applied (N): a log to identify
+from (:func:`log_of`); ``braked``: states published while the plant was
+held after it had started (zero effort: no command for the simulator's
+``command_timeout``, a process stalled), which spoil a pass.
 """
 
 
@@ -89,8 +132,9 @@ class Recorder(Node):
 
     def __init__(self, context):
         super().__init__('closed_loop_recorder', context=context)
-        self.joints = []        # (stamp ns, lambda (3,))
+        self.joints = []        # (stamp ns, lambda (3,), effort (3,))
         self.first_setpoint = None
+        self.last_setpoint = None
         self.create_subscription(JointState, 'joint_states', self._on_joints,
                                  QOS)
         self.create_subscription(MultiDOFJointTrajectory,
@@ -99,20 +143,24 @@ class Recorder(Node):
         self.reset = self.create_client(Trigger, '/simulator/reset')
         self.plant = AsyncParameterClient(self, 'simulator')
         self.controller = AsyncParameterClient(self, 'tracking_controller')
+        self.model = AsyncParameterClient(self, 'feedforward')
 
     def clear(self):
         """Forget everything recorded."""
         self.joints = []
         self.first_setpoint = None
+        self.last_setpoint = None
 
     def _on_joints(self, msg):
         stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
-        self.joints.append((stamp, tuple(msg.position)))
+        self.joints.append((stamp, tuple(msg.position), tuple(msg.effort)))
 
     def _on_setpoint(self, msg):
         stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
         if self.first_setpoint is None or stamp < self.first_setpoint:
             self.first_setpoint = stamp
+        if self.last_setpoint is None or stamp > self.last_setpoint:
+            self.last_setpoint = stamp
 
 
 class ClosedLoop:
@@ -154,6 +202,7 @@ class ClosedLoop:
                 self.recorder.reset.service_is_ready()
                 and self.recorder.plant.services_are_ready()
                 and self.recorder.controller.services_are_ready()
+                and self.recorder.model.services_are_ready()
                 and self.recorder.count_publishers('joint_states') >= 1),
                 START_TIMEOUT, 'the simulator and the controller')
         except BaseException:
@@ -175,48 +224,70 @@ class ClosedLoop:
         return False
 
     def run(self, name='paper', feedforward=True, kp=None, kd=None,
-            mass_factor=1.0):
+            mass_factor=1.0, plant=None, model=None, passes=1):
         """
-        Stream one pass of trajectory ``name`` and return its :class:`Run`.
+        Stream a motion and return its :class:`Run`.
 
+        ``name``: a key of TRAJECTORIES or a :class:`Motion`;
         ``feedforward``: the controller adds the feedforward force or not;
         ``kp``, ``kd``: the controller's gains (3 values; None: its
-        defaults); ``mass_factor``: the plant's platform mass over the
-        model's (1.0: the exact model).
+        defaults); ``plant``: the simulator's robot (a :class:`Robot`;
+        None: the model's with its platform mass times ``mass_factor``);
+        ``model``: the feedforward's robot (None: the paper's);
+        ``passes``: how many passes, looped (the publisher is stopped
+        after the last).
         """
-        target, omega, duration = TRAJECTORIES[name]
-        model = Robot()
+        motion = TRAJECTORIES[name] if isinstance(name, str) else name
+        model = model or Robot()
+        plant = plant or model.replace(m5=model.m5 * mass_factor)
         gains = [Parameter('feedforward', value=feedforward)]
         for key, values in (('kp', kp), ('kd', kd)):
             if values is None:
                 values = DEFAULT_GAINS[key]
             gains.append(Parameter(key, value=[float(v) for v in values]))
         self._set(self.recorder.controller, gains)
-        self._set(self.recorder.plant, [Parameter(
-            'robot.m5', value=model.m5 * mass_factor)])
+        self._set(self.recorder.plant, robot_parameters(plant))
+        self._set(self.recorder.model, robot_parameters(model))
         answer = self._call(self.recorder.reset.call_async(Trigger.Request()))
         if not answer.success:
             raise LoopError(f'simulator reset refused: {answer.message}')
         self.recorder.clear()
+        duration = motion.duration * passes
         publisher = start_node_process([
-            '--ros-args', '-p', f'rate_hz:={self.loop_rate}',
-            '-p', f'omega:={float(omega)}', '-p', f'duration:={duration}',
-            '-p', f'target:={[float(c) for c in target]}',
+            '--ros-args', '-p', f'rate_hz:={self.loop_rate}', *motion.args,
             '-p', 'start_delay:=10.0',
             # The feedforward and the recorder.
-            '-p', 'min_subscribers:=2'],
+            '-p', 'min_subscribers:=2',
+            '-p', f'loop:={"true" if passes > 1 else "false"}'],
             command=[node_executable('setpoint_publisher')])
         try:
-            self._wait(lambda: publisher.poll() is not None,
-                       duration + PASS_MARGIN, 'the end of the pass')
+            end_ns = None
+            deadline = time.monotonic() + duration + PASS_MARGIN
+            while publisher.poll() is None:
+                recorder = self.recorder
+                if end_ns is None and recorder.first_setpoint is not None:
+                    end_ns = recorder.first_setpoint + round(duration * 1e9)
+                if end_ns is not None and recorder.last_setpoint is not \
+                        None and recorder.last_setpoint >= end_ns:
+                    break       # the last pass is over (looped passes)
+                if time.monotonic() > deadline:
+                    raise LoopError('timed out waiting for the end of the '
+                                    'pass')
+                self._spin(0.02)
             self._spin(0.3)     # the last measurements
         finally:
             code, err = stop_process(publisher)
         if code != 0:
             raise LoopError(f'setpoint_publisher exited {code}:\n{err}')
-        label = (f'{name}, {"PD + feedforward" if feedforward else "PD"}, '
-                 f'plant m5 x{mass_factor:g}')
-        return _tracking(label, self.recorder, target, omega, duration)
+        label = (f'{name if isinstance(name, str) else "motion"}, '
+                 f'{"PD + feedforward" if feedforward else "PD"}, '
+                 f'plant m5 x{plant.m5 / model.m5:g}')
+        return _tracking(label, self.recorder, motion, duration)
+
+    def wait_for_subscribers(self, topic, count, timeout=START_TIMEOUT):
+        """Wait until ``topic`` has ``count`` subscribers (a recorder's)."""
+        self._wait(lambda: self.recorder.count_subscribers(topic) >= count,
+                   timeout, f'{count} subscribers of {topic}')
 
     def _set(self, client, parameters):
         results = self._call(client.set_parameters(parameters)).results
@@ -245,23 +316,49 @@ class ClosedLoop:
             raise LoopError('the ROS context was shut down') from None
 
 
-def _tracking(label, recorder, target, omega, duration):
-    """Compare the recorded pass with the trajectory: a :class:`Run`."""
+def robot_parameters(robot):
+    """Return every ``robot.*`` parameter of ``robot`` (rclpy Parameters)."""
+    return [Parameter(f'robot.{name}', value=value)
+            for name, value in robot.as_parameters().items()]
+
+
+def _tracking(label, recorder, motion, duration):
+    """Compare the recorded pass with the motion: a :class:`Run`."""
     if recorder.first_setpoint is None:
         raise LoopError(f'{label}: no setpoint seen')
     start = recorder.first_setpoint
     end = start + round(duration * 1e9)
-    samples = [(s, lam) for s, lam in recorder.joints if start <= s <= end]
+    samples = [(s, lam, effort) for s, lam, effort in recorder.joints
+               if start <= s <= end]
     if len(samples) < 10:
         raise LoopError(f'{label}: only {len(samples)} measurements')
-    times = np.array([(s - start) * 1e-9 for s, _ in samples])
-    lam = np.array([lam for _, lam in samples])
+    times = np.array([(s - start) * 1e-9 for s, _, _ in samples])
+    lam = np.array([lam for _, lam, _ in samples])
     model = Robot()
-    desired = np.array([trajectory.paper_sample(t, target, omega)[0]
-                        for t in times])
+    desired = np.array([motion.sample(t)[0] for t in times])
     desired_lam = mechanics.solve_batch(model, desired).lambda_
     position_error = mechanics.forward_kinematics(model, lam) - desired
     norm_mm = np.linalg.norm(position_error, axis=1) * 1e3
+    efforts = np.array([effort for _, _, effort in samples])
+    held = ~efforts.any(axis=1)
+    started = int(np.argmin(held)) if not held.all() else len(held)
     return Run(label, times, position_error, lam - desired_lam,
                float(np.sqrt(np.mean(norm_mm ** 2))), float(norm_mm.max()),
-               len(samples))
+               len(samples), start, lam, efforts,
+               int(held[started:].sum()))
+
+
+def log_of(run):
+    """Return a run's measurements as an ``identification.Log``."""
+    from orthoglide_ros.identification import Log
+    return Log(run.times, run.lambdas, run.efforts, run.label)
+
+
+def force_lag(plant_rate=PLANT_RATE):
+    """
+    Return how long before its stamp a state's effort was applied (s).
+
+    The simulator publishes with each state the force it held over the
+    step that led to it: on average half a step before the state.
+    """
+    return 0.5 / plant_rate

@@ -12,7 +12,7 @@ import sys
 
 import pytest
 
-from orthoglide_ros import cli, mechanics
+from orthoglide_ros import cli, mechanics, trajectory
 from orthoglide_ros.robot import Robot
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -332,11 +332,144 @@ def test_unreadable_params_file_exits_2(capsys, tmp_path):
     assert_bad_input(code, out, err, 'missing.yaml')
 
 
+# -- excitation and identify --------------------------------------------------
+
+def test_excitation_describes_the_motion(capsys):
+    code, out, err = run(capsys, 'excitation', '--seed', 3, '--duration', 4)
+    assert (code, err) == (0, '')
+    assert 'seed 3, period 4 s, 5 harmonics (0.25 to 1.25 Hz)' in out
+    for label in ('peak |position| (m)', 'peak |velocity| (m/s)',
+                  'peak |acceleration| (m/s^2)', 'singularity distance',
+                  'm5 + 3 m4', 'condition number of the base regressor'):
+        assert label in out
+
+
+@pytest.mark.parametrize('argv', [
+    ['--seeds', '0'], ['--seed', '-1'], ['--duration', '0'],
+    ['--duration', 'nan'], ['--rate', '-5']])
+def test_excitation_refuses_bad_arguments(capsys, argv):
+    code, out, err = run(capsys, 'excitation', *argv)
+    assert code == 2 and out == '' and argv[0] in err
+
+
+def test_excitation_compares_seeds(capsys):
+    code, out, _ = run(capsys, 'excitation', '--seed', 10, '--seeds', 3)
+    assert code == 0
+    lines = [line for line in out.splitlines() if 'seed 1' in line]
+    assert [line.split()[1] for line in lines] == ['10', '11', '12']
+    assert sum('(best)' in line for line in lines) == 1
+
+
+def test_excitation_csv_is_a_log_of_the_robot(capsys, tmp_path):
+    path = tmp_path / 'excitation.csv'
+    assert run(capsys, 'excitation', '--seed', 2, '--duration', 3, '--csv',
+               path, '--rate', 200)[0] == 0
+    header, rows = read_csv(path.read_text())
+    assert header == HEADER and len(rows) == 600
+    motion = trajectory.excitation(2, 3.0)
+    for i in (0, 77, 599):
+        t = float(rows[i]['t'])
+        assert t == pytest.approx(i / 200.0, abs=1e-12)
+        p, v, a = trajectory.excitation_sample(motion, t)
+        assert_close(rows[i], expected_row(mechanics.solve(Robot(), p, v,
+                                                           a)), tol=1e-9)
+
+
+def identification_log(tmp_path, name='log.csv', seed=0, duration=20.0):
+    """Write a synthetic log of a robot unlike the paper's (test_identification)."""
+    from test_identification import synthetic_log, TRUE
+    log = synthetic_log(TRUE, seed, 5.0, 11, duration=duration)
+    lines = ['t,lambda_a,lambda_b,lambda_c,force_a,force_b,force_c']
+    lines += [','.join(map(repr, (t, *lam, *f))) for t, lam, f in zip(
+        log.times.tolist(), log.lambdas.tolist(), log.forces.tolist())]
+    path = tmp_path / name
+    path.write_text('\n'.join(lines) + '\n')
+    return path, log
+
+
+def test_identify_writes_a_parameters_file_the_tools_read(capsys, tmp_path):
+    from orthoglide_ros import identification, params_file
+    source, log = identification_log(tmp_path)
+    out = tmp_path / 'identified.yaml'
+    code, stdout, err = run(capsys, 'identify', '--log', source, '--output',
+                            out)
+    assert (code, err) == (0, '')
+    expected = identification.identify(Robot(), log)
+    robot = params_file.load_robot(out)
+    assert robot == expected.robot
+    values = params_file.load_parameters(out)
+    assert all(type(v) is float or all(type(c) is float for c in v)
+               for v in values.values())
+    assert len(values) == len(Robot.parameter_names())
+    for name, value in zip(expected.base.names, expected.values):
+        assert name in stdout and f'{value:.6g}' in stdout
+    assert 'condition number' in stdout and 'residual RMS (N)' in stdout
+    assert f'written: {out}' in stdout
+    code, solved, _ = run(capsys, 'solve', '--position', 0, 0, 0, '--json',
+                          '--params', out)
+    assert code == 0
+    assert json.loads(solved)['force_c'] == pytest.approx(
+        mechanics.solve(robot, (0.0, 0.0, 0.0)).force[2], rel=1e-12)
+
+
+def test_identify_validates_on_another_log(capsys, tmp_path):
+    source, _ = identification_log(tmp_path)
+    other, _ = identification_log(tmp_path, 'other.csv', seed=4,
+                                  duration=6.0)
+    code, out, _ = run(capsys, 'identify', '--log', source, '--validate',
+                       other)
+    assert code == 0
+    nominal = [float(v) for v in next(
+        line for line in out.splitlines() if 'nominal robot' in line)
+        .split()[-3:]]
+    identified = [float(v) for v in next(
+        line for line in out.splitlines() if 'identified robot' in line)
+        .split()[-3:]]
+    assert all(10.0 * i < n for i, n in zip(identified, nominal))
+
+
+BAD_IDENTIFY = {
+    'missing_log': (['--log', 'nope.csv'], ['nope.csv']),
+    'cutoff_above_nyquist': (['--log', 'log.csv', '--cutoff', '600'],
+                             ['cutoff', '500']),
+    'not_a_number': (['--log', 'log.csv', '--cutoff', 'x'], ['--cutoff']),
+    'missing_bag_topic': (['--log', 'bag', '--topic', 'nothing'],
+                          ['no topic /nothing']),
+}
+
+
+@pytest.mark.parametrize('name', sorted(BAD_IDENTIFY))
+def test_identify_bad_input_exits_2_and_writes_nothing(capsys, tmp_path,
+                                                       name):
+    argv, words = BAD_IDENTIFY[name]
+    identification_log(tmp_path, duration=2.0)
+    if 'bag' in argv:
+        from test_identification import synthetic_log, TRUE, write_bag
+        write_bag(tmp_path / 'bag', synthetic_log(TRUE, 0, 5.0, 1, 0.1),
+                  'mcap')
+    out = tmp_path / 'out.yaml'
+    argv = [str(tmp_path / a) if a in ('log.csv', 'nope.csv', 'bag') else a
+            for a in argv]
+    code, stdout, err = run(capsys, 'identify', *argv, '--output', out)
+    if name == 'not_a_number':
+        assert code == 2 and '--cutoff' in err
+    else:
+        assert_bad_input(code, stdout, err, *words)
+    assert not out.exists()
+
+
+def test_record_help_needs_no_ros(capsys):
+    code, out, _ = run(capsys, 'record', '--help')
+    assert code == 0 and 'rosbag2' in out and '--storage' in out
+
+
 # -- the tool as a whole ------------------------------------------------------
 
 @pytest.mark.parametrize('command,units', [
     ('paper', ['(m', '(W', ' s']), ('solve', ['m/s^2', '(N', '(W']),
-    ('batch', ['m/s^2', '(m)', '(s)'])])
+    ('batch', ['m/s^2', '(m)', '(s)']),
+    ('excitation', ['m/s^2', '(s;', 'm/s']),
+    ('identify', ['(kg)', '(N s/m)', '(Hz;']), ('record', ['(s;'])])
 def test_help_gives_units(capsys, command, units):
     code, out, _ = run(capsys, command, '--help')
     assert code == 0
@@ -345,9 +478,11 @@ def test_help_gives_units(capsys, command, units):
 
 
 def test_cli_imports_neither_rclpy_nor_matplotlib():
+    # Nor scipy and rosbags, which only identification's steps need.
     code = ('import sys; from orthoglide_ros import cli; '
             'assert cli.main(["paper"]) == 0; '
-            'bad = {"rclpy", "matplotlib"} & set(sys.modules); '
+            'bad = {"rclpy", "matplotlib", "scipy", "rosbags"} '
+            '& set(sys.modules); '
             'assert not bad, bad')
     done = subprocess.run([sys.executable, '-c', code], cwd=ROOT,
                           capture_output=True, text=True)

@@ -5,7 +5,9 @@ Lengths and masses must be finite positive numbers, ``alpha`` must lie in
 (0, pi/2) rad and ``gravity`` must be a finite 3-vector of numbers; each
 bad value raises ``RobotParameterError`` whose ``name`` and message name
 the parameter. ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the paper's
-``m4 = m2``, ``m6 = m3``). The defaults are the paper's robot (section 2).
+``m4 = m2``, ``m6 = m3``). The friction coefficients are 3-vectors of
+finite values >= 0 and ``friction_velocity`` a positive speed. The
+defaults are the paper's robot (section 2), without friction.
 """
 
 import dataclasses
@@ -16,7 +18,8 @@ from orthoglide_ros.robot import Robot, RobotParameterError
 import pytest
 
 POSITIVE = ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm4', 'm5',
-            'm6')
+            'm6', 'friction_velocity')
+FRICTION = ('friction_viscous', 'friction_coulomb')
 BAD_NUMBERS = (0.0, -0.1, -math.inf, math.inf, math.nan, '0.2', None,
                True, [0.2])
 
@@ -37,6 +40,8 @@ def test_defaults_are_the_paper_robot():
     for name, value in paper.items():
         assert getattr(robot, name) == value, name
     assert robot.gravity == (0.0, 0.0, -9.81)
+    assert robot.friction_viscous == robot.friction_coulomb == (0.0,) * 3
+    assert not robot.has_friction
 
 
 @pytest.mark.parametrize('name, value', [
@@ -68,6 +73,26 @@ def test_gravity_accepts_finite_3_sequences_and_stores_floats():
     assert Robot(gravity=[0, 0, 0]).gravity == (0.0, 0.0, 0.0)
 
 
+@pytest.mark.parametrize('name', FRICTION)
+@pytest.mark.parametrize('value', [
+    (0.0, -1e-9, 0.0), (0.0, 0.0), (1.0, 2.0, 3.0, 4.0), 5.0, None,
+    (0.0, math.inf, 0.0), (math.nan, 0.0, 0.0), (0.0, 0.0, True),
+    (0.0, '1', 0.0), (2e6, 0.0, 0.0)], ids=repr)
+def test_friction_coefficients_are_three_finite_values_at_least_zero(
+        name, value):
+    refused(name, **{name: value})
+
+
+def test_friction_is_kept_as_floats_and_flagged():
+    robot = Robot(friction_viscous=[0, 2, 0], friction_coulomb=(0.5, 0, 0),
+                  friction_velocity=0.002)
+    assert robot.friction_viscous == (0.0, 2.0, 0.0)
+    assert all(type(c) is float for c in robot.friction_viscous)
+    assert robot.friction_coulomb == (0.5, 0.0, 0.0)
+    assert robot.has_friction
+    assert Robot(friction_coulomb=(0.0, 0.0, 1e-3)).has_friction
+
+
 def test_m4_and_m6_default_to_m2_and_m3():
     robot = Robot(m2=0.4, m3=3.5)
     assert robot.m4 == 0.4
@@ -94,6 +119,14 @@ def test_equal_values_make_equal_robots():
 
 
 def test_parameter_names_and_values_round_trip():
-    robot = Robot(m4=0.3, gravity=(1.0, 2.0, 3.0))
-    assert set(Robot.parameter_names()) == set(POSITIVE) | {'gravity'}
+    robot = Robot(m4=0.3, gravity=(1.0, 2.0, 3.0),
+                  friction_viscous=(1.0, 2.0, 3.0),
+                  friction_coulomb=(4.0, 5.0, 6.0), friction_velocity=0.02)
+    assert set(Robot.parameter_names()) == set(POSITIVE) | {'gravity'} \
+        | set(FRICTION)
     assert Robot(**robot.as_parameters()) == robot
+    assert robot.replace() == robot
+    assert robot.replace(m5=16.0).friction_coulomb == (4.0, 5.0, 6.0)
+    values = robot.as_parameters()
+    assert values['friction_viscous'] == [1.0, 2.0, 3.0]
+    assert type(values['friction_velocity']) is float

@@ -68,3 +68,40 @@ def test_stream_counts_passes_and_gaps():
     assert s.passes == 3 and s.published == 30
     assert s.largest_gap_ns == 100_000_000
     assert '3 pass(es)' in s.summary()
+
+
+def test_excitation_is_the_trajectory_modules_motion_then_ends():
+    s = stream(motion='excitation', seed=3, duration=4.0)
+    motion = trajectory.excitation(3, 4.0)
+    for t in (0.0, 0.7, 2.5, 4.0):
+        assert s.sample(t) == trajectory.excitation_sample(motion, t)
+    assert s.sample(4.0 + 1e-9) is None
+    assert max(map(abs, sum(s.sample(0.0), ()))) < 1e-15    # home, at rest
+
+
+def test_looped_excitation_repeats_its_period_without_a_way_back():
+    s = stream(motion='excitation', seed=5, duration=3.0, loop=True,
+               return_duration=7.0)
+    for t in (0.4, 1.9, 2.999):
+        for a, b in zip(s.sample(t), s.sample(t + 3.0)):
+            assert np.allclose(a, b, rtol=0, atol=1e-12), t
+    assert s.passes == 2
+    for joint in (3.0, 6.0):
+        before, after = s.sample(joint - 1e-9), s.sample(joint + 1e-9)
+        for a, b in zip(before, after):
+            assert np.allclose(a, b, rtol=0, atol=1e-6), joint
+
+
+def test_seeds_make_different_motions():
+    one = stream(motion='excitation', seed=1).sample(0.5)
+    two = stream(motion='excitation', seed=2).sample(0.5)
+    assert one != two
+    assert one == stream(motion='excitation', seed=1).sample(0.5)
+
+
+@pytest.mark.parametrize('changes', [
+    {'motion': 'excitation', 'duration': 0.0}, {'motion': 'bogus'},
+    {'seed': -1}, {'seed': 2**31}, {'seed': 1.0}])
+def test_bad_motion_settings_are_refused(changes):
+    with pytest.raises(ValueError):
+        PARAMETERS.parse(changes)

@@ -1,0 +1,197 @@
+"""
+The recorder behind ``orthoglide record``: topics into a rosbag2 bag.
+
+A thin rclpy node over the writer of the ``rosbags`` library. Each topic is
+an input of :class:`node_runtime.InputNode` (a raw subscription read on the
+input thread, with a byte limit), and each message's serialized bytes go
+into the bag unchanged, as rosbag2 stores them (CDR), stamped with the node
+clock at reception. The bag is opened, written and closed by one thread of
+its own (:class:`BagThread`; sqlite3 refuses a connection used from
+another thread than its own), fed through a queue, so the input thread
+never waits for the disk. MCAP (the default) or sqlite3 storage, bag format
+version 9 (ROS 2 Jazzy's); ``ros2 bag info`` and ``orthoglide identify``
+read it. The topics' types are taken from the graph (their publishers) and
+must be in the ROS 2 Jazzy type store of ``rosbags``, which writes their
+definitions into the bag. The subscription's reliability follows the
+publishers' (reliable when all of them are), keep-last RECORD_DEPTH.
+
+Run by ``orthoglide record`` through :func:`node_runtime.run`: Ctrl-C or
+SIGTERM ends it with exit code 0 and a complete bag, as does the end of
+``duration``; a topic without a publisher after ``wait`` seconds, an
+unknown type or an existing output ends it with exit code 2.
+"""
+
+import functools
+import importlib
+import queue
+import threading
+import time
+
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from orthoglide_ros import console
+from orthoglide_ros.node_runtime import InputNode, run
+
+# Largest message recorded (bytes): a longer one is refused before it is
+# read, counted and warned about (an oversize input of any node).
+RECORD_MESSAGE_BYTES = 4 * 1024 * 1024
+# History of each subscription: the messages that may wait for the writer.
+RECORD_DEPTH = 1000
+STORAGES = ('mcap', 'sqlite3')
+BAG_VERSION = 9
+GRAPH_POLL = 0.05   # s between two looks at the graph while waiting
+
+
+class BagThread(threading.Thread):
+    """
+    The thread that owns the bag: opens it, writes the queue, closes it.
+
+    :attr:`queue` takes ``(connection index, stamp ns, bytes)`` and None
+    to close. :attr:`ready` is set once the bag is open (or could not be:
+    :attr:`error`); :attr:`failed` counts the writes the writer refused.
+    """
+
+    def __init__(self, output, storage, topics, typestore):
+        """Prepare the thread; ``topics``: ``(topic, type)`` pairs."""
+        super().__init__(name='orthoglide_record bag', daemon=True)
+        self.output = output
+        self.storage = storage
+        self.topics = topics
+        self.typestore = typestore
+        self.queue = queue.SimpleQueue()
+        self.ready = threading.Event()
+        self.error = None
+        self.failed = 0
+
+    def run(self):
+        """Open the bag, write what comes, close it on None."""
+        from rosbags.rosbag2 import StoragePlugin, Writer
+        plugin = {'mcap': StoragePlugin.MCAP,
+                  'sqlite3': StoragePlugin.SQLITE3}[self.storage]
+        try:
+            writer = Writer(self.output, version=BAG_VERSION,
+                            storage_plugin=plugin)
+            writer.open()
+            connections = [writer.add_connection(t, kind,
+                                                 typestore=self.typestore)
+                           for t, kind in self.topics]
+        except Exception as error:  # rosbags' WriterError: exists, etc.
+            self.error = error
+            self.ready.set()
+            return
+        self.ready.set()
+        while True:
+            item = self.queue.get()
+            if item is None:
+                break
+            index, stamp, data = item
+            try:
+                writer.write(connections[index], stamp, data)
+            except Exception:   # the disk, the writer: counted, reported
+                self.failed += 1
+        writer.close()
+
+
+class Recorder(InputNode):
+    """Node ``orthoglide_record``: writes ``topics`` into the bag ``output``."""
+
+    def __init__(self, output, topics, storage='mcap', duration=None,
+                 wait=10.0):
+        super().__init__('orthoglide_record')
+        from rosbags.typesys import get_typestore, Stores
+        typestore = get_typestore(Stores.ROS2_JAZZY)
+        found = self._topic_types(topics, wait)
+        for topic, type_name in found.items():
+            if type_name not in typestore.types:
+                raise ValueError(f'{topic}: type {type_name} is not in the '
+                                 'ROS 2 Jazzy type store of rosbags')
+        self._bag = BagThread(output, storage, list(found.items()),
+                              typestore)
+        self._bag.start()
+        self._bag.ready.wait()
+        if self._bag.error is not None:
+            raise ValueError(f'cannot write the bag {output}: '
+                             f'{self._bag.error}')
+        self._open = True
+        self.output = output
+        self.counts = dict.fromkeys(found, 0)
+        for index, (topic, type_name) in enumerate(found.items()):
+            self.create_input(
+                _message_class(type_name), topic,
+                functools.partial(self._write, topic, index),
+                self._qos(topic), topic, decode=bytes,
+                max_bytes=RECORD_MESSAGE_BYTES)
+        self._end = None if duration is None else time.monotonic() + duration
+        self.get_logger().info(
+            f'recording {", ".join(f"{t} ({n})" for t, n in found.items())}'
+            f' into {output} ({storage})')
+        self.start_threads()
+
+    def _topic_types(self, topics, wait):
+        """Return ``{resolved topic: type}`` once each has a publisher."""
+        names = [self.resolve_topic_name(t) for t in topics]
+        deadline = time.monotonic() + wait
+        while True:
+            graph = dict(self.get_topic_names_and_types())
+            published = {n: graph[n] for n in names
+                         if n in graph and self.count_publishers(n)}
+            if len(published) == len(names):
+                break
+            if console.STOP or time.monotonic() > deadline:
+                missing = [n for n in names if n not in published]
+                raise ValueError(f'no publisher of {", ".join(missing)} '
+                                 f'after {wait:g} s')
+            time.sleep(GRAPH_POLL)
+        for name, types in published.items():
+            if len(types) != 1:
+                raise ValueError(f'{name} has several types: {types}')
+        return {name: published[name][0] for name in names}
+
+    def _qos(self, topic):
+        """Reliable keep-last RECORD_DEPTH, best effort if a publisher is."""
+        best_effort = any(
+            info.qos_profile.reliability == ReliabilityPolicy.BEST_EFFORT
+            for info in self.get_publishers_info_by_topic(topic))
+        return QoSProfile(
+            history=HistoryPolicy.KEEP_LAST, depth=RECORD_DEPTH,
+            reliability=ReliabilityPolicy.BEST_EFFORT if best_effort
+            else ReliabilityPolicy.RELIABLE)
+
+    def _write(self, topic, index, data):
+        """Queue one message for the bag (runs with the lock held)."""
+        if not self._open:
+            return
+        self._bag.queue.put((index, self.get_clock().now().nanoseconds,
+                             data))
+        self.counts[topic] += 1
+
+    @property
+    def finished(self):
+        """Whether ``duration`` has passed."""
+        return self._end is not None and time.monotonic() >= self._end
+
+    def on_stop(self, interrupted):
+        """Close the bag (complete, whatever stopped the recording)."""
+        with self.lock:
+            self._open = False
+            self._bag.queue.put(None)
+        self._bag.join()
+        failed = f'; {self._bag.failed} write(s) failed' \
+            if self._bag.failed else ''
+        self.get_logger().info(
+            f'recorded {sum(self.counts.values())} message(s) ('
+            + ', '.join(f'{t}: {n}' for t, n in self.counts.items())
+            + f') into {self.output}{failed}')
+
+
+def _message_class(type_name):
+    """Return the rclpy message class of ``pkg/msg/Name``."""
+    package, kind, name = type_name.split('/')
+    return getattr(importlib.import_module(f'{package}.{kind}'), name)
+
+
+def main(output, topics, storage='mcap', duration=None, wait=10.0):
+    """Record until ``duration`` (s), Ctrl-C or SIGTERM; return the code."""
+    return run(functools.partial(Recorder, output, topics, storage,
+                                 duration, wait), 'orthoglide_record',
+               args=[])

@@ -1,0 +1,253 @@
+"""
+Identification demo: a simulated Orthoglide the feedforward does not know.
+
+The ``simulator`` runs a plant unlike the paper's robot (a 25 % heavier
+platform, 15 % heavier bars, friction on every slider:
+``closed_loop_harness.UNKNOWN_PLANT``); the ``feedforward`` knows only the
+paper's robot. The demo
+
+1. streams the excitation motion (``setpoint_publisher``, ``motion:
+   excitation``) through PD + the nominal feedforward for a few periods
+   while ``orthoglide record`` writes the plant's ``joint_states`` into an
+   MCAP bag;
+2. runs ``orthoglide identify`` on the bag (the passes' window), which
+   writes the identified robot as a parameters file;
+3. tracks another motion (the paper's trajectory and a faster one) with PD
+   alone, PD + the nominal feedforward, PD + the identified feedforward
+   (the feedforward's ``robot.*`` set from the file) and PD + the exact
+   feedforward (the plant's own robot);
+4. prints the base parameters, identified against the plant's, and the
+   tracking errors, checks that PD + identified tracks within 1.5 times
+   PD + exact (RMS), and writes a PNG.
+
+The loop and its error measure are in ``test/closed_loop_harness.py``.
+Run it through ``bash scripts/identification_demo.sh`` (sets up .venv,
+keeps DDS on this host, picks a ROS_DOMAIN_ID); ``--help`` for the
+options. Exit code 0 when every criterion holds, 1 if one misses or a
+node fails, 2 on a usage error.
+"""
+
+import argparse
+import os
+from pathlib import Path
+import shutil
+import subprocess
+import sys
+
+# DDS stays on this host whoever starts the demo; a domain of its own.
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / 'test'))
+
+import numpy as np  # noqa: E402
+import rclpy  # noqa: E402
+
+import closed_loop_harness as harness  # noqa: E402
+from node_harness import node_executable, start_node_process, \
+    stop_process  # noqa: E402
+from orthoglide_ros import identification, params_file  # noqa: E402
+from orthoglide_ros.robot import Robot  # noqa: E402
+
+CRITERION = 1.5     # PD + identified within this factor of PD + exact
+CASES = ('PD', 'PD + nominal FF', 'PD + identified FF', 'PD + exact FF')
+
+
+def main(argv=None):
+    """Excite, identify, validate; print and plot; return the exit code."""
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--seed', type=int, default=0,
+                        help='seed of the excitation (default 0)')
+    parser.add_argument('--period', type=float, default=6.0, metavar='S',
+                        help='period of the excitation (s; default 6)')
+    parser.add_argument('--passes', type=int, default=5,
+                        help='periods recorded (default 5: 30 s)')
+    parser.add_argument('--trajectories', default='paper,fast',
+                        help='validation motions, comma-separated, of: '
+                        + ', '.join(harness.TRAJECTORIES))
+    parser.add_argument('--out', default=str(ROOT / 'out' / 'identification'),
+                        metavar='DIR', help='bag, parameters file and PNG '
+                        '(default out/identification in the repository)')
+    args = parser.parse_args(argv)
+    names = args.trajectories.split(',')
+    if any(n not in harness.TRAJECTORIES for n in names) or \
+            args.passes < 1 or not args.period > 0.0:
+        parser.error('unknown trajectory, or passes < 1, or period <= 0')
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    bag = out / 'excitation'
+    identified_file = out / 'identified.yaml'
+    shutil.rmtree(bag, ignore_errors=True)     # record makes a new bag
+    identified_file.unlink(missing_ok=True)
+
+    context = rclpy.context.Context()
+    rclpy.init(context=context)
+    nominal, plant = Robot(), harness.UNKNOWN_PLANT
+    try:
+        with harness.ClosedLoop(context) as loop:
+            excitation = excite(loop, args, bag, nominal, plant)
+            identify_output = identify(bag, excitation, args,
+                                       identified_file)
+            identified = params_file.load_robot(identified_file)
+            runs = validate(loop, names, nominal, identified, plant)
+        failed = {k: v for k, v in loop.exit_codes.items() if v != 0}
+        if failed:
+            raise harness.LoopError(f'nodes exited with {failed}:\n'
+                                    + '\n'.join(loop.stderr.values()))
+    except harness.LoopError as error:
+        print(f'identification_demo: error: {error}', file=sys.stderr)
+        return 1
+    finally:
+        rclpy.try_shutdown(context=context)
+    print('\n' + identify_output)
+    print_parameters(nominal, identified, plant)
+    ok = print_tracking(runs, names)
+    path = out / 'identification.png'
+    plot(runs, names, nominal, identified, plant, path)
+    print(f'plot: {path}')
+    return 0 if ok else 1
+
+
+def excite(loop, args, bag, nominal, plant):
+    """Stream the excitation while ``orthoglide record`` writes the bag."""
+    print(f'Excitation: seed {args.seed}, {args.passes} x {args.period:g} s, '
+          f'PD + nominal feedforward, recorded into {bag}', flush=True)
+    record = start_node_process(
+        ['record', '--output', str(bag), '--topic', 'joint_states'],
+        command=[node_executable('orthoglide')])
+    try:
+        # The controller, the harness's recorder and this one.
+        loop.wait_for_subscribers('joint_states', 3)
+        run = loop.run(harness.excitation_motion(args.seed, args.period),
+                       feedforward=True, plant=plant, model=nominal,
+                       passes=args.passes)
+    finally:
+        code, err = stop_process(record)
+    if code != 0:
+        raise harness.LoopError(f'orthoglide record exited {code}:\n{err}')
+    print(f'  {run.samples} states, tracking error RMS {run.rms_mm:.3f} mm',
+          flush=True)
+    return run
+
+
+def identify(bag, run, args, output):
+    """Run ``orthoglide identify`` on the passes' window of the bag."""
+    log = identification.read_bag(bag)
+    start = (run.start_ns - log.origin) * 1e-9
+    end = start + args.passes * args.period
+    command = [node_executable('orthoglide'), 'identify', '--log', str(bag),
+               '--start', f'{start + harness.SETTLE:.6f}',
+               '--end', f'{end:.6f}', '--force-lag', f'{harness.force_lag():g}',
+               '--output', str(output)]
+    print('  ' + ' '.join(command[1:]), flush=True)
+    done = subprocess.run(command, capture_output=True, text=True,
+                          timeout=120)
+    if done.returncode != 0:
+        raise harness.LoopError(f'orthoglide identify exited '
+                                f'{done.returncode}: {done.stderr.strip()}')
+    return done.stdout.rstrip()
+
+
+def validate(loop, names, nominal, identified, plant):
+    """Track each validation motion in the four cases."""
+    models = {'PD': (False, nominal), 'PD + nominal FF': (True, nominal),
+              'PD + identified FF': (True, identified),
+              'PD + exact FF': (True, plant)}
+    runs = {}
+    for name in names:
+        for case in CASES:
+            feedforward, model = models[case]
+            run = loop.run(name, feedforward, plant=plant, model=model)
+            if run.braked:
+                print(f'  {name}, {case}: the plant was braked for '
+                      f'{run.braked} states (a process stalled longer than '
+                      'the command timeout): a second pass', flush=True)
+                run = loop.run(name, feedforward, plant=plant, model=model)
+            print(f'  {name}, {case}: {run.samples} samples, position '
+                  f'error RMS {run.rms_mm:.3f} mm, max {run.max_mm:.3f} mm'
+                  + (f', braked {run.braked}' if run.braked else ''),
+                  flush=True)
+            runs[name, case] = run
+    return runs
+
+
+def print_parameters(nominal, identified, plant):
+    """Print the base parameters: nominal, identified, the plant's."""
+    base = identification.base_parameters(nominal)
+    values = {label: base.matrix @ identification.standard_parameters(robot)
+              for label, robot in (('nominal', nominal),
+                                   ('identified', identified),
+                                   ('plant', plant))}
+    print('\nBase parameters (the plant\'s are what identify should find):')
+    print(f'{"base parameter":<16}{"nominal":>12}{"identified":>12}'
+          f'{"plant":>12}{"error":>10}')
+    for i, name in enumerate(base.names):
+        truth = values['plant'][i]
+        error = values['identified'][i] - truth
+        print(f'{name:<16}{values["nominal"][i]:12.4f}'
+              f'{values["identified"][i]:12.4f}{truth:12.4f}'
+              f'{100.0 * error / truth:9.2f}%')
+
+
+def print_tracking(runs, names):
+    """Print the RMS tracking errors; return whether the criterion holds."""
+    print('\nTracking error of the platform centre, RMS (mm), plant '
+          'unknown to the nominal model:')
+    print(f'{"trajectory":<12}' + ''.join(f'{c:>20}' for c in CASES)
+          + f'{"identified/exact":>18}')
+    ok = True
+    for name in names:
+        rms = [runs[name, case].rms_mm for case in CASES]
+        ratio = rms[2] / rms[3]
+        ok &= ratio <= CRITERION
+        print(f'{name:<12}' + ''.join(f'{r:20.3f}' for r in rms)
+              + f'{ratio:17.2f}x')
+    print(f'criterion: PD + identified FF within {CRITERION:g}x of PD + '
+          f'exact FF (RMS): {"met" if ok else "MISSED"}')
+    return ok
+
+
+def plot(runs, names, nominal, identified, plant, path):
+    """Write the errors over time (one panel per motion) and the parameters."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    figure, axes = plt.subplots(1, len(names) + 1,
+                                figsize=(6 * (len(names) + 1), 4.5),
+                                squeeze=False)
+    colors = dict(zip(CASES, ('tab:red', 'tab:orange', 'tab:green',
+                              'tab:blue')))
+    for axis, name in zip(axes[0], names):
+        for case in CASES:
+            run = runs[name, case]
+            norm = np.linalg.norm(run.position_error, axis=1) * 1e3
+            axis.semilogy(run.times, np.maximum(norm, 1e-4),
+                          color=colors[case],
+                          label=f'{case} (rms {run.rms_mm:.3g} mm)')
+        axis.set_title(f'{name} trajectory, plant unknown to the model')
+        axis.set_xlabel('t (s)')
+        axis.set_ylabel('|r_G - r*| (mm)')
+        axis.grid(True, which='both', alpha=0.3)
+        axis.legend(fontsize=8)
+    base = identification.base_parameters(nominal)
+    truth = base.matrix @ identification.standard_parameters(plant)
+    axis = axes[0][-1]
+    x = np.arange(len(base.names))
+    for offset, label, robot, color in (
+            (-0.2, 'nominal', nominal, 'tab:orange'),
+            (0.2, 'identified', identified, 'tab:green')):
+        values = base.matrix @ identification.standard_parameters(robot)
+        axis.bar(x + offset, values / truth, 0.4, label=label, color=color)
+    axis.axhline(1.0, color='k', linewidth=0.8)
+    axis.set_xticks(x, base.names, rotation=45, ha='right', fontsize=8)
+    axis.set_ylabel('base parameter / plant\'s')
+    axis.set_title('Base parameters against the plant\'s')
+    axis.legend(fontsize=8)
+    figure.suptitle('Orthoglide: identified feedforward over DDS')
+    figure.tight_layout()
+    figure.savefig(path, dpi=110)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,147 @@
+"""
+Friction on the sliders: part of the actuator forces, a resistance in the plant.
+
+The paper neglects friction; the package adds, per actuator, the law of
+doc/model.md, written here again: ``f_j = c_j lambdadot_j + F_j
+tanh(lambdadot_j / v_s)`` (``robot.friction_viscous``, ``friction_coulomb``,
+``friction_velocity``). Checked:
+
+- ``solve``: the forces of a robot with friction are those of the same
+  robot without it plus the law, and the power is ``lambdadot`` times the
+  total force; ``solve_batch`` agrees sample by sample;
+- without friction (the default) nothing changes, bit for bit;
+- the friction dissipates (``sum f_j lambdadot_j >= 0``), vanishes at rest
+  and is odd in ``lambdadot``;
+- ``forward_dynamics`` still inverts ``solve``, and the plant feels the
+  friction as a resistance: under forces ``f`` it moves as the robot
+  without friction under ``f - friction(lambdadot)``.
+"""
+
+import math
+
+from mechanics_reference import OTHER_ROBOT_VALUES
+import numpy as np
+from orthoglide_ros import mechanics
+from orthoglide_ros.robot import Robot
+import pytest
+
+# Unequal per actuator, so that a mix-up of actuators shows.
+FRICTION = {'friction_viscous': (40.0, 25.0, 60.0),
+            'friction_coulomb': (6.0, 9.0, 3.5), 'friction_velocity': 0.02}
+ROUNDING = 1e-14
+ROBOTS = {'paper': {}, 'other': OTHER_ROBOT_VALUES}
+
+
+def law(robot, lambdadot):
+    """Return the friction law of the module docstring (N) per actuator."""
+    return np.array([
+        c * v + f * math.tanh(v / robot.friction_velocity)
+        for c, f, v in zip(robot.friction_viscous, robot.friction_coulomb,
+                           lambdadot)])
+
+
+def random_states(seed, n, speed=1.0):
+    rng = np.random.default_rng(seed)
+    return (rng.uniform(-0.3, 0.3, (n, 3)),
+            rng.uniform(-speed, speed, (n, 3)),
+            rng.uniform(-20.0, 20.0, (n, 3)))
+
+
+@pytest.mark.parametrize('robot_name', sorted(ROBOTS))
+def test_forces_are_the_rigid_ones_plus_the_friction_law(robot_name):
+    rigid = Robot(**ROBOTS[robot_name])
+    robot = rigid.replace(**FRICTION)
+    # Slow rates too: the Coulomb term's smooth part (|lambdadot| ~ v_s).
+    for speed in (1.0, 0.03):
+        for p, v, a in zip(*random_states(1, 200, speed)):
+            with_friction = mechanics.solve(robot, p, v, a)
+            without = mechanics.solve(rigid, p, v, a)
+            assert with_friction.lambdadot == without.lambdadot
+            expected = np.add(without.force, law(robot, without.lambdadot))
+            scale = np.abs(expected).max()
+            assert np.abs(np.subtract(with_friction.force, expected)).max() \
+                <= ROUNDING * scale
+            assert with_friction.power == tuple(
+                d * f for d, f in zip(with_friction.lambdadot,
+                                      with_friction.force))
+
+
+def test_batch_equals_single_samples_with_friction():
+    robot = Robot(**OTHER_ROBOT_VALUES, **FRICTION)
+    n = mechanics.BATCH_CHUNK + 11
+    p, v, a = random_states(2, n, 0.1)
+    batch = mechanics.solve_batch(robot, p, v, a)
+    singles = [mechanics.solve(robot, *state) for state in zip(p, v, a)]
+    for field in ('force', 'power', 'lambdadot'):
+        expected = np.array([getattr(s, field) for s in singles])
+        got = getattr(batch, field)
+        assert np.abs(got - expected).max() \
+            <= 1e-12 * np.abs(expected).max(), field
+
+
+def test_no_friction_changes_nothing():
+    p, v, a = random_states(3, 50)
+    explicit = Robot(friction_viscous=(0.0,) * 3,
+                     friction_coulomb=[0.0] * 3, friction_velocity=0.5)
+    assert not explicit.has_friction
+    for state in zip(p, v, a):
+        assert mechanics.solve(explicit, *state) == mechanics.solve(
+            Robot(), *state)
+    batch = mechanics.solve_batch(explicit, p, v, a)
+    reference = mechanics.solve_batch(Robot(), p, v, a)
+    for got, want in zip(batch, reference):
+        assert np.array_equal(got, want)
+
+
+def test_friction_dissipates_vanishes_at_rest_and_is_odd():
+    robot = Robot(**FRICTION)
+    rng = np.random.default_rng(4)
+    speeds = rng.uniform(-0.5, 0.5, (500, 3))
+    friction = mechanics.friction_force(robot, speeds)
+    assert friction.shape == (500, 3)
+    assert ((friction * speeds).sum(axis=1) >= 0.0).all()
+    assert np.array_equal(mechanics.friction_force(robot, -speeds),
+                          -friction)
+    assert mechanics.friction_force(robot, (0.0, 0.0, 0.0)) == (0.0,) * 3
+    single = mechanics.friction_force(robot, tuple(speeds[0]))
+    assert isinstance(single, tuple)
+    assert np.abs(np.subtract(single, law(robot, speeds[0]))).max() \
+        <= ROUNDING * np.abs(single).max()
+    # Far beyond v_s the Coulomb part is the full F_j, of the speed's sign.
+    fast = mechanics.friction_force(robot, (1.0, -1.0, 1.0))
+    assert fast == pytest.approx((40.0 + 6.0, -25.0 - 9.0, 60.0 + 3.5),
+                                 rel=1e-15)
+
+
+@pytest.mark.parametrize('robot_name', sorted(ROBOTS))
+def test_forward_dynamics_inverts_solve_with_friction(robot_name):
+    robot = Robot(**ROBOTS[robot_name], **FRICTION)
+    for p, v, a in zip(*random_states(5, 100)):
+        force = mechanics.solve(robot, p, v, a).force
+        got = mechanics.forward_dynamics(robot, p, v, force)
+        assert np.abs(np.subtract(got, a)).max() <= 1e-10 * (
+            1.0 + np.abs(a).max())
+    p, v, a = random_states(6, 40)
+    forces = mechanics.solve_batch(robot, p, v, a).force
+    got = mechanics.forward_dynamics_batch(robot, p, v, forces)
+    assert np.abs(got - a).max() <= 1e-10 * (1.0 + np.abs(a).max())
+
+
+def test_the_plant_feels_friction_as_a_resistance():
+    """Under forces f it moves as the frictionless robot under f - friction."""
+    rigid = Robot(**OTHER_ROBOT_VALUES)
+    robot = rigid.replace(**FRICTION)
+    p, v, f = random_states(7, 100)
+    f *= 10.0
+    for position, velocity, force in zip(p, v, f):
+        lambdadot = mechanics.solve(rigid, position, velocity).lambdadot
+        got = mechanics.forward_dynamics(robot, position, velocity, force)
+        expected = mechanics.forward_dynamics(
+            rigid, position, velocity, force - law(robot, lambdadot))
+        assert np.abs(np.subtract(got, expected)).max() <= 1e-10 * (
+            1.0 + np.abs(expected).max())
+    batch = mechanics.forward_dynamics_batch(robot, p, v, f)
+    lambdadot = mechanics.solve_batch(rigid, p, v).lambdadot
+    expected = mechanics.forward_dynamics_batch(
+        rigid, p, v, f - mechanics.friction_force(robot, lambdadot))
+    assert np.abs(batch - expected).max() <= 1e-10 * np.abs(expected).max()

@@ -1,0 +1,124 @@
+"""
+``orthoglide record`` over DDS: joint states into a bag identify reads.
+
+A JointState publisher in the test's process, ``orthoglide record`` as a
+process (the installed console script): every message published reaches
+the bag (reliable QoS, acknowledged before the stop), with its bytes
+unchanged, in MCAP or sqlite3, and ``identification.read_bag`` reads the
+positions and efforts back in the joint order asked for. The recorder
+stops on SIGINT or at the end of ``--duration``, exit code 0 either way;
+without a publisher it gives up after ``--wait`` with exit code 2.
+"""
+
+import os
+import time
+
+import numpy as np
+import pytest
+
+from node_harness import node_executable, start_node_process, stop_process
+
+from orthoglide_ros import identification
+
+rclpy = pytest.importorskip('rclpy')
+from rclpy.duration import Duration  # noqa: E402
+from rclpy.qos import HistoryPolicy, QoSProfile, \
+    ReliabilityPolicy  # noqa: E402
+from sensor_msgs.msg import JointState  # noqa: E402
+
+pytestmark = [pytest.mark.ros, pytest.mark.skipif(
+    not os.path.exists(node_executable('orthoglide')),
+    reason='the orthoglide console script is not installed next to python')]
+
+MESSAGES = 150
+QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=MESSAGES,
+                 reliability=ReliabilityPolicy.RELIABLE)
+MATCH_TIMEOUT = 20.0    # s for the recorder to start and subscribe
+
+
+def record(args):
+    return start_node_process(['record', *args],
+                              command=[node_executable('orthoglide')])
+
+
+def publish_states(node, publisher, proc):
+    """Publish MESSAGES joint states once the recorder listens; return them."""
+    deadline = time.monotonic() + MATCH_TIMEOUT
+    while publisher.get_subscription_count() < 1:
+        assert proc.poll() is None, stop_process(proc)
+        assert time.monotonic() < deadline, 'the recorder never subscribed'
+        time.sleep(0.05)
+    time.sleep(0.3)     # the recorder's side of the match
+    sent = []
+    for k in range(MESSAGES):
+        msg = JointState(name=['slider_c', 'slider_a', 'slider_b'],
+                         position=[0.003 * k, 0.001 * k, 0.002 * k],
+                         velocity=[0.0, 0.0, 0.0],
+                         effort=[250.0 + k, 1.0 + k, -2.0 - k])
+        msg.header.stamp.sec = 1000 + k // 100
+        msg.header.stamp.nanosec = (k % 100) * 10_000_000
+        publisher.publish(msg)
+        sent.append(msg)
+        time.sleep(0.005)
+    assert publisher.wait_for_all_acked(Duration(seconds=5.0))
+    return sent
+
+
+def check_bag(path):
+    log = identification.read_bag(path)
+    k = np.arange(MESSAGES)
+    assert np.allclose(log.times, 0.01 * k, rtol=0.0, atol=1e-12)
+    assert log.origin == 1000 * 10**9
+    assert np.array_equal(log.lambdas, np.column_stack(
+        (0.001 * k, 0.002 * k, 0.003 * k)))
+    assert np.array_equal(log.forces, np.column_stack(
+        (1.0 + k, -2.0 - k, 250.0 + k)))
+
+
+def test_record_writes_every_joint_state_into_an_mcap_bag(ros_context,
+                                                          tmp_path):
+    node = rclpy.create_node('joint_state_source', context=ros_context)
+    try:
+        publisher = node.create_publisher(JointState, 'joint_states', QOS)
+        proc = record(['--output', str(tmp_path / 'bag')])
+        try:
+            publish_states(node, publisher, proc)
+            time.sleep(0.2)
+        finally:
+            code, err = stop_process(proc)
+        assert code == 0, err
+        assert list((tmp_path / 'bag').glob('*.mcap'))
+        check_bag(tmp_path / 'bag')
+    finally:
+        node.destroy_node()
+
+
+def test_record_stops_by_itself_into_a_sqlite3_bag(ros_context, tmp_path):
+    node = rclpy.create_node('joint_state_source', context=ros_context)
+    try:
+        publisher = node.create_publisher(JointState, 'joint_states', QOS)
+        proc = record(['--output', str(tmp_path / 'bag'), '--storage',
+                       'sqlite3', '--duration', '4', '--topic',
+                       '/joint_states'])
+        try:
+            publish_states(node, publisher, proc)
+            proc.wait(timeout=MATCH_TIMEOUT)
+        finally:
+            code, err = stop_process(proc)
+        assert code == 0, err
+        assert list((tmp_path / 'bag').glob('*.db3'))
+        check_bag(tmp_path / 'bag')
+    finally:
+        node.destroy_node()
+
+
+def test_record_without_a_publisher_exits_2(tmp_path):
+    proc = record(['--output', str(tmp_path / 'bag'), '--topic',
+                   'nobody_publishes_this', '--wait', '1'])
+    try:
+        proc.wait(timeout=MATCH_TIMEOUT)
+    finally:
+        code, err = stop_process(proc)
+    assert code == 2
+    assert 'nobody_publishes_this' in err
+    assert not (tmp_path / 'bag').exists()
