@@ -9,7 +9,16 @@ nodes once; each :meth:`ClosedLoop.run` sets the controller's gains and
 feedforward switch and the plant's platform mass through the standard
 parameter services, resets the simulator (platform at home, at rest, held
 until the first command) and streams one pass of a trajectory from a new
-``setpoint_publisher`` process.
+``setpoint_publisher`` process, or (``mode='trajectory'``) sends the
+whole pass once as a Cartesian trajectory, which the feedforward converts
+into a JointTrajectory that the tracking controller follows as
+joint_trajectory_controller would (its ``joint_trajectory`` input is
+remapped onto ``feedforward/joint_trajectory``). A trajectory is sent once
+and published once, reliable but volatile, like a real planner's: the
+harness confirms through the controller's ``/diagnostics`` (``trajectories
+received``) that it arrived before its start, and sends it once more
+otherwise (the same stamp: the same plan), since a pass whose trajectory
+was lost would measure the plant at rest.
 
 Tracking error. A measured sample of stamp ``s`` (the simulator's clock at
 the end of a step) is compared with the trajectory at the same time,
@@ -20,7 +29,7 @@ not only the model. The platform position comes from the measured
 ``lambda`` through :func:`mechanics.forward_kinematics`.
 
 Rates. The control loop (setpoints, feedforward, commands) runs at
-``loop_rate`` and the plant at ``plant_rate`` (default 250 Hz and 1 kHz):
+``loop_rate`` and the plant at ``plant_rate`` (default 250 Hz and 500 Hz):
 four Python nodes and the recorder at 1 kHz would need more than this
 machine's two cores (see doc/measurements.md).
 
@@ -38,11 +47,13 @@ from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
-from node_harness import (node_executable, start_node_process,
+from node_harness import (cartesian_message, node_executable,
+                          start_node_process,
                           stop_process)
 
 from orthoglide_ros import mechanics, trajectory
@@ -96,6 +107,12 @@ class Recorder(Node):
         self.create_subscription(MultiDOFJointTrajectory,
                                  'setpoint/trajectory', self._on_setpoint,
                                  QOS)
+        self.cartesian = self.create_publisher(
+            MultiDOFJointTrajectory, 'cartesian_trajectory', QOS)
+        # The controller's count of joint trajectories received.
+        self.controller_trajectories = None
+        self.create_subscription(DiagnosticArray, '/diagnostics',
+                                 self._on_diagnostics, 10)
         self.reset = self.create_client(Trigger, '/simulator/reset')
         self.plant = AsyncParameterClient(self, 'simulator')
         self.controller = AsyncParameterClient(self, 'tracking_controller')
@@ -108,6 +125,13 @@ class Recorder(Node):
     def _on_joints(self, msg):
         stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
         self.joints.append((stamp, tuple(msg.position)))
+
+    def _on_diagnostics(self, msg):
+        for status in msg.status:
+            if status.name.startswith('tracking_controller'):
+                values = {v.key: v.value for v in status.values}
+                self.controller_trajectories = int(values.get(
+                    'trajectories received', 0))
 
     def _on_setpoint(self, msg):
         stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
@@ -140,7 +164,8 @@ class ClosedLoop:
         commands = {
             'simulator': ['-p', f'rate_hz:={self.plant_rate}'],
             'feedforward': [],
-            'tracking_controller': [],
+            'tracking_controller': [
+                '-r', 'joint_trajectory:=feedforward/joint_trajectory'],
         }
         try:
             for name, params in commands.items():
@@ -154,7 +179,8 @@ class ClosedLoop:
                 self.recorder.reset.service_is_ready()
                 and self.recorder.plant.services_are_ready()
                 and self.recorder.controller.services_are_ready()
-                and self.recorder.count_publishers('joint_states') >= 1),
+                and self.recorder.count_publishers('joint_states') >= 1
+                and self.recorder.controller_trajectories is not None),
                 START_TIMEOUT, 'the simulator and the controller')
         except BaseException:
             self.__exit__(None, None, None)
@@ -175,14 +201,16 @@ class ClosedLoop:
         return False
 
     def run(self, name='paper', feedforward=True, kp=None, kd=None,
-            mass_factor=1.0):
+            mass_factor=1.0, mode='stream'):
         """
-        Stream one pass of trajectory ``name`` and return its :class:`Run`.
+        Run one pass of trajectory ``name`` and return its :class:`Run`.
 
         ``feedforward``: the controller adds the feedforward force or not;
         ``kp``, ``kd``: the controller's gains (3 values; None: its
         defaults); ``mass_factor``: the plant's platform mass over the
-        model's (1.0: the exact model).
+        model's (1.0: the exact model); ``mode``: ``'stream'`` (setpoints
+        from a setpoint_publisher) or ``'trajectory'`` (the whole pass as
+        one Cartesian trajectory, see the module docstring).
         """
         target, omega, duration = TRAJECTORIES[name]
         model = Robot()
@@ -198,6 +226,61 @@ class ClosedLoop:
         if not answer.success:
             raise LoopError(f'simulator reset refused: {answer.message}')
         self.recorder.clear()
+        if mode == 'trajectory':
+            self._send_trajectory(target, omega, duration)
+        else:
+            self._stream(target, omega, duration)
+        label = (f'{name}, {"PD + feedforward" if feedforward else "PD"}, '
+                 f'plant m5 x{mass_factor:g}'
+                 + (', joint trajectory' if mode == 'trajectory' else ''))
+        return _tracking(label, self.recorder, target, omega, duration)
+
+    def _send_trajectory(self, target, omega, duration, lead=2.0,
+                         hold=0.5):
+        """
+        Send the pass as one trajectory starting ``lead`` s from now.
+
+        Points at the loop rate, ``time_from_start`` from 0: first ``hold``
+        s at rest where the pass begins (the plant's state after the
+        reset: a planner's trajectory starts from the robot's state, and
+        the controller's transition from its state at reception then ends
+        on the static forces), then the pass, from the header stamp plus
+        ``hold``, the instant the measurements are compared against.
+        Sent again, once, when the controller's diagnostics (about once a
+        second) have not counted it after 1.2 s; a LoopError if they have
+        not by the start.
+        """
+        step = 1.0 / self.loop_rate
+        times = np.arange(0.0, duration + 0.5 * step, step)
+        p, v, a = trajectory.paper_batch(times, target, omega)
+        rest = np.zeros((round(hold / step), 3))
+        p = np.vstack([rest + p[0], p])
+        v, a = np.vstack([rest, v]), np.vstack([rest, a])
+        times = np.r_[np.arange(len(rest)) * step, hold + times]
+        recorder = self.recorder
+        self._wait(lambda: recorder.cartesian.get_subscription_count() > 0,
+                   START_TIMEOUT, 'the feedforward')
+        sent = time.monotonic()
+        start = recorder.get_clock().now().nanoseconds + round(lead * 1e9)
+        msg = cartesian_message(times, p, v, a, divmod(start, 10**9))
+        before = recorder.controller_trajectories
+        for deadline in (sent + 1.2, sent + lead - 0.1):
+            recorder.cartesian.publish(msg)
+            while (recorder.controller_trajectories == before
+                   and time.monotonic() < deadline):
+                self._spin(0.02)
+            if recorder.controller_trajectories != before:
+                break
+        else:
+            raise LoopError('the tracking controller did not receive the '
+                            'trajectory before its start')
+        recorder.first_setpoint = start + round(hold * 1e9)
+        end = sent + lead + hold + duration + 0.3
+        self._wait(lambda: time.monotonic() > end, lead + hold + duration
+                   + PASS_MARGIN, 'the end of the trajectory')
+
+    def _stream(self, target, omega, duration):
+        """Stream the pass from a setpoint_publisher process."""
         publisher = start_node_process([
             '--ros-args', '-p', f'rate_hz:={self.loop_rate}',
             '-p', f'omega:={float(omega)}', '-p', f'duration:={duration}',
@@ -214,9 +297,6 @@ class ClosedLoop:
             code, err = stop_process(publisher)
         if code != 0:
             raise LoopError(f'setpoint_publisher exited {code}:\n{err}')
-        label = (f'{name}, {"PD + feedforward" if feedforward else "PD"}, '
-                 f'plant m5 x{mass_factor:g}')
-        return _tracking(label, self.recorder, target, omega, duration)
 
     def _set(self, client, parameters):
         results = self._call(client.set_parameters(parameters)).results
