@@ -12,7 +12,17 @@ therefore subscribes with ``raw=True`` and reads only what it uses:
 - ``MultiDOFJointTrajectory``: stamp, frame and, of the first point, the
   first transform, velocity, acceleration and ``time_from_start``;
 - ``JointState``: stamp, frame, names, positions, velocities, efforts;
-- ``Float64MultiArray``: the data (the layout is skipped).
+- ``Float64MultiArray``: the data (the layout is skipped);
+- ``MultiDOFJointTrajectory`` whole (:func:`cartesian_trajectory`): every
+  point's first transform, velocity and acceleration and its time, as
+  numpy arrays;
+- ``JointTrajectory`` whole (:func:`joint_trajectory_points`): names, every
+  point's arrays and time, as numpy arrays.
+
+and writes one message the same way, :func:`joint_trajectory` (a
+``trajectory_msgs/JointTrajectory`` of three joints from numpy arrays:
+building 10,000 message objects in Python would cost far more than the
+mechanics).
 
 The layout is the OMG CDR encoding of the ROS 2 message definitions
 (XCDR1: a 4-byte encapsulation header, then each primitive aligned to its
@@ -26,7 +36,10 @@ not use (``joint_names``) raises :class:`LimitError` beyond
 :data:`MAX_JOINT_NAMES`: what a message holds cannot make reading it slow.
 """
 
+from collections import namedtuple
 import struct
+
+import numpy as np
 
 _STAMP = struct.Struct('<iI')          # stamp.sec, stamp.nanosec
 _COUNT = struct.Struct('<I')
@@ -130,6 +143,292 @@ def float64_array(buf):
         offset = _align(offset, 4) + 8      # size, stride
     offset = _align(offset, 4) + 4          # data_offset
     return _doubles(buf, offset)[0]
+
+
+Waypoints = namedtuple('Waypoints', (
+    'stamp', 'frame', 'transform', 'velocity', 'acceleration', 'position',
+    'orientation', 'linear_velocity', 'linear_acceleration', 'time'))
+Waypoints.__doc__ = """The points of a MultiDOFJointTrajectory, as arrays.
+
+``transform``, ``velocity``, ``acceleration``: (N,) bools, whether point k
+has one; ``position`` (N, 3) and ``orientation`` (N, 4, x y z w) of its
+first transform, ``linear_velocity``, ``linear_acceleration`` (N, 3) of its
+first twists (NaN where absent); ``time`` (N, 2) int64: time_from_start
+(sec, nanosec)."""
+
+
+def cartesian_trajectory(buf):
+    """
+    Read every point of a MultiDOFJointTrajectory; return :class:`Waypoints`.
+
+    The offsets of each point's fields are found from its counts, the
+    numbers then gathered with numpy in one pass. When every point has the
+    first point's counts (the common case: one transform, one velocity, one
+    acceleration), the offsets follow from the first two points' layouts
+    (a point's layout depends only on its start's alignment) and are
+    checked with numpy instead of walked in Python.
+    """
+    stamp, frame, offset = _header(buf)
+    names, offset = _count(buf, offset)
+    if names > MAX_JOINT_NAMES:
+        raise LimitError(f'{names} joint_names: at most {MAX_JOINT_NAMES}')
+    for _ in range(names):
+        _, offset = _string(buf, offset)
+    points, offset = _count(buf, offset)
+    # Each point holds at least three counts and a duration: 20 bytes.
+    if 20 * points > len(buf) - offset:
+        raise CdrError('truncated message')
+    size = len(buf)
+    words = np.frombuffer(buf, dtype='<u4', count=size // 4)
+    found = _regular_points(buf, words, offset, points)
+    first, times = found if found is not None else _walk_points(
+        buf, offset, points)
+    doubles = np.frombuffer(buf, dtype='<f8', offset=4,
+                            count=(size - 4) // 8)
+    present = first >= 0
+    index = (np.where(present, first, 4) - 4) // 8
+    pose = np.where(present[0, :, None], doubles[
+        index[0, :, None] + np.arange(7)], np.nan)
+    twists = [np.where(present[j, :, None], doubles[
+        index[j, :, None] + np.arange(3)], np.nan) for j in (1, 2)]
+    time = np.column_stack((words[times // 4].view('<i4').astype(np.int64),
+                            words[times // 4 + 1].astype(np.int64)))
+    return Waypoints((stamp[0], stamp[1]), frame, present[0], present[1],
+                     present[2], pose[:, :3], pose[:, 3:], twists[0],
+                     twists[1], time)
+
+
+_ITEMS = (56, 48, 48)   # bytes of a Transform, a Twist, a Twist
+
+
+def _walk_points(buf, offset, points):
+    """Walk every point; return (first-item offsets (3, N), time offsets)."""
+    first = np.full((3, points), -1, dtype=np.int64)
+    times = np.empty(points, dtype=np.int64)
+    for k in range(points):
+        offset, _, first[:, k], _ = _point(buf, offset)
+        times[k] = offset - 8
+    return first, times
+
+
+def _point(buf, offset):
+    """
+    Read one point from ``offset``.
+
+    Returns ``(end, count offsets, first-item offsets or -1, counts)`` of
+    its transforms, velocities and accelerations.
+    """
+    size = len(buf)
+    at, first, counts = [], [], []
+    for item in _ITEMS:
+        offset += -(offset - 4) % 4
+        if offset + 4 > size:
+            raise CdrError('truncated message')
+        count = _COUNT.unpack_from(buf, offset)[0]
+        at.append(offset)
+        counts.append(count)
+        offset += 4
+        first.append(-1)
+        if count:
+            offset += -(offset - 4) % 8
+            first[-1] = offset
+            offset += item * count
+    offset += -(offset - 4) % 4
+    if offset + 8 > size:
+        raise CdrError('truncated message')
+    return offset + 8, at, first, counts
+
+
+def _regular_points(buf, words, offset, points):
+    """
+    Return the offsets if every point repeats the first point's counts.
+
+    Else None (the caller walks the points). A point's layout depends only
+    on its counts and on its start's alignment, which alternates between
+    two values: the first two points give both layouts, and one numpy pass
+    checks that every point's count words hold those counts.
+    """
+    if points < 2:
+        return None
+    shapes, origin = [], offset
+    for _ in range(2):
+        end, at, first, counts = _point(buf, origin)
+        shapes.append((end - origin, np.array(at) - origin,
+                       np.array(first) - origin, counts))
+        origin = end
+    (s0, at0, f0, c0), (s1, at1, f1, c1) = shapes
+    if c0 != c1:
+        return None
+    starts, end = _strided(offset, s0, s1, points)
+    if end > len(buf):
+        return None
+    # Point k has point 0's layout where its start has point 0's
+    # alignment, else point 1's.
+    second = ((starts - offset) % 8 != 0)[:, None]
+    at = starts[:, None] + np.where(second, at1, at0)       # (N, 3)
+    if not np.array_equal(words[at // 4],
+                          np.broadcast_to(np.array(c0), at.shape)):
+        return None
+    present = np.array(c0) > 0
+    first = np.where(present, starts[:, None] + np.where(second, f1, f0),
+                     -1).T
+    times = starts + np.where(second[:, 0], s1, s0) - 8
+    return first, times
+
+
+def _strided(origin, first, second, count):
+    """
+    Return the start offsets of ``count`` items and the end of the last.
+
+    ``first``: the size of an item starting with ``origin``'s alignment
+    (mod 8), ``second``: with the other alignment. Alignments then go
+    constant, alternate, or switch once and stay.
+    """
+    k = np.arange(count)
+    if first % 8 == 0:                      # every item aligned as the 1st
+        starts = origin + k * first
+        return starts, origin + count * first
+    if second % 8 != 0:                     # alternating
+        starts = origin + (k // 2) * (first + second) + (k % 2) * first
+        return starts, origin + (count // 2) * (first + second) + \
+            (count % 2) * first
+    starts = origin + np.where(k > 0, first + (k - 1) * second, 0)
+    return starts, origin + (first + (count - 1) * second if count else 0)
+
+
+JointPoints = namedtuple('JointPoints', (
+    'stamp', 'frame', 'names', 'lengths', 'positions', 'velocities',
+    'accelerations', 'efforts', 'time'))
+JointPoints.__doc__ = """The points of a JointTrajectory, as arrays.
+
+``names``: the joint names; ``lengths`` (4, N) ints: how many values point
+k holds in its positions, velocities, accelerations, efforts; those four
+(N, J) arrays hold them (J the number of names; NaN where a point holds
+fewer, extra values dropped); ``time`` (N, 2) int64 time_from_start."""
+
+
+def joint_trajectory_points(buf, max_names=MAX_JOINT_NAMES):
+    """Read a whole JointTrajectory; return :class:`JointPoints`."""
+    stamp, frame, offset = _header(buf)
+    count, offset = _count(buf, offset)
+    if count > max_names:
+        raise LimitError(f'{count} joint_names: at most {max_names}')
+    names = []
+    for _ in range(count):
+        name, offset = _string(buf, offset)
+        names.append(name)
+    points, offset = _count(buf, offset)
+    # Each point holds four counts and a duration: 24 bytes at least.
+    if 24 * points > len(buf) - offset:
+        raise CdrError('truncated message')
+    lengths = np.zeros((4, points), dtype=np.int64)
+    first = np.zeros((4, points), dtype=np.int64)
+    times = np.empty(points, dtype=np.int64)
+    size = len(buf)
+    for k in range(points):
+        for field in range(4):
+            offset += -(offset - 4) % 4
+            if offset + 4 > size:
+                raise CdrError('truncated message')
+            n = _COUNT.unpack_from(buf, offset)[0]
+            offset += 4
+            if n:
+                offset += -(offset - 4) % 8
+            lengths[field, k], first[field, k] = n, offset
+            offset += 8 * n
+        offset += -(offset - 4) % 4
+        times[k] = offset
+        offset += 8
+    if offset > size:
+        raise CdrError('truncated message')
+    doubles = np.frombuffer(buf, dtype='<f8', offset=4,
+                            count=(size - 4) // 8)
+    words = np.frombuffer(buf, dtype='<u4', count=size // 4)
+    columns = np.arange(count)
+    arrays = []
+    for field in range(4):
+        has = columns[None, :] < lengths[field][:, None]        # (N, J)
+        index = np.where(has, (first[field][:, None] - 4) // 8
+                         + columns[None, :], 0)
+        arrays.append(np.where(has, doubles[index] if len(doubles) else
+                               0.0, np.nan))
+    time = np.column_stack((words[times // 4].view('<i4').astype(np.int64),
+                            words[times // 4 + 1].astype(np.int64)))
+    return JointPoints(stamp, frame, tuple(names), lengths, *arrays, time)
+
+
+def joint_trajectory(stamp, frame, names, time, positions, velocities,
+                     accelerations, efforts):
+    """
+    Serialize a ``trajectory_msgs/JointTrajectory`` (little-endian CDR).
+
+    ``stamp`` (sec, nanosec), ``frame`` and ``names`` (strings); ``time``
+    (N, 2) ints, time_from_start (sec, nanosec); ``positions``,
+    ``velocities``, ``accelerations``, ``efforts``: (N, J) arrays, J the
+    number of names. Returns the bytes ``Publisher.publish`` sends as is.
+    A point's layout depends only on its start's alignment (two values):
+    the points are written by numpy, each with the layout of its
+    alignment (:func:`_strided`).
+    """
+    n, joints = len(time), len(names)
+    head = bytearray(b'\x00\x01\x00\x00')
+    head += _STAMP.pack(*stamp)
+    _put_string(head, frame)
+    head += bytes(-(len(head) - 4) % 4) + _COUNT.pack(joints)
+    for name in names:
+        head += bytes(-(len(head) - 4) % 4)
+        _put_string(head, name)
+    head += bytes(-(len(head) - 4) % 4) + _COUNT.pack(n)
+    start = len(head)
+    layouts = [_point_layout(start, joints)]
+    layouts.append(_point_layout(start + layouts[0][0], joints))
+    origin, end = _strided(start, layouts[0][0], layouts[1][0], n)
+    k = np.arange(n)
+    second = (origin - start) % 8 != 0
+    out = np.zeros(-(-end // 8) * 8 + 8, dtype=np.uint8)
+    out[:start] = np.frombuffer(bytes(head), dtype=np.uint8)
+    words = out.view('<u4')
+    doubles = out[4:len(out) - 4].view('<f8')
+    for parity in (0, 1):
+        points = k[second == parity]
+        base = origin[points]
+        _, counts, data, clock = layouts[parity]
+        for count, at, values in zip(counts, data, (
+                positions, velocities, accelerations, efforts)):
+            words[(base + count) // 4] = joints
+            index = (base + at - 4)[:, None] // 8 + np.arange(joints)
+            doubles[index] = np.asarray(values, dtype=float)[points]
+        words[(base + clock) // 4] = np.asarray(
+            time, dtype=np.int64)[points, 0].astype('<i4').view('<u4')
+        words[(base + clock) // 4 + 1] = np.asarray(
+            time, dtype=np.int64)[points, 1]
+    return out[:end].tobytes()
+
+
+def _point_layout(origin, joints):
+    """
+    Return one JointTrajectoryPoint's layout when it starts at ``origin``.
+
+    ``(size, count offsets, data offsets, time offset)``, offsets from the
+    point's start, for four arrays of ``joints`` doubles and the duration.
+    """
+    offset, counts, data = origin, [], []
+    for _ in range(4):
+        offset += -(offset - 4) % 4
+        counts.append(offset - origin)
+        offset += 4
+        if joints:
+            offset += -(offset - 4) % 8
+        data.append(offset - origin)
+        offset += 8 * joints
+    offset += -(offset - 4) % 4
+    clock = offset - origin
+    return offset + 8 - origin, counts, data, clock
+
+
+def _put_string(out, text):
+    data = text.encode('utf-8') + b'\x00'
+    out += _COUNT.pack(len(data)) + data
 
 
 def _encapsulation(buf):

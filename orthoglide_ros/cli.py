@@ -33,8 +33,9 @@ from orthoglide_ros import identification, mechanics, params_file, \
     trajectory
 from orthoglide_ros.csvfile import CsvError, read_columns
 from orthoglide_ros.identification import DEFAULT_CUTOFF
-from orthoglide_ros.parameters import JOINT_NAMES
-from orthoglide_ros.params_file import load_robot, ParametersFileError
+from orthoglide_ros.parameters import JOINT_NAMES, joint_names
+from orthoglide_ros.params_file import (load_parameters, load_robot,
+                                        ParametersFileError)
 from orthoglide_ros.robot import Robot, RobotParameterError
 
 PROG = 'orthoglide'
@@ -180,7 +181,7 @@ def run_solve(robot, args):
 # -- batch ------------------------------------------------------------------
 
 def run_batch(robot, args):
-    """Solve every row of a trajectory file; write the results as CSV."""
+    """Solve every row of a trajectory file; write CSV or a JointTrajectory."""
     name = '<stdin>' if args.input == '-' else args.input
     times, p, v, a, lines = _read_trajectory(args.input, name)
     try:
@@ -188,8 +189,77 @@ def run_batch(robot, args):
     except mechanics.WorkspaceError as error:
         raise CliError(f'{name}: data row {error.row + 1} (line '
                        f'{lines[error.row]}): {_reason(error)}') from None
-    _write_output(args.output, _csv_text(times, p, sol))
+    if args.format == 'joint_trajectory':
+        data = _joint_trajectory_yaml(_time_from_start(times, lines, name),
+                                      sol, _joint_names(args.params))
+    else:
+        data = _csv_text(times, p, sol)
+    _write_output(args.output, data)
     return 0
+
+
+def _time_from_start(times, lines, name):
+    """
+    Return the rows' ``t`` as time_from_start in nanoseconds (int64).
+
+    Refused (CliError): no row, no ``t`` column, or a ``t`` that is
+    negative, not below 2**31 s (a Duration's int32 seconds) or, rounded
+    to the nanosecond, not later than the row before it.
+    """
+    if times is None:
+        raise CliError(f'{name}: no \'t\' column: a joint trajectory '
+                       'needs each point\'s time_from_start (s)')
+    if len(times) == 0:
+        raise CliError(f'{name}: no data row: a joint trajectory needs at '
+                       'least one point')
+    bad = (times < 0.0) | (times >= 2.0 ** 31)
+    ns = np.round(np.where(bad, 0.0, times) * 1e9).astype(np.int64)
+    bad |= np.r_[False, np.diff(ns) <= 0]
+    if bad.any():
+        row = int(np.argmax(bad)) + 1
+        raise CliError(f'{name}: data row {row} (line {lines[row - 1]}): '
+                       't must be in [0, 2**31) s and increase from row to '
+                       'row (to the nanosecond)')
+    return ns
+
+
+def _joint_trajectory_yaml(ns, sol, names):
+    """
+    Format a trajectory_msgs/JointTrajectory as YAML (bytes).
+
+    The message as ``ros2 topic pub`` and launch files read it: a zero
+    header stamp (joint_trajectory_controller starts it on arrival),
+    ``names``, one point per row with positions = lambda (m), velocities =
+    lambdadot (m/s), accelerations = lambdaddot (m/s^2), effort = f (N)
+    and time_from_start = ``ns`` (int64 nanoseconds). Doubles in full
+    precision.
+    """
+    def row(values):
+        return '[' + ', '.join(repr(float(x)) for x in values) + ']'
+    out = ['header:', '  stamp:', '    sec: 0', '    nanosec: 0',
+           "  frame_id: ''",
+           'joint_names: [' + ', '.join(map(json.dumps, names)) + ']',
+           'points:']
+    for k in range(len(ns)):
+        sec, nanosec = divmod(int(ns[k]), 10**9)
+        out += [f'- positions: {row(sol.lambda_[k])}',
+                f'  velocities: {row(sol.lambdadot[k])}',
+                f'  accelerations: {row(sol.lambdaddot[k])}',
+                f'  effort: {row(sol.force[k])}',
+                '  time_from_start:', f'    sec: {sec}',
+                f'    nanosec: {nanosec}']
+    return ('\n'.join(out) + '\n').encode('utf-8')
+
+
+def _joint_names(path):
+    """Return the feedforward section's joint_names of ``path``, or the defaults."""
+    if path is None:
+        return JOINT_NAMES
+    names = load_parameters(path).get('joint_names', list(JOINT_NAMES))
+    try:
+        return joint_names(names)
+    except ValueError as error:
+        raise CliError(f'{path}: joint_names: {error}') from None
 
 
 def _read_trajectory(path, name):
@@ -517,7 +587,14 @@ def _parser():
         'units). Nothing is written unless every row is solved.')
     batch.add_argument('--input', required=True, metavar='FILE',
                        help='trajectory CSV file; - for standard input')
-    batch.add_argument('--output', metavar='FILE', help='result CSV file '
+    batch.add_argument('--format', choices=('csv', 'joint_trajectory'),
+                       default='csv', help='csv: the columns above '
+                       '(default); joint_trajectory: a trajectory_msgs/'
+                       'JointTrajectory in YAML, as ros2 topic pub and '
+                       'launch files read it (needs t; joint names from '
+                       'the --params file\'s joint_names, default '
+                       'slider_a, slider_b, slider_c)')
+    batch.add_argument('--output', metavar='FILE', help='result file '
                        '(default: standard output)')
     batch.set_defaults(run=run_batch)
 

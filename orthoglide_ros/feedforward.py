@@ -26,16 +26,22 @@ Rules (``doc/feedforward.md`` states them for users):
 - Freshness is judged by arrival time on a monotonic clock, never by stamp:
   the newest result is fresh for ``setpoint_timeout`` after its setpoint
   completed.
+- A whole Cartesian trajectory (:func:`convert_trajectory`) is converted
+  point by point with :func:`mechanics.solve_batch`, all or nothing: one
+  bad point refuses it whole, with the reason and the point's index
+  (:data:`TRAJECTORY_REASONS`, counted apart from the setpoints').
 """
 
 from collections import namedtuple
 import math
 import time
 
+import numpy as np
+
 from orthoglide_ros import mechanics
 from orthoglide_ros.inputs import check_stamp, NANOSECONDS, Rejected
-from orthoglide_ros.parameters import joint_names_spec, ParameterError, \
-    Spec, Table
+from orthoglide_ros.parameters import joint_names_spec, \
+    nonnegative_triple, ParameterError, Spec, Table
 from orthoglide_ros.status import first, OK, Period, Status, WARN
 
 # Largest rotation of the platform accepted as "the identity" (rad).
@@ -45,16 +51,124 @@ MAX_PENDING = 1000
 # Byte limit of a setpoint/trajectory message (its first point is used):
 # 4 MiB, about 20,000 points.
 TRAJECTORY_MESSAGE_BYTES = 4 * 1024 * 1024
+# Byte limit of a cartesian_trajectory message (every point is converted):
+# 8 MiB, about 45,000 points (10,000 points take 1.8 MB).
+CARTESIAN_TRAJECTORY_BYTES = 8 * 1024 * 1024
+# Why a whole Cartesian trajectory was refused: 'rejected trajectory <r>'.
+TRAJECTORY_REASONS = ('empty', 'frame', 'stamp', 'time', 'malformed',
+                      'orientation', 'non_finite', 'unreachable', 'singular',
+                      'overflow', 'velocity_limit', 'force_limit', 'oversize')
 
 REASONS = ('non_finite', 'unreachable', 'singular', 'overflow', 'frame',
            'orientation', 'stamp', 'malformed', 'oversize', 'unpaired')
 INPUTS = ('pose', 'twist', 'accel', 'trajectory')
+
+Conversion = namedtuple('Conversion', 'stamp frame time solution')
+Conversion.__doc__ = """A converted Cartesian trajectory.
+
+``stamp`` (sec, nanosec) and ``frame`` of its header, unchanged; ``time``
+(N, 2) the points' time_from_start (sec, nanosec); ``solution`` the
+:class:`mechanics.Solution` of the N points, (N, 3) arrays."""
 
 Output = namedtuple('Output', 'stamp solution')
 Output.__doc__ = """A result: ``stamp`` (sec, nanosec) of its setpoint and
 the :class:`mechanics.Solution`."""
 
 _ZERO = (0.0, 0.0, 0.0)
+
+
+def convert_trajectory(settings, waypoints):
+    """
+    Convert every point of a Cartesian trajectory, or refuse it whole.
+
+    ``waypoints``: :class:`orthoglide_ros.cdr.Waypoints` (the arrays of a
+    MultiDOFJointTrajectory). The rules, in this order, the first broken
+    one raising :class:`Rejected` with a reason of TRAJECTORY_REASONS and,
+    where a point is at fault, its 0-based index:
+
+    - ``empty``: no point; ``frame``: a frame neither empty nor
+      ``base_frame``; ``stamp``: a header nanosec outside [0, 1e9) or
+      negative seconds (a zero stamp means "start now" and passes
+      unchanged);
+    - ``malformed``: a point without a transform, or without a velocity or
+      acceleration (unless ``pose_only``: zero);
+    - ``time``: a time_from_start with nanosec outside [0, 1e9), negative,
+      or not after the previous point's;
+    - ``orientation`` / ``non_finite``: a rotation more than
+      ORIENTATION_TOLERANCE from the identity, or not finite;
+    - the mechanics' refusals (``non_finite``, ``unreachable``,
+      ``singular``, ``overflow``) of :func:`mechanics.solve_batch`;
+    - ``velocity_limit`` / ``force_limit``: a |lambdadot| or |f| beyond
+      the node's limit of that actuator (0.0: none).
+
+    Returns a :class:`Conversion`.
+    """
+    w = waypoints
+    n = len(w.time)
+    if n == 0:
+        raise Rejected('empty', 'trajectory without points')
+    if w.frame and w.frame != settings.base_frame:
+        raise Rejected('frame', (
+            f'trajectory in frame {w.frame!r}, expected '
+            f'{settings.base_frame!r} (or empty)'))
+    sec, nanosec = w.stamp
+    if sec < 0 or not 0 <= nanosec < NANOSECONDS:
+        raise Rejected('stamp', (
+            f'header stamp {sec} s + {nanosec} ns: seconds must be >= 0 and '
+            'nanosec in [0, 1e9)'))
+    _first_bad('malformed', ~w.transform, 'has no transform')
+    velocity, acceleration = w.linear_velocity, w.linear_acceleration
+    if settings.pose_only:
+        velocity = np.where(w.velocity[:, None], velocity, 0.0)
+        acceleration = np.where(w.acceleration[:, None], acceleration, 0.0)
+    else:
+        _first_bad('malformed', ~w.velocity, 'has no velocity (set '
+                   'pose_only to take it as zero)')
+        _first_bad('malformed', ~w.acceleration, 'has no acceleration (set '
+                   'pose_only to take it as zero)')
+    seconds, nanoseconds = w.time[:, 0], w.time[:, 1]
+    _first_bad('time', (nanoseconds < 0) | (nanoseconds >= NANOSECONDS),
+               'has a time_from_start nanosec outside [0, 1e9)')
+    total = seconds * NANOSECONDS + nanoseconds
+    _first_bad('time', total < 0, 'has a negative time_from_start')
+    _first_bad('time', np.r_[False, np.diff(total) <= 0],
+               'is not later than the point before it')
+    q = w.orientation
+    _first_bad('non_finite', ~np.isfinite(q).all(1), 'has a rotation that '
+               'is not finite')
+    with np.errstate(all='ignore'):
+        vector = np.sqrt((q[:, :3] ** 2).sum(1))
+        angle = 2.0 * np.arctan2(vector, np.abs(q[:, 3]))
+    _first_bad('orientation', ~(angle <= ORIENTATION_TOLERANCE) |
+               ((vector == 0.0) & (q[:, 3] == 0.0)),
+               f'turns the platform more than {ORIENTATION_TOLERANCE:g} rad '
+               'from the identity (the Orthoglide only translates)')
+    try:
+        solution = mechanics.solve_batch(settings.robot, w.position,
+                                         velocity, acceleration,
+                                         settings.singularity_margin)
+    except mechanics.WorkspaceError as error:
+        raise Rejected(error.reason, f'point {error.row}: '
+                       + str(error).split(': ', 1)[-1]) from None
+    for reason, values, limits, unit in (
+            ('velocity_limit', solution.lambdadot, settings.velocity_limit,
+             'm/s'),
+            ('force_limit', solution.force, settings.force_limit, 'N')):
+        limit = np.where(np.asarray(limits) > 0.0, limits, np.inf)
+        beyond = np.abs(values) > limit
+        if beyond.any():
+            row, leg = np.argwhere(beyond)[0]
+            raise Rejected(reason, (
+                f'point {row}: actuator {"ABC"[leg]} needs '
+                f'{values[row, leg]:.6g} {unit}, beyond its {reason} '
+                f'{limits[leg]:g} {unit}'))
+    return Conversion(w.stamp, w.frame, w.time, solution)
+
+
+def _first_bad(reason, bad, what):
+    """Raise Rejected(reason) naming the first point where ``bad``."""
+    if bad.any():
+        raise Rejected(reason, f'point {int(np.argmax(bad))} {what}')
 
 
 def _pairing_within_setpoint_timeout(settings):
@@ -90,6 +204,14 @@ PARAMETERS = Table('Settings', (
          'serve each pose alone as a setpoint with zero velocity and '
          'acceleration (twist and accel topics ignored); trajectory points '
          'may then omit velocities and accelerations'),
+    Spec('velocity_limit', 'double_array', [0.0, 0.0, 0.0],
+         'largest |lambdadot| per actuator A, B, C (m/s) of a converted '
+         'cartesian_trajectory: one beyond it is refused whole; 0.0: no '
+         'limit', check=nonnegative_triple),
+    Spec('force_limit', 'double_array', [0.0, 0.0, 0.0],
+         'largest |f| per actuator A, B, C (N) of a converted '
+         'cartesian_trajectory: one beyond it is refused whole; 0.0: no '
+         'limit', check=nonnegative_triple),
 ), rules=(_pairing_within_setpoint_timeout,), robot=True)
 
 
@@ -112,6 +234,11 @@ class Feedforward:
         self.compute_ns_total = 0
         self.compute_ns_max = 0
         self.published = 0
+        self.trajectories = 0           # Cartesian trajectories converted
+        self.trajectory_points = 0
+        self.trajectory_seconds = math.nan      # the last one's, s
+        self.trajectory_seconds_max = 0.0       # the period's largest, s
+        self.trajectory_rejected = dict.fromkeys(TRAJECTORY_REASONS, 0)
         self._pending = {}
         self._period = Period(now)
 
@@ -191,6 +318,24 @@ class Feedforward:
         return self.trajectory_point(stamp, frame, position, orientation,
                                      velocity, acceleration, now)
 
+    def count_trajectory(self, conversion, seconds):
+        """
+        Count a converted Cartesian trajectory (a :class:`Conversion`).
+
+        ``seconds``: from its reception to its publication (the node's
+        side of a conversion: reading, the kernel, writing, publishing).
+        """
+        self.trajectories += 1
+        self.trajectory_points += len(conversion.time)
+        self.trajectory_seconds = seconds
+        self.trajectory_seconds_max = max(self.trajectory_seconds_max,
+                                          seconds)
+
+    def reject_trajectory(self, rejection):
+        """Count a Cartesian trajectory refused whole; re-raise."""
+        self.trajectory_rejected[rejection.reason] += 1
+        raise rejection
+
     def reject(self, source, rejection):
         """Count a message on input ``source`` refused whole; re-raise."""
         self.received[source] += 1
@@ -229,26 +374,30 @@ class Feedforward:
         """
         Return the :class:`Status` of the period ending at ``now``.
 
-        ERROR after an internal error; WARN when stale or when setpoints
-        were rejected in the period; else OK (``waiting for the first
-        setpoint`` until there is one). The values: rates over the period,
+        ERROR after an internal error; WARN when setpoints or
+        trajectories were rejected in the period, or when stale; else OK
+        (``waiting for the first setpoint`` until there is one). The values: rates over the period,
         compute times (the maximum restarts with each period), counters.
         """
         rejected = sum(self.rejected.values())
         seconds, new = self._period.advance(
             now, published=self.published, computed=self.computed,
-            compute_ns=self.compute_ns_total, rejected=rejected)
+            compute_ns=self.compute_ns_total, rejected=rejected,
+            trajectories_rejected=sum(self.trajectory_rejected.values()))
         age = None if self.latest_arrival is None \
             else now - self.latest_arrival
         fresh = self.fresh(now)
         level, message = first(
             internal_errors,
+            (new['rejected'], WARN,
+             f'{new["rejected"]} setpoint(s) rejected in the last period'),
+            (new['trajectories_rejected'], WARN,
+             f'{new["trajectories_rejected"]} trajectory(ies) rejected in '
+             'the last period'),
             (age is None, OK, 'waiting for the first setpoint'),
             (not fresh, WARN,
              f'stale: no fresh setpoint for {age or 0.0:.2f} s, outputs '
-             'stopped'),
-            (new['rejected'], WARN,
-             f'{new["rejected"]} setpoint(s) rejected in the last period'))
+             'stopped'))
         mean_us = new['compute_ns'] / new['computed'] / 1e3 \
             if new['computed'] else 0.0
         distance = self.latest.solution.singularity_distance \
@@ -270,6 +419,15 @@ class Feedforward:
         ]
         values += [(f'received {k}', v) for k, v in self.received.items()]
         values += [(f'rejected {r}', self.rejected[r]) for r in REASONS]
+        values += [('trajectories converted', self.trajectories),
+                   ('trajectory points converted', self.trajectory_points),
+                   ('trajectory receive to publish last (ms)',
+                    self.trajectory_seconds * 1e3),
+                   ('trajectory receive to publish max (ms)',
+                    self.trajectory_seconds_max * 1e3)]
+        self.trajectory_seconds_max = 0.0
+        values += [(f'rejected trajectory {r}', self.trajectory_rejected[r])
+                   for r in TRAJECTORY_REASONS]
         self.compute_ns_max = 0
         return Status(level, message, values)
 

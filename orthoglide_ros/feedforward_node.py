@@ -18,11 +18,12 @@ from rclpy.serialization import deserialize_message, serialize_message
 from geometry_msgs.msg import AccelStamped, PoseStamped, TwistStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
-from trajectory_msgs.msg import MultiDOFJointTrajectory
+from trajectory_msgs.msg import JointTrajectory, MultiDOFJointTrajectory
 
 from orthoglide_ros import cdr
-from orthoglide_ros.feedforward import (Feedforward, PARAMETERS,
-                                        TRAJECTORY_MESSAGE_BYTES)
+from orthoglide_ros.feedforward import (
+    CARTESIAN_TRAJECTORY_BYTES, convert_trajectory, Feedforward, PARAMETERS,
+    TRAJECTORY_MESSAGE_BYTES)
 from orthoglide_ros.inputs import Rejected, SMALL_MESSAGE_BYTES
 from orthoglide_ros.node_runtime import default_qos, InputNode, run
 
@@ -76,6 +77,19 @@ class FeedforwardNode(InputNode):
             decode=raw_decoder(cdr.trajectory_point, MultiDOFJointTrajectory),
             max_bytes=TRAJECTORY_MESSAGE_BYTES,
             qos_overriding_options=overrides)
+        # Whole trajectories on a thread of their own: converting 10,000
+        # points must not hold the setpoints back.
+        self._pub_trajectory = self.create_publisher(
+            JointTrajectory, 'feedforward/joint_trajectory', default_qos(),
+            qos_overriding_options=overrides)
+        self._read_waypoints = raw_decoder(cdr.cartesian_trajectory,
+                                           MultiDOFJointTrajectory)
+        self.create_input(
+            MultiDOFJointTrajectory, 'cartesian_trajectory',
+            self._on_cartesian_trajectory, default_qos(),
+            'cartesian_trajectory', decode=self._convert,
+            max_bytes=CARTESIAN_TRAJECTORY_BYTES, group='trajectories',
+            qos_overriding_options=overrides)
 
         self._joints = JointState()
         self._forces = _vector_message()
@@ -113,9 +127,38 @@ class FeedforwardNode(InputNode):
     def on_input_rejected(self, source, rejection):
         """Count a message refused before it was read (oversize, malformed)."""
         try:
-            self._core.reject(source, rejection)
+            if source == 'cartesian_trajectory':
+                self._core.reject_trajectory(rejection)
+            else:
+                self._core.reject(source, rejection)
         except Rejected:
-            self._warn(rejection.reason, str(rejection))
+            what = 'trajectory' if source == 'cartesian_trajectory' \
+                else 'setpoint'
+            self.warn_throttled((source, rejection.reason),
+                                f'{what} rejected ({rejection.reason}): '
+                                f'{rejection}')
+
+    # Whole trajectories (their input thread) ------------------------------
+    def _convert(self, data):
+        """
+        Read, convert and serialize a Cartesian trajectory (no lock held).
+
+        The settings are read once (one immutable tuple, swapped whole);
+        a refusal raises Rejected, which :meth:`on_input_rejected` counts.
+        Returns the conversion and the JointTrajectory's bytes.
+        """
+        settings = self._core.settings
+        conversion = convert_trajectory(settings, self._read_waypoints(data))
+        s = conversion.solution
+        return conversion, cdr.joint_trajectory(
+            conversion.stamp, conversion.frame, settings.joint_names,
+            conversion.time, s.lambda_, s.lambdadot, s.lambdaddot, s.force)
+
+    def _on_cartesian_trajectory(self, converted):
+        conversion, data = converted
+        self._pub_trajectory.publish(data)
+        self._core.count_trajectory(conversion,
+                                    time.monotonic() - self.arrival)
 
     def _take(self, method, *args):
         """Call the core; publish a completed setpoint, warn on a rejection."""

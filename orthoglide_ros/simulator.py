@@ -289,8 +289,11 @@ class Simulator:
         Make the grid's next step if it is due at ``now``.
 
         Returns ``(tick, instant)``, the :class:`Tick` and the grid time
-        (s) its state holds at, or None when no step is due. Call it until
-        None (or an event) to catch up. The grid starts half a period
+        (s) its state holds at, or None when no step is due. The step made
+        at grid time g integrates [g, g + 1/rate_hz] with the command known
+        at g (a drive applies a command from its next cycle), so its state
+        holds at g + 1/rate_hz. Call it until None (or an event) to catch
+        up. The grid starts half a period
         before the first call, so that a caller's jitter below half a
         period makes exactly one step per wake-up; a grid more than
         MAX_CATCH_UP periods behind ``now`` drops the missed time
@@ -308,7 +311,7 @@ class Simulator:
             return None
         instant = self._grid
         self._grid += period
-        return self.tick(instant), instant
+        return self.tick(instant), self._grid
 
     def publish_due(self, tick, instant):
         """

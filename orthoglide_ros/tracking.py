@@ -54,18 +54,24 @@ Rules (``doc/tracking_controller.md`` states them for users):
 from collections import namedtuple
 import math
 
-from orthoglide_ros.inputs import Rejected
+import numpy as np
+
+from orthoglide_ros.inputs import NANOSECONDS, Rejected
+from orthoglide_ros.joint_plan import JointPlan
 from orthoglide_ros.parameters import joint_names_spec, \
     nonnegative_triple, Spec, Table
 from orthoglide_ros.status import ERROR, first, OK, Period, Status, WARN
 
 FORCE_LIMIT_MAX = 1.0e6     # N: the largest force_limit accepted
-INPUTS = ('desired', 'measured')
+INPUTS = ('desired', 'measured', 'trajectory')
 REASONS = ('missing_joint', 'malformed', 'missing_position',
            'missing_velocity', 'missing_effort', 'non_finite', 'overflow',
-           'oversize')
-SKIPS = ('no_measurement', 'stale_measurement')
+           'oversize', 'empty', 'time')
+SKIPS = ('no_measurement', 'stale_measurement', 'trajectory_active')
 FOLLOWING, HOLDING = 'following', 'holding'
+# Byte limit of a joint_trajectory message: 8 MiB, about 60,000 points of
+# three joints (a 10,000-point trajectory takes 1.4 MB).
+TRAJECTORY_BYTES = 8 * 1024 * 1024
 # Largest |lambdadot_d - lambdadot| (m/s) of a desired state that re-arms.
 REARM_SPEED = 0.01
 _ZERO = (0.0, 0.0, 0.0)
@@ -90,6 +96,10 @@ PARAMETERS = Table('ControllerSettings', (
          'seconds (by arrival time) after which a measurement is too old '
          'to compute a command with: nothing is published until a fresh '
          'one arrives', (0.0001, 3600.0)),
+    Spec('rate_hz', 'double', 250.0,
+         'loop rate (Hz) at which a received joint_trajectory is sampled '
+         'and a command published while it is followed',
+         (1.0, 2000.0)),
     Spec('path_tolerance', 'double_array', [0.05, 0.05, 0.05],
          'largest |lambda_d - lambda| per actuator A, B, C (m) while '
          'following; beyond it the controller holds the measured position '
@@ -151,6 +161,69 @@ def read_joint_state(joint_names, names, position, velocity, effort,
                        values[2] if need_effort else None)
 
 
+def read_joint_trajectory(joint_names, points, need_effort):
+    """
+    Pick ``joint_names``' columns out of a JointTrajectory's points.
+
+    ``points``: :class:`orthoglide_ros.cdr.JointPoints` (names, lengths,
+    positions, velocities, accelerations, efforts, time). Returns ``(times
+    (N,) s, positions, velocities, efforts)``, (N, 3) arrays in
+    ``joint_names`` order (efforts zero unless ``need_effort``); raises
+    :class:`Rejected` (not counted here): ``empty``, the joint-state
+    reasons for a point (``missing_joint``, ``malformed`` for repeated
+    names or an array neither empty nor as long as the names,
+    ``missing_position``, ``missing_velocity``, ``missing_effort``,
+    ``non_finite``), or ``time`` for a time_from_start whose nanosec is not
+    in [0, 1e9), that is negative or not after the point before it.
+    Accelerations are not used (cubic interpolation).
+    """
+    names = points.names
+    n = len(points.time)
+    if n == 0:
+        raise Rejected('empty', 'joint trajectory without points')
+    index = {name: i for i, name in enumerate(names)}
+    if len(index) != len(names):
+        raise Rejected('malformed', f'joint names repeat: {list(names)!r}')
+    columns = []
+    for name in joint_names:
+        if name not in index:
+            raise Rejected('missing_joint', (
+                f'joint {name!r} absent (names: {list(names)!r})'))
+        columns.append(index[name])
+    fields = [('position', 0, points.positions),
+              ('velocity', 1, points.velocities)]
+    if need_effort:
+        fields.append(('effort', 3, points.efforts))
+    arrays = []
+    for field, row, values in fields:
+        lengths = points.lengths[row]
+        for bad, reason, what in (
+                (lengths == 0, f'missing_{field}', f'no {field} values'),
+                (lengths != len(names), 'malformed',
+                 f'{field} values not one per name')):
+            if bad.any():
+                raise Rejected(reason, f'point {int(np.argmax(bad))}: {what}')
+        picked = values[:, columns]
+        finite = np.isfinite(picked).all(1)
+        if not finite.all():
+            raise Rejected('non_finite', (
+                f'point {int(np.argmin(finite))}: {field} of '
+                f'{list(joint_names)} not finite'))
+        arrays.append(picked)
+    seconds, nanoseconds = points.time[:, 0], points.time[:, 1]
+    total = seconds * NANOSECONDS + nanoseconds
+    for bad, what in (
+            ((nanoseconds < 0) | (nanoseconds >= NANOSECONDS),
+             'time_from_start nanosec outside [0, 1e9)'),
+            (total < 0, 'negative time_from_start'),
+            (np.r_[False, np.diff(total) <= 0],
+             'not later than the point before it')):
+        if bad.any():
+            raise Rejected('time', f'point {int(np.argmax(bad))}: {what}')
+    efforts = arrays[2] if need_effort else np.zeros((n, 3))
+    return total / NANOSECONDS, arrays[0], arrays[1], efforts
+
+
 def control_law(settings, desired, measured):
     """
     Return the :class:`Command` of one desired state and measurement.
@@ -207,6 +280,9 @@ class Tracking:
         self.hold = None            # JointValues held while holding
         self.hold_message = None    # why it holds
         self._bias = None           # the last force sent while following
+        self.plan = None            # the joint trajectory followed, if any
+        self.plan_finished = False  # past its last point (holding it)
+        self.trajectories = 0
         self._period = Period(now)
 
     def configure(self, settings):
@@ -239,12 +315,91 @@ class Tracking:
 
         Skipped (and counted) when no measurement is fresh: none yet
         (``no_measurement``) or older than measurement_timeout
-        (``stale_measurement``).
+        (``stale_measurement``), or while a joint trajectory runs
+        (``trajectory_active``); once it has ended, a desired state ends it.
         """
         self.received['desired'] += 1
         settings = self.settings
         values = self._read('desired', names, position, velocity, effort,
                             settings.feedforward)
+        if self.plan is not None:
+            if not self.plan_finished:
+                self.skipped['trajectory_active'] += 1
+                return None
+            self.plan = None
+        return self._command('desired', values, now)
+
+    def trajectory(self, points, clock, now):
+        """
+        Take a joint trajectory; it replaces any other, from its own start.
+
+        ``points``: :class:`orthoglide_ros.cdr.JointPoints`; ``clock``: the
+        node clock now (s), the start when the header stamp is zero (else
+        the stamp). Refused (counted, raised) by
+        :func:`read_joint_trajectory`, or as ``time`` when a non-zero
+        stamp makes it end before ``clock`` (as joint_trajectory_controller
+        refuses it). The plan goes from the newest measurement when it is
+        fresh, else from its first point at rest, with the force that
+        holds the robot (:meth:`_held_force`), to its first point ahead.
+        """
+        self.received['trajectory'] += 1
+        settings = self.settings
+        try:
+            times, positions, velocities, efforts = read_joint_trajectory(
+                settings.joint_names, points, settings.feedforward)
+        except Rejected as rejection:
+            self.rejected['trajectory', rejection.reason] += 1
+            raise
+        sec, nanosec = points.stamp
+        start = clock if (sec, nanosec) == (0, 0) else sec + nanosec * 1e-9
+        if (sec, nanosec) != (0, 0) and start + times[-1] < clock:
+            self.rejected['trajectory', 'time'] += 1
+            raise Rejected('time', (
+                f'it ends in the past: its last point at {start + times[-1]:.9f}'
+                f' s, received at {clock:.9f} s (node clock)'))
+        held = self._held_force(tuple(efforts[0]))
+        state = (self.measurement.position, self.measurement.velocity,
+                 held) if self.fresh(now) else (tuple(positions[0]), _ZERO,
+                                                held)
+        self.plan = JointPlan(start, times, positions, velocities, efforts,
+                              state, clock)
+        self.plan_finished = False
+        self.trajectories += 1
+
+    def tick(self, clock, now):
+        """
+        Sample the joint trajectory; return its Command.
+
+        ``clock``: the node clock now (s); ``now``: the monotonic time.
+        The plan is sampled at the instant the newest measurement arrived
+        (``clock`` less its age), as joint_trajectory_controller samples
+        its trajectory at the instant it read the state interfaces: the
+        desired and the measured state then describe the same instant.
+        None when no trajectory is followed or no measurement is fresh
+        (skipped, counted). The same law and path tolerance as a desired
+        state's.
+        """
+        if self.plan is None:
+            return None
+        if self.measurement_arrival is not None:
+            clock -= now - self.measurement_arrival
+        self.plan_finished = self.plan.finished(clock)
+        return self._command('trajectory', JointValues(*self.plan.sample(
+            clock)), now)
+
+    def _held_force(self, effort):
+        """
+        Return the force that holds the robot where it is (N, 3-tuple).
+
+        The last command sent while following; before any, ``effort`` (the
+        desired one) with the feedforward on, else zero.
+        """
+        return tuple(self._bias or (effort if self.settings.feedforward
+                                    else _ZERO))
+
+    def _command(self, source, values, now):
+        """Apply the law to one desired state of ``source`` (None: skipped)."""
+        settings = self.settings
         if self.measurement is None:
             self.skipped['no_measurement'] += 1
             return None
@@ -260,7 +415,7 @@ class Tracking:
                 command = control_law(settings, values, self.measurement)
                 self._bias = command.force
         except Rejected as rejection:
-            self.rejected['desired', rejection.reason] += 1
+            self.rejected[source, rejection.reason] += 1
             raise
         self.commands += 1
         self.clipped += command.clipped
@@ -285,10 +440,9 @@ class Tracking:
         if not beyond:
             return
         i = beyond[0]
-        bias = self._bias or (desired.effort if settings.feedforward
-                              else _ZERO)
         self.mode, self.trips = HOLDING, self.trips + 1
-        self.hold = JointValues(measured, _ZERO, tuple(bias))
+        self.hold = JointValues(measured, _ZERO,
+                                self._held_force(desired.effort))
         self.hold_message = (
             f'holding: path tolerance exceeded on '
             f'{settings.joint_names[i]!r} (desired - measured = '
@@ -329,7 +483,7 @@ class Tracking:
             (new['rejected'], WARN,
              f'{new["rejected"]} joint state(s) rejected in the last '
              'period'),
-            (self.received['desired'] == 0, OK,
+            (self.received['desired'] == 0 and self.plan is None, OK,
              'waiting for desired states'))
         settings = self.settings
         errors = self.latest.error if self.latest is not None \
@@ -349,6 +503,9 @@ class Tracking:
         values += [(f'rejected {i} {r}', self.rejected[i, r])
                    for i in INPUTS for r in REASONS]
         values += [
+            ('trajectory', 'none' if self.plan is None else
+             'holding its last point' if self.plan_finished else 'running'),
+            ('trajectories received', self.trajectories),
             ('mode', self.mode),
             ('path tolerance trips', self.trips),
             ('feedforward', settings.feedforward),

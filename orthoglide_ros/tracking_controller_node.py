@@ -15,12 +15,14 @@ import time
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from orthoglide_ros import cdr
 from orthoglide_ros.inputs import Rejected
 from orthoglide_ros.node_runtime import default_qos, InputNode, run
-from orthoglide_ros.tracking import HOLDING, PARAMETERS, Tracking
+from orthoglide_ros.tracking import (HOLDING, PARAMETERS, Tracking,
+                                     TRAJECTORY_BYTES)
 
 
 class TrackingControllerNode(InputNode):
@@ -28,9 +30,11 @@ class TrackingControllerNode(InputNode):
     Node ``tracking_controller``: PD plus feedforward on the three actuators.
 
     Both joint-state inputs are read on the input thread of
-    :class:`InputNode` (raw, decoded by :mod:`cdr` outside the lock); the
-    diagnostics run on a periodic thread and the parameter services on the
-    executor; all hold ``self.lock`` on the core.
+    :class:`InputNode` (raw, decoded by :mod:`cdr` outside the lock),
+    joint trajectories on a thread of their own; a periodic thread samples
+    the trajectory followed at ``rate_hz``; the diagnostics run on a
+    periodic thread and the parameter services on the executor; all hold
+    ``self.lock`` on the core.
     """
 
     def __init__(self, **kwargs):
@@ -54,6 +58,14 @@ class TrackingControllerNode(InputNode):
             JointState, 'feedforward/joint_states', self._on_desired,
             default_qos(), 'desired', decode=cdr.joint_state,
             qos_overriding_options=overrides)
+        # A joint_trajectory_controller's input: whole trajectories.
+        self.create_input(
+            JointTrajectory, 'joint_trajectory', self._on_trajectory,
+            default_qos(), 'trajectory', decode=cdr.joint_trajectory_points,
+            max_bytes=TRAJECTORY_BYTES, group='trajectories',
+            qos_overriding_options=overrides)
+        self.create_periodic(lambda: 1.0 / self._core.settings.rate_hz,
+                             self._on_tick, 'trajectory loop')
 
         self._command = Float64MultiArray()
         self._command.layout.dim = [
@@ -69,7 +81,34 @@ class TrackingControllerNode(InputNode):
 
     def _on_desired(self, fields):
         mode = self._core.mode
-        command = self._take('desired', self._core.desired, fields)
+        self._send(self._take('desired', self._core.desired, fields), mode)
+
+    def _on_trajectory(self, points):
+        try:
+            self._core.trajectory(points, self._node_seconds(), self.arrival)
+        except Rejected as rejection:
+            self._warn('trajectory', rejection)
+
+    # The trajectory loop (its own thread) ---------------------------------
+    def _on_tick(self):
+        if self._core.plan is None:     # idle: not even the lock
+            return
+        with self.lock:
+            mode = self._core.mode
+            try:
+                command = self._core.tick(self._node_seconds(),
+                                          time.monotonic())
+            except Rejected as rejection:
+                self._warn('trajectory', rejection)
+                return
+            self._send(command, mode)
+
+    def _node_seconds(self):
+        """Return the node clock's time now (s), the trajectories' clock."""
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def _send(self, command, mode):
+        """Publish a command (None: none); log a change of mode."""
         if self._core.mode != mode:
             self.log('error' if self._core.mode == HOLDING else 'info',
                      self._core.hold_message or 'path tolerance re-armed: '

@@ -5,8 +5,11 @@ Starts the ``simulator``, ``feedforward`` and ``tracking_controller`` nodes
 as processes, then for the paper's trajectory (eq. 6) and a faster one
 streams one pass per case from a ``setpoint_publisher`` process: PD alone
 and PD + feedforward, on the exact plant and on a plant whose platform is
-20 % heavier than the model. Prints the tracking error of every case and
-writes a PNG of the errors over time. The loop and its error measure are
+20 % heavier than the model. With ``--mode trajectory`` each pass is sent
+once, whole, as a Cartesian trajectory that the feedforward converts into a
+JointTrajectory and the tracking controller follows as
+joint_trajectory_controller would. Prints the tracking error of every case
+and writes a PNG of the errors over time. The loop and its error measure are
 in ``test/closed_loop_harness.py`` (shared with ``test_closed_loop.py``).
 
 Run it through ``bash scripts/closed_loop_demo.sh`` (sets up .venv, keeps
@@ -48,6 +51,11 @@ def main(argv=None):
     parser.add_argument('--trajectories', default='paper,fast',
                         help='comma-separated, of: '
                         + ', '.join(harness.TRAJECTORIES))
+    parser.add_argument('--mode', choices=('stream', 'trajectory'),
+                        default='stream', help='stream: setpoints from a '
+                        'setpoint_publisher (default); trajectory: each '
+                        'pass as one Cartesian trajectory, converted by the '
+                        'feedforward, followed as a JointTrajectory')
     parser.add_argument('--plot', default=str(ROOT / 'out' /
                                               'closed_loop.png'),
                         metavar='FILE', help='PNG of the tracking errors '
@@ -67,7 +75,8 @@ def main(argv=None):
                                 args.plant_rate) as loop:
             for name in names:
                 for feedforward, mass in CASES:
-                    run = loop.run(name, feedforward, mass_factor=mass)
+                    run = loop.run(name, feedforward, mass_factor=mass,
+                                   mode=args.mode)
                     print(f'  {run.label}: {run.samples} samples, position '
                           f'error RMS {run.rms_mm:.3f} mm, max '
                           f'{run.max_mm:.3f} mm', flush=True)
@@ -90,7 +99,9 @@ def main(argv=None):
 def print_table(runs, names, args):
     """Print the RMS and max errors and the PD / PD + FF ratios."""
     print(f'\nTracking error of the platform centre (mm), loop '
-          f'{args.loop_rate:g} Hz, plant {args.plant_rate:g} Hz:')
+          f'{args.loop_rate:g} Hz, plant {args.plant_rate:g} Hz, '
+          + ('streamed setpoints:' if args.mode == 'stream' else
+             'one joint trajectory per pass:'))
     print(f'{"trajectory":<10} {"plant":<16} {"PD rms":>8} {"PD max":>8} '
           f'{"PD+FF rms":>10} {"PD+FF max":>10} {"ratio rms":>10}')
     for name in names:

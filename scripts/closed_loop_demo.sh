@@ -4,7 +4,8 @@
 # domain (see scripts/ros_env.sh) and runs scripts/closed_loop_demo.py
 # (--help for options; about a minute).
 #
-# Usage: scripts/closed_loop_demo.sh [--loop-rate HZ] [--plant-rate HZ]
+# Usage: scripts/closed_loop_demo.sh [--mode stream|trajectory]
+#                                    [--loop-rate HZ] [--plant-rate HZ]
 #                                    [--trajectories paper,fast] [--plot FILE]
 # Env:   ORTHOGLIDE_DEMO_DOMAIN_ID=N   ROS_DOMAIN_ID to use (default: one in
 #                                      1..232 drawn from the process id)

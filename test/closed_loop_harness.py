@@ -12,6 +12,16 @@ services, resets the simulator (platform at home, at rest, held until the
 first command) and streams one pass (or several, looped) of a motion from
 a new ``setpoint_publisher`` process: the paper's trajectory, a faster
 one, or an excitation (:func:`excitation_motion`, for identification).
+With ``mode='trajectory'`` it sends the whole pass once as a Cartesian
+trajectory instead, which the feedforward converts into a JointTrajectory
+that the tracking controller follows as joint_trajectory_controller would
+(its ``joint_trajectory`` input is remapped onto
+``feedforward/joint_trajectory``). A trajectory is sent once and published
+once, reliable but volatile, like a real planner's: the harness confirms
+through the controller's ``/diagnostics`` (``trajectories received``)
+that it arrived before its start, and sends it once more otherwise (the
+same stamp: the same plan), since a pass whose trajectory was lost would
+measure the plant at rest.
 
 Tracking error. A measured sample of stamp ``s`` (the simulator's clock at
 the end of a step) is compared with the trajectory at the same time,
@@ -22,7 +32,7 @@ not only the model. The platform position comes from the measured
 ``lambda`` through :func:`mechanics.forward_kinematics`.
 
 Rates. The control loop (setpoints, feedforward, commands) runs at
-``loop_rate`` and the plant at ``plant_rate`` (default 250 Hz and 1 kHz):
+``loop_rate`` and the plant at ``plant_rate`` (default 250 Hz and 500 Hz):
 four Python nodes and the recorder at 1 kHz would need more than this
 machine's two cores (see doc/measurements.md).
 
@@ -40,12 +50,13 @@ from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
-from node_harness import (node_executable, start_node_process,
-                          stop_process)
+from node_harness import (cartesian_message, node_executable,
+                          start_node_process, stop_process)
 
 from orthoglide_ros import mechanics, trajectory
 from orthoglide_ros.robot import Robot
@@ -144,6 +155,12 @@ class Recorder(Node):
         self.plant = AsyncParameterClient(self, 'simulator')
         self.controller = AsyncParameterClient(self, 'tracking_controller')
         self.model = AsyncParameterClient(self, 'feedforward')
+        self.cartesian = self.create_publisher(
+            MultiDOFJointTrajectory, 'cartesian_trajectory', QOS)
+        # The controller's count of joint trajectories received.
+        self.controller_trajectories = None
+        self.create_subscription(DiagnosticArray, '/diagnostics',
+                                 self._on_diagnostics, 10)
 
     def clear(self):
         """Forget everything recorded."""
@@ -154,6 +171,13 @@ class Recorder(Node):
     def _on_joints(self, msg):
         stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
         self.joints.append((stamp, tuple(msg.position), tuple(msg.effort)))
+
+    def _on_diagnostics(self, msg):
+        for status in msg.status:
+            if status.name.startswith('tracking_controller'):
+                values = {v.key: v.value for v in status.values}
+                self.controller_trajectories = int(values.get(
+                    'trajectories received', 0))
 
     def _on_setpoint(self, msg):
         stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
@@ -188,7 +212,8 @@ class ClosedLoop:
         commands = {
             'simulator': ['-p', f'rate_hz:={self.plant_rate}'],
             'feedforward': [],
-            'tracking_controller': [],
+            'tracking_controller': [
+                '-r', 'joint_trajectory:=feedforward/joint_trajectory'],
         }
         try:
             for name, params in commands.items():
@@ -203,7 +228,8 @@ class ClosedLoop:
                 and self.recorder.plant.services_are_ready()
                 and self.recorder.controller.services_are_ready()
                 and self.recorder.model.services_are_ready()
-                and self.recorder.count_publishers('joint_states') >= 1),
+                and self.recorder.count_publishers('joint_states') >= 1
+                and self.recorder.controller_trajectories is not None),
                 START_TIMEOUT, 'the simulator and the controller')
         except BaseException:
             self.__exit__(None, None, None)
@@ -224,9 +250,10 @@ class ClosedLoop:
         return False
 
     def run(self, name='paper', feedforward=True, kp=None, kd=None,
-            mass_factor=1.0, plant=None, model=None, passes=1):
+            mass_factor=1.0, plant=None, model=None, passes=1,
+            mode='stream'):
         """
-        Stream a motion and return its :class:`Run`.
+        Run a motion and return its :class:`Run`.
 
         ``name``: a key of TRAJECTORIES or a :class:`Motion`;
         ``feedforward``: the controller adds the feedforward force or not;
@@ -235,7 +262,9 @@ class ClosedLoop:
         None: the model's with its platform mass times ``mass_factor``);
         ``model``: the feedforward's robot (None: the paper's);
         ``passes``: how many passes, looped (the publisher is stopped
-        after the last).
+        after the last); ``mode``: ``'stream'`` (setpoints from a
+        setpoint_publisher) or ``'trajectory'`` (the whole motion as one
+        Cartesian trajectory, see the module docstring).
         """
         motion = TRAJECTORIES[name] if isinstance(name, str) else name
         model = model or Robot()
@@ -253,6 +282,18 @@ class ClosedLoop:
             raise LoopError(f'simulator reset refused: {answer.message}')
         self.recorder.clear()
         duration = motion.duration * passes
+        if mode == 'trajectory':
+            self._send_trajectory(motion, duration)
+        else:
+            self._stream(motion, duration, passes)
+        label = (f'{name if isinstance(name, str) else "motion"}, '
+                 f'{"PD + feedforward" if feedforward else "PD"}, '
+                 f'plant m5 x{plant.m5 / model.m5:g}'
+                 + (', joint trajectory' if mode == 'trajectory' else ''))
+        return _tracking(label, self.recorder, motion, duration)
+
+    def _stream(self, motion, duration, passes):
+        """Stream the motion from a setpoint_publisher process."""
         publisher = start_node_process([
             '--ros-args', '-p', f'rate_hz:={self.loop_rate}', *motion.args,
             '-p', 'start_delay:=10.0',
@@ -279,10 +320,49 @@ class ClosedLoop:
             code, err = stop_process(publisher)
         if code != 0:
             raise LoopError(f'setpoint_publisher exited {code}:\n{err}')
-        label = (f'{name if isinstance(name, str) else "motion"}, '
-                 f'{"PD + feedforward" if feedforward else "PD"}, '
-                 f'plant m5 x{plant.m5 / model.m5:g}')
-        return _tracking(label, self.recorder, motion, duration)
+
+    def _send_trajectory(self, motion, duration, lead=2.0, hold=0.5):
+        """
+        Send the motion as one trajectory starting ``lead`` s from now.
+
+        Points at the loop rate, ``time_from_start`` from 0: first ``hold``
+        s at rest where the motion begins (the plant's state after the
+        reset: a planner's trajectory starts from the robot's state, and
+        the controller's transition from its state at reception then ends
+        on the static forces), then the motion, from the header stamp plus
+        ``hold``, the instant the measurements are compared against.
+        Sent again, once, when the controller's diagnostics (about once a
+        second) have not counted it after 1.2 s; a LoopError if they have
+        not by the start.
+        """
+        step = 1.0 / self.loop_rate
+        times = np.arange(0.0, duration + 0.5 * step, step)
+        p, v, a = (np.array(x) for x in zip(*map(motion.sample, times)))
+        rest = np.zeros((round(hold / step), 3))
+        p = np.vstack([rest + p[0], p])
+        v, a = np.vstack([rest, v]), np.vstack([rest, a])
+        times = np.r_[np.arange(len(rest)) * step, hold + times]
+        recorder = self.recorder
+        self._wait(lambda: recorder.cartesian.get_subscription_count() > 0,
+                   START_TIMEOUT, 'the feedforward')
+        sent = time.monotonic()
+        start = recorder.get_clock().now().nanoseconds + round(lead * 1e9)
+        msg = cartesian_message(times, p, v, a, divmod(start, 10**9))
+        before = recorder.controller_trajectories
+        for deadline in (sent + 1.2, sent + lead - 0.1):
+            recorder.cartesian.publish(msg)
+            while (recorder.controller_trajectories == before
+                   and time.monotonic() < deadline):
+                self._spin(0.02)
+            if recorder.controller_trajectories != before:
+                break
+        else:
+            raise LoopError('the tracking controller did not receive the '
+                            'trajectory before its start')
+        recorder.first_setpoint = start + round(hold * 1e9)
+        end = sent + lead + hold + duration + 0.3
+        self._wait(lambda: time.monotonic() > end, lead + hold + duration
+                   + PASS_MARGIN, 'the end of the trajectory')
 
     def wait_for_subscribers(self, topic, count, timeout=START_TIMEOUT):
         """Wait until ``topic`` has ``count`` subscribers (a recorder's)."""

@@ -193,7 +193,8 @@ class Probe(Node):
         Whether every input and output is matched with the node.
 
         ``node``, when the node runs in this process, also lets the node's
-        own publishers confirm that they match this probe's subscriptions.
+        own publishers on this probe's topics confirm that they match its
+        subscriptions (``feedforward/joint_trajectory`` is not one).
         """
         if any(p.get_subscription_count() == 0
                for p in self.publishers_by_input.values()):
@@ -202,9 +203,10 @@ class Probe(Node):
                for s in self.subscriptions_by_output.values()):
             return False
         if node is not None:
+            topics = {s.topic_name
+                      for s in self.subscriptions_by_output.values()}
             return all(p.get_subscription_count() > 0
-                       for p in node.publishers
-                       if p.topic_name != '/parameter_events')
+                       for p in node.publishers if p.topic_name in topics)
         return True
 
     def handshake(self, executor, timeout=30.0, outputs=OUTPUTS):
@@ -520,3 +522,37 @@ class Producer:
         else:
             for pub, msg in zip(self.pubs, self.msgs):
                 pub.publish(msg)
+
+
+def cartesian_message(times, positions, velocities, accelerations, stamp,
+                      frame='base_link', rotations=None):
+    """
+    Build a MultiDOFJointTrajectory of whole Cartesian trajectory points.
+
+    ``times`` (N,) s from the start; ``positions``, ``velocities``,
+    ``accelerations``: (N, 3) arrays (m, m/s, m/s^2), a None leaving that
+    list empty in every point; ``stamp`` (sec, nanosec); ``rotations``:
+    None (the identity) or (N, 4) quaternions (x, y, z, w).
+    """
+    msg = MultiDOFJointTrajectory(joint_names=['platform'])
+    msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+    msg.header.frame_id = frame
+    for k, t in enumerate(times):
+        transform = Transform()
+        p = transform.translation
+        p.x, p.y, p.z = (float(c) for c in positions[k])
+        q = transform.rotation
+        q.x, q.y, q.z, q.w = (0.0, 0.0, 0.0, 1.0) if rotations is None \
+            else (float(c) for c in rotations[k])
+        point = MultiDOFJointTrajectoryPoint(transforms=[transform])
+        for name, vectors in (('velocities', velocities),
+                              ('accelerations', accelerations)):
+            if vectors is not None:
+                twist = Twist()
+                v = twist.linear
+                v.x, v.y, v.z = (float(c) for c in vectors[k])
+                setattr(point, name, [twist])
+        point.time_from_start.sec, point.time_from_start.nanosec = \
+            divmod(round(float(t) * 1e9), 10**9)
+        msg.points.append(point)
+    return msg

@@ -16,11 +16,15 @@ from orthoglide_ros import cdr
 pytest.importorskip('rclpy')
 from geometry_msgs.msg import (AccelStamped, PoseStamped,  # noqa: E402
                                Transform, Twist, TwistStamped)
-from rclpy.serialization import serialize_message  # noqa: E402
+import numpy as np  # noqa: E402
+from rclpy.serialization import (deserialize_message,  # noqa: E402
+                                 serialize_message)
 from sensor_msgs.msg import JointState  # noqa: E402
 from std_msgs.msg import (Float64MultiArray,  # noqa: E402
                           MultiArrayDimension)
-from trajectory_msgs.msg import (MultiDOFJointTrajectory,  # noqa: E402
+from trajectory_msgs.msg import (JointTrajectory,  # noqa: E402
+                                 JointTrajectoryPoint,
+                                 MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
 floats = st.floats(allow_nan=True, allow_infinity=True, width=64)
@@ -170,3 +174,124 @@ def test_too_many_joint_names_is_a_limit_not_a_decoding_failure():
         cdr.trajectory_point(serialize_message(msg))
     msg.joint_names = msg.joint_names[:cdr.MAX_JOINT_NAMES]
     assert cdr.trajectory_point(serialize_message(msg))[2] is None
+
+
+def _trajectory_point(draw_point):
+    transforms, velocities, accelerations, time = draw_point
+    point = MultiDOFJointTrajectoryPoint()
+    made = []
+    for pose in transforms:
+        t = Transform()
+        t.translation.x, t.translation.y, t.translation.z = pose[:3]
+        r = t.rotation
+        r.x, r.y, r.z, r.w = pose[3:]
+        made.append(t)
+    point.transforms = made
+    for name, twists in (('velocities', velocities),
+                         ('accelerations', accelerations)):
+        items = []
+        for linear in twists:
+            twist = Twist()
+            twist.linear.x, twist.linear.y, twist.linear.z = linear
+            twist.angular.z = 7.0
+            items.append(twist)
+        setattr(point, name, items)
+    point.time_from_start.sec, point.time_from_start.nanosec = time
+    return point
+
+
+poses = st.tuples(*[floats] * 7)
+trajectory_points = st.tuples(
+    st.lists(poses, max_size=2), st.lists(vectors, max_size=2),
+    st.lists(vectors, max_size=2),
+    st.tuples(st.integers(-2**31, 2**31 - 1), st.integers(0, 2**32 - 1)))
+regular_points = st.tuples(
+    st.lists(poses, min_size=1, max_size=1),
+    st.lists(vectors, min_size=1, max_size=1),
+    st.lists(vectors, min_size=1, max_size=1),
+    st.tuples(st.integers(0, 9), st.integers(0, 10**9 - 1)))
+
+
+@settings(max_examples=150, deadline=None)
+@given(stamps, frames, names, st.one_of(
+    st.lists(trajectory_points, max_size=6),
+    st.lists(regular_points, min_size=2, max_size=9)))
+def test_cartesian_trajectory_reads_every_point(stamp, frame, joint_names,
+                                                drawn):
+    """Irregular counts (walked) and regular ones (the numpy pass)."""
+    msg = header(MultiDOFJointTrajectory(), stamp, frame)
+    msg.joint_names = joint_names
+    msg.points = [_trajectory_point(p) for p in drawn]
+    got = cdr.cartesian_trajectory(serialize_message(msg))
+    assert (got.stamp, got.frame) == (stamp, frame)
+    assert len(got.time) == len(drawn)
+    for k, (transforms, velocities, accelerations, time) in enumerate(drawn):
+        assert got.transform[k] == bool(transforms)
+        assert got.velocity[k] == bool(velocities)
+        assert got.acceleration[k] == bool(accelerations)
+        if transforms:
+            assert same(tuple(got.position[k]), transforms[0][:3])
+            assert same(tuple(got.orientation[k]), transforms[0][3:])
+        if velocities:
+            assert same(tuple(got.linear_velocity[k]), velocities[0])
+        if accelerations:
+            assert same(tuple(got.linear_acceleration[k]),
+                        accelerations[0])
+        assert tuple(got.time[k]) == time
+
+
+@settings(max_examples=100, deadline=None)
+@given(stamps, frames, names.filter(bool), st.integers(0, 7), st.data())
+def test_joint_trajectory_writes_what_rclpy_reads(stamp, frame, joint_names,
+                                                  count, data):
+    width = len(joint_names)
+    arrays = [np.array(data.draw(st.lists(
+        st.lists(floats, min_size=width, max_size=width),
+        min_size=count, max_size=count))).reshape(count, width)
+        for _ in range(4)]
+    time = np.array(data.draw(st.lists(st.tuples(
+        st.integers(-2**31, 2**31 - 1), st.integers(0, 2**32 - 1)),
+        min_size=count, max_size=count))).reshape(count, 2)
+    msg = deserialize_message(cdr.joint_trajectory(
+        stamp, frame, joint_names, time, *arrays), JointTrajectory)
+    assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == stamp
+    assert msg.header.frame_id == frame
+    assert list(msg.joint_names) == joint_names
+    assert len(msg.points) == count
+    for k, point in enumerate(msg.points):
+        for got, sent in zip((point.positions, point.velocities,
+                              point.accelerations, point.effort), arrays):
+            assert same(tuple(got), tuple(sent[k]))
+        assert (point.time_from_start.sec,
+                point.time_from_start.nanosec) == tuple(time[k])
+
+
+@settings(max_examples=100, deadline=None)
+@given(stamps, frames, names, st.lists(st.tuples(
+    *[st.lists(floats, max_size=4)] * 4,
+    st.tuples(st.integers(-2**31, 2**31 - 1), st.integers(0, 2**32 - 1))),
+    max_size=6))
+def test_joint_trajectory_points_reads_what_rclpy_writes(
+        stamp, frame, joint_names, drawn):
+    msg = header(JointTrajectory(), stamp, frame)
+    msg.joint_names = joint_names
+    msg.points = []
+    for positions, velocities, accelerations, effort, time in drawn:
+        point = JointTrajectoryPoint(
+            positions=positions, velocities=velocities,
+            accelerations=accelerations, effort=effort)
+        point.time_from_start.sec, point.time_from_start.nanosec = time
+        msg.points.append(point)
+    got = cdr.joint_trajectory_points(serialize_message(msg))
+    assert (got.stamp, got.frame) == (stamp, frame)
+    assert got.names == tuple(joint_names)
+    width = len(joint_names)
+    for k, (*arrays, time) in enumerate(drawn):
+        assert tuple(got.time[k]) == time
+        for field, (sent, read) in enumerate(zip(arrays, (
+                got.positions, got.velocities, got.accelerations,
+                got.efforts))):
+            assert got.lengths[field, k] == len(sent)
+            kept = min(width, len(sent))
+            assert same(tuple(read[k, :kept]), tuple(sent[:kept]))
+            assert np.isnan(read[k, kept:]).all()

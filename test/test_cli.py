@@ -514,3 +514,74 @@ def test_console_script_runs_batch_and_reports_errors(tmp_path):
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 2
     assert done.stderr.startswith('orthoglide: error: ')
+
+
+# batch --format joint_trajectory ---------------------------------------------
+def joint_trajectory_of(document):
+    """Fill a trajectory_msgs/JointTrajectory from its YAML mapping."""
+    from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+    msg = JointTrajectory(joint_names=document['joint_names'])
+    stamp = document['header']['stamp']
+    msg.header.stamp.sec, msg.header.stamp.nanosec = (stamp['sec'],
+                                                      stamp['nanosec'])
+    msg.header.frame_id = document['header']['frame_id']
+    for point in document['points']:
+        made = JointTrajectoryPoint(
+            positions=point['positions'], velocities=point['velocities'],
+            accelerations=point['accelerations'], effort=point['effort'])
+        made.time_from_start.sec = point['time_from_start']['sec']
+        made.time_from_start.nanosec = point['time_from_start']['nanosec']
+        msg.points.append(made)
+    return msg
+
+
+def test_batch_writes_a_joint_trajectory_ros_reads(tmp_path, capsys):
+    """Every point equals solve_batch; the YAML fills a JointTrajectory."""
+    pytest.importorskip('rclpy')
+    import yaml
+    times = trajectory.paper_times(21)
+    p, v, a = trajectory.paper_batch(times)
+    source = tmp_path / 'in.csv'
+    rows = ['t,x,y,z,vx,vy,vz,ax,ay,az'] + [
+        ','.join(repr(float(x)) for x in (t, *p[k], *v[k], *a[k]))
+        for k, t in enumerate(times)]
+    source.write_text('\n'.join(rows) + '\n')
+    params = tmp_path / 'params.yaml'
+    params.write_text('feedforward:\n  ros__parameters:\n'
+                      '    joint_names: [ja, jb, jc]\n')
+    out = tmp_path / 'out.yaml'
+    code, _, err = run(capsys, 'batch', '--input', source, '--format',
+                       'joint_trajectory', '--params', params,
+                       '--output', out)
+    assert code == 0, err
+    msg = joint_trajectory_of(yaml.safe_load(out.read_text()))
+    s = mechanics.solve_batch(Robot(), p, v, a)
+    assert list(msg.joint_names) == ['ja', 'jb', 'jc']
+    assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (0, 0)
+    assert len(msg.points) == 21
+    for k, point in enumerate(msg.points):
+        assert list(point.positions) == list(s.lambda_[k])
+        assert list(point.velocities) == list(s.lambdadot[k])
+        assert list(point.accelerations) == list(s.lambdaddot[k])
+        assert list(point.effort) == list(s.force[k])
+        ns = point.time_from_start.sec * 10**9 + \
+            point.time_from_start.nanosec
+        assert ns == round(times[k] * 1e9)
+
+
+@pytest.mark.parametrize('rows, words', [
+    (['x,y,z', '0,0,0'], ["'t'"]),
+    (['t,x,y,z', '0.5,0,0,0', '0.5,0,0,0'], ['data row 2', 'increase']),
+    (['t,x,y,z', '-0.1,0,0,0'], ['data row 1', '[0, 2**31)']),
+    (['t,x,y,z', '0,0,0,0', '3e9,0,0,0'], ['data row 2', '[0, 2**31)']),
+    # Apart by less than half a nanosecond: the same time_from_start.
+    (['t,x,y,z', '0,0,0,0', '1e-10,0,0,0'], ['data row 2', 'nanosecond']),
+    (['t,x,y,z'], ['no data row']),
+])
+def test_batch_joint_trajectory_needs_increasing_times(tmp_path, capsys,
+                                                       rows, words):
+    source = tmp_path / 'in.csv'
+    source.write_text('\n'.join(rows) + '\n')
+    code, out, err = run(capsys, 'batch', '--input', source, '--format',
+                         'joint_trajectory')
+    assert_bad_input(code, out, err, *words)

@@ -152,3 +152,23 @@ def test_feedforward_better_mismatched_plant(loop):
     report(pd)
     report(ff)
     assert ff.rms_mm < pd.rms_mm
+
+
+def test_joint_trajectory_ten_times_better_like_the_stream(loop):
+    """
+    The whole pass as one trajectory: the same 10x as the streamed mode.
+
+    The Cartesian trajectory goes to the feedforward once; its
+    JointTrajectory (effort = the model's forces) is followed by the
+    tracking controller as joint_trajectory_controller would.
+    """
+    def loop_pass(feedforward):
+        run = loop.run('paper', feedforward=feedforward, mode='trajectory')
+        report(run)
+        return run
+
+    pd = second_pass_on_a_miss(lambda: loop_pass(False),
+                               lambda r: r.rms_mm >= 10.0)
+    ff = second_pass_on_a_miss(lambda: loop_pass(True),
+                               lambda r: pd.rms_mm >= 10.0 * r.rms_mm)
+    assert pd.rms_mm >= 10.0 * ff.rms_mm

@@ -461,7 +461,8 @@ def test_default_settings():
     s = settings_from_parameters(default_parameters())
     assert s == Settings(Robot(), ('slider_a', 'slider_b', 'slider_c'),
                          'base_link', 0.0, 0.1, 0.05,
-                         mechanics.DEFAULT_SINGULARITY_MARGIN, False)
+                         mechanics.DEFAULT_SINGULARITY_MARGIN, False,
+                         (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
     assert settings_from_parameters({}) == s
     assert s.robot.m4 == s.robot.m2 and s.robot.m6 == s.robot.m3
 

@@ -73,7 +73,7 @@ def test_specs_defaults_and_names():
     specs = {s.name: s for s in CONTROLLER_SPECS}
     assert list(specs) == ['kp', 'kd', 'feedforward', 'force_limit',
                            'joint_names', 'measurement_timeout',
-                           'path_tolerance']
+                           'rate_hz', 'path_tolerance']
     assert specs['kp'].type == specs['kd'].type == 'double_array'
     assert specs['kp'].default == [20000.0] * 3
     assert specs['kd'].default == [1200.0] * 3
@@ -82,6 +82,7 @@ def test_specs_defaults_and_names():
     assert specs['joint_names'].default == list(NAMES)
     assert specs['measurement_timeout'].default == 0.05
     assert specs['path_tolerance'].default == [0.05] * 3
+    assert specs['rate_hz'].default == 250.0
     for spec in CONTROLLER_SPECS:
         assert spec.description
     s = settings()
@@ -308,9 +309,10 @@ def test_no_measurement_skips():
     """Before any measurement a desired state is skipped and counted."""
     core = Tracking(settings())
     assert send_desired(core, (0.0, 0.0, 0.0), 1.0) is None
-    assert core.skipped == {'no_measurement': 1, 'stale_measurement': 0}
+    assert core.skipped == {'no_measurement': 1, 'stale_measurement': 0,
+                            'trajectory_active': 0}
     assert core.commands == 0 and core.latest is None
-    assert core.received == {'desired': 1, 'measured': 0}
+    assert core.received == {'desired': 1, 'measured': 0, 'trajectory': 0}
 
 
 def test_stale_measurement_skips_until_a_fresh_one():
@@ -320,7 +322,8 @@ def test_stale_measurement_skips_until_a_fresh_one():
     assert send_desired(core, (0.001, 0.0, 0.0), 10.0625) is not None
     assert core.fresh(10.0625) and not core.fresh(10.0626)
     assert send_desired(core, (0.001, 0.0, 0.0), 10.0626) is None
-    assert core.skipped == {'no_measurement': 0, 'stale_measurement': 1}
+    assert core.skipped == {'no_measurement': 0, 'stale_measurement': 1,
+                            'trajectory_active': 0}
     send_measured(core, (0.0, 0.0, 0.0), 11.0)
     command = send_desired(core, (0.001, 0.0, 0.0), 11.01)
     assert command.force[0] == pytest.approx(20.0)
@@ -351,7 +354,7 @@ def test_rejected_inputs_counted_and_change_nothing():
     assert core.rejected['measured', 'missing_joint'] == 1
     assert core.rejected['desired', 'missing_velocity'] == 1
     assert sum(core.rejected.values()) == 3
-    assert core.received == {'desired': 1, 'measured': 3}
+    assert core.received == {'desired': 1, 'measured': 3, 'trajectory': 0}
     command = send_desired(core, (1.0, 1.0, 1.0), 0.03)
     assert command.force == (1.0, 1.0, 1.0)
     assert set(i for i, _ in core.rejected) == set(INPUTS)

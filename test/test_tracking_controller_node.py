@@ -22,6 +22,7 @@ from rclpy.executors import SingleThreadedExecutor
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from orthoglide_ros.tracking import INPUTS, PARAMETERS, REASONS
 from orthoglide_ros.tracking_controller_node import TrackingControllerNode
@@ -59,6 +60,8 @@ class TrackingProbe(Node):
             JointState, 'feedforward/joint_states', PROBE_QOS)
         self.pub_measured = self.create_publisher(
             JointState, 'joint_states', PROBE_QOS)
+        self.pub_trajectory = self.create_publisher(
+            JointTrajectory, 'joint_trajectory', PROBE_QOS)
         self.commands = []
         self.diagnostics = []
         self.sub_commands = self.create_subscription(
@@ -71,6 +74,7 @@ class TrackingProbe(Node):
         """Whether both inputs and both outputs are matched."""
         return (self.pub_desired.get_subscription_count() > 0
                 and self.pub_measured.get_subscription_count() > 0
+                and self.pub_trajectory.get_subscription_count() > 0
                 and self.sub_commands.get_publisher_count() > 0
                 and self.sub_diagnostics.get_publisher_count() > 0)
 
@@ -166,6 +170,62 @@ def wait_diagnostics(g, predicate, timeout=WAIT):
                                     predicate, timeout)
 
 
+# Joint trajectories ----------------------------------------------------------
+def joint_trajectory(times, positions, efforts, names=NAMES):
+    """Build a JointTrajectory with a zero stamp (start on reception)."""
+    msg = JointTrajectory(joint_names=list(names))
+    for t, p, e in zip(times, positions, efforts):
+        point = JointTrajectoryPoint(positions=[float(x) for x in p],
+                                     velocities=[0.0] * len(names),
+                                     effort=[float(x) for x in e])
+        point.time_from_start.sec, point.time_from_start.nanosec = divmod(
+            round(t * 1e9), 10**9)
+        msg.points.append(point)
+    return msg
+
+
+def test_joint_trajectory_followed_then_held_and_a_bad_one_refused(graph):
+    """
+    The loop samples the trajectory and applies the law; its end is held.
+
+    At rest at 0 with Kp = 100 N/m, Kd = 0: once the trajectory's last
+    point (0.01 m, 7 N) is reached, every command is 7 + 100 * 0.01 N. A
+    trajectory without one of the joints is refused and counted; the one
+    followed goes on.
+    """
+    g = graph({**PATIENT, 'kp': [100.0] * 3, 'kd': [0.0] * 3,
+               'rate_hz': 100.0})
+    measure(g, ZERO)
+    g.probe.pub_trajectory.publish(joint_trajectory(
+        [0.1, 0.2], [ZERO, (0.01,) * 3], [(5.0,) * 3, (7.0,) * 3]))
+    end = law([100.0] * 3, [0.0] * 3, (0.01,) * 3, ZERO, (7.0,) * 3, ZERO,
+              ZERO)
+
+    def held():
+        return (len(g.probe.commands) > 0
+                and list(g.probe.commands[-1].data) == end[0])
+    # A plant at rest: the measurements keep coming (the plan is sampled
+    # at the newest one's arrival).
+    deadline = time.monotonic() + WAIT
+    while not held() and time.monotonic() < deadline:
+        measure(g, ZERO)
+        spin_for(g.executor, 0.01)
+    assert held(), g.probe.commands[-1:]
+    assert_command(g.probe.commands[-1], end)
+    g.probe.pub_trajectory.publish(joint_trajectory(
+        [0.1], [(0.5,) * 2], [(1.0,) * 2], names=NAMES[:2]))
+    values = wait_diagnostics(g, lambda v: v.get(
+        'rejected trajectory missing_joint') == '1')
+    values = diagnostic_values(values)
+    assert values['trajectories received'] == '1'
+    assert values['trajectory'] == 'holding its last point'
+    count = len(g.probe.commands)
+    measure(g, ZERO)
+    spin_for(g.executor, 0.1)
+    assert len(g.probe.commands) > count
+    assert_command(g.probe.commands[-1], end)
+
+
 # The law ---------------------------------------------------------------------
 def test_law_exact_on_published_commands(graph):
     """Each command is f_ff + Kp e + Kd edot of its inputs (defaults)."""
@@ -252,7 +312,8 @@ def test_missing_then_stale_measurement_commands_nothing(graph):
     assert list(command(g, (0.001, 0.0, 0.0)).data)[0] == \
         pytest.approx(20.0)
     assert g.node._core.skipped == {'no_measurement': 1,
-                                    'stale_measurement': 1}
+                                    'stale_measurement': 1,
+                                    'trajectory_active': 0}
 
 
 def test_bad_inputs_rejected_counted_and_node_goes_on(graph):

@@ -1,0 +1,103 @@
+"""
+A joint trajectory sampled in time, as joint_trajectory_controller does.
+
+:class:`JointPlan` holds one received ``trajectory_msgs/JointTrajectory``
+(three joints) from the instant it starts, and :meth:`JointPlan.sample`
+gives the desired position (m), velocity (m/s) and effort (N) of each
+joint at any time of the node's clock. The interpolation is
+joint_trajectory_controller's for positions and velocities without
+accelerations, and its linear effort:
+
+- from the instant the plan was accepted to the first point (its header
+  stamp plus its ``time_from_start``, however far in the future): one
+  cubic from the robot's state at acceptance to the first point, the
+  effort linear from the force that held the robot then (the caller's
+  choice: the tracking controller's last command) to the first point's,
+  as joint_trajectory_controller interpolates from its state at the
+  reception of a trajectory; points already past at the acceptance are
+  skipped (the transition goes to the first point still ahead), and a
+  plan whose every point is past is refused by the caller;
+- between two points: the cubic Hermite polynomial of each joint, from
+  the positions and velocities at both ends; the effort linear;
+- after the last point: the last point's position, velocity zero, its
+  effort, held until something else comes.
+
+No ROS: the tracking controller (``tracking.py``) samples it at its loop
+rate; tests drive it with plain numbers.
+
+>>> plan = JointPlan(10.0, [1.0, 2.0], [[0.0] * 3, [1.0] * 3],
+...                  [[0.0] * 3, [0.0] * 3], [[5.0] * 3, [7.0] * 3],
+...                  ((0.0,) * 3, (0.0,) * 3, (5.0,) * 3), 10.0)
+>>> [round(x, 6) for x in plan.sample(11.5)[0]], plan.sample(11.5)[2]
+([0.5, 0.5, 0.5], (6.0, 6.0, 6.0))
+"""
+
+import numpy as np
+
+_ZERO = (0.0, 0.0, 0.0)
+
+
+class JointPlan:
+    """
+    One joint trajectory from the instant it starts.
+
+    ``start``: the node-clock time (s) of ``time_from_start`` 0; ``times``
+    (N,) s from the start, strictly increasing and >= 0; ``positions``,
+    ``velocities``, ``efforts``: (N, 3) arrays (m, m/s, N) in the
+    controller's joint order; ``state``: ``(position, velocity, effort)``
+    3-tuples of the robot when the plan was accepted (effort: the force
+    that held it), at ``accepted`` (s, the same clock as ``start``).
+    """
+
+    def __init__(self, start, times, positions, velocities, efforts, state,
+                 accepted):
+        """Keep the plan; see the class docstring."""
+        self.start = float(start)
+        self.times = np.asarray(times, dtype=float)
+        self.positions = np.asarray(positions, dtype=float)
+        self.velocities = np.asarray(velocities, dtype=float)
+        self.efforts = np.asarray(efforts, dtype=float)
+        self.state = tuple(np.asarray(x, dtype=float) for x in state)
+        self.accepted = float(accepted) - self.start     # from the start
+        # The first point still ahead at the acceptance.
+        self.first = int(np.searchsorted(self.times, self.accepted,
+                                         side='right'))
+        self.end = self.start + self.times[-1]
+
+    def sample(self, now):
+        """
+        Return ``(position, velocity, effort)`` 3-tuples at ``now`` (s).
+
+        On the node's clock, the one the plan's ``start`` is on.
+        """
+        t = max(now - self.start, self.accepted)
+        times = self.times
+        if t >= times[-1]:
+            return (_floats(self.positions[-1]), _ZERO,
+                    _floats(self.efforts[-1]))
+        i = max(int(np.searchsorted(times, t, side='right')), self.first)
+        if i == self.first:     # from the accepted state to that point
+            (p0, v0, e0), t0 = self.state, self.accepted
+        else:
+            p0, v0, t0 = (self.positions[i - 1], self.velocities[i - 1],
+                          times[i - 1])
+            e0 = self.efforts[i - 1]
+        p1, v1, e1, t1 = (self.positions[i], self.velocities[i],
+                          self.efforts[i], times[i])
+        h = t1 - t0
+        s = (t - t0) / h
+        s2, s3 = s * s, s * s * s
+        position = ((2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * h * v0
+                    + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * h * v1)
+        velocity = ((6 * s2 - 6 * s) * p0 + (3 * s2 - 4 * s + 1) * h * v0
+                    + (-6 * s2 + 6 * s) * p1 + (3 * s2 - 2 * s) * h * v1) / h
+        effort = e0 + s * (e1 - e0)
+        return _floats(position), _floats(velocity), _floats(effort)
+
+    def finished(self, now):
+        """Whether ``now`` (s, node clock) is past the last point."""
+        return bool(now >= self.end)
+
+
+def _floats(array):
+    return tuple(array.tolist())

@@ -1,0 +1,158 @@
+"""
+Whole Cartesian trajectories into joint trajectories, without DDS.
+
+``feedforward.convert_trajectory`` turns every point of a
+MultiDOFJointTrajectory into lambda, lambdadot, lambdaddot and f with
+``mechanics.solve_batch``, all or nothing: each refusal names its reason
+and the index of the first point at fault, and changes nothing.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from orthoglide_ros import mechanics, trajectory
+from orthoglide_ros.cdr import Waypoints
+from orthoglide_ros.feedforward import (convert_trajectory, Feedforward,
+                                        PARAMETERS, TRAJECTORY_REASONS)
+from orthoglide_ros.inputs import Rejected
+
+
+def settings(**changes):
+    values = PARAMETERS.defaults()
+    values.update(changes)
+    return PARAMETERS.parse(values)
+
+
+def paper(n=201, stamp=(7, 5), frame='base_link'):
+    """Return the paper's trajectory in n points over 2 s, as Waypoints."""
+    times = trajectory.paper_times(n)
+    p, v, a = trajectory.paper_batch(times)
+    ns = np.round(times * 1e9).astype(np.int64)
+    return Waypoints(stamp, frame, np.ones(n, bool), np.ones(n, bool),
+                     np.ones(n, bool), p, np.tile([0.0, 0.0, 0.0, 1.0],
+                                                  (n, 1)),
+                     v, a, np.column_stack(divmod(ns, 10**9)))
+
+
+def changed(w, **fields):
+    """Return a copy of ``w`` with fields replaced (arrays copied)."""
+    return w._replace(**{k: v for k, v in fields.items()})
+
+
+def refused(reason, w, index=None, **changes):
+    with pytest.raises(Rejected) as info:
+        convert_trajectory(settings(**changes), w)
+    assert info.value.reason == reason
+    if index is not None:
+        assert f'point {index}' in str(info.value), str(info.value)
+    return info.value
+
+
+def test_every_point_equals_solve_batch():
+    w = paper()
+    out = convert_trajectory(settings(), w)
+    expected = mechanics.solve_batch(mechanics_robot(), w.position,
+                                     w.linear_velocity,
+                                     w.linear_acceleration)
+    for got, want in zip(out.solution, expected):
+        assert np.array_equal(got, want)
+    assert out.stamp == (7, 5) and out.frame == 'base_link'
+    assert np.array_equal(out.time, w.time)
+
+
+def mechanics_robot():
+    return settings().robot
+
+
+def test_one_point_and_zero_stamp_pass_unchanged():
+    w = paper(2)
+    one = w._replace(**{name: getattr(w, name)[:1] for name in (
+        'transform', 'velocity', 'acceleration', 'position', 'orientation',
+        'linear_velocity', 'linear_acceleration', 'time')}, stamp=(0, 0))
+    out = convert_trajectory(settings(), one)
+    assert out.stamp == (0, 0) and len(out.time) == 1
+
+
+def test_refusals_name_the_reason_and_the_first_point():
+    w = paper(10)
+    empty = w._replace(**{name: getattr(w, name)[:0] for name in (
+        'transform', 'velocity', 'acceleration', 'position', 'orientation',
+        'linear_velocity', 'linear_acceleration', 'time')})
+    refused('empty', empty)
+    refused('frame', w._replace(frame='world'))
+    refused('stamp', w._replace(stamp=(3, 10**9)))
+    refused('stamp', w._replace(stamp=(-1, 0)))
+    no_transform = w.transform.copy()
+    no_transform[4] = False
+    refused('malformed', w._replace(transform=no_transform), 4)
+    no_velocity = w.velocity.copy()
+    no_velocity[6] = False
+    bad = w._replace(velocity=no_velocity,
+                     linear_velocity=np.where(no_velocity[:, None],
+                                              w.linear_velocity, np.nan))
+    refused('malformed', bad, 6)
+    times = w.time.copy()
+    times[3] = times[2]
+    refused('time', w._replace(time=times), 3)
+    times = w.time.copy()
+    times[5, 1] = 10**9
+    refused('time', w._replace(time=times), 5)
+    rotated = w.orientation.copy()
+    rotated[7] = (math.sin(0.01), 0.0, 0.0, math.cos(0.01))
+    refused('orientation', w._replace(orientation=rotated), 7)
+    position = w.position.copy()
+    position[8] = (0.9, 0.0, 0.0)
+    refused('unreachable', w._replace(position=position), 8)
+    position[8] = (0.84, 0.0, 0.0)
+    refused('singular', w._replace(position=position), 8)
+    position[8] = (math.nan, 0.0, 0.0)
+    refused('non_finite', w._replace(position=position), 8)
+
+
+def test_pose_only_takes_missing_rates_as_zero():
+    w = paper(5)
+    none = np.zeros(5, bool)
+    bare = w._replace(velocity=none, acceleration=none,
+                      linear_velocity=np.full((5, 3), np.nan),
+                      linear_acceleration=np.full((5, 3), np.nan))
+    out = convert_trajectory(settings(pose_only=True), bare)
+    still = mechanics.solve_batch(mechanics_robot(), w.position)
+    assert np.array_equal(out.solution.force, still.force)
+    refused('malformed', bare, 0)
+
+
+def test_limits_refuse_with_point_actuator_and_value():
+    w = paper()
+    out = convert_trajectory(settings(), w)
+    speed = np.abs(out.solution.lambdadot).max(0)
+    force = np.abs(out.solution.force).max(0)
+    assert convert_trajectory(settings(velocity_limit=(speed * 1.01).tolist()),
+                              w)
+    error = refused('velocity_limit', w,
+                    velocity_limit=[0.0, 0.0, float(speed[2] * 0.99)])
+    row = int(np.argmax(np.abs(out.solution.lambdadot[:, 2])
+                        > speed[2] * 0.99))
+    assert f'point {row}: actuator C' in str(error)
+    error = refused('force_limit', w, force_limit=[0.0, 0.0, 200.0])
+    assert 'actuator C' in str(error)
+    assert convert_trajectory(settings(force_limit=(force + 1.0).tolist()), w)
+
+
+def test_core_counts_trajectories_apart_from_setpoints():
+    core = Feedforward(settings())
+    conversion = convert_trajectory(settings(), paper(50))
+    core.count_trajectory(conversion, 0.004)
+    with pytest.raises(Rejected):
+        core.reject_trajectory(Rejected('time', 'point 3 ...'))
+    assert (core.trajectories, core.trajectory_points) == (1, 50)
+    assert core.trajectory_rejected['time'] == 1
+    assert not any(core.rejected.values())
+    values = dict(core.status(1.0).values)
+    assert values['rejected trajectory time'] == 1
+    assert values['trajectory receive to publish max (ms)'] == 4.0
+    assert dict(core.status(2.0).values)[
+        'trajectory receive to publish max (ms)'] == 0.0
+    assert set(TRAJECTORY_REASONS) <= {
+        k.split()[-1] for k in values if k.startswith('rejected trajectory')}
