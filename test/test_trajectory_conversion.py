@@ -62,6 +62,28 @@ def test_every_point_equals_solve_batch():
     assert np.array_equal(out.time, w.time)
 
 
+def test_friction_is_in_the_effort():
+    """
+    With friction parameters the effort is the rigid force plus friction.
+
+    Checked against the frictionless conversion plus c lambdadot + F
+    tanh(lambdadot / v_s) computed here (issue 10's law).
+    """
+    w = paper()
+    c, f, vs = [30.0, 40.0, 50.0], [5.0, 3.0, 4.0], 0.002
+    rough = convert_trajectory(settings(**{
+        'robot.friction_viscous': c, 'robot.friction_coulomb': f,
+        'robot.friction_velocity': vs}), w).solution
+    rigid = convert_trajectory(settings(), w).solution
+    rate = rigid.lambdadot
+    expected = rigid.force + np.array(c) * rate + np.array(f) * np.tanh(
+        rate / vs)
+    assert np.allclose(rough.force, expected, rtol=1e-12, atol=1e-9)
+    assert np.abs(rough.force - rigid.force).max() > 5.0
+    for name in ('lambda_', 'lambdadot', 'lambdaddot'):
+        assert np.array_equal(getattr(rough, name), getattr(rigid, name))
+
+
 def mechanics_robot():
     return settings().robot
 
