@@ -111,7 +111,7 @@ def exchange(g, stamp, lam, lamd=None):
 
 
 def check_closes(model, msg, lam, with_velocity):
-    """The published state closes every cut of the URDF at G."""
+    """Check that the published state closes every cut of the URDF at G."""
     centre = mechanics.forward_kinematics(ROBOT, lam)
     phi32 = np.arcsin([leg_geometry(ROBOT, leg, centre).sin32
                        for leg in LEGS])
