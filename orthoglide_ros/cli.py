@@ -307,8 +307,7 @@ def run_animate(robot, args):
                            f'{_reason(error)}') from None
         raise CliError(f'{where}: data row {error.row + 1} (line '
                        f'{lines[error.row]}): {_reason(error)}') from None
-    rows = np.unique(np.linspace(0, len(p) - 1, min(args.frames, len(p)))
-                     .round().astype(int))
+    rows = drawing.frame_rows(len(p), args.frames)
     data = drawing.animate(
         robot, None if times is None else times[rows], p[rows],
         sol.force[rows], args.size, args.fps,

@@ -11,7 +11,8 @@ The GIF is written by matplotlib's ``PillowWriter`` (Pillow).
 
 - :func:`draw`: one platform position -> PNG bytes (with the statics
   forces, the robot at rest there);
-- :func:`animate`: a trajectory (times, positions, forces) -> GIF bytes.
+- :func:`animate`: a trajectory (times, positions, forces) -> GIF bytes;
+  :func:`frame_rows`: which samples of a long trajectory to animate.
 """
 
 import io
@@ -86,6 +87,19 @@ def animate(robot, times, positions, forces, size=(640, 640), fps=20.0,
             return stream.read()
     finally:
         os.unlink(path)
+
+
+def frame_rows(samples, frames):
+    """
+    Return the indices of at most ``frames`` samples spread evenly.
+
+    Over ``samples`` samples, the first and the last included.
+
+    >>> frame_rows(11, 3).tolist()
+    [0, 5, 10]
+    """
+    count = max(1, min(frames, samples))
+    return np.unique(np.linspace(0, samples - 1, count).round().astype(int))
 
 
 class _Scene:

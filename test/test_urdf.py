@@ -272,3 +272,22 @@ def test_rpy_round_trip_including_gimbal_lock():
                 rotations.append(m)
     for r in rotations:
         assert np.allclose(matrix_of_rpy(*rpy(r)), r, rtol=0, atol=1e-12)
+
+
+# RViz --------------------------------------------------------------------
+def test_rviz_config_shows_the_model_and_existing_frames(paper_model):
+    """config/orthoglide.rviz: RobotModel on /robot_description, TF."""
+    import yaml
+    path = COMMITTED_URDF.parents[1] / 'config' / 'orthoglide.rviz'
+    config = yaml.safe_load(path.read_text())['Visualization Manager']
+    assert config['Global Options']['Fixed Frame'] == 'base_link'
+    displays = {d['Class']: d for d in config['Displays']}
+    model = displays['rviz_default_plugins/RobotModel']
+    assert model['Description Source'] == 'Topic'
+    assert model['Description Topic']['Value'] == '/robot_description'
+    assert model['Description Topic']['Durability Policy'] == 'Transient Local'
+    frames = displays['rviz_default_plugins/TF']['Frames']
+    links = {link.name for link in paper_model.robot.links}
+    shown = {name for name in frames if name != 'All Enabled'}
+    assert {'base_link', 'platform', 'a_leg_end', 'b_platform_mount'} <= shown
+    assert shown <= links
