@@ -41,6 +41,7 @@ none). Joint limits are the ranges over the workspace within the
 singularity margin (:func:`joint_limits`). Shapes are boxes and cylinders.
 """
 
+import functools
 import math
 import xml.etree.ElementTree as ET
 
@@ -129,8 +130,15 @@ def joint_limits(robot, margin=DEFAULT_SINGULARITY_MARGIN):
     their ranges are the same. Found by a grid over the cube ``|x|, |y|,
     |z| < l3`` (which holds every reachable point), then random samples
     around the best points so far, in a spread that shrinks to about 1e-9
-    m (seeded: the same limits every time).
+    m (seeded: the same limits every time; about 1 s, remembered for the
+    last robots asked).
     """
+    return dict(_joint_limits(robot, float(margin)))
+
+
+@functools.lru_cache(maxsize=8)
+def _joint_limits(robot, margin):
+    """Return :func:`joint_limits` as ``(variable, (low, high))`` pairs."""
     limits = {}
     for variable in ('lambda_', 'phi21', 'phi32'):
         low = -_extreme(robot, margin, variable, -1.0)
@@ -138,7 +146,7 @@ def joint_limits(robot, margin=DEFAULT_SINGULARITY_MARGIN):
         limits[variable] = (
             round(math.floor(low / LIMIT_STEP) * LIMIT_STEP, 10),
             round(math.ceil(high / LIMIT_STEP) * LIMIT_STEP, 10))
-    return limits
+    return tuple(limits.items())
 
 
 def _extreme(robot, margin, variable, sign):
