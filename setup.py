@@ -22,10 +22,14 @@ setup(
         ('share/ament_index/resource_index/packages',
             ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
-        # config/orthoglide.yaml and the Fast DDS profile (any config/*.yaml
-        # and config/*.xml).
+        # config/orthoglide.yaml, the Fast DDS profile and the RViz config
+        # (any config/*.yaml, config/*.xml and config/*.rviz).
         ('share/' + package_name + '/config',
-            sorted(glob('config/*.yaml') + glob('config/*.xml'))),
+            sorted(glob('config/*.yaml') + glob('config/*.xml')
+                   + glob('config/*.rviz'))),
+        # The robot's URDF (urdf/orthoglide.urdf, written by `orthoglide
+        # urdf` for the paper's robot).
+        ('share/' + package_name + '/urdf', sorted(glob('urdf/*.urdf'))),
     ],
     # ROS packages (rclpy, *_msgs) are deliberately absent: they come from
     # apt ROS or from the ros-jazzy-* wheels in requirements.txt. scipy and
@@ -49,6 +53,8 @@ setup(
             'setpoint_publisher = orthoglide_ros.console:setpoint_publisher',
             'tracking_controller = orthoglide_ros.console:tracking_controller',
             'simulator = orthoglide_ros.console:simulator',
+            'mechanism_state_publisher = '
+            'orthoglide_ros.console:mechanism_state_publisher',
         ],
     },
     **legacy_kwargs,

@@ -13,6 +13,10 @@ Subcommands (``orthoglide SUBCOMMAND --help`` for details):
   a rosbag2 bag), written as a parameters file (``--output``).
 - ``record``: topics into a rosbag2 bag (MCAP or sqlite3); the one
   subcommand that needs ROS (rclpy).
+- ``urdf``: the robot's URDF (a cut tree, see :mod:`orthoglide_ros.urdf`).
+- ``draw``: a picture of the robot at one platform position (PNG).
+- ``animate``: the robot moving along a trajectory, with its actuator
+  forces (GIF).
 
 Units are SI throughout: m, m/s, m/s^2, N, W, s. Bad input exits with code 2
 and one line ``orthoglide: error: ...`` on standard error; output files are
@@ -23,6 +27,7 @@ are imported by the subcommands that use them, rclpy by ``record`` alone.
 import argparse
 import io
 import json
+import math
 import os
 import sys
 import tempfile
@@ -55,6 +60,10 @@ DEFAULT_SAMPLES = 201
 # Samples per second of an excitation for its condition number (the
 # number changes by less than 1 % from 100 Hz to 1 kHz).
 CONDITION_RATE = 100.0
+# Pictures: size limits (pixels) and the animation's defaults.
+MIN_PIXELS, MAX_PIXELS = 100, 4000
+MAX_FRAMES = 1000
+DEFAULT_FRAMES, DEFAULT_FPS = 41, 20.0
 
 
 class CliError(Exception):
@@ -413,6 +422,83 @@ def run_record(robot, args):
                               args.storage, args.duration, args.wait)
 
 
+# -- urdf -------------------------------------------------------------------
+
+def run_urdf(robot, args):
+    """Write the robot's URDF (standard output or ``--output``)."""
+    from orthoglide_ros import urdf
+    try:
+        names = joint_names(args.joint_names)
+    except ValueError as error:
+        raise CliError(f'--joint-names: {error}') from None
+    text = urdf.urdf(robot, names, args.singularity_margin)
+    _write_output(args.output, text.encode('utf-8'))
+    return 0
+
+
+# -- draw, animate ----------------------------------------------------------
+
+def run_draw(robot, args):
+    """Draw the robot at one platform position; write a PNG."""
+    _check_extension(args.output, '.png')
+    drawing = _drawing()
+    try:
+        data = drawing.draw(robot, args.position, args.size)
+    except mechanics.WorkspaceError as error:
+        raise CliError(str(error)) from None
+    _write_output(args.output, data)
+    return 0
+
+
+def run_animate(robot, args):
+    """Animate the robot along a trajectory; write a GIF."""
+    _check_extension(args.output, '.gif')
+    drawing = _drawing()
+    if args.input is None:
+        times = trajectory.paper_times(max(args.frames, 2))
+        p, v, a = trajectory.paper_batch(times)
+        where = 'the paper trajectory'
+        lines = None
+    else:
+        where = '<stdin>' if args.input == '-' else args.input
+        times, p, v, a, lines = _read_trajectory(args.input, where)
+        if not len(p):
+            raise CliError(f'{where}: no data row')
+    try:
+        sol = mechanics.solve_batch(robot, p, v, a)
+    except mechanics.WorkspaceError as error:
+        if lines is None:
+            raise CliError(f'{where} at t = {times[error.row]:.6g} s: '
+                           f'{_reason(error)}') from None
+        raise CliError(f'{where}: data row {error.row + 1} (line '
+                       f'{lines[error.row]}): {_reason(error)}') from None
+    rows = drawing.frame_rows(len(p), args.frames)
+    data = drawing.animate(
+        robot, None if times is None else times[rows], p[rows],
+        sol.force[rows], args.size, args.fps,
+        'Orthoglide, ' + ('eq. (6)' if lines is None
+                          else os.path.basename(where)))
+    _write_output(args.output, data)
+    return 0
+
+
+def _drawing():
+    try:
+        from orthoglide_ros import drawing
+        import matplotlib  # noqa: F401
+    except ImportError:
+        raise CliError('drawing needs matplotlib (pip install matplotlib)',
+                       code=1) from None
+    return drawing
+
+
+def _check_extension(path, extension):
+    if not path.lower().endswith(extension):
+        raise CliError(f'--output {path}: the file name must end with '
+                       f'{extension} (the picture is written as '
+                       f'{extension[1:].upper()})')
+
+
 # -- shared -----------------------------------------------------------------
 
 def _csv_text(times, positions, sol):
@@ -474,6 +560,51 @@ def _row(label, *values):
 
 def _fail(message):
     print(f'{PROG}: error: {" ".join(message.split())}', file=sys.stderr)
+
+
+def _pixels(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not MIN_PIXELS <= value <= MAX_PIXELS:
+        raise argparse.ArgumentTypeError(
+            f'must be an integer in [{MIN_PIXELS}, {MAX_PIXELS}] pixels, '
+            f'got {text!r}')
+    return value
+
+
+def _frames(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= MAX_FRAMES:
+        raise argparse.ArgumentTypeError(
+            f'must be an integer in [1, {MAX_FRAMES}], got {text!r}')
+    return value
+
+
+def _fps(text):
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.5 <= value <= 50.0:
+        raise argparse.ArgumentTypeError(
+            f'must be a number in [0.5, 50] frames/s, got {text!r}')
+    return value
+
+
+def _margin(text):
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.0 <= value <= 0.99:
+        raise argparse.ArgumentTypeError(
+            f'must be a number in [0, 0.99], got {text!r}')
+    return value
 
 
 def _samples(text):
@@ -700,6 +831,66 @@ def _parser():
                         metavar='S', help='longest wait for each topic\'s '
                         'publisher (s; default 10)')
     record.set_defaults(run=run_record)
+    urdf = sub.add_parser(
+        'urdf', parents=[common], help='write the robot\'s URDF',
+        description='Write the URDF of the robot (lengths m, masses kg, '
+        'inertias kg m^2, angles rad): a cut tree of the closed mechanism '
+        'for robot_state_publisher, whose every moving joint the '
+        'mechanism_state_publisher node publishes. Joint limits are the '
+        'ranges over the workspace within the singularity margin.')
+    urdf.add_argument('--output', metavar='FILE', help='URDF file '
+                      '(default: standard output)')
+    urdf.add_argument('--joint-names', nargs=3, metavar=('A', 'B', 'C'),
+                      default=list(JOINT_NAMES), help='names of '
+                      'the prismatic joints of actuators A, B, C (default: '
+                      + ' '.join(JOINT_NAMES) + ')')
+    urdf.add_argument('--singularity-margin', type=_margin,
+                      default=mechanics.DEFAULT_SINGULARITY_MARGIN,
+                      metavar='D', help='the workspace of the joint limits: '
+                      'singularity distance at least D, in [0, 0.99] '
+                      f'(default {mechanics.DEFAULT_SINGULARITY_MARGIN:g})')
+    urdf.set_defaults(run=run_urdf)
+
+    draw = sub.add_parser(
+        'draw', parents=[common], help='draw the robot at a position (PNG)',
+        description='Draw the robot in 3D with its platform centre at a '
+        'position: every body, the actuator axes, the paper\'s workspace '
+        'cube (|x|, |y|, |z| <= 0.3 m) and the actuator forces (N) that '
+        'hold it at rest there. Needs matplotlib.')
+    draw.add_argument('--position', type=float, nargs=3, required=True,
+                      metavar=('X', 'Y', 'Z'),
+                      help='platform centre in the base frame (m)')
+    draw.add_argument('--output', required=True, metavar='FILE.png',
+                      help='PNG file to write')
+    draw.add_argument('--size', type=_pixels, nargs=2, default=(800, 800),
+                      metavar=('WIDTH', 'HEIGHT'), help='image size in '
+                      'pixels (default 800 800)')
+    draw.set_defaults(run=run_draw)
+
+    animate = sub.add_parser(
+        'animate', parents=[common], help='animate the robot along a '
+        'trajectory (GIF)',
+        description='Animate the robot along a trajectory with each '
+        'actuator\'s force (N, an arrow along its slider) and the time. '
+        'The trajectory is the paper\'s, eq. (6), or a CSV file read as '
+        'batch reads it (x, y, z in m; vx, vy, vz in m/s and ax, ay, az in '
+        'm/s^2 optional; t in s optional); its rows are sampled evenly '
+        'down to --frames. Needs matplotlib.')
+    animate.add_argument('--input', metavar='FILE', help='trajectory CSV '
+                         'file, - for standard input (default: the paper\'s '
+                         'trajectory, eq. (6))')
+    animate.add_argument('--output', required=True, metavar='FILE.gif',
+                         help='GIF file to write')
+    animate.add_argument('--frames', type=_frames, default=DEFAULT_FRAMES,
+                         metavar='N', help='frames at most, evenly spread '
+                         f'over the trajectory (default {DEFAULT_FRAMES})')
+    animate.add_argument('--fps', type=_fps, default=DEFAULT_FPS,
+                         metavar='F', help='frames per second of the GIF '
+                         f'(default {DEFAULT_FPS:g}: eq. (6) in real time)')
+    animate.add_argument('--size', type=_pixels, nargs=2,
+                         default=(640, 640), metavar=('WIDTH', 'HEIGHT'),
+                         help='image size in pixels (default 640 640)')
+    animate.set_defaults(run=run_animate)
     return parser
 
 

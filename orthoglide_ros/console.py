@@ -55,3 +55,8 @@ def tracking_controller():
 def setpoint_publisher():
     """Run the ``setpoint_publisher`` node; return its exit code."""
     return _run('setpoint_publisher_node')
+
+
+def mechanism_state_publisher():
+    """Run the ``mechanism_state_publisher`` node; return its exit code."""
+    return _run('mechanism_state_publisher_node')

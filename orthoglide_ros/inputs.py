@@ -6,10 +6,15 @@ Rules every node applies to what it receives, without ROS.
   in ``/diagnostics`` as ``rejected <reason>``).
 - :func:`check_stamp`: the one rule for a ``builtin_interfaces/Time``
   stamp, applied to every stamped input;
+- :func:`read_joint_state`: the one way to pick the actuated joints out of
+  a ``sensor_msgs/JointState``, by name, in any order;
 - the byte limits of the inputs: a message longer than its input's limit
   is refused (``oversize``) before any decoding, so its length cannot
   cost the node more than taking it from the middleware.
 """
+
+from collections import namedtuple
+import math
 
 # Largest stamp seconds an output can carry (builtin_interfaces/Time: int32).
 STAMP_SEC_MAX = 2**31 - 1
@@ -61,3 +66,64 @@ def check_stamp(stamp):
         raise Rejected('stamp', (
             f'stamp {sec}.{nanosec:09d} is beyond the int32 seconds '
             'of builtin_interfaces/Time'))
+
+
+JointValues = namedtuple('JointValues', 'position velocity effort')
+JointValues.__doc__ = """One joint state in joint_names order: 3-tuples of
+lambda (m), lambdadot (m/s, None when optional and absent) and effort (N,
+None when not needed)."""
+
+
+def read_joint_state(joint_names, names, position, velocity, effort,
+                     need_effort, optional_velocity=False):
+    """
+    Pick ``joint_names``' values out of one JointState's arrays.
+
+    ``names``, ``position``, ``velocity``, ``effort``: the message's
+    sequences, in the message's order; joints not in ``joint_names`` are
+    ignored. Returns :class:`JointValues` in ``joint_names`` order
+    (``effort`` None unless ``need_effort``; ``velocity`` None when
+    ``optional_velocity`` and the message has none). Raises
+    :class:`Rejected` (not counted here) when one of ``joint_names`` is
+    absent (``missing_joint``), names repeat or an array is neither empty
+    nor as long as the names (``malformed``), an array needed is empty
+    (``missing_position``, ``missing_velocity``, ``missing_effort``) or a
+    value read is not finite (``non_finite``).
+
+    >>> read_joint_state(('a', 'b', 'c'), ['c', 'x', 'a', 'b'],
+    ...                  [3.0, 9.0, 1.0, 2.0], [], [], False, True)
+    JointValues(position=(1.0, 2.0, 3.0), velocity=None, effort=None)
+    """
+    count = len(names)
+    index = {name: i for i, name in enumerate(names)}
+    if len(index) != count:
+        raise Rejected('malformed', f'joint names repeat: {list(names)!r}')
+    rows = []
+    for name in joint_names:
+        i = index.get(name)
+        if i is None:
+            raise Rejected('missing_joint', (
+                f'joint {name!r} absent (names: {list(names)!r})'))
+        rows.append(i)
+    fields = [('position', position)]
+    if len(velocity) or not optional_velocity:
+        fields.append(('velocity', velocity))
+    if need_effort:
+        fields.append(('effort', effort))
+    values = {}
+    for field, array in fields:
+        size = len(array)
+        if size == 0:
+            raise Rejected(f'missing_{field}', f'no {field} values')
+        if size != count:
+            raise Rejected('malformed', (
+                f'{size} {field} values for {count} names'))
+        picked = (float(array[rows[0]]), float(array[rows[1]]),
+                  float(array[rows[2]]))
+        if not math.isfinite(picked[0] + picked[1] + picked[2]) and not all(
+                math.isfinite(x) for x in picked):
+            raise Rejected('non_finite', (
+                f'{field} {picked} of {list(joint_names)} is not finite'))
+        values[field] = picked
+    return JointValues(values['position'], values.get('velocity'),
+                       values.get('effort'))

@@ -9,7 +9,11 @@ Plain numpy, no ROS. Every function takes a validated :class:`Robot` first.
 - :func:`forward_dynamics`: platform state and actuator forces -> platform
   acceleration (one sample); :func:`forward_dynamics_batch`: N samples.
 - :func:`elements`: position, velocity and acceleration of every body.
-- :func:`forward_kinematics`: actuator displacements -> platform centre.
+- :func:`leg_joints`: every leg's joint variables and rates, one sample
+  or N (lighter than :func:`elements`).
+- :func:`forward_kinematics`: actuator displacements -> platform centre
+  (:func:`forward_kinematics_rows` without refusals);
+  :func:`platform_velocity`: actuator rates -> platform velocity.
 - :func:`workspace_status`: reachability and distance to singularity.
 - :func:`jacobians`: J1 and J2 of eq. (16).
 
@@ -56,6 +60,17 @@ Per actuator (A, B, C): ``lambda_`` (m), ``lambdadot`` (m/s),
 ``1 / kappa_F(J_lambda)`` (1 at home, 0 at a singularity of J2);
 ``singularity_distance`` = the smallest of the four. A single sample holds
 3-tuples of floats and floats; a batch holds (N, 3) and (N,) arrays.
+"""
+
+LegJoints = namedtuple('LegJoints', (
+    'lambda_', 'phi21', 'phi32', 'lambdadot', 'omega21', 'omega32'))
+LegJoints.__doc__ = """One leg's joint variables and their rates.
+
+``lambda_`` (m) and ``lambdadot`` (m/s) of the slider; ``phi21``,
+``phi32`` (rad) of eq. (9) and their rates ``omega21``, ``omega32``
+(rad/s) of eq. (13), in the passive convention of ``a^phi`` (a rate about
+the child frame's ``u3``). By eq. (5) ``phi54 = phi21`` and ``phi43 =
+phi62 = phi32``. Floats for one sample, (N,) arrays for N.
 """
 
 WorkspaceStatus = namedtuple('WorkspaceStatus', (
@@ -388,18 +403,40 @@ def forward_kinematics(robot, lam):
     Platform centre G (m) from the actuator displacements (m), eq. (14).
 
     Intersects the three constraint spheres of eq. (14) on the branch that
-    holds the home position (every ``alpha_i > 0``). ``lam``: (3,) or
-    (N, 3). With ``d_j = l3 - lambda_j`` and ``s = |r_G|^2`` each sphere
-    reads ``s + 2 r_j d_j + d_j^2 = l3^2``, so ``r_j = (l3^2 - d_j^2 - s) /
-    (2 d_j)`` and ``s`` solves a quadratic whose smaller root is the home
-    branch. Raises :class:`WorkspaceError` where there is no such point.
+    holds the home position (every ``alpha_i > 0``): see
+    :func:`forward_kinematics_rows`. ``lam``: (3,) or (N, 3). Raises
+    :class:`WorkspaceError` where there is no such point.
     """
     lam = np.asarray(lam, dtype=float)
     if not np.isfinite(lam).all():
         raise WorkspaceError('non_finite', f'lambda {lam} is not finite')
+    r, found = forward_kinematics_rows(robot, lam)
+    if not np.all(found):
+        row = int(np.argmin(np.atleast_1d(found)))
+        raise WorkspaceError('unreachable', (
+            f'lambda {format_vector(np.atleast_2d(lam)[row])} m has no platform '
+            'position on the home branch'), row if lam.ndim == 2 else None)
+    return r
+
+
+def forward_kinematics_rows(robot, lam):
+    """
+    Forward kinematics without refusals: ``(positions, found)``.
+
+    ``lam``: (3,) or (N, 3) (m). With ``d_j = l3 - lambda_j`` and ``s =
+    |r_G|^2`` each sphere of eq. (14) reads ``s + 2 r_j d_j + d_j^2 =
+    l3^2``, so ``r_j = (l3^2 - d_j^2 - s) / (2 d_j)`` and ``s`` solves a
+    quadratic whose smaller root is the home branch. ``found`` (bool, ()
+    or (N,)) says where that root gives a point with every ``alpha_i >
+    0``; ``positions`` (m) is meaningless elsewhere. Where both roots are
+    valid platform positions (two assembly modes), a position on the other
+    one is not given back: a robot started at home cannot reach it without
+    crossing a singularity of J2.
+    """
+    lam = np.asarray(lam, dtype=float)
     l3 = robot.l3
     d = l3 - lam
-    with np.errstate(all='ignore'):     # checked below, row by row
+    with np.errstate(all='ignore'):     # judged by found, row by row
         kk = l3 * l3 - d * d
         w = 0.25 / (d * d)
         qa = w.sum(-1)
@@ -409,13 +446,81 @@ def forward_kinematics(robot, lam):
         s = 2.0 * qc / (qb + np.sqrt(disc))
         r = (kk - s[..., None]) / (2.0 * d)
         alpha = r + d
-    good = (disc >= 0.0) & np.isfinite(r).all(-1) & (alpha > 0.0).all(-1)
-    if not np.all(good):
-        row = int(np.argmin(np.atleast_1d(good)))
-        raise WorkspaceError('unreachable', (
-            f'lambda {format_vector(np.atleast_2d(lam)[row])} m has no platform '
-            'position on the home branch'), row if lam.ndim == 2 else None)
-    return r
+        found = (disc >= 0.0) & np.isfinite(r).all(-1) & (alpha > 0.0).all(-1)
+    return r, found
+
+
+def platform_velocity(robot, position, lambdadot):
+    """
+    Platform velocity ``rdot_G`` (m/s, frame 0) from the actuator rates.
+
+    Eq. (15) solved for ``rdot_G``: ``J2 rdot_G = J1 lambdadot``, with
+    ``J1``, ``J2`` of eq. (16) at ``position`` (m, as
+    :func:`forward_kinematics` returns it) and ``lambdadot`` (m/s, A, B,
+    C). Returns a 3-tuple of floats. Raises :class:`WorkspaceError` where
+    the position is unreachable, a rate is not finite or J2 is so singular
+    that the result is not finite; near a singularity the result is large
+    (callers that need a margin check it, as :func:`leg_joints` does).
+
+    >>> from orthoglide_ros.robot import Robot
+    >>> rates = solve(Robot(), (0.05, 0.1, -0.2), (0.1, -0.2, 0.3)).lambdadot
+    >>> [round(v, 12) for v in platform_velocity(
+    ...     Robot(), (0.05, 0.1, -0.2), rates)]
+    [0.1, -0.2, 0.3]
+    """
+    rates = np.asarray(lambdadot, dtype=float)
+    if not np.isfinite(rates).all():
+        raise WorkspaceError(
+            'non_finite', f'lambdadot {format_vector(rates)} is not finite')
+    j1, j2 = jacobians(robot, position)
+    try:
+        velocity = np.linalg.solve(j2, j1 @ rates)
+    except np.linalg.LinAlgError:
+        velocity = np.full(3, math.nan)
+    if not np.isfinite(velocity).all():
+        raise WorkspaceError('singular', (
+            f'position {format_vector(position)} m is on a singularity of '
+            'J2: the platform velocity is undefined'))
+    return tuple(velocity.tolist())
+
+
+def leg_joints(robot, position, velocity=ZERO,
+               margin=DEFAULT_SINGULARITY_MARGIN):
+    """
+    Every leg's joint variables and rates (eqs. 9 and 13).
+
+    ``position``, ``velocity``: the platform centre G and its velocity in
+    frame 0 (m, m/s), 3-sequences for one sample (through :func:`solve`)
+    or (N, 3) arrays for N (checked by :func:`solve_batch`; a
+    ``velocity`` of shape (3,) is that of every sample, None is zero).
+    Returns ``{'A': LegJoints, 'B': ..., 'C': ...}`` (:class:`LegJoints`).
+    Refuses what :func:`solve` and :func:`solve_batch` refuse
+    (:class:`WorkspaceError`).
+
+    >>> from orthoglide_ros.robot import Robot
+    >>> leg = leg_joints(Robot(), (0.0, 0.0, -0.425))['A']
+    >>> round(math.degrees(leg.phi32), 9), leg.phi21
+    (30.0, 0.0)
+    """
+    record = {}
+    p = np.asarray(position, dtype=float)
+    if p.ndim == 1:
+        solve(robot, position, velocity, ZERO, margin, record)
+        atan2 = math.atan2
+    else:
+        v = np.broadcast_to(np.asarray(
+            ZERO if velocity is None else velocity, dtype=float), p.shape)
+        solve_batch(robot, p, v, None, margin)
+        columns = (*p.T, *v.T, *np.zeros((3, len(p))))
+        kernel.solve(robot.constants, *columns, np.sqrt, record)
+        atan2 = np.arctan2
+    return {leg: _leg_joints(record[leg], atan2) for leg in 'ABC'}
+
+
+def _leg_joints(rec, atan2):
+    """One leg's :class:`LegJoints` from the kernel's record."""
+    return LegJoints(rec['lam'], atan2(*rec['phi21']), atan2(*rec['phi32']),
+                     rec['lamd'], rec['omega21'], rec['omega32'])
 
 
 def jacobians(robot, position):
@@ -516,11 +621,12 @@ def _leg_elements(robot, leg, rec):
             'velocity': rot[b].T @ rec['v'][b],
             'acceleration': rot[b].T @ rec['gamma'][b]}
         for b in (1, 2, 3, 4, 5, 6)}
+    variables = _leg_joints(rec, math.atan2)
     return {
-        'phi21': math.atan2(s1, c1), 'phi32': math.atan2(s2, c2),
-        'omega21': rec['omega21'], 'omega32': rec['omega32'],
+        'phi21': variables.phi21, 'phi32': variables.phi32,
+        'omega21': variables.omega21, 'omega32': variables.omega32,
         'epsilon21': rec['epsilon21'], 'epsilon32': rec['epsilon32'],
-        'lambda': rec['lam'], 'lambdadot': rec['lamd'],
+        'lambda': variables.lambda_, 'lambdadot': variables.lambdadot,
         'lambdaddot': rec['lamdd'], 'joints': joints, 'bodies': bodies}
 
 

@@ -56,7 +56,8 @@ import math
 
 import numpy as np
 
-from orthoglide_ros.inputs import NANOSECONDS, Rejected
+from orthoglide_ros.inputs import (JointValues, NANOSECONDS,
+                                   read_joint_state, Rejected)
 from orthoglide_ros.joint_plan import JointPlan
 from orthoglide_ros.parameters import joint_names_spec, \
     nonnegative_triple, Spec, Table
@@ -107,58 +108,10 @@ PARAMETERS = Table('ControllerSettings', (
          'limit for that actuator', check=nonnegative_triple),
 ))
 
-JointValues = namedtuple('JointValues', 'position velocity effort')
-JointValues.__doc__ = """One joint state in joint_names order: 3-tuples of
-lambda (m), lambdadot (m/s) and effort (N, None when not needed)."""
-
 Command = namedtuple('Command', 'force error clipped')
 Command.__doc__ = """One command: ``force`` the 3 forces (N) after
 clipping, ``error`` lambda_d - lambda (m), ``clipped`` how many of the three
 were clipped."""
-
-
-def read_joint_state(joint_names, names, position, velocity, effort,
-                     need_effort):
-    """
-    Pick ``joint_names``' values out of one JointState's arrays.
-
-    ``names``, ``position``, ``velocity``, ``effort``: the message's
-    sequences, in the message's order. Returns :class:`JointValues` in
-    ``joint_names`` order (``effort`` None unless ``need_effort``); raises
-    :class:`Rejected` (not counted here) when a rule of the module refuses
-    the message.
-    """
-    count = len(names)
-    index = {name: i for i, name in enumerate(names)}
-    if len(index) != count:
-        raise Rejected('malformed', f'joint names repeat: {list(names)!r}')
-    rows = []
-    for name in joint_names:
-        i = index.get(name)
-        if i is None:
-            raise Rejected('missing_joint', (
-                f'joint {name!r} absent (names: {list(names)!r})'))
-        rows.append(i)
-    fields = [('position', position), ('velocity', velocity)]
-    if need_effort:
-        fields.append(('effort', effort))
-    values = []
-    for field, array in fields:
-        size = len(array)
-        if size == 0:
-            raise Rejected(f'missing_{field}', f'no {field} values')
-        if size != count:
-            raise Rejected('malformed', (
-                f'{size} {field} values for {count} names'))
-        picked = (float(array[rows[0]]), float(array[rows[1]]),
-                  float(array[rows[2]]))
-        if not math.isfinite(picked[0] + picked[1] + picked[2]) and not all(
-                math.isfinite(x) for x in picked):
-            raise Rejected('non_finite', (
-                f'{field} {picked} of {list(joint_names)} is not finite'))
-        values.append(picked)
-    return JointValues(values[0], values[1],
-                       values[2] if need_effort else None)
 
 
 def read_joint_trajectory(joint_names, points, need_effort):

@@ -7,7 +7,8 @@ the setpoints it was sent, stops both with SIGINT, then checks every output
 against :func:`mechanics.solve` of its setpoint and prints a summary. Writes
 figures 3-8 of the paper (actuator displacements and powers: the node's
 samples as points, eq. (6) through :func:`mechanics.solve_batch` as lines)
-to a PNG, and optionally the samples to a CSV.
+to a PNG, the robot moving along the run with the node's forces to a GIF
+next to it, and optionally the samples to a CSV.
 
 Run it through ``bash scripts/demo.sh`` (sets up .venv, keeps DDS on this
 host, picks a ROS_DOMAIN_ID); ``scripts/demo.py --help`` for the options.
@@ -47,7 +48,7 @@ from sensor_msgs.msg import JointState  # noqa: E402
 from std_msgs.msg import Float64MultiArray  # noqa: E402
 from trajectory_msgs.msg import MultiDOFJointTrajectory  # noqa: E402
 
-from orthoglide_ros import mechanics, trajectory  # noqa: E402
+from orthoglide_ros import drawing, mechanics, trajectory  # noqa: E402
 from orthoglide_ros.cli import CSV_COLUMNS  # noqa: E402
 from orthoglide_ros.params_file import load_robot  # noqa: E402
 from node_harness import interrupt  # noqa: E402
@@ -63,6 +64,9 @@ DRAIN_IDLE = 1.5        # s without an output that end the drain early
 STOP_TIMEOUT = 5.0      # s a process gets to exit after SIGINT
 TOLERANCE = 1e-9        # largest accepted |node - mechanics.solve|
 CURVE_SAMPLES = 401
+# The animation of the run: frames at most, size (pixels).
+ANIMATION_FRAMES = 30
+ANIMATION_SIZE = (480, 480)
 LEVELS = {0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
 
 
@@ -209,6 +213,9 @@ def _parser():
                         metavar='FILE', help=(
                             'PNG of figures 3-8 (default out/demo.png in '
                             'the repository)'))
+    parser.add_argument('--animation', metavar='FILE', help=(
+        'GIF of the robot along the run, with the forces the node '
+        'published (default: the plot\'s name with .gif)'))
     parser.add_argument('--csv', metavar='FILE', help=(
         'write the recorded samples: ' + ','.join(CSV_COLUMNS) + ' (SI '
         'units; t in s since the first setpoint; lambdaddot is not '
@@ -443,6 +450,15 @@ def _report(args, robot, record, logs):
 
     _write(args.plot, _plot_png(robot, table))
     print(f'plot       {_shown(args.plot)}')
+    animation = args.animation or str(Path(args.plot).with_suffix('.gif'))
+    rows = drawing.frame_rows(len(table), ANIMATION_FRAMES)
+    span = table[rows[-1], 0] - table[rows[0], 0]
+    fps = min(50.0, max(1.0, (len(rows) - 1) / span)) if span > 0 else 1.0
+    _write(animation, drawing.animate(
+        robot, table[rows, 0], table[rows, 1:4], table[rows, 13:16],
+        ANIMATION_SIZE, fps, 'Orthoglide feedforward node'))
+    print(f'animation  {_shown(animation)} ({len(rows)} frames, the '
+          'forces the node published)')
     if args.csv:
         _write(args.csv, _csv_text(table))
         print(f'csv        {_shown(args.csv)} (lambdaddot from '

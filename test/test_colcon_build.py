@@ -68,16 +68,21 @@ def install_env(prefix):
 
 
 def test_install_layout(install):
-    """Executables, config, package.xml and the ament index are installed."""
+    """Executables, config, URDF, package.xml and the ament index are installed."""
     for relative in ('lib/orthoglide_ros/feedforward',
                      'lib/orthoglide_ros/orthoglide',
                      'lib/orthoglide_ros/tracking_controller',
-                     'lib/orthoglide_ros/simulator'):
+                     'lib/orthoglide_ros/simulator',
+                     'lib/orthoglide_ros/mechanism_state_publisher'):
         path = install / relative
         assert path.is_file() and os.access(path, os.X_OK), relative
-    for name in ('orthoglide.yaml', 'fastdds_discovery.xml'):
+    for name in ('orthoglide.yaml', 'fastdds_discovery.xml',
+                 'orthoglide.rviz'):
         assert (install / 'share' / PACKAGE / 'config' / name
                 ).read_text() == (ROOT / 'config' / name).read_text()
+    # The URDF that robot_state_publisher reads as robot_description.
+    assert (install / 'share' / PACKAGE / 'urdf' / 'orthoglide.urdf'
+            ).read_text() == (ROOT / 'urdf' / 'orthoglide.urdf').read_text()
     assert (install / 'share' / PACKAGE / 'package.xml').is_file()
     assert (install / 'share' / 'ament_index' / 'resource_index'
             / 'packages' / PACKAGE).is_file()

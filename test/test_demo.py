@@ -42,6 +42,8 @@ def test_demo_runs_end_to_end(tmp_path):
                   'peak |power| (W)', 'node       ', 'plot       '):
         assert any(line.startswith(start) for line in lines), (start, report)
     assert plot.read_bytes().startswith(PNG_MAGIC)
+    assert any(line.startswith('animation  ') for line in lines), report
+    assert (tmp_path / 'demo.gif').read_bytes().startswith(b'GIF89a')
     with open(table, newline='') as stream:
         reader = csv.reader(stream)
         assert tuple(next(reader)) == CSV_COLUMNS

@@ -50,6 +50,7 @@ NODE_PAGES = {
     'simulator.md': 'orthoglide_ros.simulator',
     'tracking_controller.md': 'orthoglide_ros.tracking',
     'setpoint_publisher.md': 'orthoglide_ros.setpoint_publisher',
+    'mechanism_state_publisher.md': 'orthoglide_ros.mechanism_state',
 }
 
 

@@ -165,7 +165,8 @@ def test_robot_from_parameters_on_a_flat_dict():
         robot_from_parameters({'robot.m2': 1})
 
 
-@pytest.mark.parametrize('node', ['simulator', 'tracking_controller'])
+@pytest.mark.parametrize('node', ['simulator', 'tracking_controller',
+                                  'mechanism_state_publisher'])
 def test_shipped_config_sections_hold_the_defaults(node):
     """
     The other nodes' sections parse by rcl's rules and are the defaults.
@@ -175,6 +176,8 @@ def test_shipped_config_sections_hold_the_defaults(node):
     """
     if node == 'simulator':
         from orthoglide_ros.simulator import PARAMETERS
+    elif node == 'mechanism_state_publisher':
+        from orthoglide_ros.mechanism_state import PARAMETERS
     else:
         from orthoglide_ros.tracking import PARAMETERS
     specs, parse = PARAMETERS.specs, PARAMETERS.parse

@@ -1,0 +1,100 @@
+"""
+The ``mechanism_state_publisher`` ROS 2 node: three sliders in, every joint out.
+
+A thin layer over :class:`orthoglide_ros.mechanism_state.MechanismState`:
+it declares the parameters of :data:`orthoglide_ros.mechanism_state.PARAMETERS`,
+hands each ``joint_states`` message's arrays to the core, publishes every
+non-fixed joint of the Orthoglide's URDF on ``mechanism/joint_states`` with
+the input's stamp, logs throttled warnings and publishes the core's status
+on ``/diagnostics``. With the URDF as ``robot_description``,
+``robot_state_publisher`` remapped to ``mechanism/joint_states`` gives TF for
+every body. Run it with ``ros2 run orthoglide_ros mechanism_state_publisher``;
+``doc/mechanism_state_publisher.md`` has the topics, parameters and rules.
+"""
+
+import array
+import time
+
+from rclpy.qos_overriding_options import QoSOverridingOptions
+
+from sensor_msgs.msg import JointState
+
+from orthoglide_ros import cdr
+from orthoglide_ros.inputs import Rejected
+from orthoglide_ros.mechanism_state import MechanismState, PARAMETERS
+from orthoglide_ros.node_runtime import default_qos, InputNode, run
+
+
+class MechanismStatePublisherNode(InputNode):
+    """
+    Node ``mechanism_state_publisher``: the URDF's joint state from the sliders.
+
+    The input is read on the input thread of :class:`InputNode` (raw,
+    decoded by :mod:`cdr` outside the lock); the diagnostics run on a
+    periodic thread and the parameter services on the executor; all hold
+    ``self.lock`` on the core.
+    """
+
+    def __init__(self, **kwargs):
+        super().__init__('mechanism_state_publisher', **kwargs)
+        # Raises ValueError on an invalid start-up set (run() reports it).
+        self._core = MechanismState(self.declare_settings(PARAMETERS),
+                                    time.monotonic())
+        overrides = QoSOverridingOptions.with_default_policies()
+        self._publisher = self.create_publisher(
+            JointState, 'mechanism/joint_states', default_qos(),
+            qos_overriding_options=overrides)
+        self.create_input(
+            JointState, 'joint_states', self._on_joint_state, default_qos(),
+            'joint_states', decode=cdr.joint_state,
+            qos_overriding_options=overrides)
+        self._message = JointState()
+        self._names = None
+        self.publish_status('Orthoglide mechanism state', self._core)
+        # The core swaps its settings at once (under the lock).
+        self.apply_changes_with(self._core.configure)
+        self.start_threads()
+
+    def _on_joint_state(self, fields):
+        """Solve one joint state and publish it (input thread, lock held)."""
+        stamp, frame, names, position, velocity, _ = fields
+        try:
+            state = self._core.joint_state(names, position, velocity,
+                                           self.arrival)
+        except Rejected as rejection:
+            self._warn(rejection)
+            return
+        except Exception:   # a defect, not bad input: publish nothing, go on
+            self.report_defect('on a joint state, nothing published')
+            return
+        message = self._message
+        message.header.stamp.sec, message.header.stamp.nanosec = stamp
+        message.header.frame_id = frame
+        if state.names != self._names:
+            message.name = list(state.names)
+            self._names = state.names
+        message.position = array.array('d', state.position)
+        message.velocity = array.array('d', state.velocity)
+        self._publisher.publish(message)
+
+    def on_input_rejected(self, source, rejection):
+        """Count a joint state refused before it was read."""
+        try:
+            self._core.reject(rejection)
+        except Rejected:
+            self._warn(rejection)
+
+    def _warn(self, rejection):
+        self.warn_throttled(
+            rejection.reason,
+            f'joint state rejected ({rejection.reason}), nothing published: '
+            f'{rejection}')
+
+
+def main(args=None):
+    """Run the node until Ctrl-C or shutdown; return the exit code."""
+    return run(MechanismStatePublisherNode, 'mechanism_state_publisher', args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,419 @@
+"""
+The Orthoglide as a URDF: a cut tree of the closed mechanism, without ROS.
+
+URDF describes trees, and the Orthoglide has loops: each leg's
+parallelogram closes at A7, and the three legs meet at the platform. The
+tree is cut where :mod:`mechanics` cuts it for virtual work (doc/model.md):
+body 6 (the bar A6A7) is a branch of body 2, so the parallelogram is open
+at A7, and legs B and C end at their own frame 5 (B5, C5) while leg A
+carries the platform. A joint state from :mod:`mechanism_state` (every
+passive joint from the three sliders, closed form) closes every cut, so
+``robot_state_publisher`` then gives every body its pose.
+
+Names (fixed; tools and users rely on them), with ``x`` in ``a, b, c``:
+
+- links ``base_link`` (frame 0) and ``platform`` (origin G, axes parallel
+  to frame 0);
+- per leg, the bodies of doc/model.md: ``x_slider`` (1, origin A1),
+  ``x_rod_a3a6`` (2, origin A2), ``x_bar_a3a4`` (3, origin A3),
+  ``x_bar_a6a7`` (6, origin A6), ``x_rod_a4a7`` (4, origin A4) and
+  ``x_leg_end`` (frame 5 reached through the leg, origin A5: the
+  platform's orientation); ``x_platform_mount``, a fixed child of
+  ``platform`` at A5 that coincides with ``x_leg_end`` in a consistent
+  state; ``x_a7_bar`` and ``x_a7_rod``, the two sides of the
+  parallelogram's cut at A7 (fixed children of bodies 6 and 4: same
+  origin in a consistent state, turned by ``-phi32`` about their common
+  z axis);
+- the non-fixed joints (:func:`moving_joints`): the prismatic sliders
+  named ``joint_names`` (zero at home, positive along +x0, +y0, +z0), and
+  per leg the revolute ``x_phi21``, ``x_phi32``, ``x_phi62``, ``x_phi43``,
+  ``x_phi54`` (body 2 on 1, 3 on 2, 6 on 2, 4 on 3, 5 on 4), each about the
+  child frame's z axis with the angle of the model's ``a^phi`` convention:
+  ``phi21``, ``phi32``, ``phi32``, ``phi32``, ``phi21`` (eq. 5);
+- fixed joints are named after their child: ``platform_joint``,
+  ``x_platform_mount_joint``, ``x_a7_bar_joint``, ``x_a7_rod_joint``.
+
+Every frame comes from :func:`mechanics.elements` at home, where every
+joint variable is zero: a joint's origin is its child's frame seen from
+its parent's. The inertials are the bodies table of doc/model.md (the
+platform once, on ``platform``; links that are no body of the model carry
+none). Joint limits are the ranges over the workspace within the
+singularity margin (:func:`joint_limits`). Shapes are boxes and cylinders.
+"""
+
+import functools
+import math
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+from orthoglide_ros import mechanics
+from orthoglide_ros.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
+from orthoglide_ros.parameters import JOINT_NAMES
+
+LEGS = ('A', 'B', 'C')
+BASE_LINK = 'base_link'
+PLATFORM = 'platform'
+# A leg's bodies in the tree: (body, link suffix, parent body, joint suffix,
+# the LegJoints field the joint takes). Parent 0 is base_link; the slider's
+# joint is named by joint_names.
+CHAIN = (
+    (1, 'slider', 0, None, 'lambda_'),
+    (2, 'rod_a3a6', 1, 'phi21', 'phi21'),
+    (3, 'bar_a3a4', 2, 'phi32', 'phi32'),
+    (6, 'bar_a6a7', 2, 'phi62', 'phi32'),
+    (4, 'rod_a4a7', 3, 'phi43', 'phi32'),
+    (5, 'leg_end', 4, 'phi54', 'phi21'),
+)
+# The rate (LegJoints field) of each variable.
+RATES = {'lambda_': 'lambdadot', 'phi21': 'omega21', 'phi32': 'omega32'}
+# Joint limits are rounded outward to this step (m, rad). Their search: a
+# grid of SEARCH_GRID points per axis, then SEARCH_ROUNDS rounds of
+# SEARCH_SAMPLES normal samples around the SEARCH_KEEP best points so far,
+# the spread (from the grid's step) times SEARCH_SHRINK each round.
+LIMIT_STEP = 1e-4
+SEARCH_GRID, SEARCH_ROUNDS, SEARCH_SAMPLES, SEARCH_KEEP = 41, 60, 2000, 20
+SEARCH_SHRINK, SEARCH_SEED = 0.75, 12
+# Effort limit of the sliders (N): the force_limit default of the simulator
+# and the tracking controller (the model rates no actuator); velocity
+# limits (m/s, rad/s): the model rates none, so a bound for tools only.
+SLIDER_EFFORT = 1000.0
+VELOCITY_LIMIT = 10.0
+# Colours (RGBA): the legs as the axes of their sliders (A red, B green,
+# C blue), the rods, sliders and rails grey, the platform light grey.
+LEG_COLOURS = {'A': (0.85, 0.2, 0.2, 1.0), 'B': (0.2, 0.7, 0.3, 1.0),
+               'C': (0.2, 0.4, 0.9, 1.0)}
+GREY = {'rail': (0.55, 0.55, 0.55, 1.0), 'steel': (0.3, 0.3, 0.35, 1.0),
+        'platform': (0.8, 0.8, 0.8, 1.0)}
+
+
+def link_name(leg, body):
+    """Return the URDF link of ``body`` (1-6) of ``leg`` ('A', 'B', 'C')."""
+    for number, suffix, _, _, _ in CHAIN:
+        if number == body:
+            return f'{leg.lower()}_{suffix}'
+    raise ValueError(f'no body {body}')
+
+
+def moving_joints(joint_names=JOINT_NAMES):
+    """
+    Every non-fixed joint of the URDF, in the order a joint state lists it.
+
+    The three sliders (``joint_names``, actuators A, B, C), then for legs
+    a, b, c their revolute joints ``x_phi21, x_phi32, x_phi62, x_phi43,
+    x_phi54``. Returns ``(name, leg, variable)`` triples: ``variable`` is
+    the :class:`mechanics.LegJoints` field of ``leg`` that the joint takes
+    (its rate is ``RATES[variable]``).
+
+    >>> [name for name, _, _ in moving_joints()][:4]
+    ['slider_a', 'slider_b', 'slider_c', 'a_phi21']
+    """
+    joints = [(name, leg, 'lambda_') for name, leg in zip(joint_names, LEGS)]
+    for leg in LEGS:
+        joints += [(f'{leg.lower()}_{suffix}', leg, variable)
+                   for _, _, _, suffix, variable in CHAIN if suffix]
+    return tuple(joints)
+
+
+def joint_limits(robot, margin=DEFAULT_SINGULARITY_MARGIN):
+    """
+    Range of each joint variable over the workspace within ``margin``.
+
+    The workspace is every platform position with a singularity distance
+    of at least ``margin`` (:func:`mechanics.workspace_status`) on the
+    home branch of the forward kinematics (the positions that
+    :func:`mechanics.forward_kinematics` gives back, so those a joint
+    state of the sliders can describe). Returns
+    ``{'lambda_': (low, high), 'phi21': ..., 'phi32': ...}`` (m, rad) of
+    leg A, rounded outward to LIMIT_STEP; legs B and C are leg A turned
+    about the diagonal and the workspace is symmetric under that turn, so
+    their ranges are the same. Found by a grid over the cube ``|x|, |y|,
+    |z| < l3`` (which holds every reachable point), then random samples
+    around the best points so far, in a spread that shrinks to about 1e-9
+    m (seeded: the same limits every time; about 1 s, remembered for the
+    last robots asked).
+    """
+    return dict(_joint_limits(robot, float(margin)))
+
+
+@functools.lru_cache(maxsize=8)
+def _joint_limits(robot, margin):
+    """Return :func:`joint_limits` as ``(variable, (low, high))`` pairs."""
+    limits = {}
+    for variable in ('lambda_', 'phi21', 'phi32'):
+        low = -_extreme(robot, margin, variable, -1.0)
+        high = _extreme(robot, margin, variable, 1.0)
+        limits[variable] = (
+            round(math.floor(low / LIMIT_STEP) * LIMIT_STEP, 10),
+            round(math.ceil(high / LIMIT_STEP) * LIMIT_STEP, 10))
+    return tuple(limits.items())
+
+
+def _extreme(robot, margin, variable, sign):
+    """Largest ``sign * variable`` of leg A over the workspace."""
+    def values(points):
+        ok = mechanics.workspace_status(robot, points, margin).ok
+        points = points[ok]
+        if not len(points):
+            return points, np.empty(0)
+        # Inside the margin by workspace_status: solved without it, so a
+        # point on the margin's very edge is not refused by rounding.
+        legs = mechanics.leg_joints(robot, points, None, 0.0)
+        # Only the home branch: the positions the forward kinematics gives
+        # back (the others lie beyond a singularity of J2).
+        back, found = mechanics.forward_kinematics_rows(
+            robot, np.column_stack([legs[leg].lambda_ for leg in LEGS]))
+        home = found & (np.abs(back - points).max(-1) <= 1e-9 * robot.l3)
+        return points[home], sign * getattr(legs['A'], variable)[home]
+
+    axis = np.linspace(-robot.l3, robot.l3, SEARCH_GRID)
+    points, found = values(_grid(ZERO, axis))
+    # The best points so far, each sampled around with a spread that
+    # shrinks every round (a workspace edge may be curved or have corners,
+    # where a search along the axes stalls). Seeded: the same limits for
+    # the same robot.
+    rng = np.random.default_rng(SEARCH_SEED)
+    spread = axis[1] - axis[0]
+    for _ in range(SEARCH_ROUNDS):
+        best = np.argsort(found)[-SEARCH_KEEP:]
+        points, found = points[best], found[best]
+        near = np.repeat(points, SEARCH_SAMPLES // len(points), 0)
+        more, more_found = values(near + rng.normal(0.0, spread, near.shape))
+        points = np.concatenate((points, more))
+        found = np.concatenate((found, more_found))
+        spread *= SEARCH_SHRINK
+    return float(found.max())
+
+
+def _grid(centre, offsets):
+    """Return the points ``centre + (a, b, c)`` for a, b, c in offsets."""
+    mesh = np.meshgrid(offsets, offsets, offsets, indexing='ij')
+    return np.stack(mesh, -1).reshape(-1, 3) + np.asarray(centre)
+
+
+def inertials(robot):
+    """
+    Return doc/model.md's bodies table: ``{body: (mass, centre, inertia)}``.
+
+    Per leg, bodies 1, 2, 3, 4, 6 and the platform 5 (once): mass (kg),
+    centre of mass (m, from the body's frame origin, in its frame) and
+    inertia about the centre of mass (kg m^2, 3x3, in the body's frame).
+    Body 1 only translates and the model gives it no inertia: zero.
+    """
+    l2, l3 = robot.l2, robot.l3
+    sa, ca = math.sin(robot.alpha), math.cos(robot.alpha)
+    return {
+        1: (robot.m1, (0.0, robot.l1 * sa / 2.0, robot.l1 * ca / 2.0),
+            np.zeros((3, 3))),
+        2: (robot.m2, ZERO, robot.m2 * l2 ** 2 / 12.0 * np.diag((1, 1, 0))),
+        3: (robot.m3, (0.0, -l3 / 2.0, 0.0),
+            robot.m3 * l3 ** 2 / 12.0 * np.diag((1, 0, 1))),
+        6: (robot.m6, (0.0, -l3 / 2.0, 0.0),
+            robot.m6 * l3 ** 2 / 12.0 * np.diag((1, 0, 1))),
+        4: (robot.m4, (l2 / 2.0, 0.0, 0.0),
+            robot.m4 * l2 ** 2 / 12.0 * np.diag((0, 1, 1))),
+        5: (robot.m5, ZERO, robot.m5 * robot.l ** 2 / 6.0 * np.eye(3)),
+    }
+
+
+def urdf(robot, joint_names=JOINT_NAMES, margin=DEFAULT_SINGULARITY_MARGIN):
+    """
+    Return the URDF (XML text) of ``robot``, sliders named ``joint_names``.
+
+    Joint limits over the workspace within ``margin`` (see the module's
+    docstring for the tree and its names). Plain text, the same for the
+    same arguments.
+    """
+    home = mechanics.elements(robot, ZERO)
+    limits = joint_limits(robot, margin)
+    masses = inertials(robot)
+    radius = robot.l2 / 8.0
+    root = ET.Element('robot', name='orthoglide')
+    root.append(ET.Comment(
+        ' The Orthoglide (Chablat, Wenger, Staicu), written by `orthoglide '
+        'urdf` from the robot.* parameters: '
+        + ', '.join(f'{k} = {v if isinstance(v, list) else _number(v)}'
+                    for k, v in robot.as_parameters().items())
+        + f'; joint limits within the singularity margin {margin:g}. A cut '
+        'tree: publish every moving joint (mechanism_state_publisher). '))
+    for name, rgba in [*((f'leg_{leg.lower()}', c)
+                         for leg, c in LEG_COLOURS.items()),
+                       *GREY.items()]:
+        ET.SubElement(ET.SubElement(root, 'material', name=name), 'color',
+                      rgba=_vector(rgba))
+
+    base = _link(root, BASE_LINK)
+    for leg, name in zip(LEGS, joint_names):
+        low, high = limits['lambda_']
+        axis = home[leg]['bodies'][1]['rotation'].T[:, 2]     # z1, frame 0
+        a1 = home[leg]['joints']['A1']
+        _shape(base, 'cylinder', 'rail', radius,
+               a1 + low * axis, a1 + high * axis)
+    for leg, name in zip(LEGS, joint_names):
+        _leg(root, robot, leg, name, home[leg], limits, masses, radius)
+
+    platform = _link(root, PLATFORM, masses[5])
+    _shape(platform, 'box', 'platform', (robot.l,) * 3)
+    a_end = home['A']['bodies'][5]
+    _joint(root, 'platform_joint', 'fixed', link_name('A', 5), PLATFORM,
+           a_end['rotation'] @ (home['A']['joints']['G'] - a_end['origin']),
+           a_end['rotation'])
+    centre = home['A']['joints']['G']
+    for leg in LEGS:
+        end = home[leg]['bodies'][5]
+        mount = f'{leg.lower()}_platform_mount'
+        _link(root, mount)
+        _joint(root, f'{mount}_joint', 'fixed', PLATFORM, mount,
+               end['origin'] - centre, end['rotation'].T)
+        _shape(platform, 'cylinder', 'platform', radius, ZERO,
+               end['origin'] - centre)
+    ET.indent(root, '  ')
+    return ('<?xml version="1.0"?>\n'
+            + ET.tostring(root, encoding='unicode') + '\n')
+
+
+def _leg(root, robot, leg, slider_joint, home, limits, masses, radius):
+    """Add one leg's links and joints (bodies 1-6, the A7 cut)."""
+    bodies = home['bodies']
+    prefix = leg.lower()
+    colour = f'leg_{prefix}'
+    for body, _, parent, suffix, variable in CHAIN:
+        link = _link(root, link_name(leg, body),
+                     masses[body] if body != 5 else None)
+        frame = bodies[body]
+        if parent == 0:
+            rotation, origin = np.eye(3), np.zeros(3)
+        else:
+            rotation = bodies[parent]['rotation']
+            origin = bodies[parent]['origin']
+        name = slider_joint if suffix is None else f'{prefix}_{suffix}'
+        _joint(root, name, 'prismatic' if body == 1 else 'revolute',
+               BASE_LINK if parent == 0 else link_name(leg, parent),
+               link_name(leg, body), rotation @ (frame['origin'] - origin),
+               rotation @ frame['rotation'].T, limits[variable],
+               SLIDER_EFFORT if body == 1 else 0.0)
+        _body_shapes(link, robot, body, home, colour, radius)
+    joints = home['joints']
+    for body, side in ((6, 'bar'), (4, 'rod')):
+        frame = bodies[body]
+        tip = f'{prefix}_a7_{side}'
+        _link(root, tip)
+        _joint(root, f'{tip}_joint', 'fixed', link_name(leg, body), tip,
+               frame['rotation'] @ (joints['A7'] - frame['origin']),
+               frame['rotation'] @ bodies[6]['rotation'].T)
+
+
+def _body_shapes(link, robot, body, home, colour, radius):
+    """Add the visual and collision shapes of one body (its own frame)."""
+    frame = home['bodies'][body]
+
+    def local(joint):
+        return frame['rotation'] @ (home['joints'][joint] - frame['origin'])
+
+    if body == 1:
+        size = 6.0 * radius
+        _shape(link, 'box', 'steel', (size, size, 2.0 * size))
+        _shape(link, 'cylinder', 'steel', radius, ZERO, local('A2'))
+    elif body == 2:
+        _shape(link, 'cylinder', 'steel', radius, local('A3'), local('A6'))
+    elif body in (3, 6):
+        start = 'A3' if body == 3 else 'A6'
+        end = local('A4') if body == 3 else local('A7')
+        _shape(link, 'cylinder', colour, radius, local(start), end)
+    elif body == 4:
+        _shape(link, 'cylinder', 'steel', radius, ZERO,
+               2.0 * local('A5'))
+
+
+def _link(root, name, inertial=None):
+    """Add a link; ``inertial`` is ``(mass, centre, inertia)`` or None."""
+    link = ET.SubElement(root, 'link', name=name)
+    if inertial is not None:
+        mass, centre, inertia = inertial
+        element = ET.SubElement(link, 'inertial')
+        ET.SubElement(element, 'origin', xyz=_vector(centre), rpy='0 0 0')
+        ET.SubElement(element, 'mass', value=_number(mass))
+        ET.SubElement(element, 'inertia', **{
+            key: _number(inertia[i][j]) for key, (i, j) in (
+                ('ixx', (0, 0)), ('ixy', (0, 1)), ('ixz', (0, 2)),
+                ('iyy', (1, 1)), ('iyz', (1, 2)), ('izz', (2, 2)))})
+    return link
+
+
+def _joint(root, name, kind, parent, child, xyz, rotation, limits=None,
+           effort=0.0):
+    """Add a joint whose origin is ``(xyz, rotation)`` in the parent."""
+    joint = ET.SubElement(root, 'joint', name=name, type=kind)
+    ET.SubElement(joint, 'parent', link=parent)
+    ET.SubElement(joint, 'child', link=child)
+    ET.SubElement(joint, 'origin', xyz=_vector(xyz),
+                  rpy=_vector(rpy(rotation)))
+    if kind != 'fixed':
+        ET.SubElement(joint, 'axis', xyz='0 0 1')
+        ET.SubElement(joint, 'limit', lower=_number(limits[0]),
+                      upper=_number(limits[1]), effort=_number(effort),
+                      velocity=_number(VELOCITY_LIMIT))
+
+
+def _shape(link, kind, material, size, start=None, end=None):
+    """
+    Add the same visual and collision shape to a link.
+
+    A box of ``size`` (3 lengths, m) at the link's origin, or a cylinder of
+    radius ``size`` from ``start`` to ``end`` (m, the link's frame).
+    """
+    if kind == 'box':
+        xyz, rotation, geometry = ZERO, np.eye(3), {'size': _vector(size)}
+    else:
+        start, end = np.asarray(start, float), np.asarray(end, float)
+        xyz = (start + end) / 2.0
+        rotation = _z_towards(end - start)
+        geometry = {'radius': _number(size),
+                    'length': _number(np.linalg.norm(end - start))}
+    for role in ('visual', 'collision'):
+        element = ET.SubElement(link, role)
+        ET.SubElement(element, 'origin', xyz=_vector(xyz),
+                      rpy=_vector(rpy(rotation)))
+        ET.SubElement(ET.SubElement(element, 'geometry'), kind, **geometry)
+        if role == 'visual':
+            ET.SubElement(element, 'material', name=material)
+
+
+def _z_towards(direction):
+    """Return a rotation whose z axis points along ``direction``."""
+    z = np.asarray(direction, float) / np.linalg.norm(direction)
+    helper = np.eye(3)[int(np.argmin(np.abs(z)))]
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    return np.column_stack((x, np.cross(z, x), z))
+
+
+def rpy(rotation):
+    """
+    Return URDF's roll, pitch and yaw (rad) of a rotation matrix.
+
+    URDF composes ``R = Rz(yaw) Ry(pitch) Rx(roll)`` (fixed axes x, y,
+    z). At pitch = +-pi/2 only roll - yaw (or roll + yaw) is defined: yaw
+    is then 0.
+
+    >>> [abs(round(v, 12)) for v in rpy([[0, 0, 1], [0, 1, 0], [-1, 0, 0]])]
+    [0.0, 1.570796326795, 0.0]
+    """
+    r = np.asarray(rotation, dtype=float)
+    cos_pitch = math.hypot(r[0, 0], r[1, 0])
+    pitch = math.atan2(-r[2, 0], cos_pitch)
+    if cos_pitch < 1e-9:
+        return (math.atan2(-r[1, 2], r[1, 1]), pitch, 0.0)
+    return (math.atan2(r[2, 1], r[2, 2]), pitch, math.atan2(r[1, 0], r[0, 0]))
+
+
+def _number(value):
+    """Format a number: 12 significant digits, no ``-0``, tiny values 0."""
+    value = float(value)
+    if abs(value) < 1e-12:
+        value = 0.0
+    return f'{value:.12g}'
+
+
+def _vector(values):
+    return ' '.join(_number(v) for v in values)

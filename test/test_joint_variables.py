@@ -1,0 +1,89 @@
+"""
+``leg_joints`` and ``platform_velocity``: the joint variables and rates.
+
+``leg_joints`` against eq. (9) written independently (the reference model)
+and its derivative by complex step, for one sample and for a batch;
+``platform_velocity`` inverts ``lambdadot = J_lambda rdot_G`` (the
+reference's complex-step ``J_lambda``); both refuse what ``solve`` refuses.
+"""
+
+from hypothesis import given, settings
+from mechanics_reference import (
+    COMPLEX_STEP, cube_points, lambda_jacobian, leg_geometry, LEGS,
+    OTHER_ROBOT_VALUES, vectors)
+import numpy as np
+from orthoglide_ros.mechanics import (
+    leg_joints, platform_velocity, WorkspaceError)
+from orthoglide_ros.robot import Robot
+import pytest
+
+ROBOTS = {'paper': Robot(), 'other': Robot(**OTHER_ROBOT_VALUES)}
+
+
+def reference(robot, position, velocity):
+    """Per leg: lambda, phi21, phi32 and their rates, by complex step."""
+    step = np.asarray(position, complex) + 1j * COMPLEX_STEP * np.asarray(
+        velocity, float)
+    out = {}
+    for leg in LEGS:
+        g = leg_geometry(robot, leg, step)
+        values = np.array([g.lam, np.arcsin(g.sin21), np.arcsin(g.sin32)])
+        out[leg] = (values.real, values.imag / COMPLEX_STEP)
+    return out
+
+
+@pytest.mark.parametrize('name', sorted(ROBOTS))
+@settings(deadline=None, max_examples=60)
+@given(position=cube_points(), velocity=vectors(1.0))
+def test_leg_joints_are_eq9_and_its_derivative(name, position, velocity):
+    robot = ROBOTS[name]
+    legs = leg_joints(robot, position, velocity)
+    for leg, (values, rates) in reference(robot, position, velocity).items():
+        got = legs[leg]
+        assert np.allclose([got.lambda_, got.phi21, got.phi32], values,
+                           rtol=0, atol=1e-12)
+        assert np.allclose([got.lambdadot, got.omega21, got.omega32], rates,
+                           rtol=0, atol=1e-11)
+
+
+def test_batch_equals_single_samples():
+    robot = Robot()
+    rng = np.random.default_rng(3)
+    positions = rng.uniform(-0.3, 0.3, (50, 3))
+    velocities = rng.uniform(-1.0, 1.0, (50, 3))
+    batch = leg_joints(robot, positions, velocities)
+    for i, (p, v) in enumerate(zip(positions, velocities)):
+        single = leg_joints(robot, p, v)
+        for leg in LEGS:
+            assert np.allclose([x[i] for x in batch[leg]], single[leg],
+                               rtol=1e-12, atol=1e-14)
+
+
+def test_refusals_are_those_of_solve():
+    robot = Robot()
+    with pytest.raises(WorkspaceError) as error:
+        leg_joints(robot, (0.9, 0.0, 0.0))
+    assert error.value.reason == 'unreachable'
+    with pytest.raises(WorkspaceError) as error:
+        leg_joints(robot, np.array([[0.0, 0.0, 0.0], [0.8, 0.0, 0.0]]))
+    assert error.value.reason == 'singular' and error.value.row == 1
+
+
+@pytest.mark.parametrize('name', sorted(ROBOTS))
+@settings(deadline=None, max_examples=60)
+@given(position=cube_points(), velocity=vectors(1.0))
+def test_platform_velocity_inverts_j_lambda(name, position, velocity):
+    robot = ROBOTS[name]
+    rates = lambda_jacobian(robot, position) @ velocity
+    back = platform_velocity(robot, position, rates)
+    assert np.abs(np.subtract(back, velocity)).max() <= 1e-12
+
+
+def test_platform_velocity_refuses():
+    robot = Robot()
+    with pytest.raises(WorkspaceError) as error:
+        platform_velocity(robot, (0.0, 0.0, 0.0), (0.0, float('nan'), 0.0))
+    assert error.value.reason == 'non_finite'
+    with pytest.raises(WorkspaceError) as error:
+        platform_velocity(robot, (0.0, 0.0, 0.9), (0.0, 0.0, 0.0))
+    assert error.value.reason == 'unreachable'

@@ -1,0 +1,237 @@
+"""
+Tests of the mechanism_state_publisher node over real DDS.
+
+In-process: the node and a :class:`MechanismProbe` share one rclpy context
+and one EventsExecutor; messages go through Fast DDS. The probe publishes
+slider states (by name, shuffled, with an extra joint), and every
+``mechanism/joint_states`` the node publishes is applied to the URDF loaded
+by yourdfpy: ``platform`` at G (``mechanics.forward_kinematics`` of the
+sliders) with frame 0's orientation, each ``x_leg_end`` on its
+``x_platform_mount`` and each parallelogram's two A7 frames together, to
+1e-9 m and 1e-9 rad, on random reachable configurations and on the paper's
+trajectory. Bad input publishes nothing and is counted in /diagnostics; the
+topics' QoS is the other nodes'. As a process: the console script answers,
+exits 0 on SIGINT and 2 on an invalid parameter.
+"""
+
+import os
+import random
+
+from mechanics_reference import COMPLEX_STEP, leg_geometry, LEGS
+import numpy as np
+from orthoglide_ros import mechanics, trajectory
+from orthoglide_ros.mechanism_state_publisher_node import \
+    MechanismStatePublisherNode
+from orthoglide_ros.robot import Robot
+import pytest
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
+
+from diagnostic_msgs.msg import DiagnosticArray
+from sensor_msgs.msg import JointState
+
+from node_harness import (
+    assert_clean_exit, node_executable, node_graphs, PROBE_QOS, run_to_exit,
+    spin_until, start_node_process, timed_stop,
+    wait_diagnostics as harness_wait_diagnostics)
+from urdf_harness import COMMITTED_URDF, cut_errors, load, TOLERANCE
+
+pytestmark = pytest.mark.ros  # DDS and node processes
+
+WAIT = 10.0
+START_WAIT = 40.0
+PROMPT = 5.0
+NAMES = ['slider_a', 'slider_b', 'slider_c']
+ROBOT = Robot()
+EXECUTABLE = node_executable('mechanism_state_publisher')
+
+
+class MechanismProbe(Node):
+    """Publishes slider joint states; records the node's outputs."""
+
+    def __init__(self, context, name='mechanism_probe'):
+        super().__init__(name, context=context)
+        self.pub = self.create_publisher(JointState, 'joint_states',
+                                         PROBE_QOS)
+        self.outputs = []
+        self.diagnostics = []
+        self.sub = self.create_subscription(
+            JointState, 'mechanism/joint_states', self.outputs.append,
+            PROBE_QOS)
+        self.sub_diagnostics = self.create_subscription(
+            DiagnosticArray, '/diagnostics', self.diagnostics.append,
+            PROBE_QOS)
+
+    def matched(self):
+        """Whether the input and both outputs are matched."""
+        return (self.pub.get_subscription_count() > 0
+                and self.sub.get_publisher_count() > 0
+                and self.sub_diagnostics.get_publisher_count() > 0)
+
+    def send(self, stamp, lam, lamd=None, names=NAMES, extra=True):
+        """Publish the sliders shuffled by name, with an extra joint."""
+        rows = list(zip(names, lam, lamd if lamd is not None else lam))
+        if extra:
+            rows.append(('gripper', 7.0, 7.0))
+        random.Random(stamp[1]).shuffle(rows)
+        msg = JointState()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+        msg.header.frame_id = 'base_link'
+        msg.name = [r[0] for r in rows]
+        msg.position = [float(r[1]) for r in rows]
+        msg.velocity = [] if lamd is None else [float(r[2]) for r in rows]
+        self.pub.publish(msg)
+
+
+@pytest.fixture
+def graph(ros_context):
+    def ready(probe, node):
+        return probe.matched() and all(
+            p.get_subscription_count() > 0 for p in node.publishers
+            if p.topic_name != '/parameter_events')
+    with node_graphs(ros_context, MechanismStatePublisherNode,
+                     MechanismProbe, ready, WAIT) as make:
+        yield make
+
+
+@pytest.fixture(scope='module')
+def model():
+    return load(COMMITTED_URDF.read_text())
+
+
+def exchange(g, stamp, lam, lamd=None):
+    """Send one state; return the node's answer (one message)."""
+    count = len(g.probe.outputs)
+    g.probe.send(stamp, lam, lamd)
+    assert spin_until(g.executor, lambda: len(g.probe.outputs) > count,
+                      WAIT), 'no mechanism/joint_states'
+    return g.probe.outputs[-1]
+
+
+def check_closes(model, msg, lam, with_velocity):
+    """Check that the published state closes every cut of the URDF at G."""
+    centre = mechanics.forward_kinematics(ROBOT, lam)
+    phi32 = np.arcsin([leg_geometry(ROBOT, leg, centre).sin32
+                       for leg in LEGS])
+    assert len(msg.name) == len(msg.position) == 18
+    assert len(msg.velocity) == (18 if with_velocity else 0)
+    distance, angle = cut_errors(model, msg.name, msg.position, centre,
+                                 phi32)
+    assert distance <= TOLERANCE and angle <= TOLERANCE, (distance, angle)
+    sliders = dict(zip(msg.name, msg.position))
+    assert [sliders[n] for n in NAMES] == list(lam)
+
+
+def test_published_states_close_the_urdf(graph, model):
+    """Random reachable configurations and the paper's trajectory."""
+    g = graph()
+    rng = np.random.default_rng(4)
+    points = rng.uniform(-0.35, 0.35, (40, 3))
+    points = points[mechanics.workspace_status(ROBOT, points).ok][:20]
+    for k, p in enumerate(points):
+        lam = mechanics.solve(ROBOT, p).lambda_
+        msg = exchange(g, (100, k), lam)
+        assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (100, k)
+        assert msg.header.frame_id == 'base_link'
+        check_closes(model, msg, lam, False)
+    times = trajectory.paper_times(21)
+    for k, (p, v, a) in enumerate(zip(*trajectory.paper_batch(times))):
+        s = mechanics.solve(ROBOT, p, v, a)
+        msg = exchange(g, (200, k), s.lambda_, s.lambdadot)
+        check_closes(model, msg, s.lambda_, True)
+        rates = dict(zip(msg.name, msg.velocity))
+        assert [rates[n] for n in NAMES] == list(s.lambdadot)
+        # The rates of eq. (9) by complex step along the velocity.
+        step = np.asarray(p, complex) + 1j * COMPLEX_STEP * np.asarray(v)
+        for leg in LEGS:
+            geo = leg_geometry(ROBOT, leg, step)
+            x = leg.lower()
+            for name, value in ((f'{x}_phi21', geo.sin21),
+                                (f'{x}_phi54', geo.sin21),
+                                (f'{x}_phi32', geo.sin32),
+                                (f'{x}_phi62', geo.sin32),
+                                (f'{x}_phi43', geo.sin32)):
+                assert rates[name] == pytest.approx(
+                    np.arcsin(value).imag / COMPLEX_STEP, abs=1e-11)
+
+
+@pytest.mark.parametrize('names, lam, reason', [
+    (['slider_a', 'slider_b', 'other'], [0.0, 0.0, 0.0], 'missing_joint'),
+    (NAMES, [0.0, float('nan'), 0.0], 'non_finite'),
+    (NAMES, [1.7, 1.7, 1.7], 'unreachable'),
+])
+def test_bad_input_publishes_nothing_and_counts(graph, names, lam, reason):
+    g = graph()
+    g.probe.send((300, 1), lam, names=names, extra=False)
+    msg = harness_wait_diagnostics(
+        g.executor, g.probe.diagnostics,
+        lambda values: values.get(f'rejected {reason}') == '1', WAIT)
+    assert msg.status[0].level == b'\x01'       # WARN
+    assert reason in msg.status[0].message
+    assert not g.probe.outputs
+    # The next good state is published again.
+    exchange(g, (300, 2), [0.0, 0.0, 0.0])
+
+
+def test_qos_is_reliable_volatile_keep_last_and_overridable(graph):
+    g = graph()
+    [info] = g.probe.get_publishers_info_by_topic('/mechanism/joint_states')
+    assert info.qos_profile.reliability == ReliabilityPolicy.RELIABLE
+    assert info.qos_profile.durability == DurabilityPolicy.VOLATILE
+    [subscription] = g.probe.get_subscriptions_info_by_topic('/joint_states')
+    assert subscription.qos_profile.reliability == ReliabilityPolicy.RELIABLE
+
+
+def test_qos_overrides(ros_context):
+    node = MechanismStatePublisherNode(context=ros_context, parameter_overrides=[
+        Parameter('qos_overrides./mechanism/joint_states.publisher.'
+                  'reliability', value='best_effort'),
+        Parameter('qos_overrides./mechanism/joint_states.publisher.depth',
+                  value=3)])
+    try:
+        [publisher] = [p for p in node.publishers
+                       if p.topic_name == '/mechanism/joint_states']
+        assert publisher.qos_profile.reliability == \
+            ReliabilityPolicy.BEST_EFFORT
+        assert publisher.qos_profile.depth == 3
+    finally:
+        node.destroy_node()
+
+
+needs_script = pytest.mark.skipif(
+    not os.path.exists(EXECUTABLE),
+    reason='the mechanism_state_publisher console script is not installed')
+
+
+@needs_script
+def test_process_answers_and_exits_0_on_sigint(ros_context):
+    probe = MechanismProbe(ros_context)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(probe)
+    proc = start_node_process([], command=[EXECUTABLE])
+    try:
+        assert spin_until(executor, probe.matched, START_WAIT)
+        k = 0
+        while not probe.outputs:    # until the input is matched too
+            assert k < 200, 'no mechanism/joint_states'
+            k += 1
+            probe.send((1, k), [0.01, 0.02, -0.03])
+            spin_until(executor, lambda: bool(probe.outputs), 0.2)
+        assert len(probe.outputs[0].name) == 18
+        assert proc.poll() is None
+    finally:
+        stopped = timed_stop(proc)
+        executor.shutdown()
+        probe.destroy_node()
+    assert_clean_exit(*stopped, PROMPT)
+
+
+@needs_script
+def test_process_exits_2_on_invalid_parameter():
+    code, stderr = run_to_exit(
+        ['--ros-args', '-p', 'joint_names:=[a, a, b]'], [EXECUTABLE],
+        START_WAIT)
+    assert code == 2, f'exit code {code}; stderr:\n{stderr}'
+    assert 'joint_names' in stderr and 'Traceback' not in stderr, stderr

@@ -1,0 +1,293 @@
+"""
+The URDF (orthoglide_ros.urdf) read by an independent library, yourdfpy.
+
+- The committed ``urdf/orthoglide.urdf`` is what ``orthoglide urdf`` writes
+  for the paper's robot (so it cannot drift).
+- Names and tree: the links and joints the issue fixes, a cut tree.
+- Masses, centres and inertias equal doc/model.md's bodies table, written
+  out here; the total mass is the model's.
+- Kinematics: with the joint state of ``mechanism_state.joint_state``, on
+  random reachable configurations and on the paper's trajectory, yourdfpy's
+  forward kinematics puts ``platform`` at G (``mechanics.forward_kinematics``
+  of the sliders) with frame 0's orientation, each ``x_leg_end`` on its
+  ``x_platform_mount`` and the parallelogram's two A7 frames together, to
+  1e-9 m and 1e-9 rad; every body's frame is where ``mechanics.elements``
+  puts it.
+- Joint limits hold every state of the workspace within the margin, and
+  are near its extremes.
+"""
+
+import math
+
+from mechanics_reference import (
+    CUBE, leg_geometry, LEGS, OTHER_ROBOT_VALUES)
+import numpy as np
+from orthoglide_ros import mechanics, trajectory
+from orthoglide_ros.mechanism_state import joint_state
+from orthoglide_ros.parameters import JOINT_NAMES
+from orthoglide_ros.robot import Robot
+from orthoglide_ros.urdf import joint_limits, link_name, moving_joints, \
+    rpy, urdf
+import pytest
+from urdf_harness import COMMITTED_URDF, cut_errors, load, TOLERANCE
+
+PAPER = Robot()
+OTHER = Robot(**OTHER_ROBOT_VALUES)
+
+
+@pytest.fixture(scope='module')
+def paper_model():
+    return load(COMMITTED_URDF.read_text())
+
+
+@pytest.fixture(scope='module')
+def other_model():
+    return load(urdf(OTHER, ('ja', 'jb', 'jc')))
+
+
+def test_committed_urdf_is_what_the_generator_writes():
+    assert COMMITTED_URDF.read_text() == urdf(PAPER), (
+        'urdf/orthoglide.urdf is stale: run orthoglide urdf --output '
+        'urdf/orthoglide.urdf')
+
+
+# Names and tree ----------------------------------------------------------
+def test_names_and_tree(paper_model):
+    robot = paper_model.robot
+    joints = {j.name: j for j in robot.joints}
+    assert paper_model.base_link == 'base_link'
+    assert {j.name for j in robot.joints if j.type != 'fixed'} == {
+        name for name, _, _ in moving_joints()}
+    for name, leg in zip(JOINT_NAMES, 'abc'):
+        slider = joints[name]
+        assert (slider.type, slider.parent, slider.child) == (
+            'prismatic', 'base_link', f'{leg}_slider')
+    for leg in 'abc':
+        # x_leg_end: the child of the leg's last revolute joint.
+        last = joints[f'{leg}_phi54']
+        assert (last.type, last.child) == ('revolute', f'{leg}_leg_end')
+        mount = joints[f'{leg}_platform_mount_joint']
+        assert (mount.type, mount.parent, mount.child) == (
+            'fixed', 'platform', f'{leg}_platform_mount')
+        for side, body in (('bar', 'bar_a6a7'), ('rod', 'rod_a4a7')):
+            cut = joints[f'{leg}_a7_{side}_joint']
+            assert (cut.type, cut.parent) == ('fixed', f'{leg}_{body}')
+    # Leg A carries the platform; legs B and C end at their cut.
+    assert joints['platform_joint'].parent == 'a_leg_end'
+    assert not [j for j in robot.joints
+                if j.parent in ('b_leg_end', 'c_leg_end')]
+    # A tree: every link but base_link is the child of exactly one joint.
+    children = [j.child for j in robot.joints]
+    assert sorted(children) == sorted(
+        link.name for link in robot.links if link.name != 'base_link')
+
+
+def test_sliders_are_zero_at_home_and_positive_along_their_axis(paper_model):
+    for name, axis in zip(JOINT_NAMES, np.eye(3)):
+        paper_model.update_cfg({n: 0.0 for n in paper_model.actuated_joint_names})
+        home = paper_model.get_transform(f'{name[-1]}_slider')[:3, 3]
+        paper_model.update_cfg({name: 0.1})
+        moved = paper_model.get_transform(f'{name[-1]}_slider')[:3, 3]
+        assert np.allclose(moved - home, 0.1 * axis, atol=1e-12)
+
+
+def test_joint_names_follow_the_parameter(other_model):
+    names = other_model.actuated_joint_names
+    assert {'ja', 'jb', 'jc'} <= set(names)
+    assert not {'slider_a', 'slider_b', 'slider_c'} & set(names)
+
+
+# Masses and inertias -----------------------------------------------------
+def model_table(robot):
+    """doc/model.md's bodies table: link -> (mass, centre, inertia)."""
+    l2, l3 = robot.l2, robot.l3
+    sa, ca = math.sin(robot.alpha), math.cos(robot.alpha)
+    rod2 = robot.m2 * l2 * l2 / 12.0
+    bar3, bar6 = robot.m3 * l3 * l3 / 12.0, robot.m6 * l3 * l3 / 12.0
+    rod4 = robot.m4 * l2 * l2 / 12.0
+    table = {'platform': (robot.m5, (0, 0, 0),
+                          np.eye(3) * robot.m5 * robot.l ** 2 / 6.0)}
+    for leg in 'abc':
+        table.update({
+            # Body 1 translates: the model gives it no inertia (zero here).
+            f'{leg}_slider': (robot.m1, (0, robot.l1 * sa / 2,
+                                         robot.l1 * ca / 2), np.zeros((3, 3))),
+            f'{leg}_rod_a3a6': (robot.m2, (0, 0, 0),
+                                np.diag((rod2, rod2, 0.0))),
+            f'{leg}_bar_a3a4': (robot.m3, (0, -l3 / 2, 0),
+                                np.diag((bar3, 0.0, bar3))),
+            f'{leg}_bar_a6a7': (robot.m6, (0, -l3 / 2, 0),
+                                np.diag((bar6, 0.0, bar6))),
+            f'{leg}_rod_a4a7': (robot.m4, (l2 / 2, 0, 0),
+                                np.diag((0.0, rod4, rod4))),
+        })
+    return table
+
+
+@pytest.mark.parametrize('which', ['paper', 'other'])
+def test_masses_centres_and_inertias_are_the_models(which, paper_model,
+                                                    other_model):
+    robot, model = (PAPER, paper_model) if which == 'paper' \
+        else (OTHER, other_model)
+    table = model_table(robot)
+    links = {link.name: link for link in model.robot.links}
+    assert {name for name, link in links.items()
+            if link.inertial is not None} == set(table)
+    for name, (mass, centre, inertia) in table.items():
+        inertial = links[name].inertial
+        assert inertial.mass == pytest.approx(mass, rel=1e-11)
+        assert np.allclose(inertial.origin[:3, 3], centre, rtol=0,
+                           atol=1e-12)
+        assert np.allclose(inertial.origin[:3, :3], np.eye(3))
+        assert np.allclose(inertial.inertia, inertia, rtol=1e-11,
+                           atol=1e-15)
+    total = robot.m5 + 3 * (robot.m1 + robot.m2 + robot.m3 + robot.m4
+                            + robot.m6)
+    assert sum(link.inertial.mass for link in links.values()
+               if link.inertial is not None) == pytest.approx(total,
+                                                              rel=1e-12)
+
+
+# Kinematics --------------------------------------------------------------
+def home_branch(robot, points):
+    """
+    Keep the points within the margin that a robot started at home reaches.
+
+    Those the forward kinematics gives back: the others lie beyond a
+    singularity of J2 (another assembly mode of the same sliders).
+    """
+    points = points[mechanics.workspace_status(robot, points).ok]
+    lam = mechanics.solve_batch(robot, points).lambda_
+    back, found = mechanics.forward_kinematics_rows(robot, lam)
+    return points[found & (np.abs(back - points).max(-1) < 1e-9)]
+
+
+def reachable_positions(robot, count, seed):
+    """Random platform positions in the cube and beyond, within the margin."""
+    rng = np.random.default_rng(seed)
+    points = rng.uniform(-0.6 * robot.l3, 0.6 * robot.l3, (20 * count, 3))
+    return home_branch(robot, points)[:count]
+
+
+def check_state(model, robot, names, lam, lamd=None):
+    """Solve the joint state of the sliders; check it closes every cut."""
+    state = joint_state(robot, names, lam, lamd)
+    centre = mechanics.forward_kinematics(robot, lam)
+    phi32 = [leg_geometry(robot, leg, centre).sin32 for leg in LEGS]
+    distance, angle = cut_errors(model, state.names, state.position, centre,
+                                 np.arcsin(phi32))
+    assert distance <= TOLERANCE and angle <= TOLERANCE, (lam, distance,
+                                                          angle)
+    return state, centre
+
+
+@pytest.mark.parametrize('which', ['paper', 'other'])
+def test_cuts_close_on_random_configurations(which, paper_model, other_model):
+    robot, model, names = (PAPER, paper_model, JOINT_NAMES) \
+        if which == 'paper' else (OTHER, other_model, ('ja', 'jb', 'jc'))
+    for position in reachable_positions(robot, 60, 12):
+        lam = mechanics.solve(robot, position).lambda_
+        _, centre = check_state(model, robot, names, lam)
+        assert np.abs(centre - position).max() <= 1e-12
+
+
+def test_cuts_close_on_the_paper_trajectory(paper_model):
+    times = trajectory.paper_times(41)
+    for p, v, a in zip(*trajectory.paper_batch(times)):
+        s = mechanics.solve(PAPER, p, v, a)
+        check_state(paper_model, PAPER, JOINT_NAMES, s.lambda_, s.lambdadot)
+
+
+def test_every_body_is_where_the_model_puts_it(paper_model):
+    for position in reachable_positions(PAPER, 10, 5):
+        lam = mechanics.solve(PAPER, position).lambda_
+        state = joint_state(PAPER, JOINT_NAMES, lam)
+        paper_model.update_cfg(dict(zip(state.names, state.position)))
+        legs = mechanics.elements(PAPER, position)
+        for leg in LEGS:
+            bodies = legs[leg]['bodies']
+            for body in (1, 2, 3, 4, 5, 6):
+                frame = paper_model.get_transform(link_name(leg, body))
+                assert np.allclose(frame[:3, 3], bodies[body]['origin'],
+                                   rtol=0, atol=1e-10)
+                assert np.allclose(frame[:3, :3], bodies[body]['rotation'].T,
+                                   rtol=0, atol=1e-10)
+
+
+# Joint limits ------------------------------------------------------------
+def test_limits_hold_the_workspace_and_are_near_its_extremes(paper_model):
+    limits = joint_limits(PAPER)
+    joints = {j.name: j for j in paper_model.robot.joints}
+    for name, _, variable in moving_joints():
+        limit = joints[name].limit
+        assert (limit.lower, limit.upper) == pytest.approx(limits[variable],
+                                                           abs=1e-12)
+    rng = np.random.default_rng(8)
+    points = home_branch(PAPER, rng.uniform(-PAPER.l3, PAPER.l3,
+                                            (200000, 3)))
+    legs = mechanics.leg_joints(PAPER, points)
+    for variable, (low, high) in limits.items():
+        values = np.concatenate([getattr(legs[leg], variable)
+                                 for leg in LEGS])
+        assert low <= values.min() and values.max() <= high, variable
+        # Random points come near the extremes, not onto them.
+        assert values.min() - low < 0.05 and high - values.max() < 0.05, (
+            variable, values.min(), values.max(), low, high)
+    # The paper's tested cube lies well inside.
+    cube = mechanics.leg_joints(PAPER, np.array(
+        [[x, y, z] for x in (-CUBE, CUBE) for y in (-CUBE, CUBE)
+         for z in (-CUBE, CUBE)]))
+    for variable, (low, high) in limits.items():
+        values = np.concatenate([getattr(cube[leg], variable)
+                                 for leg in LEGS])
+        assert low < values.min() and values.max() < high
+
+
+# rpy ---------------------------------------------------------------------
+def matrix_of_rpy(roll, pitch, yaw):
+    """Return URDF's R = Rz(yaw) Ry(pitch) Rx(roll), written out."""
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def test_rpy_round_trip_including_gimbal_lock():
+    rng = np.random.default_rng(2)
+    rotations = [matrix_of_rpy(*rng.uniform(-3, 3, 3)) for _ in range(200)]
+    rotations += [matrix_of_rpy(r, s * math.pi / 2, y)
+                  for r in (0.0, 0.7, -2.0) for y in (0.0, 1.1)
+                  for s in (1, -1)]
+    # Every signed permutation matrix of determinant 1 (the model's a_k).
+    for perm in ((0, 1, 2), (1, 2, 0), (2, 0, 1), (0, 2, 1), (2, 1, 0),
+                 (1, 0, 2)):
+        for signs in np.ndindex(2, 2, 2):
+            m = np.zeros((3, 3))
+            for row, col in enumerate(perm):
+                m[row, col] = 1.0 - 2.0 * signs[row]
+            if np.linalg.det(m) > 0:
+                rotations.append(m)
+    for r in rotations:
+        assert np.allclose(matrix_of_rpy(*rpy(r)), r, rtol=0, atol=1e-12)
+
+
+# RViz --------------------------------------------------------------------
+def test_rviz_config_shows_the_model_and_existing_frames(paper_model):
+    """config/orthoglide.rviz: RobotModel on /robot_description, TF."""
+    import yaml
+    path = COMMITTED_URDF.parents[1] / 'config' / 'orthoglide.rviz'
+    config = yaml.safe_load(path.read_text())['Visualization Manager']
+    assert config['Global Options']['Fixed Frame'] == 'base_link'
+    displays = {d['Class']: d for d in config['Displays']}
+    model = displays['rviz_default_plugins/RobotModel']
+    assert model['Description Source'] == 'Topic'
+    assert model['Description Topic']['Value'] == '/robot_description'
+    assert model['Description Topic']['Durability Policy'] == 'Transient Local'
+    frames = displays['rviz_default_plugins/TF']['Frames']
+    links = {link.name for link in paper_model.robot.links}
+    shown = {name for name in frames if name != 'All Enabled'}
+    assert {'base_link', 'platform', 'a_leg_end', 'b_platform_mount'} <= shown
+    assert shown <= links
