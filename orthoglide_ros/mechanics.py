@@ -141,12 +141,14 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
             f'position {format_vector(position)} m is too near a singularity of '
             f'J2: 1/kappa_F(J_lambda) = {conditioning:.3g} < margin '
             f'{margin:g}'))
+    l3 = robot.l3
+    ratio = (alphas[0] / l3, alphas[1] / l3, alphas[2] / l3)
+    if min(ratio) < margin:     # the leg test above, rounded apart
+        raise _leg_error(robot, position, margin)
     if not math.isfinite(sum(lamdd) + sum(force) + sum(power)) and not all(
             math.isfinite(f) for f in (*lamdd, *force, *power)):
         # (A sum of large finite numbers may overflow: check one by one.)
         raise _overflow_error(position, velocity, acceleration)
-    l3 = robot.l3
-    ratio = (alphas[0] / l3, alphas[1] / l3, alphas[2] / l3)
     return Solution(lam, lamd, lamdd, force, power, ratio, conditioning,
                     min(min(ratio), conditioning))
 
@@ -215,10 +217,14 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
             f'position {format_vector(p[row])} m is too near a singularity of J2: '
             f'1/kappa_F(J_lambda) = {conditioning[row]:.3g} < margin '
             f'{margin:g}'), row)
+    ratio = out[5] / robot.l3
+    near = ratio.min(1) < margin    # the leg test above, rounded apart
+    if near.any():
+        row = int(np.argmax(near))
+        raise _leg_error(robot, p[row], margin, row)
     if not np.isfinite(out[2:5]).all():
         row = int(np.argmin(np.isfinite(out[2:5]).all(axis=(0, 2))))
         raise _overflow_error(p[row], v[row], a[row], row)
-    ratio = out[5] / robot.l3
     return Solution(*out[:5], ratio, conditioning,
                     np.minimum(ratio.min(1), conditioning))
 
