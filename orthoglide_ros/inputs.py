@@ -7,7 +7,9 @@ Rules every node applies to what it receives, without ROS.
 - :func:`check_stamp`: the one rule for a ``builtin_interfaces/Time``
   stamp, applied to every stamped input;
 - :func:`read_joint_state`: the one way to pick the actuated joints out of
-  a ``sensor_msgs/JointState``, by name, in any order;
+  a ``sensor_msgs/JointState``, by name, in any order, and
+  :func:`read_joint_trajectory` the same for every point of a
+  ``trajectory_msgs/JointTrajectory``;
 - the byte limits of the inputs: a message longer than its input's limit
   is refused (``oversize``) before any decoding, so its length cannot
   cost the node more than taking it from the middleware.
@@ -15,6 +17,8 @@ Rules every node applies to what it receives, without ROS.
 
 from collections import namedtuple
 import math
+
+import numpy as np
 
 # Largest stamp seconds an output can carry (builtin_interfaces/Time: int32).
 STAMP_SEC_MAX = 2**31 - 1
@@ -95,16 +99,7 @@ def read_joint_state(joint_names, names, position, velocity, effort,
     JointValues(position=(1.0, 2.0, 3.0), velocity=None, effort=None)
     """
     count = len(names)
-    index = {name: i for i, name in enumerate(names)}
-    if len(index) != count:
-        raise Rejected('malformed', f'joint names repeat: {list(names)!r}')
-    rows = []
-    for name in joint_names:
-        i = index.get(name)
-        if i is None:
-            raise Rejected('missing_joint', (
-                f'joint {name!r} absent (names: {list(names)!r})'))
-        rows.append(i)
+    rows = joint_columns(joint_names, names)
     fields = [('position', position)]
     if len(velocity) or not optional_velocity:
         fields.append(('velocity', velocity))
@@ -127,3 +122,75 @@ def read_joint_state(joint_names, names, position, velocity, effort,
         values[field] = picked
     return JointValues(values['position'], values.get('velocity'),
                        values.get('effort'))
+
+
+def joint_columns(joint_names, names):
+    """
+    Return where each of ``joint_names`` stands in a message's ``names``.
+
+    Raises :class:`Rejected`: ``malformed`` when names repeat,
+    ``missing_joint`` when one of ``joint_names`` is absent.
+    """
+    index = {name: i for i, name in enumerate(names)}
+    if len(index) != len(names):
+        raise Rejected('malformed', f'joint names repeat: {list(names)!r}')
+    rows = []
+    for name in joint_names:
+        i = index.get(name)
+        if i is None:
+            raise Rejected('missing_joint', (
+                f'joint {name!r} absent (names: {list(names)!r})'))
+        rows.append(i)
+    return rows
+
+
+def read_joint_trajectory(joint_names, points, need_effort):
+    """
+    Pick ``joint_names``' columns out of a JointTrajectory's points.
+
+    ``points``: :class:`orthoglide_ros.cdr.JointPoints` (names, lengths,
+    positions, velocities, accelerations, efforts, time). Returns ``(times
+    (N,) s, positions, velocities, efforts)``, (N, 3) arrays in
+    ``joint_names`` order (efforts zero unless ``need_effort``). Raises
+    :class:`Rejected` (not counted here): ``empty``; the joint-state
+    reasons of :func:`read_joint_state` for a point; ``time`` for a
+    time_from_start whose nanosec is not in [0, 1e9), that is negative or
+    not after the point before it. Accelerations are not read.
+    """
+    names = points.names
+    n = len(points.time)
+    if n == 0:
+        raise Rejected('empty', 'joint trajectory without points')
+    columns = joint_columns(joint_names, names)
+    fields = [('position', 0, points.positions),
+              ('velocity', 1, points.velocities)]
+    if need_effort:
+        fields.append(('effort', 3, points.efforts))
+    arrays = []
+    for field, row, values in fields:
+        lengths = points.lengths[row]
+        for bad, reason, what in (
+                (lengths == 0, f'missing_{field}', f'no {field} values'),
+                (lengths != len(names), 'malformed',
+                 f'{field} values not one per name')):
+            if bad.any():
+                raise Rejected(reason, f'point {int(np.argmax(bad))}: {what}')
+        picked = values[:, columns]
+        finite = np.isfinite(picked).all(1)
+        if not finite.all():
+            raise Rejected('non_finite', (
+                f'point {int(np.argmin(finite))}: {field} of '
+                f'{list(joint_names)} not finite'))
+        arrays.append(picked)
+    seconds, nanoseconds = points.time[:, 0], points.time[:, 1]
+    total = seconds * NANOSECONDS + nanoseconds
+    for bad, what in (
+            ((nanoseconds < 0) | (nanoseconds >= NANOSECONDS),
+             'time_from_start nanosec outside [0, 1e9)'),
+            (total < 0, 'negative time_from_start'),
+            (np.r_[False, np.diff(total) <= 0],
+             'not later than the point before it')):
+        if bad.any():
+            raise Rejected('time', f'point {int(np.argmax(bad))}: {what}')
+    efforts = arrays[2] if need_effort else np.zeros((n, 3))
+    return total / NANOSECONDS, arrays[0], arrays[1], efforts

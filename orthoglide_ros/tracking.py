@@ -54,10 +54,8 @@ Rules (``doc/tracking_controller.md`` states them for users):
 from collections import namedtuple
 import math
 
-import numpy as np
-
-from orthoglide_ros.inputs import (JointValues, NANOSECONDS,
-                                   read_joint_state, Rejected)
+from orthoglide_ros.inputs import (JointValues, read_joint_state,
+                                   read_joint_trajectory, Rejected)
 from orthoglide_ros.joint_plan import JointPlan
 from orthoglide_ros.parameters import joint_names_spec, \
     nonnegative_triple, Spec, Table
@@ -112,69 +110,6 @@ Command = namedtuple('Command', 'force error clipped')
 Command.__doc__ = """One command: ``force`` the 3 forces (N) after
 clipping, ``error`` lambda_d - lambda (m), ``clipped`` how many of the three
 were clipped."""
-
-
-def read_joint_trajectory(joint_names, points, need_effort):
-    """
-    Pick ``joint_names``' columns out of a JointTrajectory's points.
-
-    ``points``: :class:`orthoglide_ros.cdr.JointPoints` (names, lengths,
-    positions, velocities, accelerations, efforts, time). Returns ``(times
-    (N,) s, positions, velocities, efforts)``, (N, 3) arrays in
-    ``joint_names`` order (efforts zero unless ``need_effort``); raises
-    :class:`Rejected` (not counted here): ``empty``, the joint-state
-    reasons for a point (``missing_joint``, ``malformed`` for repeated
-    names or an array neither empty nor as long as the names,
-    ``missing_position``, ``missing_velocity``, ``missing_effort``,
-    ``non_finite``), or ``time`` for a time_from_start whose nanosec is not
-    in [0, 1e9), that is negative or not after the point before it.
-    Accelerations are not used (cubic interpolation).
-    """
-    names = points.names
-    n = len(points.time)
-    if n == 0:
-        raise Rejected('empty', 'joint trajectory without points')
-    index = {name: i for i, name in enumerate(names)}
-    if len(index) != len(names):
-        raise Rejected('malformed', f'joint names repeat: {list(names)!r}')
-    columns = []
-    for name in joint_names:
-        if name not in index:
-            raise Rejected('missing_joint', (
-                f'joint {name!r} absent (names: {list(names)!r})'))
-        columns.append(index[name])
-    fields = [('position', 0, points.positions),
-              ('velocity', 1, points.velocities)]
-    if need_effort:
-        fields.append(('effort', 3, points.efforts))
-    arrays = []
-    for field, row, values in fields:
-        lengths = points.lengths[row]
-        for bad, reason, what in (
-                (lengths == 0, f'missing_{field}', f'no {field} values'),
-                (lengths != len(names), 'malformed',
-                 f'{field} values not one per name')):
-            if bad.any():
-                raise Rejected(reason, f'point {int(np.argmax(bad))}: {what}')
-        picked = values[:, columns]
-        finite = np.isfinite(picked).all(1)
-        if not finite.all():
-            raise Rejected('non_finite', (
-                f'point {int(np.argmin(finite))}: {field} of '
-                f'{list(joint_names)} not finite'))
-        arrays.append(picked)
-    seconds, nanoseconds = points.time[:, 0], points.time[:, 1]
-    total = seconds * NANOSECONDS + nanoseconds
-    for bad, what in (
-            ((nanoseconds < 0) | (nanoseconds >= NANOSECONDS),
-             'time_from_start nanosec outside [0, 1e9)'),
-            (total < 0, 'negative time_from_start'),
-            (np.r_[False, np.diff(total) <= 0],
-             'not later than the point before it')):
-        if bad.any():
-            raise Rejected('time', f'point {int(np.argmax(bad))}: {what}')
-    efforts = arrays[2] if need_effort else np.zeros((n, 3))
-    return total / NANOSECONDS, arrays[0], arrays[1], efforts
 
 
 def control_law(settings, desired, measured):
