@@ -43,6 +43,8 @@ FEEDFORWARD_TOPICS = [
     ('setpoint/twist', 'subscription'),
     ('setpoint/accel', 'subscription'),
     ('setpoint/trajectory', 'subscription'),
+    ('cartesian_trajectory', 'subscription'),
+    ('feedforward/joint_trajectory', 'publisher'),
 ]
 
 
