@@ -186,16 +186,27 @@ def cartesian_trajectory(buf):
     doubles = np.frombuffer(buf, dtype='<f8', offset=4,
                             count=(size - 4) // 8)
     present = first >= 0
-    index = (np.where(present, first, 4) - 4) // 8
-    pose = np.where(present[0, :, None], doubles[
-        index[0, :, None] + np.arange(7)], np.nan)
-    twists = [np.where(present[j, :, None], doubles[
-        index[j, :, None] + np.arange(3)], np.nan) for j in (1, 2)]
+    pose, twists = (_gather(doubles, first[j], present[j], width)
+                    for j, width in ((0, 7), (slice(1, 3), 3)))
     time = np.column_stack((words[times // 4].view('<i4').astype(np.int64),
                             words[times // 4 + 1].astype(np.int64)))
     return Waypoints((stamp[0], stamp[1]), frame, present[0], present[1],
                      present[2], pose[:, :3], pose[:, 3:], twists[0],
                      twists[1], time)
+
+
+def _gather(doubles, first, present, width):
+    """
+    Read ``width`` doubles from each first-item offset; NaN where absent.
+
+    ``first``, ``present``: (N,) or (K, N); the result has a trailing axis
+    of ``width``. Only the items present are read (an absent one's offset
+    is -1, which must not be dereferenced, even masked).
+    """
+    out = np.full(first.shape + (width,), np.nan)
+    out[present] = doubles[((first[present] - 4) // 8)[:, None]
+                           + np.arange(width)]
+    return out
 
 
 _ITEMS = (56, 48, 48)   # bytes of a Transform, a Twist, a Twist
