@@ -89,15 +89,23 @@ COMBINATION_TOLERANCE = 1e-9
 
 # The log's processing (doc/identification.md): a 4th-order Butterworth
 # low-pass at DEFAULT_CUTOFF (Hz) run forwards and backwards (zero phase,
-# 8th-order roll-off), on the positions before differentiation and on the
-# forces and the regressor's columns alike; samples within 2 / cutoff of a
-# segment's ends are dropped (the edges of the two filters in series); a
-# gap longer than GAP_FACTOR times the median sampling period and longer
-# than GAP_SHARE / cutoff splits the log into segments; shorter gaps are
-# interpolated linearly (for a component at frequency f, an error below
-# (pi f gap)^2 / 2 of it: 5 % at the cutoff, 0.2 % at a fifth of it).
+# 8th-order roll-off) on the forces and the regressor's columns alike;
+# samples within 2 / cutoff of a segment's ends are dropped (the edges of
+# the two filters in series); a gap longer than GAP_FACTOR times the
+# median sampling period and longer than GAP_SHARE / cutoff splits the log
+# into segments; shorter gaps are interpolated linearly (for a component
+# at frequency f, an error below (pi f gap)^2 / 2 of it: 5 % at the
+# cutoff, 0.2 % at a fifth of it).
 DEFAULT_CUTOFF = 10.0
 FILTER_ORDER = 4
+# The motion (positions, measured velocities) goes through the same design
+# at STATE_CUTOFF_FACTOR times the cutoff, at most STATE_CUTOFF_SHARE of the
+# sampling rate: five times the band of the forces, as Gautier filters
+# positions, so that the velocity keeps the ripple a Coulomb switch sees
+# (at the cutoff itself, the closed-loop logs of the demo gave m1 + m2 5 %
+# too heavy) while the encoder's quantisation stays out.
+STATE_CUTOFF_FACTOR = 5.0
+STATE_CUTOFF_SHARE = 0.4
 GAP_FACTOR = 3.0
 GAP_SHARE = 0.1
 # Fewest samples the least squares may use, per base parameter.
@@ -346,16 +354,20 @@ def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0):
     reports with each state the force it held over the last period of
     ``dt``: ``dt / 2``). Then, with ``H`` the zero-phase Butterworth
     low-pass of ``cutoff`` Hz (order FILTER_ORDER, run forwards and
-    backwards: ``scipy.signal.sosfiltfilt``):
+    backwards: ``scipy.signal.sosfiltfilt``) and ``H_s`` the same at
+    STATE_CUTOFF_FACTOR times ``cutoff`` (at most STATE_CUTOFF_SHARE of
+    the sampling rate):
 
     1. the motion: the platform positions from ``lambda``
        (:func:`mechanics.forward_kinematics`, ``robot``'s geometry)
-       through ``H``, the velocity their central difference ``(r+ -
+       through ``H_s``, the velocity their central difference ``(r+ -
        r-) / 2 dt`` (or, with measured ``lambdadots``, theirs through
-       ``H``: ``rdot = J2^-1 J1 lambdadot``, eq. 15), the acceleration the
-       velocity's central difference (at a frequency ``f``, relative
+       ``H_s``: ``rdot = J2^-1 J1 lambdadot``, eq. 15), the acceleration
+       the velocity's central difference (at a frequency ``f``, relative
        errors of ``(2 pi f dt)^2 / 6`` and twice that: 7e-6 and 1.3e-5
-       at 1 Hz and 1 kHz);
+       at 1 Hz and 1 kHz). ``H_s`` passes what the forces answer to (the
+       velocity's ripple at a reversal, which the Coulomb switch sees)
+       and stops the encoder's noise;
     2. the regressor ``W`` (:func:`regressor`) at every sample;
     3. parallel filtering: the forces and every column of ``W`` through
        ``H``, so that ``H(f) = H(W) theta`` holds as ``f = W theta`` does:
@@ -385,6 +397,9 @@ def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0):
                        f'(0, {0.5 * rate:g}) Hz, half the sampling rate '
                        f'{rate:g} Hz')
     sos = scipy.signal.butter(FILTER_ORDER, cutoff, fs=rate, output='sos')
+    state_sos = scipy.signal.butter(
+        FILTER_ORDER, min(STATE_CUTOFF_FACTOR * cutoff,
+                          STATE_CUTOFF_SHARE * rate), fs=rate, output='sos')
     # (1e-9: a median period rounded up must not change these counts.)
     trim = int(math.ceil(2.0 * rate / cutoff * (1.0 - 1e-9)))
     step = max(1, int(rate / (2.0 * cutoff) * (1.0 + 1e-9)))
@@ -407,14 +422,16 @@ def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0):
                                     for j in range(3)])
         try:
             position = scipy.signal.sosfiltfilt(
-                sos, mechanics.forward_kinematics(robot, on_grid(lambdas)),
+                state_sos, mechanics.forward_kinematics(robot,
+                                                        on_grid(lambdas)),
                 axis=0)
             if measured is None:
                 velocity = np.gradient(position, period, axis=0)
             else:
                 j1, j2 = mechanics.jacobians(robot, position)
                 velocity = np.linalg.solve(j2, j1 @ scipy.signal.sosfiltfilt(
-                    sos, on_grid(measured), axis=0)[:, :, None])[:, :, 0]
+                    state_sos, on_grid(measured), axis=0)[:, :, None]
+                )[:, :, 0]
             acceleration = np.gradient(velocity, period, axis=0)
             w = regressor(robot, position, velocity, acceleration)
         except mechanics.WorkspaceError as error:

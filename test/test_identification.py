@@ -254,6 +254,54 @@ def test_parallel_filtering_leaves_no_bias_from_a_sharp_coulomb_switch(
     assert np.abs(found.values / truth - 1.0).max() < 0.01, found.values
 
 
+def closed_loop_log(duration=12.0, loop_rate=250.0, plant_rate=500.0,
+                    gains=(20000.0, 1200.0)):
+    """
+    Log PD + the nominal feedforward driving TRUE's plant, without DDS.
+
+    The tracking controller's law at ``loop_rate`` on the simulator's
+    plant (RK4, the command held over each step) at ``plant_rate``; each
+    state logged with the force held over the step that led to it, as the
+    simulator publishes them; ``lambda`` quantised to 1 um.
+    """
+    from orthoglide_ros.simulation import Plant
+    motion = trajectory.excitation(0, PERIOD)
+    plant = Plant(TRUE)
+    kp, kd = gains
+    steps = round(plant_rate / loop_rate)
+    times, lambdas, forces = [], [], []
+    for k in range(round(duration * loop_rate)):
+        p, v, a = trajectory.excitation_sample(motion, (k / loop_rate)
+                                               % PERIOD)
+        desired = mechanics.solve(NOMINAL, p, v, a)
+        now = mechanics.solve(TRUE, plant.position, plant.velocity)
+        force = tuple(np.add(desired.force, kp * np.subtract(
+            desired.lambda_, now.lambda_) + kd * np.subtract(
+            desired.lambdadot, now.lambdadot)))
+        for _ in range(steps):
+            plant.step(force, 1.0 / plant_rate)
+            times.append(plant.time)
+            lambdas.append(mechanics.solve(TRUE, plant.position).lambda_)
+            forces.append(force)
+    return Log(np.array(times), np.round(np.array(lambdas) / QUANTUM)
+               * QUANTUM, np.array(forces), 'closed loop')
+
+
+def test_a_closed_loop_log_is_identified_without_bias(base):
+    """
+    The motion filtered at 5 x the cutoff keeps what the Coulomb switch sees.
+
+    In a closed loop the velocity ripples at the reversals; filtered at
+    the cutoff itself, the motion missed m1 + m2 by 5.8 % and m3 + m6 by
+    1.2 % on this log (without noise: the figures are the bias).
+    """
+    found = identification.identify(NOMINAL, closed_loop_log(), base=base,
+                                    force_lag=0.5 / 500.0)
+    error = np.abs(found.values / truth_of(base) - 1.0)
+    assert error[0] <= 0.02 and (error[1:] <= 0.005).all(), dict(
+        zip(base.names, error))
+
+
 def test_measured_velocities_replace_the_differentiated_ones(base):
     log = synthetic_log(TRUE, 0, PERIOD, 3, duration=6.0, velocities=True)
     with_velocities = identification.prepare(NOMINAL, log)
@@ -263,12 +311,13 @@ def test_measured_velocities_replace_the_differentiated_ones(base):
     viscous = slice(6, 9)
     # The viscous columns are the filtered lambdadot: the measured ones
     # where given (doubled: doubled), else the differentiated ones, which
-    # the 1 um quantisation hardly changes.
+    # the 1 um quantisation hardly changes (the Coulomb columns, of size
+    # 1, by 0.3 % where the sliders reverse).
     assert np.allclose(doubled.regressor[:, :, viscous],
                        2.0 * with_velocities.regressor[:, :, viscous],
                        rtol=1e-9, atol=1e-12)
     assert np.allclose(with_velocities.regressor, without.regressor,
-                       rtol=1e-3, atol=1e-3)
+                       rtol=1e-3, atol=5e-3)
     assert np.array_equal(with_velocities.forces, without.forces)
     found = identification.identify(
         NOMINAL, synthetic_log(TRUE, 0, PERIOD, 1, velocities=True),
