@@ -169,35 +169,24 @@ def validate(loop, names, nominal, identified, plant, repeats):
     """
     Track each validation motion in the four cases; return the runs.
 
-    The two cases the criterion compares run ``repeats`` times each,
-    interleaved, and keep their median run (by RMS error): one pass over
-    DDS on a shared machine varies by a factor of two or more with the
-    load, the same for both.
+    PD alone and PD + nominal once; the two cases the criterion compares
+    ``repeats`` times each, interleaved, their median pass kept
+    (:func:`closed_loop_harness.median_runs`).
     """
     models = {'PD': (False, nominal), 'PD + nominal FF': (True, nominal),
               'PD + identified FF': (True, identified),
               'PD + exact FF': (True, plant)}
+
+    def report(text):
+        print('  ' + text, flush=True)
     runs = {}
     for name in names:
-        order = [c for c in CASES if c not in COMPARED] \
-            + list(COMPARED) * repeats
-        passes = {case: [] for case in CASES}
-        for case in order:
-            feedforward, model = models[case]
-            run = loop.run(name, feedforward, plant=plant, model=model)
-            if run.braked:
-                print(f'  {name}, {case}: the plant was braked for '
-                      f'{run.braked} states (a process stalled longer than '
-                      'the command timeout): a second pass', flush=True)
-                run = loop.run(name, feedforward, plant=plant, model=model)
-            print(f'  {name}, {case}: {run.samples} samples, position '
-                  f'error RMS {run.rms_mm:.3f} mm, max {run.max_mm:.3f} mm'
-                  + (f', braked {run.braked}' if run.braked else ''),
-                  flush=True)
-            passes[case].append(run)
-        for case, done in passes.items():
-            runs[name, case] = sorted(done, key=lambda r: r.rms_mm)[
-                len(done) // 2]
+        for group, times in (([c for c in CASES if c not in COMPARED], 1),
+                             (COMPARED, repeats)):
+            medians, _ = harness.median_runs(
+                loop, name, {case: models[case] for case in group}, plant,
+                times, report)
+            runs.update({(name, case): run for case, run in medians.items()})
     return runs
 
 

@@ -396,6 +396,41 @@ class ClosedLoop:
             raise LoopError('the ROS context was shut down') from None
 
 
+def median_runs(loop, name, cases, plant, repeats=3, report=None,
+                passes=None):
+    """
+    Run each case ``repeats`` times, interleaved; return its median runs.
+
+    ``cases``: ``{label: (feedforward, model)}`` for :meth:`ClosedLoop.run`
+    of the motion ``name`` on ``plant``. A pass the plant was braked in (a
+    process stalled longer than the command timeout) is run again once.
+    Returns ``(medians, passes)``: ``{label: Run}``, the pass of median
+    RMS error of each case, and ``{label: [Run, ...]}``, every pass (those
+    of ``passes`` given, a first round's, and this round's). One pass over
+    DDS varies severalfold with the machine's load (the pass's latency,
+    which the error includes), the same for every model. ``report(text)``
+    (optional) hears about every pass.
+    """
+    passes = passes or {label: [] for label in cases}
+    for _ in range(repeats):
+        for label, (feedforward, model) in cases.items():
+            run = loop.run(name, feedforward, plant=plant, model=model)
+            if run.braked:
+                if report:
+                    report(f'{name}, {label}: the plant was braked for '
+                           f'{run.braked} states (a process stalled longer '
+                           'than the command timeout): a second pass')
+                run = loop.run(name, feedforward, plant=plant, model=model)
+            if report:
+                report(f'{name}, {label}: {run.samples} samples, position '
+                       f'error RMS {run.rms_mm:.3f} mm, max {run.max_mm:.3f}'
+                       ' mm' + (f', braked {run.braked}' if run.braked
+                                else ''))
+            passes[label].append(run)
+    return {label: sorted(runs, key=lambda r: r.rms_mm)[len(runs) // 2]
+            for label, runs in passes.items()}, passes
+
+
 def robot_parameters(robot):
     """Return every ``robot.*`` parameter of ``robot`` (rclpy Parameters)."""
     return [Parameter(f'robot.{name}', value=value)

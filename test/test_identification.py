@@ -254,28 +254,31 @@ def test_parallel_filtering_leaves_no_bias_from_a_sharp_coulomb_switch(
     assert np.abs(found.values / truth - 1.0).max() < 0.01, found.values
 
 
-def closed_loop_log(duration=12.0, loop_rate=250.0, plant_rate=500.0,
-                    gains=(20000.0, 1200.0)):
+def closed_loop(model, sample, duration, loop_rate=250.0, plant_rate=500.0,
+                gains=(20000.0, 1200.0)):
     """
-    Log PD + the nominal feedforward driving TRUE's plant, without DDS.
+    Run PD + ``model``'s feedforward on TRUE's plant, without DDS.
 
-    The tracking controller's law at ``loop_rate`` on the simulator's
-    plant (RK4, the command held over each step) at ``plant_rate``; each
-    state logged with the force held over the step that led to it, as the
-    simulator publishes them; ``lambda`` quantised to 1 um.
+    The tracking controller's law at ``loop_rate`` (each command from the
+    state at its tick, applied from the next tick on, as a drive does) on
+    the simulator's plant (RK4, the command held over each step) at
+    ``plant_rate``, following ``sample(t)`` (position, velocity,
+    acceleration). Returns ``(log, rms)``: the log of each state with the
+    force held over the step that led to it (as the simulator publishes
+    them; ``lambda`` quantised to 1 um) and the RMS position error (m).
     """
     from orthoglide_ros.simulation import Plant
-    motion = trajectory.excitation(0, PERIOD)
     plant = Plant(TRUE)
     kp, kd = gains
     steps = round(plant_rate / loop_rate)
-    times, lambdas, forces = [], [], []
+    times, lambdas, forces, errors = [], [], [], []
+    force = (0.0, 0.0, 0.0)
     for k in range(round(duration * loop_rate)):
-        p, v, a = trajectory.excitation_sample(motion, (k / loop_rate)
-                                               % PERIOD)
-        desired = mechanics.solve(NOMINAL, p, v, a)
+        p, v, a = sample(k / loop_rate)
+        errors.append(np.subtract(plant.position, p))
+        desired = mechanics.solve(model, p, v, a)
         now = mechanics.solve(TRUE, plant.position, plant.velocity)
-        force = tuple(np.add(desired.force, kp * np.subtract(
+        command = tuple(np.add(desired.force, kp * np.subtract(
             desired.lambda_, now.lambda_) + kd * np.subtract(
             desired.lambdadot, now.lambdadot)))
         for _ in range(steps):
@@ -283,11 +286,26 @@ def closed_loop_log(duration=12.0, loop_rate=250.0, plant_rate=500.0,
             times.append(plant.time)
             lambdas.append(mechanics.solve(TRUE, plant.position).lambda_)
             forces.append(force)
-    return Log(np.array(times), np.round(np.array(lambdas) / QUANTUM)
-               * QUANTUM, np.array(forces), 'closed loop')
+        force = command
+    log = Log(np.array(times), np.round(np.array(lambdas) / QUANTUM)
+              * QUANTUM, np.array(forces), 'closed loop')
+    return log, float(np.sqrt(np.mean(np.sum(np.square(errors), axis=1))))
 
 
-def test_a_closed_loop_log_is_identified_without_bias(base):
+def excitation_sample(t, motion=trajectory.excitation(0, PERIOD)):
+    return trajectory.excitation_sample(motion, t % PERIOD)
+
+
+@pytest.fixture(scope='module')
+def closed_loop_result(base):
+    """Identify TRUE from 12 s of the excitation tracked by PD + nominal."""
+    log, _ = closed_loop(NOMINAL, excitation_sample, 12.0)
+    return identification.identify(NOMINAL, log, base=base,
+                                   force_lag=0.5 / 500.0)
+
+
+def test_a_closed_loop_log_is_identified_without_bias(base,
+                                                      closed_loop_result):
     """
     The motion filtered at 5 x the cutoff keeps what the Coulomb switch sees.
 
@@ -295,11 +313,24 @@ def test_a_closed_loop_log_is_identified_without_bias(base):
     the cutoff itself, the motion missed m1 + m2 by 5.8 % and m3 + m6 by
     1.2 % on this log (without noise: the figures are the bias).
     """
-    found = identification.identify(NOMINAL, closed_loop_log(), base=base,
-                                    force_lag=0.5 / 500.0)
-    error = np.abs(found.values / truth_of(base) - 1.0)
+    error = np.abs(closed_loop_result.values / truth_of(base) - 1.0)
     assert error[0] <= 0.02 and (error[1:] <= 0.005).all(), dict(
         zip(base.names, error))
+
+
+@pytest.mark.parametrize('target,omega', [
+    (trajectory.PAPER_TARGET, trajectory.PAPER_OMEGA),
+    ((0.04, 0.08, -0.16), 2.0 * math.pi)], ids=['paper', 'fast'])
+def test_identified_feedforward_tracks_within_1_5_times_the_exact_one(
+        closed_loop_result, target, omega):
+    """Issue 10's criterion, in the loop of the demo without DDS's jitter."""
+    def sample(t):
+        return trajectory.paper_sample(t, target, omega)
+    rms = {name: closed_loop(model, sample, 2.0)[1]
+           for name, model in (('identified', closed_loop_result.robot),
+                               ('exact', TRUE), ('nominal', NOMINAL))}
+    assert rms['identified'] <= 1.5 * rms['exact'], rms
+    assert rms['nominal'] > 10.0 * rms['identified'], rms
 
 
 def test_measured_velocities_replace_the_differentiated_ones(base):
