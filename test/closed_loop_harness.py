@@ -101,6 +101,10 @@ TRAJECTORIES = {
 }
 DEFAULT_GAINS = {s.name: s.default for s in PARAMETERS.specs
                  if s.name in ('kp', 'kd')}
+# The controller's path tolerance (m, per actuator): a joint error beyond
+# it made the controller stop following and hold.
+PATH_TOLERANCE = np.array(next(s.default for s in PARAMETERS.specs
+                               if s.name == 'path_tolerance'))
 MISMATCH = 1.2          # the mismatched plant's platform: 20 % heavier
 # A plant the paper's model does not know, for identification: a 25 %
 # heavier platform, bars 15 % heavier, friction on every slider.
@@ -402,8 +406,10 @@ def median_runs(loop, name, cases, plant, repeats=3, report=None,
     Run each case ``repeats`` times, interleaved; return its median runs.
 
     ``cases``: ``{label: (feedforward, model)}`` for :meth:`ClosedLoop.run`
-    of the motion ``name`` on ``plant``. A pass the plant was braked in (a
-    process stalled longer than the command timeout) is run again once.
+    of the motion ``name`` on ``plant``. A pass the plant was braked in, or
+    in which a joint error beyond the path tolerance stopped the
+    controller (a process stalled longer than the command timeout), is run
+    again once.
     Returns ``(medians, passes)``: ``{label: Run}``, the pass of median
     RMS error of each case, and ``{label: [Run, ...]}``, every pass (those
     of ``passes`` given, a first round's, and this round's). One pass over
@@ -415,11 +421,15 @@ def median_runs(loop, name, cases, plant, repeats=3, report=None,
     for _ in range(repeats):
         for label, (feedforward, model) in cases.items():
             run = loop.run(name, feedforward, plant=plant, model=model)
-            if run.braked:
+            tripped = (np.abs(run.joint_error) > PATH_TOLERANCE).any()
+            if run.braked or tripped:
                 if report:
-                    report(f'{name}, {label}: the plant was braked for '
-                           f'{run.braked} states (a process stalled longer '
-                           'than the command timeout): a second pass')
+                    report(f'{name}, {label}: ' + (
+                        f'the plant was braked for {run.braked} states'
+                        if run.braked else 'a joint error beyond the path '
+                        'tolerance stopped the controller') + ' (a process '
+                        'stalled longer than the command timeout): a '
+                        'second pass')
                 run = loop.run(name, feedforward, plant=plant, model=model)
             if report:
                 report(f'{name}, {label}: {run.samples} samples, position '

@@ -16,9 +16,10 @@ plant step before its state (``force_lag``). Checked:
   robot), and better than PD + the nominal one: the median of three
   interleaved passes of each, of six when three miss (one pass over DDS
   varies severalfold with the load; ``closed_loop_harness.median_runs``),
-  a pass in which the plant was braked (a process stalled longer than the
-  command timeout) run again once. The same criterion without DDS, where
-  a pass is deterministic, is ``test_identification.py``'s;
+  a pass in which the plant was braked or the controller held (a process
+  stalled longer than the command timeout) run again once. The same
+  criterion without DDS, where a pass is deterministic, is
+  ``test_identification.py``'s;
 - the identified robot written as a parameters file starts the
   ``feedforward`` node (``--params-file``) with its values.
 
