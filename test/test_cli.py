@@ -333,6 +333,39 @@ def test_unreadable_params_file_exits_2(capsys, tmp_path):
     assert_bad_input(code, out, err, 'missing.yaml')
 
 
+def test_friction_of_the_params_file_reaches_solve_batch_and_paper(
+        capsys, tmp_path):
+    """robot.friction_* read by --params: in every force and power."""
+    params = tmp_path / 'friction.yaml'
+    params.write_text('feedforward:\n  ros__parameters:\n    robot:\n'
+                      '      friction_viscous: [30.0, 40.0, 50.0]\n'
+                      '      friction_coulomb: [5.0, 3.0, 4.0]\n'
+                      '      friction_velocity: 0.002\n')
+    robot = Robot(friction_viscous=(30.0, 40.0, 50.0),
+                  friction_coulomb=(5.0, 3.0, 4.0), friction_velocity=0.002)
+    p, v, a = eq6(0.7)
+    code, out, _ = run(capsys, 'solve', '--position', *p, '--velocity', *v,
+                       '--acceleration', *a, '--json', '--params', params)
+    assert code == 0
+    assert_close(json.loads(out), expected_row(mechanics.solve(robot, p, v,
+                                                               a)))
+    rigid = mechanics.solve(Robot(), p, v, a)
+    assert json.loads(out)['force_a'] - rigid.force[0] == pytest.approx(
+        30.0 * rigid.lambdadot[0] + 5.0 * math.tanh(rigid.lambdadot[0]
+                                                    / 0.002), rel=1e-9)
+    columns, rows = paper_trajectory(5)
+    source = write_trajectory(tmp_path / 'in.csv', columns, rows)
+    for argv in (['batch', '--input', source], ['paper', '--samples', 5,
+                                                '--csv', '-']):
+        code, out, _ = run(capsys, *argv, '--params', params)
+        assert code == 0
+        _, result = read_csv(out)
+        for row in result:
+            t = float(row['t'])
+            assert_close(row, expected_row(mechanics.solve(robot, *eq6(t))),
+                         tol=1e-9)
+
+
 # -- excitation, identify, record ----------------------------------------------
 
 TRAJECTORY_HEADER = 't,x,y,z,vx,vy,vz,ax,ay,az'
