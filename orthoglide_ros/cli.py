@@ -741,9 +741,11 @@ def _parser():
                           'sample (default: to the last)')
     identify.add_argument('--cutoff', type=_positive_float,
                           default=DEFAULT_CUTOFF, metavar='HZ',
-                          help='low-pass cutoff (Hz; default '
-                          f'{DEFAULT_CUTOFF:g}), below half the log\'s '
-                          'sampling rate')
+                          help='cutoff of the low-pass of the forces and '
+                          f'the regressor (Hz; default {DEFAULT_CUTOFF:g}; '
+                          'the motion\'s is '
+                          f'{identification.STATE_CUTOFF_FACTOR:g} times it),'
+                          ' below half the log\'s sampling rate')
     identify.add_argument('--force-lag', type=float, default=0.0,
                           metavar='S', help='the forces were applied S '
                           'seconds before their stamps (default 0; a '
