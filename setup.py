@@ -34,7 +34,7 @@ setup(
     # ROS packages (rclpy, *_msgs) are deliberately absent: they come from
     # apt ROS or from the ros-jazzy-* wheels in requirements.txt. scipy and
     # rosbags (orthoglide identify) are plain PyPI libraries, as numpy.
-    install_requires=['setuptools', 'numpy', 'PyYAML', 'scipy', 'rosbags'],
+    install_requires=['setuptools', 'numpy', 'PyYAML', 'scipy', 'rosbags>=0.11'],
     zip_safe=True,
     maintainer='Orthoglide ROS maintainers',
     maintainer_email='orthoglide@example.com',

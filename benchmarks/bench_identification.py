@@ -3,12 +3,13 @@
 Benchmark the identification (orthoglide_ros.identification).
 
 A synthetic log as the tests make it (30 s at 1 kHz of the excitation of
-seed 0, period 10 s, of a robot unlike the paper's, lambda quantised to
+seed 0, period 6 s, of a robot unlike the paper's, lambda quantised to
 1 um, 0.5 N of noise on the forces: 30,000 samples) goes through
 ``identification.identify`` with the paper's robot as the nominal one, in
 a fresh process each time (so the import of scipy counts, as it does for
-``orthoglide identify``), and once more in the same process. Prints the
-wall times of the steps and the total against the target: 30,000 samples
+``orthoglide identify``). Prints the wall times of the steps (``prepare``
+alone, then ``identify``, which prepares again) and the total (imports,
+base parameters, prepare and identify) against the target: 30,000 samples
 identified within 5 s. No ROS import.
 
 Usage: python benchmarks/bench_identification.py [--samples N] [--repeat R]
@@ -35,7 +36,7 @@ def make_log(samples):
     true = Robot(m5=18.75, m3=2.875, friction_viscous=(30.0, 40.0, 50.0),
                  friction_coulomb=(5.0, 3.0, 4.0))
     times = np.arange(samples) * 1e-3
-    motion = trajectory.excitation(0, 10.0)
+    motion = trajectory.excitation(0, 6.0)
     solution = mechanics.solve_batch(
         true, *trajectory.excitation_batch(motion, times))
     rng = np.random.default_rng(0)
@@ -93,10 +94,10 @@ def main(argv=None):
     print(f'best of {args.repeat} fresh processes (s):')
     print(f'  imports (numpy, scipy.signal, the package)   {imports:8.3f}')
     print(f'  base parameters (400 random states)          {base:8.3f}')
-    print(f'  prepare (resample, filter, differentiate)    {prepare:8.3f}')
+    print(f'  prepare (filter, differentiate, W, filter)   {prepare:8.3f}')
     print(f'  identify (prepare, regressor, least squares) {identify:8.3f}'
           f'   ({int(used)} samples after the decimation)')
-    print(f'  total: imports + base + identify             {total:8.3f}')
+    print(f'  total: imports, base, prepare, identify      {total:8.3f}')
     print('  all runs, total (s): '
           + ', '.join(f'{row[4]:.3f}' for row in rows))
     if args.samples == TARGET_SAMPLES:

@@ -7,11 +7,12 @@ Subcommands (``orthoglide SUBCOMMAND --help`` for details):
   summary table, a CSV file (``--csv``) and a PNG figure (``--plot``).
 - ``solve``: inverse kinematics and dynamics of one sample.
 - ``batch``: the same for every row of a trajectory CSV file.
-- ``excitation``: a periodic motion for identification, its peaks and the
-  condition number of its regressor (``--csv``: its samples).
+- ``excitation``: a periodic trajectory for identification (a ``batch``
+  input file), its peaks and the condition number of its regressor.
 - ``identify``: the robot's masses and friction from a log (a CSV file or
-  a rosbag2 bag), written as a parameters file (``--output``).
-- ``record``: topics into a rosbag2 bag (MCAP or sqlite3); the one
+  a rosbag2 bag), written as a parameters file (``--output``), with a
+  report on standard output (and ``--report``, a PNG).
+- ``record``: joint states into a rosbag2 bag (MCAP or sqlite3); the one
   subcommand that needs ROS (rclpy).
 - ``urdf``: the robot's URDF (a cut tree, see :mod:`orthoglide_ros.urdf`).
 - ``draw``: a picture of the robot at one platform position (PNG).
@@ -135,15 +136,8 @@ def _paper_summary(times, sol, static_force):
 
 
 def _plot_png(times, sol):
-    """Render figures 3-8 as PNG bytes (matplotlib's Agg canvas, no pyplot)."""
-    try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-    except ImportError:
-        raise CliError('--plot needs matplotlib (pip install matplotlib)',
-                       code=1) from None
-    figure = Figure(figsize=(13, 7), layout='constrained')
-    FigureCanvasAgg(figure)
+    """Render figures 3-8 as PNG bytes."""
+    figure = _figure((13, 7), '--plot')
     axes = figure.subplots(2, 3, sharex=True)
     for j, leg in enumerate('ABC'):
         top, bottom = axes[0, j], axes[1, j]
@@ -157,9 +151,7 @@ def _plot_png(times, sol):
         for ax in (top, bottom):
             ax.grid(True, alpha=0.4)
     figure.suptitle('Orthoglide, trajectory of eq. (6)')
-    buffer = io.BytesIO()
-    figure.savefig(buffer, format='png', dpi=100)
-    return buffer.getvalue()
+    return _png(figure)
 
 
 # -- solve ------------------------------------------------------------------
@@ -290,28 +282,29 @@ def _read_trajectory(path, name):
 # -- excitation -------------------------------------------------------------
 
 def run_excitation(robot, args):
-    """Print an excitation's figures (and its CSV), or compare seeds."""
+    """Write an excitation (the best of --seeds) as a trajectory; describe it."""
     base = identification.base_parameters(robot)
-    seeds = range(args.seed, args.seed + args.seeds)
     rows = []
-    for seed in seeds:
+    for seed in range(args.seed, args.seed + args.seeds):
         motion = _excitation(robot, seed, args.duration)
         times = np.arange(0.0, args.duration, 1.0 / CONDITION_RATE)
         p, v, a = trajectory.excitation_batch(motion, times)
         rows.append((seed, motion, identification.condition_number(
-            robot, p, v, a, base), (p, v, a)))
+            robot, p, v, a, base), p, v, a))
+    lines = []
     if args.seeds > 1:
+        lines.append(f'Condition number of the base regressor, period '
+                     f'{args.duration:g} s:')
         best = min(rows, key=lambda row: row[2])
-        print(f'Condition number of the base regressor, period '
-              f'{args.duration:g} s:')
-        for seed, _, condition, _ in rows:
-            print(f'  seed {seed:<10d} {condition:12.4g}'
-                  + ('   (best)' if seed == best[0] else ''))
-        return 0
-    seed, motion, condition, (p, v, a) = rows[0]
+        lines += [f'  seed {row[0]:<10d} {row[2]:12.4g}'
+                  + ('   (best: written)' if row is best else '')
+                  for row in rows]
+    else:
+        best = rows[0]
+    seed, motion, condition, p, v, a = best
     harmonics = motion.sines.shape[1]
     distance = mechanics.workspace_status(robot, p).singularity_distance
-    lines = [
+    lines += [
         f'Excitation: seed {seed}, period {args.duration:g} s, '
         f'{harmonics} harmonics ({1.0 / args.duration:g} to '
         f'{harmonics / args.duration:g} Hz) per axis',
@@ -323,16 +316,15 @@ def run_excitation(robot, args):
         f'base parameters: {", ".join(base.names)}',
         f'condition number of the base regressor: {condition:.4g} '
         '(unit-norm columns)']
-    print('\n'.join(lines))
-    if args.csv is not None:
-        times = np.arange(0.0, args.duration, 1.0 / args.rate)
-        p, v, a = trajectory.excitation_batch(motion, times)
-        try:
-            sol = mechanics.solve_batch(robot, p, v, a)
-        except mechanics.WorkspaceError as error:
-            raise CliError(f'the excitation at t = {times[error.row]:.6g} '
-                           f's: {_reason(error)}') from None
-        _write_output(args.csv, _csv_text(times, p, sol))
+    times = np.arange(0.0, args.duration, 1.0 / args.rate)
+    p, v, a = trajectory.excitation_batch(motion, times)
+    # With the trajectory on standard output, the description goes to
+    # standard error.
+    print('\n'.join(lines),
+          file=sys.stderr if args.output == '-' else sys.stdout)
+    _write_output(args.output, _table_csv(
+        ('t',) + tuple(c for _, names, _ in INPUT_GROUPS[1:] for c in names),
+        times, np.column_stack((p, v, a))))
     return 0
 
 
@@ -346,13 +338,14 @@ def _excitation(robot, seed, duration):
 # -- identify ---------------------------------------------------------------
 
 def run_identify(robot, args):
-    """Identify the base parameters from a log; print, write the file."""
+    """Identify the base parameters from a log; print, write the file(s)."""
     joints = tuple(args.joint_names)
     try:
-        log = identification.crop(identification.read_log(
-            args.log, args.topic, joints), args.start, args.end)
-        result = identification.identify(robot, log, args.cutoff,
-                                         force_lag=args.force_lag)
+        log = identification.read_log(args.input, args.topic, joints)
+        window = identification.crop(log, args.start, args.end)
+        result = identification.identify(
+            robot, window, args.cutoff, force_lag=args.force_lag,
+            max_relative_std=args.max_relative_std)
         validation = None
         if args.validate is not None:
             other = identification.prepare(robot, identification.read_log(
@@ -365,7 +358,9 @@ def run_identify(robot, args):
     except (identification.LogError,
             identification.IdentificationError) as error:
         raise CliError(str(error)) from None
-    summary = _identify_summary(args, log, result)
+    report = None if args.report is None else _identification_png(
+        args.input, result)
+    summary = _identify_summary(args, log, window, result)
     print('\n'.join(summary))
     for note in result.notes:
         print(f'note: {note}')
@@ -374,38 +369,79 @@ def run_identify(robot, args):
         print(_row('', 'A', 'B', 'C'))
         print(_row('  nominal robot', *validation[0]))
         print(_row('  identified robot', *validation[1]))
-    if args.output is not None:
-        comments = [f'Identified by `orthoglide identify` from {args.log}',
-                    *summary[1:]] + [f'note: {n}' for n in result.notes]
-        _write_output(args.output, params_file.robot_file_text(
-            result.robot, comments).encode('utf-8'))
-        print(f'written: {args.output}')
+    comments = [f'Identified by `orthoglide identify` from {args.input}',
+                *summary[1:]] + [f'note: {n}' for n in result.notes]
+    _write_output(args.output, params_file.robot_file_text(
+        result.robot, comments).encode('utf-8'))
+    print(f'written: {args.output}')
+    if report is not None:
+        _write_output(args.report, report)
+        print(f'written: {args.report}')
     return 0
 
 
-def _identify_summary(args, log, result):
+def _identify_summary(args, log, window, result):
+    """Return the report's lines: samples, spans, base parameters, fit."""
     samples = result.samples
-    lines = [f'Identification from {args.log}: {len(log.times)} samples, '
-             f'{len(samples.times)} used ({samples.segments} segment(s), '
-             f'low-pass {args.cutoff:g} Hz, decimated to '
-             f'{samples.rate:.4g} Hz, force lag {args.force_lag:g} s)',
-             f'{"base parameter":<32}{"identified":>14}{"nominal":>14}'
-             f'{"rel. std (%)":>14}']
-    for name, carrier, value, nominal, relative in zip(
-            result.base.names, result.base.independent, result.values,
-            result.nominal, result.relative_std):
+    lines = [
+        f'Identification from {args.input}: {len(log.times)} samples over '
+        f'{_span(log.times)}; {len(window.times)} in the window '
+        f'{_span(window.times)}; {len(samples.times)} used over '
+        f'{_span(samples.times)} ({samples.segments} segment(s), low-pass '
+        f'{args.cutoff:g} Hz, decimated to {samples.rate:.4g} Hz, force lag '
+        f'{args.force_lag:g} s)',
+        f'{"base parameter":<22}{"identified":>12}{"nominal":>12}'
+        f'{"rel. std (%)":>14}  meaning']
+    for name, meaning, carrier, value, nominal, relative in zip(
+            result.base.names, result.base.meanings,
+            result.base.independent, result.values, result.nominal,
+            result.relative_std):
         unit = identification.UNITS[identification.STANDARD[carrier]]
         label = f'{name} ({unit})'
-        lines.append(f'{label:<32}{value:14.6g}{nominal:14.6g}'
-                     f'{relative:14.3g}')
+        lines.append(f'{label:<22}{value:12.6g}{nominal:12.6g}'
+                     f'{relative:14.3g}  {meaning}')
     lines.append(f'condition number of the base regressor: '
                  f'{result.condition:.4g} (unit-norm columns)')
-    lines.append('residual RMS (N): ' + ', '.join(
+    lines.append('RMS residual per actuator (N): ' + ', '.join(
         f'{leg} {r:.4g}' for leg, r in zip('ABC', result.residual_rms))
-        + ' (forces RMS: ' + ', '.join(
+        + ' (RMS force: ' + ', '.join(
             f'{leg} {r:.4g}' for leg, r in zip('ABC', result.force_rms))
         + ')')
     return lines
+
+
+def _span(times):
+    """Describe a span of times (s): ``[0, 29.999] s (29.999 s)``."""
+    return f'[{times[0]:.6g}, {times[-1]:.6g}] s ({times[-1] - times[0]:.6g} s)'
+
+
+def _identification_png(source, result):
+    """Draw measured vs predicted forces and the residuals as PNG bytes."""
+    figure = _figure((13, 6.5), '--report')
+    axes = figure.subplots(2, 3, sharex=True)
+    samples = result.samples
+    # Segments apart: no line across a gap.
+    gap = np.r_[np.diff(samples.times) > 1.5 / samples.rate, False]
+    times = np.insert(samples.times, np.flatnonzero(gap) + 1, np.nan)
+    for j, leg in enumerate('ABC'):
+        measured, predicted = (np.insert(f[:, j], np.flatnonzero(gap) + 1,
+                                         np.nan)
+                               for f in (samples.forces, result.predicted))
+        top, bottom = axes[0, j], axes[1, j]
+        top.plot(times, measured, label='measured (filtered)')
+        top.plot(times, predicted, '--', label='predicted (identified)')
+        top.set_title(f'actuator {leg}')
+        top.set_ylabel(f'$f_{leg}$ (N)')
+        top.legend(fontsize=8)
+        bottom.plot(times, measured - predicted, color='tab:red')
+        bottom.set_title(f'residual, RMS {result.residual_rms[j]:.3g} N')
+        bottom.set_ylabel(f'$f_{leg}$ measured - predicted (N)')
+        bottom.set_xlabel('t (s)')
+        for ax in (top, bottom):
+            ax.grid(True, alpha=0.4)
+    figure.suptitle(f'Identification from {source}: measured and predicted '
+                    'actuator forces')
+    return _png(figure)
 
 
 # -- record -----------------------------------------------------------------
@@ -418,8 +454,9 @@ def run_record(robot, args):
         from orthoglide_ros import recorder_node
     except ImportError as error:
         raise CliError(f'record needs ROS 2 (rclpy): {error}') from None
-    return recorder_node.main(args.output, args.topic or ['joint_states'],
-                              args.storage, args.duration, args.wait)
+    return recorder_node.main(
+        args.output, args.topic or [identification.DEFAULT_TOPIC],
+        args.storage, args.duration, args.wait)
 
 
 # -- urdf -------------------------------------------------------------------
@@ -503,14 +540,38 @@ def _check_extension(path, extension):
 
 def _csv_text(times, positions, sol):
     """Format samples as CSV bytes (CSV_COLUMNS, repr); times may be None."""
-    table = np.column_stack([positions] + [
-        np.asarray(values) for values in sol[:5]])
-    out = [','.join(CSV_COLUMNS)]
+    return _table_csv(CSV_COLUMNS, times, np.column_stack(
+        [positions] + [np.asarray(values) for values in sol[:5]]))
+
+
+def _table_csv(columns, times, table):
+    """Format ``t`` and the (N, k) ``table`` as CSV bytes (full precision)."""
+    out = [','.join(columns)]
     t_cells = [''] * len(table) if times is None else map(
         repr, np.asarray(times, dtype=float).tolist())
     for t, row in zip(t_cells, table.tolist()):
         out.append(t + ',' + ','.join(map(repr, row)))
     return ('\n'.join(out) + '\n').encode('utf-8')
+
+
+def _figure(size, option):
+    """Return a matplotlib Figure on the Agg canvas (no pyplot)."""
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise CliError(f'{option} needs matplotlib (pip install matplotlib)',
+                       code=1) from None
+    figure = Figure(figsize=size, layout='constrained')
+    FigureCanvasAgg(figure)
+    return figure
+
+
+def _png(figure):
+    """Return ``figure`` as PNG bytes."""
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format='png', dpi=100)
+    return buffer.getvalue()
 
 
 def _write_output(path, data):
@@ -731,33 +792,39 @@ def _parser():
 
     excitation = sub.add_parser(
         'excitation', parents=[common],
-        help='a periodic motion for identification',
-        description='A finite Fourier series per axis of frame 0, '
+        help='a periodic trajectory for identification',
+        description='Write one period of an excitation as a trajectory CSV '
+        'file (the batch input columns t, x, y, z (m), vx, vy, vz (m/s), ax, '
+        'ay, az (m/s^2)): a finite Fourier series per axis of frame 0, '
         f'{trajectory.EXCITATION_HARMONICS} harmonics of 1 / duration with '
-        'random coefficients from --seed, starting at home at rest, within '
-        f'{trajectory.EXCITATION_BOX:g} m of home per axis, '
+        'random coefficients from --seed, starting and ending at home at '
+        f'rest, within {trajectory.EXCITATION_BOX:g} m of home, '
         f'{trajectory.EXCITATION_MAX_VELOCITY:g} m/s and '
         f'{trajectory.EXCITATION_MAX_ACCELERATION:g} m/s^2 per axis, inside '
         'the workspace. Prints its peaks, its smallest singularity distance '
         'and the condition number of its base regressor (the smaller the '
         'better: noise in a log is amplified by it). The setpoint_publisher '
-        'streams the same motion (motion: excitation).')
+        'streams the same motion (motion: excitation, seed, duration).')
+    excitation.add_argument('--duration', type=_positive_float,
+                            required=True, metavar='S',
+                            help='period of the series and length of the '
+                            'file (s)')
+    excitation.add_argument('--output', required=True, metavar='FILE',
+                            help='trajectory CSV file (t, x, y, z, vx, vy, '
+                            'vz, ax, ay, az; SI units), as orthoglide batch '
+                            'reads it; - for standard output (the '
+                            'description then goes to standard error)')
     excitation.add_argument('--seed', type=_count, default=0, metavar='N',
                             help='seed of the coefficients, an integer >= 0'
                             ' (default 0)')
-    excitation.add_argument('--duration', type=_positive_float, default=5.0,
-                            metavar='S', help='period (s; default 5)')
     excitation.add_argument('--seeds', type=_positive_count, default=1,
                             metavar='K',
-                            help='compare the condition numbers of K seeds '
-                            'from --seed on (default 1: describe one)')
-    excitation.add_argument('--csv', metavar='FILE', help='write one period '
-                            f'as CSV ({columns}; SI units; the robot of '
-                            '--params): a log that identify reads; - for '
-                            'standard output')
+                            help='try the K seeds from --seed on and write '
+                            'the one of the smallest condition number '
+                            '(default 1)')
     excitation.add_argument('--rate', type=_positive_float, default=1000.0,
-                            metavar='HZ', help='samples per second of --csv'
-                            ' (default 1000)')
+                            metavar='HZ', help='samples per second of the '
+                            'file (default 1000)')
     excitation.set_defaults(run=run_excitation)
 
     identify = sub.add_parser(
@@ -765,20 +832,34 @@ def _parser():
         help='identify masses and friction from a log',
         description='Identify the base parameters (the combinations of the '
         'masses (kg) and of the viscous (N s/m) and Coulomb (N) friction '
-        'of the sliders that the forces depend on) from a log: a CSV file '
-        'with the columns t (s), lambda_a, lambda_b, lambda_c (m), force_a, '
-        'force_b, force_c (N), or a rosbag2 bag (a directory, MCAP or '
-        'sqlite3) of sensor_msgs/JointState (position: lambda, effort: '
-        'force, header stamp: time). Positions and forces go through a '
-        'zero-phase low-pass; least squares; the robot of --params is the '
-        'nominal one (its geometry, gravity and friction_velocity are '
-        'kept). Prints the base parameters with their relative standard '
-        'deviations, the condition number and the residual.')
-    identify.add_argument('--log', required=True, metavar='PATH',
-                          help='CSV file or rosbag2 bag directory')
-    identify.add_argument('--topic', default='joint_states',
+        'of the sliders that the forces depend on) from a log, and write '
+        'the identified robot as a ROS 2 parameters file. The log: a CSV '
+        'file with the columns t (s), lambda_a, lambda_b, lambda_c (m), '
+        'force_a, force_b, force_c (N) and, optional, lambdadot_a, '
+        'lambdadot_b, lambdadot_c (m/s), or a rosbag2 bag (a directory, or '
+        'its .mcap or .db3 file) of sensor_msgs/JointState (position: '
+        'lambda, effort: force, header stamp: time). The forces and the '
+        'regressor go through the same zero-phase low-pass; least squares; '
+        'the robot of --params is the nominal one (its geometry, gravity '
+        'and friction_velocity are kept). Prints each base parameter with '
+        'its meaning, estimate and relative standard deviation, the '
+        'condition number, the RMS residual per actuator, the samples used '
+        'and their time span. A log that cannot be used or that does not '
+        'excite every base parameter exits with code 2; nothing is then '
+        'written.')
+    identify.add_argument('--input', required=True, metavar='LOG',
+                          help='CSV file, or rosbag2 bag (directory, .mcap '
+                          'or .db3 file)')
+    identify.add_argument('--output', required=True, metavar='FILE',
+                          help='the identified robot as a ROS 2 parameters '
+                          'file (section feedforward, every robot.* '
+                          'parameter) for --params-file and --params')
+    identify.add_argument('--report', metavar='FILE',
+                          help='draw the measured and predicted forces (N) '
+                          'per actuator and the residuals as a PNG image')
+    identify.add_argument('--topic', default=identification.DEFAULT_TOPIC,
                           help='joint states topic in a bag (default '
-                          'joint_states)')
+                          f'{identification.DEFAULT_TOPIC})')
     identify.add_argument('--joint-names', nargs=3, metavar='NAME',
                           default=list(JOINT_NAMES),
                           help='joints of actuators A, B, C in the joint '
@@ -791,42 +872,47 @@ def _parser():
                           'sample (default: to the last)')
     identify.add_argument('--cutoff', type=_positive_float,
                           default=DEFAULT_CUTOFF, metavar='HZ',
-                          help='low-pass cutoff (Hz; default '
-                          f'{DEFAULT_CUTOFF:g}), below half the log\'s '
-                          'sampling rate')
+                          help='cutoff of the low-pass of the forces and '
+                          f'the regressor (Hz; default {DEFAULT_CUTOFF:g}; '
+                          'the motion\'s is '
+                          f'{identification.STATE_CUTOFF_FACTOR:g} times it),'
+                          ' below half the log\'s sampling rate')
     identify.add_argument('--force-lag', type=float, default=0.0,
                           metavar='S', help='the forces were applied S '
                           'seconds before their stamps (default 0; a '
                           'simulator or drive that reports the force held '
                           'over its last step of dt: dt / 2)')
-    identify.add_argument('--validate', metavar='PATH',
+    identify.add_argument('--max-relative-std', type=_positive_float,
+                          default=identification.MAX_RELATIVE_STD,
+                          metavar='PCT', help='refuse the log when a base '
+                          'parameter\'s relative standard deviation exceeds '
+                          f'PCT %% (default {identification.MAX_RELATIVE_STD:g}'
+                          '): the log does not excite it')
+    identify.add_argument('--validate', metavar='LOG',
                           help='another log (another motion): print the '
                           'force error RMS (N) of the nominal and the '
                           'identified robot on it')
-    identify.add_argument('--output', metavar='FILE',
-                          help='write the identified robot as a ROS 2 '
-                          'parameters file (section feedforward, every '
-                          'robot.* parameter) for --params-file and '
-                          '--params')
     identify.set_defaults(run=run_identify)
 
     record = sub.add_parser(
-        'record', help='record topics into a rosbag2 bag (needs ROS 2)',
+        'record', help='record joint states into a rosbag2 bag (needs ROS 2)',
         description='Record topics (serialized messages, stamped at '
-        'reception) into a new rosbag2 bag directory until --duration or '
-        'Ctrl-C; their types are taken from their publishers. The bag is '
-        'what identify reads (topic joint_states) and what ros2 bag '
-        'reads. Needs rclpy; DDS settings from the environment '
-        '(ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE).')
-    record.add_argument('--output', required=True, metavar='DIR',
+        'reception) into a new rosbag2 bag directory for --duration seconds '
+        '(Ctrl-C ends it earlier, the bag complete); their types are taken '
+        'from their publishers. The bag is what identify reads (topic '
+        f'{identification.DEFAULT_TOPIC}) and what ros2 bag reads. Needs '
+        'rclpy; DDS settings from the environment (ROS_DOMAIN_ID, '
+        'ROS_AUTOMATIC_DISCOVERY_RANGE).')
+    record.add_argument('--output', required=True, metavar='BAG',
                         help='bag directory to create (must not exist)')
+    record.add_argument('--duration', type=_positive_float, required=True,
+                        metavar='S', help='stop after S seconds')
     record.add_argument('--topic', action='append', metavar='NAME',
                         help='topic to record, repeatable (default '
-                        'joint_states)')
+                        f'{identification.DEFAULT_TOPIC})')
     record.add_argument('--storage', choices=('mcap', 'sqlite3'),
-                        default='mcap', help='storage (default mcap)')
-    record.add_argument('--duration', type=_positive_float, metavar='S',
-                        help='stop after S seconds (default: at Ctrl-C)')
+                        default='mcap', help='storage (default mcap, as '
+                        'ros2 bag record)')
     record.add_argument('--wait', type=_positive_float, default=10.0,
                         metavar='S', help='longest wait for each topic\'s '
                         'publisher (s; default 10)')

@@ -23,9 +23,9 @@ PAPER_VALUES = {
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 # Friction on the sliders (not in the paper, which neglects it): none by
 # default, so that the paper's figures stand. The smoothing speed of the
-# Coulomb term: tanh(1) = 76 % of the Coulomb force at 10 mm/s.
+# Coulomb term: tanh(1) = 76 % of the Coulomb force at 1 mm/s.
 NO_FRICTION = (0.0, 0.0, 0.0)
-DEFAULT_FRICTION_VELOCITY = 0.01    # m/s
+DEFAULT_FRICTION_VELOCITY = 0.001   # m/s
 
 # Units of every parameter, for messages, descriptions and the docs.
 UNITS = {

@@ -10,12 +10,15 @@ paper's robot. The demo
    excitation``) through PD + the nominal feedforward for a few periods
    while ``orthoglide record`` writes the plant's ``joint_states`` into an
    MCAP bag;
-2. runs ``orthoglide identify`` on the bag (the passes' window), which
-   writes the identified robot as a parameters file;
+2. runs ``orthoglide identify`` on the bag (the passes' window, from the
+   bag's first header stamp, the one thing the demo reads from the bag
+   itself), which writes the identified robot as a parameters file and
+   its report (measured and predicted forces) as a PNG;
 3. tracks another motion (the paper's trajectory and a faster one) with PD
    alone, PD + the nominal feedforward, PD + the identified feedforward
    (the feedforward's ``robot.*`` set from the file) and PD + the exact
-   feedforward (the plant's own robot);
+   feedforward (the plant's own robot), the last two three times each,
+   interleaved (``--repeats``), keeping the median pass;
 4. prints the base parameters, identified against the plant's, and the
    tracking errors, checks that PD + identified tracks within 1.5 times
    PD + exact (RMS), and writes a PNG.
@@ -51,7 +54,9 @@ from orthoglide_ros import identification, params_file  # noqa: E402
 from orthoglide_ros.robot import Robot  # noqa: E402
 
 CRITERION = 1.5     # PD + identified within this factor of PD + exact
+RECORD_MARGIN = 60.0    # s the recording may last beyond the passes
 CASES = ('PD', 'PD + nominal FF', 'PD + identified FF', 'PD + exact FF')
+COMPARED = CASES[2:]     # the criterion's cases: their median of --repeats
 
 
 def main(argv=None):
@@ -63,6 +68,10 @@ def main(argv=None):
                         help='period of the excitation (s; default 6)')
     parser.add_argument('--passes', type=int, default=5,
                         help='periods recorded (default 5: 30 s)')
+    parser.add_argument('--repeats', type=int, default=3,
+                        help='passes of PD + identified and PD + exact FF '
+                        'per motion, interleaved; the median counts '
+                        '(default 3)')
     parser.add_argument('--trajectories', default='paper,fast',
                         help='validation motions, comma-separated, of: '
                         + ', '.join(harness.TRAJECTORIES))
@@ -72,8 +81,9 @@ def main(argv=None):
     args = parser.parse_args(argv)
     names = args.trajectories.split(',')
     if any(n not in harness.TRAJECTORIES for n in names) or \
-            args.passes < 1 or not args.period > 0.0:
-        parser.error('unknown trajectory, or passes < 1, or period <= 0')
+            args.passes < 1 or args.repeats < 1 or not args.period > 0.0:
+        parser.error('unknown trajectory, or passes or repeats < 1, or '
+                     'period <= 0')
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     bag = out / 'excitation'
@@ -88,9 +98,11 @@ def main(argv=None):
         with harness.ClosedLoop(context) as loop:
             excitation = excite(loop, args, bag, nominal, plant)
             identify_output = identify(bag, excitation, args,
-                                       identified_file)
+                                       identified_file,
+                                       out / 'identify_report.png')
             identified = params_file.load_robot(identified_file)
-            runs = validate(loop, names, nominal, identified, plant)
+            runs = validate(loop, names, nominal, identified, plant,
+                            args.repeats)
         failed = {k: v for k, v in loop.exit_codes.items() if v != 0}
         if failed:
             raise harness.LoopError(f'nodes exited with {failed}:\n'
@@ -113,8 +125,11 @@ def excite(loop, args, bag, nominal, plant):
     """Stream the excitation while ``orthoglide record`` writes the bag."""
     print(f'Excitation: seed {args.seed}, {args.passes} x {args.period:g} s, '
           f'PD + nominal feedforward, recorded into {bag}', flush=True)
+    # Stopped by SIGINT once the passes are over (a complete bag); the
+    # duration only bounds it.
     record = start_node_process(
-        ['record', '--output', str(bag), '--topic', 'joint_states'],
+        ['record', '--output', str(bag), '--topic', '/joint_states',
+         '--duration', f'{args.passes * args.period + RECORD_MARGIN:g}'],
         command=[node_executable('orthoglide')])
     try:
         # The controller, the harness's recorder and this one.
@@ -131,15 +146,16 @@ def excite(loop, args, bag, nominal, plant):
     return run
 
 
-def identify(bag, run, args, output):
+def identify(bag, run, args, output, report):
     """Run ``orthoglide identify`` on the passes' window of the bag."""
+    # The bag's first header stamp turns the run's start into --start.
     log = identification.read_bag(bag)
     start = (run.start_ns - log.origin) * 1e-9
     end = start + args.passes * args.period
-    command = [node_executable('orthoglide'), 'identify', '--log', str(bag),
+    command = [node_executable('orthoglide'), 'identify', '--input', str(bag),
                '--start', f'{start + harness.SETTLE:.6f}',
                '--end', f'{end:.6f}', '--force-lag', f'{harness.force_lag():g}',
-               '--output', str(output)]
+               '--output', str(output), '--report', str(report)]
     print('  ' + ' '.join(command[1:]), flush=True)
     done = subprocess.run(command, capture_output=True, text=True,
                           timeout=120)
@@ -149,26 +165,28 @@ def identify(bag, run, args, output):
     return done.stdout.rstrip()
 
 
-def validate(loop, names, nominal, identified, plant):
-    """Track each validation motion in the four cases."""
+def validate(loop, names, nominal, identified, plant, repeats):
+    """
+    Track each validation motion in the four cases; return the runs.
+
+    PD alone and PD + nominal once; the two cases the criterion compares
+    ``repeats`` times each, interleaved, their median pass kept
+    (:func:`closed_loop_harness.median_runs`).
+    """
     models = {'PD': (False, nominal), 'PD + nominal FF': (True, nominal),
               'PD + identified FF': (True, identified),
               'PD + exact FF': (True, plant)}
+
+    def report(text):
+        print('  ' + text, flush=True)
     runs = {}
     for name in names:
-        for case in CASES:
-            feedforward, model = models[case]
-            run = loop.run(name, feedforward, plant=plant, model=model)
-            if run.braked:
-                print(f'  {name}, {case}: the plant was braked for '
-                      f'{run.braked} states (a process stalled longer than '
-                      'the command timeout): a second pass', flush=True)
-                run = loop.run(name, feedforward, plant=plant, model=model)
-            print(f'  {name}, {case}: {run.samples} samples, position '
-                  f'error RMS {run.rms_mm:.3f} mm, max {run.max_mm:.3f} mm'
-                  + (f', braked {run.braked}' if run.braked else ''),
-                  flush=True)
-            runs[name, case] = run
+        for group, times in (([c for c in CASES if c not in COMPARED], 1),
+                             (COMPARED, repeats)):
+            medians, _ = harness.median_runs(
+                loop, name, {case: models[case] for case in group}, plant,
+                times, report)
+            runs.update({(name, case): run for case, run in medians.items()})
     return runs
 
 

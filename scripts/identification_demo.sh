@@ -6,7 +6,7 @@
 # scripts/ros_env.sh) and runs scripts/identification_demo.py (--help for
 # options; about two minutes).
 #
-# Usage: scripts/identification_demo.sh [--seed N] [--period S] [--passes K]
+# Usage: scripts/identification_demo.sh [--seed N] [--period S] [--passes K] [--repeats R]
 #                                       [--trajectories paper,fast] [--out DIR]
 # Env:   ORTHOGLIDE_DEMO_DOMAIN_ID=N   ROS_DOMAIN_ID to use (default: one in
 #                                      1..232 drawn from the process id)

@@ -101,6 +101,10 @@ TRAJECTORIES = {
 }
 DEFAULT_GAINS = {s.name: s.default for s in PARAMETERS.specs
                  if s.name in ('kp', 'kd')}
+# The controller's path tolerance (m, per actuator): a joint error beyond
+# it made the controller stop following and hold.
+PATH_TOLERANCE = np.array(next(s.default for s in PARAMETERS.specs
+                               if s.name == 'path_tolerance'))
 MISMATCH = 1.2          # the mismatched plant's platform: 20 % heavier
 # A plant the paper's model does not know, for identification: a 25 %
 # heavier platform, bars 15 % heavier, friction on every slider.
@@ -394,6 +398,47 @@ class ClosedLoop:
                     0.02, max(end - time.monotonic(), 0.0)))
         except ExternalShutdownException:
             raise LoopError('the ROS context was shut down') from None
+
+
+def median_runs(loop, name, cases, plant, repeats=3, report=None,
+                passes=None):
+    """
+    Run each case ``repeats`` times, interleaved; return its median runs.
+
+    ``cases``: ``{label: (feedforward, model)}`` for :meth:`ClosedLoop.run`
+    of the motion ``name`` on ``plant``. A pass the plant was braked in, or
+    in which a joint error beyond the path tolerance stopped the
+    controller (a process stalled longer than the command timeout), is run
+    again once.
+    Returns ``(medians, passes)``: ``{label: Run}``, the pass of median
+    RMS error of each case, and ``{label: [Run, ...]}``, every pass (those
+    of ``passes`` given, a first round's, and this round's). One pass over
+    DDS varies severalfold with the machine's load (the pass's latency,
+    which the error includes), the same for every model. ``report(text)``
+    (optional) hears about every pass.
+    """
+    passes = passes or {label: [] for label in cases}
+    for _ in range(repeats):
+        for label, (feedforward, model) in cases.items():
+            run = loop.run(name, feedforward, plant=plant, model=model)
+            tripped = (np.abs(run.joint_error) > PATH_TOLERANCE).any()
+            if run.braked or tripped:
+                if report:
+                    report(f'{name}, {label}: ' + (
+                        f'the plant was braked for {run.braked} states'
+                        if run.braked else 'a joint error beyond the path '
+                        'tolerance stopped the controller') + ' (a process '
+                        'stalled longer than the command timeout): a '
+                        'second pass')
+                run = loop.run(name, feedforward, plant=plant, model=model)
+            if report:
+                report(f'{name}, {label}: {run.samples} samples, position '
+                       f'error RMS {run.rms_mm:.3f} mm, max {run.max_mm:.3f}'
+                       ' mm' + (f', braked {run.braked}' if run.braked
+                                else ''))
+            passes[label].append(run)
+    return {label: sorted(runs, key=lambda r: r.rms_mm)[len(runs) // 2]
+            for label, runs in passes.items()}, passes
 
 
 def robot_parameters(robot):

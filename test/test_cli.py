@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from orthoglide_ros import cli, mechanics, trajectory
@@ -332,67 +333,134 @@ def test_unreadable_params_file_exits_2(capsys, tmp_path):
     assert_bad_input(code, out, err, 'missing.yaml')
 
 
-# -- excitation and identify --------------------------------------------------
+def test_friction_of_the_params_file_reaches_solve_batch_and_paper(
+        capsys, tmp_path):
+    """robot.friction_* read by --params: in every force and power."""
+    params = tmp_path / 'friction.yaml'
+    params.write_text('feedforward:\n  ros__parameters:\n    robot:\n'
+                      '      friction_viscous: [30.0, 40.0, 50.0]\n'
+                      '      friction_coulomb: [5.0, 3.0, 4.0]\n'
+                      '      friction_velocity: 0.002\n')
+    robot = Robot(friction_viscous=(30.0, 40.0, 50.0),
+                  friction_coulomb=(5.0, 3.0, 4.0), friction_velocity=0.002)
+    p, v, a = eq6(0.7)
+    code, out, _ = run(capsys, 'solve', '--position', *p, '--velocity', *v,
+                       '--acceleration', *a, '--json', '--params', params)
+    assert code == 0
+    assert_close(json.loads(out), expected_row(mechanics.solve(robot, p, v,
+                                                               a)))
+    rigid = mechanics.solve(Robot(), p, v, a)
+    assert json.loads(out)['force_a'] - rigid.force[0] == pytest.approx(
+        30.0 * rigid.lambdadot[0] + 5.0 * math.tanh(rigid.lambdadot[0]
+                                                    / 0.002), rel=1e-9)
+    columns, rows = paper_trajectory(5)
+    source = write_trajectory(tmp_path / 'in.csv', columns, rows)
+    for argv in (['batch', '--input', source], ['paper', '--samples', 5,
+                                                '--csv', '-']):
+        code, out, _ = run(capsys, *argv, '--params', params)
+        assert code == 0
+        _, result = read_csv(out)
+        for row in result:
+            t = float(row['t'])
+            assert_close(row, expected_row(mechanics.solve(robot, *eq6(t))),
+                         tol=1e-9)
 
-def test_excitation_describes_the_motion(capsys):
-    code, out, err = run(capsys, 'excitation', '--seed', 3, '--duration', 4)
+
+# -- excitation, identify, record ----------------------------------------------
+
+TRAJECTORY_HEADER = 't,x,y,z,vx,vy,vz,ax,ay,az'
+
+
+def test_excitation_writes_the_batch_input_columns(capsys, tmp_path):
+    path = tmp_path / 'excitation.csv'
+    code, out, err = run(capsys, 'excitation', '--duration', 3, '--output',
+                         path, '--seed', 2, '--rate', 200)
     assert (code, err) == (0, '')
-    assert 'seed 3, period 4 s, 5 harmonics (0.25 to 1.25 Hz)' in out
+    assert 'seed 2, period 3 s, 5 harmonics (0.333333 to 1.66667 Hz)' in out
     for label in ('peak |position| (m)', 'peak |velocity| (m/s)',
                   'peak |acceleration| (m/s^2)', 'singularity distance',
                   'm5 + 3 m4', 'condition number of the base regressor'):
         assert label in out
-
-
-@pytest.mark.parametrize('argv', [
-    ['--seeds', '0'], ['--seed', '-1'], ['--duration', '0'],
-    ['--duration', 'nan'], ['--rate', '-5']])
-def test_excitation_refuses_bad_arguments(capsys, argv):
-    code, out, err = run(capsys, 'excitation', *argv)
-    assert code == 2 and out == '' and argv[0] in err
-
-
-def test_excitation_compares_seeds(capsys):
-    code, out, _ = run(capsys, 'excitation', '--seed', 10, '--seeds', 3)
-    assert code == 0
-    lines = [line for line in out.splitlines() if 'seed 1' in line]
-    assert [line.split()[1] for line in lines] == ['10', '11', '12']
-    assert sum('(best)' in line for line in lines) == 1
-
-
-def test_excitation_csv_is_a_log_of_the_robot(capsys, tmp_path):
-    path = tmp_path / 'excitation.csv'
-    assert run(capsys, 'excitation', '--seed', 2, '--duration', 3, '--csv',
-               path, '--rate', 200)[0] == 0
     header, rows = read_csv(path.read_text())
-    assert header == HEADER and len(rows) == 600
+    assert header == TRAJECTORY_HEADER and len(rows) == 600
     motion = trajectory.excitation(2, 3.0)
     for i in (0, 77, 599):
         t = float(rows[i]['t'])
         assert t == pytest.approx(i / 200.0, abs=1e-12)
         p, v, a = trajectory.excitation_sample(motion, t)
-        assert_close(rows[i], expected_row(mechanics.solve(Robot(), p, v,
-                                                           a)), tol=1e-9)
+        assert [float(rows[i][c]) for c in TRAJECTORY_HEADER.split(',')[1:]
+                ] == pytest.approx([*p, *v, *a], rel=1e-12, abs=1e-15)
+    # The file is a batch input: orthoglide batch solves it.
+    solved = tmp_path / 'solved.csv'
+    assert run(capsys, 'batch', '--input', path, '--output', solved)[0] == 0
+    assert read_csv(solved.read_text())[0] == HEADER
+
+
+def test_excitation_condition_number_is_the_libraries(capsys, tmp_path):
+    from orthoglide_ros import identification
+    code, out, _ = run(capsys, 'excitation', '--duration', 4, '--output',
+                       tmp_path / 'e.csv')
+    assert code == 0
+    motion = trajectory.excitation(0, 4.0)
+    times = np.arange(0.0, 4.0, 0.01)
+    condition = identification.condition_number(
+        Robot(), *trajectory.excitation_batch(motion, times))
+    assert f'condition number of the base regressor: {condition:.4g}' in out
+
+
+@pytest.mark.parametrize('argv', [
+    ['--seeds', '0'], ['--seed', '-1'], ['--duration', '0'],
+    ['--duration', 'nan'], ['--rate', '-5']])
+def test_excitation_refuses_bad_arguments(capsys, tmp_path, argv):
+    out_file = tmp_path / 'e.csv'
+    full = {'--duration': '5', '--output': str(out_file)}
+    full.update(dict(zip(argv[::2], argv[1::2])))
+    code, out, err = run(capsys, 'excitation',
+                         *[x for kv in full.items() for x in kv])
+    assert code == 2 and out == '' and argv[0] in err
+    assert not out_file.exists()
+
+
+@pytest.mark.parametrize('missing', ['--duration', '--output'])
+def test_excitation_needs_duration_and_output(capsys, tmp_path, missing):
+    full = {'--duration': '5', '--output': str(tmp_path / 'e.csv')}
+    del full[missing]
+    code, _, err = run(capsys, 'excitation',
+                       *[x for kv in full.items() for x in kv])
+    assert code == 2 and missing in err
+
+
+def test_excitation_writes_the_best_of_several_seeds(capsys, tmp_path):
+    path = tmp_path / 'best.csv'
+    code, out, _ = run(capsys, 'excitation', '--duration', 5, '--seed', 10,
+                       '--seeds', 3, '--output', path, '--rate', 100)
+    assert code == 0
+    lines = [line for line in out.splitlines()
+             if line.strip().startswith('seed 1')]
+    assert [line.split()[1] for line in lines] == ['10', '11', '12']
+    conditions = [float(line.split()[2]) for line in lines]
+    best = 10 + int(np.argmin(conditions))
+    assert sum('(best: written)' in line for line in lines) == 1
+    assert f'Excitation: seed {best}, period 5 s' in out
+    _, rows = read_csv(path.read_text())
+    p, _, _ = trajectory.excitation_sample(trajectory.excitation(best, 5.0),
+                                           float(rows[123]['t']))
+    assert float(rows[123]['x']) == pytest.approx(p[0], rel=1e-12)
 
 
 def identification_log(tmp_path, name='log.csv', seed=0, duration=20.0):
     """Write a synthetic log of a robot unlike the paper's (test_identification)."""
-    from test_identification import synthetic_log, TRUE
+    from test_identification import synthetic_log, TRUE, write_csv
     log = synthetic_log(TRUE, seed, 5.0, 11, duration=duration)
-    lines = ['t,lambda_a,lambda_b,lambda_c,force_a,force_b,force_c']
-    lines += [','.join(map(repr, (t, *lam, *f))) for t, lam, f in zip(
-        log.times.tolist(), log.lambdas.tolist(), log.forces.tolist())]
-    path = tmp_path / name
-    path.write_text('\n'.join(lines) + '\n')
-    return path, log
+    return write_csv(tmp_path / name, log), log
 
 
 def test_identify_writes_a_parameters_file_the_tools_read(capsys, tmp_path):
     from orthoglide_ros import identification, params_file
     source, log = identification_log(tmp_path)
     out = tmp_path / 'identified.yaml'
-    code, stdout, err = run(capsys, 'identify', '--log', source, '--output',
-                            out)
+    code, stdout, err = run(capsys, 'identify', '--input', source,
+                            '--output', out)
     assert (code, err) == (0, '')
     expected = identification.identify(Robot(), log)
     robot = params_file.load_robot(out)
@@ -401,9 +469,6 @@ def test_identify_writes_a_parameters_file_the_tools_read(capsys, tmp_path):
     assert all(type(v) is float or all(type(c) is float for c in v)
                for v in values.values())
     assert len(values) == len(Robot.parameter_names())
-    for name, value in zip(expected.base.names, expected.values):
-        assert name in stdout and f'{value:.6g}' in stdout
-    assert 'condition number' in stdout and 'residual RMS (N)' in stdout
     assert f'written: {out}' in stdout
     code, solved, _ = run(capsys, 'solve', '--position', 0, 0, 0, '--json',
                           '--params', out)
@@ -412,12 +477,48 @@ def test_identify_writes_a_parameters_file_the_tools_read(capsys, tmp_path):
         mechanics.solve(robot, (0.0, 0.0, 0.0)).force[2], rel=1e-12)
 
 
+def test_identify_reports_what_the_issue_lists(capsys, tmp_path):
+    """Each base parameter, meaning, estimate, rel. std; condition; RMS; samples, span."""
+    from orthoglide_ros import identification
+    source, log = identification_log(tmp_path)
+    code, out, _ = run(capsys, 'identify', '--input', source, '--output',
+                       tmp_path / 'out.yaml', '--start', 1.0)
+    assert code == 0
+    expected = identification.identify(Robot(), identification.crop(log, 1.0))
+    lines = out.splitlines()
+    for name, meaning, value, relative in zip(
+            expected.base.names, expected.base.meanings, expected.values,
+            expected.relative_std):
+        (line,) = [x for x in lines if x.startswith(name + ' (')]
+        assert line.endswith(meaning)
+        assert f'{value:.6g}' in line and f'{relative:.3g}' in line
+    assert (f'condition number of the base regressor: '
+            f'{expected.condition:.4g}') in out
+    assert 'RMS residual per actuator (N): ' + ', '.join(
+        f'{leg} {r:.4g}' for leg, r in zip('ABC', expected.residual_rms)
+    ) in out
+    used = expected.samples.times
+    assert (f'20000 samples over [0, 19.999] s (19.999 s); 19000 in the '
+            f'window [1, 19.999] s (18.999 s); {len(used)} used over '
+            f'[{used[0]:.6g}, {used[-1]:.6g}] s') in out
+
+
+def test_identify_draws_the_report(capsys, tmp_path):
+    source, _ = identification_log(tmp_path, duration=8.0)
+    report = tmp_path / 'report.png'
+    code, out, err = run(capsys, 'identify', '--input', source, '--output',
+                         tmp_path / 'out.yaml', '--report', report)
+    assert (code, err) == (0, '')
+    assert report.read_bytes().startswith(PNG_MAGIC)
+    assert f'written: {report}' in out
+
+
 def test_identify_validates_on_another_log(capsys, tmp_path):
     source, _ = identification_log(tmp_path)
     other, _ = identification_log(tmp_path, 'other.csv', seed=4,
                                   duration=6.0)
-    code, out, _ = run(capsys, 'identify', '--log', source, '--validate',
-                       other)
+    code, out, _ = run(capsys, 'identify', '--input', source, '--validate',
+                       other, '--output', tmp_path / 'out.yaml')
     assert code == 0
     nominal = [float(v) for v in next(
         line for line in out.splitlines() if 'nominal robot' in line)
@@ -428,39 +529,127 @@ def test_identify_validates_on_another_log(capsys, tmp_path):
     assert all(10.0 * i < n for i, n in zip(identified, nominal))
 
 
+@pytest.fixture(scope='module')
+def from_csv(tmp_path_factory):
+    """Return the robot identify finds from a 6 s CSV log."""
+    from orthoglide_ros import params_file
+    tmp_path = tmp_path_factory.mktemp('from_csv')
+    source, _ = identification_log(tmp_path, duration=6.0)
+    assert cli.main(['identify', '--input', str(source), '--output',
+                     str(tmp_path / 'out.yaml')]) == 0
+    return params_file.load_robot(tmp_path / 'out.yaml')
+
+
+@pytest.mark.parametrize('storage,form,topic', [
+    ('mcap', 'directory', None), ('mcap', 'file', 'joint_states'),
+    ('sqlite3', 'directory', '/joint_states'), ('sqlite3', 'file', None)])
+def test_identify_reads_bags_of_both_storages(capsys, tmp_path, from_csv,
+                                              storage, form, topic):
+    """A bag directory or its storage file: the robot of the same CSV log."""
+    from orthoglide_ros import identification, params_file
+    from test_identification import (storage_file, synthetic_log, TRUE,
+                                     write_bag)
+    write_bag(tmp_path / 'bag', synthetic_log(TRUE, 0, 5.0, 11,
+                                              duration=6.0), storage)
+    path = tmp_path / 'bag' if form == 'directory' else storage_file(
+        tmp_path / 'bag')
+    out = tmp_path / 'from_bag.yaml'
+    code, _, err = run(capsys, 'identify', '--input', path, '--output', out,
+                       *(['--topic', topic] if topic else []))
+    assert (code, err) == (0, '')
+    # The bag's stamps are the CSV's times to the nanosecond.
+    assert np.allclose(*(identification.standard_parameters(robot)
+                         for robot in (params_file.load_robot(out),
+                                       from_csv)), rtol=1e-9, atol=0.0)
+
+
+def bad_logs(tmp_path):
+    """Write every kind of log identify must refuse; return name -> path."""
+    from test_identification import (one_actuator_log, spoiled, synthetic_log,
+                                     TRUE, write_bag, write_csv)
+    log = synthetic_log(TRUE, 0, 5.0, 12, duration=8.0)
+    header = 't,lambda_a,lambda_b,lambda_c,force_a,force_b,force_c'
+    rest = mechanics.solve(TRUE, (0.0, 0.0, 0.0))
+    rng = np.random.default_rng(3)
+    times = np.arange(0.0, 8.0, 1e-3)
+    at_rest = log._replace(
+        times=times, lambdas=np.tile(rest.lambda_, (len(times), 1)),
+        forces=rest.force + rng.normal(0.0, 0.5, (len(times), 3)))
+    paths = {
+        'missing_file': tmp_path / 'nope.csv',
+        'missing_column': tmp_path / 'column.csv',
+        'nan': write_csv(tmp_path / 'nan.csv',
+                         spoiled(log, 'forces', 99, 1, math.nan)),
+        'inf': write_csv(tmp_path / 'inf.csv',
+                         spoiled(log, 'lambdas', 5, 2, math.inf)),
+        'time': write_csv(tmp_path / 'time.csv',
+                          spoiled(log, 'times', 40, 0, log.times[39])),
+        'few': write_csv(tmp_path / 'few.csv', log._replace(
+            times=log.times[:2500], lambdas=log.lambdas[:2500],
+            forces=log.forces[:2500])),
+        'rest': write_csv(tmp_path / 'rest.csv', at_rest),
+        'one_actuator': write_csv(tmp_path / 'one.csv', one_actuator_log()),
+        'bag': tmp_path / 'bag',
+    }
+    paths['missing_column'].write_text(header.replace(',force_b', '')
+                                       + '\n0,0,0,0,0,0\n')
+    write_bag(paths['bag'], log, 'mcap')
+    return paths
+
+
 BAD_IDENTIFY = {
-    'missing_log': (['--log', 'nope.csv'], ['nope.csv']),
-    'cutoff_above_nyquist': (['--log', 'log.csv', '--cutoff', '600'],
-                             ['cutoff', '500']),
-    'not_a_number': (['--log', 'log.csv', '--cutoff', 'x'], ['--cutoff']),
-    'missing_bag_topic': (['--log', 'bag', '--topic', 'nothing'],
-                          ['no topic /nothing']),
+    'missing_file': ([], ['nope.csv']),
+    'missing_column': ([], ["no 'force_b' column"]),
+    'nan': ([], ['data row 100 (line 101)', "'force_b'"]),
+    'inf': ([], ['data row 6 (line 7)', "'lambda_c'"]),
+    'time': ([], ['data row 41 (line 42): time 0.039 s is not after']),
+    'few': ([], ['42 usable samples, at least 90']),
+    'rest': ([], ['does not excite', 'm1 + m2 (', 'viscous_a (',
+                  'coulomb_c (', 'above 10 %']),
+    'one_actuator': ([], ['does not excite', 'viscous_b (', 'coulomb_c (']),
+    'missing_topic': (['--topic', 'nothing'], ['no topic /nothing',
+                                               '/joint_states']),
+    'cutoff_above_nyquist': (['--cutoff', '600'], ['cutoff', '500']),
 }
+
+
+@pytest.fixture(scope='module')
+def bad_log_paths(tmp_path_factory):
+    return bad_logs(tmp_path_factory.mktemp('bad_logs'))
 
 
 @pytest.mark.parametrize('name', sorted(BAD_IDENTIFY))
 def test_identify_bad_input_exits_2_and_writes_nothing(capsys, tmp_path,
-                                                       name):
+                                                       bad_log_paths, name):
     argv, words = BAD_IDENTIFY[name]
-    identification_log(tmp_path, duration=2.0)
-    if 'bag' in argv:
-        from test_identification import synthetic_log, TRUE, write_bag
-        write_bag(tmp_path / 'bag', synthetic_log(TRUE, 0, 5.0, 1, 0.1),
-                  'mcap')
-    out = tmp_path / 'out.yaml'
-    argv = [str(tmp_path / a) if a in ('log.csv', 'nope.csv', 'bag') else a
-            for a in argv]
-    code, stdout, err = run(capsys, 'identify', *argv, '--output', out)
-    if name == 'not_a_number':
-        assert code == 2 and '--cutoff' in err
-    else:
-        assert_bad_input(code, stdout, err, *words)
-    assert not out.exists()
+    source = bad_log_paths.get(name, bad_log_paths[
+        'bag' if name == 'missing_topic' else 'few'])
+    if name == 'cutoff_above_nyquist':
+        source = bad_log_paths['rest']
+    out, report = tmp_path / 'out.yaml', tmp_path / 'report.png'
+    code, stdout, err = run(capsys, 'identify', '--input', source, *argv,
+                            '--output', out, '--report', report)
+    assert_bad_input(code, stdout, err, *words)
+    assert not out.exists() and not report.exists()
+
+
+def test_identify_needs_input_and_output(capsys, tmp_path):
+    source, _ = identification_log(tmp_path, duration=2.0)
+    code, _, err = run(capsys, 'identify', '--input', source)
+    assert code == 2 and '--output' in err
+    code, _, err = run(capsys, 'identify', '--output', tmp_path / 'x.yaml')
+    assert code == 2 and '--input' in err
 
 
 def test_record_help_needs_no_ros(capsys):
     code, out, _ = run(capsys, 'record', '--help')
     assert code == 0 and 'rosbag2' in out and '--storage' in out
+    assert '/joint_states' in out
+
+
+def test_record_needs_output_and_duration(capsys):
+    code, _, err = run(capsys, 'record', '--output', 'bag')
+    assert code == 2 and '--duration' in err
 
 
 # -- the tool as a whole ------------------------------------------------------
@@ -468,7 +657,7 @@ def test_record_help_needs_no_ros(capsys):
 @pytest.mark.parametrize('command,units', [
     ('paper', ['(m', '(W', ' s']), ('solve', ['m/s^2', '(N', '(W']),
     ('batch', ['m/s^2', '(m)', '(s)']),
-    ('excitation', ['m/s^2', '(s;', 'm/s']),
+    ('excitation', ['m/s^2', '(s)', 'm/s']),
     ('identify', ['(kg)', '(N s/m)', '(Hz;']), ('record', ['(s;'])])
 def test_help_gives_units(capsys, command, units):
     code, out, _ = run(capsys, command, '--help')

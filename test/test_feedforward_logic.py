@@ -487,6 +487,28 @@ def test_robot_parameters_used():
     assert s.robot == Robot(l3=0.9, m4=0.3, gravity=(0.0, -9.81, 0.0))
 
 
+def test_friction_parameters_reach_the_forces_and_powers():
+    """robot.friction_*: the law of doc/model.md on every output."""
+    friction = {'robot.friction_viscous': [30.0, 40.0, 50.0],
+                'robot.friction_coulomb': [5.0, 3.0, 4.0],
+                'robot.friction_velocity': 0.002}
+    ff = core(**friction)
+    assert ff.settings.robot == Robot(friction_viscous=(30.0, 40.0, 50.0),
+                                      friction_coulomb=(5.0, 3.0, 4.0),
+                                      friction_velocity=0.002)
+    out = complete(ff, (7, 250), SAMPLES[1], 3.0)
+    rigid = mechanics.solve(Robot(), *SAMPLES[1])
+    for j in range(3):
+        law = (friction['robot.friction_viscous'][j] * rigid.lambdadot[j]
+               + friction['robot.friction_coulomb'][j] * math.tanh(
+                   rigid.lambdadot[j] / 0.002))
+        assert out.solution.force[j] == pytest.approx(
+            rigid.force[j] + law, rel=1e-12, abs=1e-9)
+        assert out.solution.power[j] == pytest.approx(
+            rigid.lambdadot[j] * (rigid.force[j] + law), rel=1e-12)
+    assert default_parameters()['robot.friction_velocity'] == 0.001
+
+
 @pytest.mark.parametrize('changes', [
     {'rate_hz': 0.0}, {'rate_hz': 10000.0}, {'setpoint_timeout': 0.001,
                                              'pairing_timeout': 0.001},

@@ -3,9 +3,9 @@ Identification of the masses and the slider friction from logs, without ROS.
 
 Synthetic logs: 30 s at 1 kHz of an excitation motion, the forces of a
 "true" robot that the nominal (paper's) robot does not know (a 25 %
-heavier platform, heavier bars, friction on every slider), the measured
-``lambda`` quantised to 1 um, Gaussian noise of 0.5 N on every force
-(seeded generators). Checked:
+heavier platform, 15 % heavier bars, friction on every slider), the
+measured ``lambda`` quantised to 1 um, Gaussian noise of 0.5 N on every
+force (seeded generators). Checked:
 
 - the regressor reproduces the inverse dynamics (``W theta = f``);
 - the base parameters found numerically are those of a hand argument:
@@ -16,14 +16,24 @@ heavier platform, heavier bars, friction on every slider), the measured
   platform (the rod turns only about its own axis), so the three rods 4
   weigh as ``3 m4`` of platform, ``m5 + 3 m4``; the friction coefficients
   each alone. Each combination is carried by its largest nominal member;
-- every base parameter is identified within four of its standard
-  deviations, and those deviations are honest: over several noise
-  realisations the spread of the estimates is of their size;
-- on another motion the identified robot predicts the forces as well as
-  the true robot does, and far better than the nominal one;
+- issue 10's figures: every base parameter within 3 % of the truth (the
+  lightest group within 10 %), every friction coefficient of the
+  identified robot within 25 %, and on another motion its forces within
+  1 N RMS of the true robot's, per actuator;
+- every base parameter within four of its standard deviations, and those
+  deviations are honest: over several noise realisations the spread of
+  the estimates is of their size;
+- the parallel filtering: the forces and the regressor go through the same
+  filter, so a sharp Coulomb switch biases nothing;
+- measured velocities (``lambdadot_*``) replace the differentiated ones;
 - the split rule keeps nominal values where it can;
+- every refusal, naming its reason: a non-finite value, time that does
+  not increase, too few samples, a robot at rest, a motion of one
+  actuator only (the parameters it does not excite named);
 - the log readers: CSV and rosbag2 bags (MCAP and sqlite3) written here by
-  the rosbags library, joint names in any order, big-endian messages too.
+  the rosbags library, a bag directory or its storage file, joint names in
+  any order, big-endian messages too; the same result from a CSV file and
+  from a bag of each storage format.
 """
 
 import math
@@ -41,13 +51,19 @@ TRUE = Robot(m5=18.75, m3=2.875, friction_viscous=(30.0, 40.0, 50.0),
              friction_coulomb=(5.0, 3.0, 4.0))
 RATE = 1000.0           # Hz
 DURATION = 30.0         # s
+PERIOD = 6.0            # s, of the excitation
 QUANTUM = 1e-6          # m, of the measured lambda
 NOISE = 0.5             # N, standard deviation of the measured forces
 SIGMAS = 4.0
+# Issue 10's tolerances.
+BASE_TOLERANCE = 0.03
+LIGHTEST_TOLERANCE = 0.10
+FRICTION_TOLERANCE = 0.25
+VALIDATION_RMS = 1.0    # N, per actuator
 
 
 def synthetic_log(robot, seed, period, noise_seed, duration=DURATION,
-                  rate=RATE, noise=NOISE):
+                  rate=RATE, noise=NOISE, velocities=False):
     """Return an excitation's log: quantised lambda, noisy forces."""
     motion = trajectory.excitation(seed, period)
     times = np.arange(0.0, duration, 1.0 / rate)
@@ -56,7 +72,22 @@ def synthetic_log(robot, seed, period, noise_seed, duration=DURATION,
     rng = np.random.default_rng(noise_seed)
     return Log(times, np.round(solution.lambda_ / QUANTUM) * QUANTUM,
                solution.force + rng.normal(0.0, noise, (len(times), 3)),
-               f'synthetic seed {seed}')
+               f'synthetic seed {seed}',
+               lambdadots=solution.lambdadot if velocities else None)
+
+
+def write_csv(path, log, order=(2, 0, 1)):
+    """Write a log as CSV, columns shuffled (actuators in ``order``)."""
+    quantities = [('lambda', log.lambdas), ('force', log.forces)]
+    if log.lambdadots is not None:
+        quantities.append(('lambdadot', log.lambdadots))
+    header = ['note'] + [f'{q}_{"abc"[j]}' for q, _ in quantities
+                         for j in order] + ['t']
+    table = np.column_stack([values[:, list(order)]
+                             for _, values in quantities] + [log.times])
+    path.write_text(','.join(header) + '\n' + ''.join(
+        'x,' + ','.join(map(repr, row)) + '\n' for row in table.tolist()))
+    return path
 
 
 @pytest.fixture(scope='module')
@@ -67,7 +98,11 @@ def base():
 @pytest.fixture(scope='module')
 def result(base):
     return identification.identify(
-        NOMINAL, synthetic_log(TRUE, 0, 10.0, 1), base=base)
+        NOMINAL, synthetic_log(TRUE, 0, PERIOD, 1), base=base)
+
+
+def truth_of(base, robot=TRUE):
+    return base.matrix @ identification.standard_parameters(robot)
 
 
 def random_states(seed, n):
@@ -126,14 +161,37 @@ def test_base_parameters_are_the_hand_combinations(values):
                        @ (found.matrix @ theta), rtol=1e-12, atol=1e-9)
 
 
-def test_base_names_read_as_combinations(base):
+def test_base_names_and_meanings_read_as_combinations(base):
     assert base.names == ('m1 + m2', 'm3 + m6', 'm5 + 3 m4', 'viscous_a',
                           'viscous_b', 'viscous_c', 'coulomb_a', 'coulomb_b',
                           'coulomb_c')
+    assert base.meanings[:3] == (
+        'mass of each slider (body 1) + mass of each rod A3A6 (body 2)',
+        'mass of each bar A3A4 (body 3) + mass of each bar A6A7 (body 6)',
+        'mass of the platform (body 5, counted once) + 3 x mass of each '
+        'rod A4A7 (body 4)')
+    assert base.meanings[3] == 'viscous friction of slider A'
+    assert base.meanings[8] == 'Coulomb friction of slider C'
+
+
+def test_base_parameters_within_the_issues_tolerances(base, result):
+    """3 % (the lightest group 10 %), friction 25 %: issue 10's figures."""
+    truth = truth_of(base)
+    error = np.abs(result.values - truth) / truth
+    masses = [i for i, j in enumerate(base.independent) if j < 6]
+    lightest = min(masses, key=lambda i: truth[i])
+    assert base.names[lightest] == 'm1 + m2'
+    tolerance = np.full(len(truth), BASE_TOLERANCE)
+    tolerance[lightest] = LIGHTEST_TOLERANCE
+    assert (error <= tolerance).all(), dict(zip(base.names, error))
+    robot = result.robot
+    for found, true in ((robot.friction_viscous, TRUE.friction_viscous),
+                        (robot.friction_coulomb, TRUE.friction_coulomb)):
+        assert np.allclose(found, true, rtol=FRICTION_TOLERANCE, atol=0.0)
 
 
 def test_every_base_parameter_is_found_within_four_deviations(base, result):
-    truth = base.matrix @ identification.standard_parameters(TRUE)
+    truth = truth_of(base)
     error = result.values - truth
     assert (np.abs(error) <= SIGMAS * result.std).all(), (
         dict(zip(base.names, error / result.std)))
@@ -141,15 +199,19 @@ def test_every_base_parameter_is_found_within_four_deviations(base, result):
     assert (result.relative_std < 5.0).all(), result.relative_std
     assert result.condition < 1e3
     assert result.notes == []
-    # The residual is what the filtered noise and the filter leave.
+    # The residual is what the filtered noise leaves.
     assert (result.residual_rms < NOISE).all()
     assert len(result.samples.times) >= 500
+    assert np.allclose(result.samples.forces - result.predicted,
+                       result.samples.forces - identification.predict(
+                           result.robot, result.samples), atol=1e-9)
 
 
 def test_standard_deviations_are_those_of_the_estimates(base):
     """Over six noise realisations the spread is of the reported size."""
     runs = [identification.identify(NOMINAL, synthetic_log(
-        TRUE, 0, 10.0, seed, duration=20.0), base=base) for seed in range(6)]
+        TRUE, 0, PERIOD, seed, duration=20.0), base=base)
+        for seed in range(6)]
     spread = np.std([r.values for r in runs], axis=0, ddof=1)
     reported = np.mean([r.std for r in runs], axis=0)
     ratio = spread / reported
@@ -158,14 +220,140 @@ def test_standard_deviations_are_those_of_the_estimates(base):
 
 
 def test_identified_robot_predicts_another_motion(result):
+    """Another seed and period: within 1 N RMS of the true forces."""
+    motion = trajectory.excitation(7, 4.0)
+    states = trajectory.excitation_batch(motion, np.arange(0.0, 8.0, 1e-3))
+    true = mechanics.solve_batch(TRUE, *states).force
+    rms = {name: np.sqrt(np.mean((mechanics.solve_batch(robot, *states)
+                                  .force - true) ** 2, axis=0))
+           for name, robot in (('nominal', NOMINAL),
+                               ('identified', result.robot))}
+    assert (rms['identified'] <= VALIDATION_RMS).all(), rms
+    assert (rms['nominal'] >= 10.0).all(), rms
+    # And on that motion's measured log, through the same filter.
     validation = identification.prepare(
         NOMINAL, synthetic_log(TRUE, 7, 4.0, 99, duration=8.0))
-    rms = {name: np.sqrt(np.mean((validation.forces - identification.predict(
-        robot, validation)) ** 2, axis=0))
-        for name, robot in (('nominal', NOMINAL), ('true', TRUE),
-                            ('identified', result.robot))}
-    assert (rms['identified'] <= 1.1 * rms['true'] + 0.02).all(), rms
-    assert (rms['nominal'] >= 20.0 * rms['identified']).all(), rms
+    error = validation.forces - identification.predict(result.robot,
+                                                       validation)
+    assert (np.sqrt(np.mean(error ** 2, axis=0)) <= VALIDATION_RMS).all()
+
+
+def test_parallel_filtering_leaves_no_bias_from_a_sharp_coulomb_switch(
+        base):
+    """Exact forces, a 0.1 mm/s Coulomb switch: the filter biases nothing."""
+    sharp = TRUE.replace(friction_velocity=1e-4)
+    log = synthetic_log(sharp, 0, PERIOD, 2, duration=12.0, noise=0.0)
+    nominal = NOMINAL.replace(friction_velocity=1e-4)
+    found = identification.identify(nominal, log,
+                                    base=identification.base_parameters(
+                                        nominal))
+    truth = truth_of(found.base, sharp)
+    # Filtering the motion and the forces, and not the regressor, missed
+    # m1 + m2 by 12 % (at 1 mm/s); the parallel filter leaves the
+    # quantisation and the differences.
+    assert np.abs(found.values / truth - 1.0).max() < 0.01, found.values
+
+
+def closed_loop(model, sample, duration, loop_rate=250.0, plant_rate=500.0,
+                gains=(20000.0, 1200.0)):
+    """
+    Run PD + ``model``'s feedforward on TRUE's plant, without DDS.
+
+    The tracking controller's law at ``loop_rate`` (each command from the
+    state at its tick, applied from the next tick on, as a drive does) on
+    the simulator's plant (RK4, the command held over each step) at
+    ``plant_rate``, following ``sample(t)`` (position, velocity,
+    acceleration). Returns ``(log, rms)``: the log of each state with the
+    force held over the step that led to it (as the simulator publishes
+    them; ``lambda`` quantised to 1 um) and the RMS position error (m).
+    """
+    from orthoglide_ros.simulation import Plant
+    plant = Plant(TRUE)
+    kp, kd = gains
+    steps = round(plant_rate / loop_rate)
+    times, lambdas, forces, errors = [], [], [], []
+    force = (0.0, 0.0, 0.0)
+    for k in range(round(duration * loop_rate)):
+        p, v, a = sample(k / loop_rate)
+        errors.append(np.subtract(plant.position, p))
+        desired = mechanics.solve(model, p, v, a)
+        now = mechanics.solve(TRUE, plant.position, plant.velocity)
+        command = tuple(np.add(desired.force, kp * np.subtract(
+            desired.lambda_, now.lambda_) + kd * np.subtract(
+            desired.lambdadot, now.lambdadot)))
+        for _ in range(steps):
+            plant.step(force, 1.0 / plant_rate)
+            times.append(plant.time)
+            lambdas.append(mechanics.solve(TRUE, plant.position).lambda_)
+            forces.append(force)
+        force = command
+    log = Log(np.array(times), np.round(np.array(lambdas) / QUANTUM)
+              * QUANTUM, np.array(forces), 'closed loop')
+    return log, float(np.sqrt(np.mean(np.sum(np.square(errors), axis=1))))
+
+
+def excitation_sample(t, motion=trajectory.excitation(0, PERIOD)):
+    return trajectory.excitation_sample(motion, t % PERIOD)
+
+
+@pytest.fixture(scope='module')
+def closed_loop_result(base):
+    """Identify TRUE from 12 s of the excitation tracked by PD + nominal."""
+    log, _ = closed_loop(NOMINAL, excitation_sample, 12.0)
+    return identification.identify(NOMINAL, log, base=base,
+                                   force_lag=0.5 / 500.0)
+
+
+def test_a_closed_loop_log_is_identified_without_bias(base,
+                                                      closed_loop_result):
+    """
+    The motion filtered at 5 x the cutoff keeps what the Coulomb switch sees.
+
+    In a closed loop the velocity ripples at the reversals; filtered at
+    the cutoff itself, the motion missed m1 + m2 by 5.8 % and m3 + m6 by
+    1.2 % on this log (without noise: the figures are the bias).
+    """
+    error = np.abs(closed_loop_result.values / truth_of(base) - 1.0)
+    assert error[0] <= 0.02 and (error[1:] <= 0.005).all(), dict(
+        zip(base.names, error))
+
+
+@pytest.mark.parametrize('target,omega', [
+    (trajectory.PAPER_TARGET, trajectory.PAPER_OMEGA),
+    ((0.04, 0.08, -0.16), 2.0 * math.pi)], ids=['paper', 'fast'])
+def test_identified_feedforward_tracks_within_1_5_times_the_exact_one(
+        closed_loop_result, target, omega):
+    """Issue 10's criterion, in the loop of the demo without DDS's jitter."""
+    def sample(t):
+        return trajectory.paper_sample(t, target, omega)
+    rms = {name: closed_loop(model, sample, 2.0)[1]
+           for name, model in (('identified', closed_loop_result.robot),
+                               ('exact', TRUE), ('nominal', NOMINAL))}
+    assert rms['identified'] <= 1.5 * rms['exact'], rms
+    assert rms['nominal'] > 10.0 * rms['identified'], rms
+
+
+def test_measured_velocities_replace_the_differentiated_ones(base):
+    log = synthetic_log(TRUE, 0, PERIOD, 3, duration=6.0, velocities=True)
+    with_velocities = identification.prepare(NOMINAL, log)
+    without = identification.prepare(NOMINAL, log._replace(lambdadots=None))
+    doubled = identification.prepare(NOMINAL, log._replace(
+        lambdadots=2.0 * log.lambdadots))
+    viscous = slice(6, 9)
+    # The viscous columns are the filtered lambdadot: the measured ones
+    # where given (doubled: doubled), else the differentiated ones, which
+    # the 1 um quantisation hardly changes (the Coulomb columns, of size
+    # 1, by 0.3 % where the sliders reverse).
+    assert np.allclose(doubled.regressor[:, :, viscous],
+                       2.0 * with_velocities.regressor[:, :, viscous],
+                       rtol=1e-9, atol=1e-12)
+    assert np.allclose(with_velocities.regressor, without.regressor,
+                       rtol=1e-3, atol=5e-3)
+    assert np.array_equal(with_velocities.forces, without.forces)
+    found = identification.identify(
+        NOMINAL, synthetic_log(TRUE, 0, PERIOD, 1, velocities=True),
+        base=base)
+    assert np.allclose(found.values, truth_of(base), rtol=BASE_TOLERANCE)
 
 
 def test_split_keeps_nominal_values_where_it_can(base, result):
@@ -201,82 +389,181 @@ def test_split_scales_or_keeps_what_its_carrier_cannot_take(base):
         identification.split(NOMINAL, base, values)
 
 
-def test_prepare_splits_at_gaps_and_refuses_what_it_cannot_use():
+def test_prepare_splits_at_gaps_and_interpolates_jitter():
     log = synthetic_log(TRUE, 0, 10.0, 4, duration=6.0)
     keep = (log.times < 2.5) | (log.times > 3.0)     # a 0.5 s gap
     gappy = Log(log.times[keep], log.lambdas[keep], log.forces[keep], 'gap')
     samples = identification.prepare(NOMINAL, gappy)
     assert samples.segments == 2
-    assert not ((samples.times > 2.5 - 0.1) & (samples.times < 3.0 + 0.1)
+    assert not ((samples.times > 2.5 - 0.2) & (samples.times < 3.0 + 0.2)
                 ).any()
     assert samples.rate == pytest.approx(1000.0 / 50)
-    # Jittered stamps in any order give nearly the same samples (without
-    # noise, and a cutoff that keeps every sample, to compare them).
-    smooth = synthetic_log(TRUE, 0, 10.0, 4, duration=2.0, noise=0.0)
+    # Jittered stamps give nearly the same samples (without noise, a
+    # cutoff that keeps every sample, to compare them, and a Coulomb
+    # switch smooth over 10 us of jitter: 10 mm/s).
+    smooth = synthetic_log(TRUE.replace(friction_velocity=0.01), 0, 10.0, 4,
+                           duration=2.0, noise=0.0)
     rng = np.random.default_rng(5)
     jitter = smooth.times + rng.uniform(-1e-5, 1e-5, len(smooth.times))
     jitter[0] = 0.0
-    order = rng.permutation(len(smooth.times))
-    shuffled = Log(jitter[order], smooth.lambdas[order], smooth.forces[order],
-                   'shuffled')
+    jittered = Log(jitter, smooth.lambdas, smooth.forces, 'jittered')
     a = identification.prepare(NOMINAL, smooth, 300.0)
-    b = identification.prepare(NOMINAL, shuffled, 300.0)
+    b = identification.prepare(NOMINAL, jittered, 300.0)
     assert a.rate == pytest.approx(1000.0)
     inside = (a.times >= b.times[0]) & (a.times <= b.times[-1])
     assert inside.sum() >= len(a.times) - 2
     for j in range(3):
         moved = np.interp(a.times[inside], b.times, b.forces[:, j])
         assert np.abs(moved - a.forces[inside, j]).max() < 0.01
-    for bad, word in (
-            (Log(log.times, log.lambdas, log.forces, 'x'), 'cutoff'),
-            (Log(log.times[:100], log.lambdas[:100], log.forces[:100], 'x'),
-             'no piece'),
-            (Log(log.times, log.lambdas * np.nan, log.forces, 'x'),
-             'finite')):
-        with pytest.raises(LogError, match=word):
-            identification.prepare(NOMINAL, bad,
-                                   600.0 if word == 'cutoff' else 10.0)
+    with pytest.raises(LogError, match='cutoff 600 Hz'):
+        identification.prepare(NOMINAL, log, 600.0)
+    short = Log(log.times[:300], log.lambdas[:300], log.forces[:300], 'x')
+    with pytest.raises(LogError, match='no piece'):
+        identification.prepare(NOMINAL, short)
 
 
-def test_identify_refuses_a_log_without_motion(base):
-    times = np.arange(0.0, 5.0, 1e-3)
-    rest = mechanics.solve(TRUE, (0.0, 0.0, 0.0)).force
-    log = Log(times, np.zeros((len(times), 3)), np.tile(rest, (len(times), 1)),
+# Refusals -------------------------------------------------------------------
+
+def spoiled(log, quantity, k, j, value):
+    """Return ``log`` with ``quantity``'s sample k, column j set to value."""
+    arrays = {'times': log.times.copy(), 'lambdas': log.lambdas.copy(),
+              'forces': log.forces.copy(),
+              'lambdadots': None if log.lambdadots is None
+              else log.lambdadots.copy()}
+    if quantity == 'times':
+        arrays['times'][k] = value
+    else:
+        arrays[quantity][k, j] = value
+    return log._replace(**arrays)
+
+
+@pytest.mark.parametrize('quantity,k,j,value,words', [
+    ('lambdas', 41, 1, math.nan, 'sample 42: lambda_b is nan'),
+    ('forces', 7, 2, math.inf, 'sample 8: force_c is inf'),
+    ('forces', 0, 0, -math.inf, 'sample 1: force_a is -inf'),
+    ('lambdadots', 99, 0, math.nan, 'sample 100: lambdadot_a is nan'),
+    ('times', 3, 0, math.nan, 'sample 4: t is nan'),
+    ('times', 500, 0, 0.499, 'sample 501: time 0.499 s is not after'),
+    ('times', 500, 0, 0.5 - 1e-3, 'sample 501: time 0.499 s is not after'),
+])
+def test_a_log_that_cannot_be_used_is_refused_naming_the_sample(
+        quantity, k, j, value, words):
+    log = synthetic_log(TRUE, 0, PERIOD, 5, duration=6.0, velocities=True)
+    with pytest.raises(LogError, match=words):
+        identification.identify(NOMINAL, spoiled(log, quantity, k, j, value))
+
+
+def test_too_few_samples_are_refused():
+    # 2.5 s: 2.1 s left after the filter's edges, 42 samples at 20 Hz,
+    # fewer than 10 per base parameter.
+    log = synthetic_log(TRUE, 0, PERIOD, 6, duration=2.5)
+    with pytest.raises(LogError, match='42 usable samples, at least 90'):
+        identification.identify(NOMINAL, log)
+    with pytest.raises(LogError, match='2 sample'):
+        identification.identify(NOMINAL, Log(log.times[:2], log.lambdas[:2],
+                                             log.forces[:2], 'two'))
+
+
+def test_a_robot_at_rest_is_refused_naming_every_parameter(base):
+    times = np.arange(0.0, 10.0, 1e-3)
+    rest = mechanics.solve(TRUE, (0.0, 0.0, 0.0))
+    rng = np.random.default_rng(7)
+    log = Log(times, np.tile(rest.lambda_, (len(times), 1)),
+              rest.force + rng.normal(0.0, NOISE, (len(times), 3)),
               'at rest')
-    with pytest.raises(IdentificationError, match='excite'):
+    with pytest.raises(IdentificationError, match='does not excite') as info:
         identification.identify(NOMINAL, log, base=base)
+    message = str(info.value)
+    for name in base.names:
+        assert name + ' (' in message
+    assert f'above {identification.MAX_RELATIVE_STD:g} %' in message
+
+
+def one_actuator_log(seed=8):
+    """Slider A follows an excitation's lambda_A; B and C stay at home."""
+    times = np.arange(0.0, 20.0, 1e-3)
+    lam = mechanics.solve_batch(TRUE, *trajectory.excitation_batch(
+        trajectory.excitation(0, 5.0), times)).lambda_
+    home = mechanics.solve(TRUE, (0.0, 0.0, 0.0)).lambda_
+    lam[:, 1:] = home[1:]
+    position = mechanics.forward_kinematics(TRUE, lam)
+    velocity = np.gradient(position, 1e-3, axis=0)
+    force = mechanics.solve_batch(TRUE, position, velocity, np.gradient(
+        velocity, 1e-3, axis=0)).force
+    rng = np.random.default_rng(seed)
+    return Log(times, lam, force + rng.normal(0.0, NOISE, force.shape),
+               'slider A only')
+
+
+def test_a_motion_of_one_actuator_only_is_refused_naming_the_others(base):
+    with pytest.raises(IdentificationError, match='does not excite') as info:
+        identification.identify(NOMINAL, one_actuator_log(), base=base)
+    message = str(info.value)
+    for name in ('viscous_b', 'viscous_c', 'coulomb_b', 'coulomb_c'):
+        assert name + ' (' in message
+    for name in ('viscous_a', 'coulomb_a', 'm5 + 3 m4'):
+        assert name + ' (' not in message
+    # A looser threshold is the caller's choice, not a silent one.
+    with pytest.raises(IdentificationError, match='above 50 %'):
+        identification.identify(NOMINAL, one_actuator_log(), base=base,
+                                max_relative_std=50.0)
+
+
+def test_a_robot_without_friction_is_identified_as_one(base):
+    """Friction found zero is excited, not refused: judged by its deviation."""
+    log = synthetic_log(NOMINAL, 0, PERIOD, 9, duration=12.0)
+    found = identification.identify(NOMINAL, log, base=base)
+    assert np.abs(found.values[3:]).max() < 0.2
+    assert (found.relative_std < identification.MAX_RELATIVE_STD).all()
 
 
 # Logs -------------------------------------------------------------------
 
 def test_crop_keeps_a_window_counted_from_the_first_sample():
-    log = synthetic_log(TRUE, 0, 5.0, 6, duration=1.0)
-    shifted = Log(log.times + 100.0, log.lambdas, log.forces, 'shifted')
+    log = synthetic_log(TRUE, 0, 5.0, 6, duration=1.0, velocities=True)
+    shifted = Log(log.times + 100.0, log.lambdas, log.forces, 'shifted',
+                  lambdadots=log.lambdadots)
     window = identification.crop(shifted, 0.25, 0.5)
     assert window.times[0] == pytest.approx(100.25)
     assert window.times[-1] == pytest.approx(100.5)
     assert len(window.times) == 251
     assert np.array_equal(window.forces, log.forces[250:501])
+    assert np.array_equal(window.lambdadots, log.lambdadots[250:501])
     assert identification.crop(log).times.tolist() == log.times.tolist()
     with pytest.raises(LogError, match='no sample'):
         identification.crop(log, 2.0)
 
 
-def test_csv_log_reads_the_tools_columns(tmp_path):
-    log = synthetic_log(TRUE, 0, 5.0, 6, duration=0.5)
-    path = tmp_path / 'log.csv'
-    header = ('note,force_c,t,lambda_a,lambda_b,lambda_c,force_a,force_b')
-    rows = [','.join(['x', *map(repr, (f[2], t, *lam, f[0], f[1]))])
-            for t, lam, f in zip(log.times.tolist(), log.lambdas.tolist(),
-                                 log.forces.tolist())]
-    path.write_text(header + '\n' + '\n'.join(rows) + '\n')
-    read = identification.read_log(path)
+@pytest.mark.parametrize('velocities', [False, True])
+def test_csv_log_reads_its_columns_by_name(tmp_path, velocities):
+    log = synthetic_log(TRUE, 0, 5.0, 6, duration=0.5, velocities=velocities)
+    read = identification.read_log(write_csv(tmp_path / 'log.csv', log))
     assert np.array_equal(read.times, log.times)
     assert np.array_equal(read.lambdas, log.lambdas)
     assert np.array_equal(read.forces, log.forces)
-    path.write_text('t,lambda_a,lambda_b,force_a,force_b,force_c\n')
-    with pytest.raises(LogError, match="'lambda_c'"):
-        identification.read_csv(path)
+    if velocities:
+        assert np.array_equal(read.lambdadots, log.lambdadots)
+    else:
+        assert read.lambdadots is None
+
+
+@pytest.mark.parametrize('header,rows,words', [
+    ('t,lambda_a,lambda_b,force_a,force_b,force_c', [],
+     "no 'lambda_c' column"),
+    ('t,lambda_a,lambda_b,lambda_c,force_a,force_b,force_c,lambdadot_a',
+     [], "no 'lambdadot_b' column"),
+    ('t,lambda_a,lambda_b,lambda_c,force_a,force_b,force_c',
+     ['0,0,0,0,1,1,1', '0.001,0,0,0,1,nan,1'],
+     "data row 2 \\(line 3\\), column 'force_b'"),
+    ('t,lambda_a,lambda_b,lambda_c,force_a,force_b,force_c',
+     ['0,0,0,0,1,1,1', '0.002,0,0,0,1,1,1', '0.001,0,0,0,1,1,1'],
+     'data row 3 \\(line 4\\): time 0.001 s is not after'),
+])
+def test_csv_refusals_name_the_column_or_row(tmp_path, header, rows, words):
+    path = tmp_path / 'log.csv'
+    path.write_text('\n'.join([header] + rows) + '\n')
+    with pytest.raises(LogError, match=words):
+        identification.read_log(path)
 
 
 def write_bag(path, log, storage, names=('slider_a', 'slider_b', 'slider_c'),
@@ -304,26 +591,33 @@ def write_bag(path, log, storage, names=('slider_a', 'slider_b', 'slider_c'),
                                          nanosec=stamp % 10**9),
                               frame_id=''),
                 name=list(names), position=lam[order].copy(),
-                velocity=np.zeros(3), effort=force[order].copy())
+                velocity=np.zeros(len(names)), effort=force[order].copy())
             writer.write(connection, stamp, store.serialize_cdr(
                 msg, kind, little_endian=little_endian))
+
+
+def storage_file(bag):
+    (path,) = [p for p in bag.iterdir() if p.suffix in ('.mcap', '.db3')]
+    return path
 
 
 @pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
 def test_bag_log_reads_joint_states(tmp_path, storage):
     log = synthetic_log(TRUE, 0, 5.0, 7, duration=0.3)
     write_bag(tmp_path / 'bag', log, storage,
-              names=('slider_c', 'slider_a', 'slider_b'))
+              names=('slider_c', 'elbow', 'slider_a', 'slider_b'))
     read = identification.read_log(tmp_path / 'bag')
     # Header stamps, from the first (write_bag starts at 1.7e9 s).
     assert read.origin == 1_700_000_000 * 10**9
     assert np.allclose(read.times, log.times, rtol=0.0, atol=1e-9)
     assert np.array_equal(read.lambdas, log.lambdas)
     assert np.array_equal(read.forces, log.forces)
-    (storage_file,) = (tmp_path / 'bag').glob(
-        '*.mcap' if storage == 'mcap' else '*.db3')
-    again = identification.read_log(storage_file)
-    assert np.array_equal(again.forces, log.forces)
+    assert read.lambdadots is None
+    # The bag's storage file, in its directory and alone.
+    path = storage_file(tmp_path / 'bag')
+    assert np.array_equal(identification.read_log(path).forces, log.forces)
+    alone = path.rename(tmp_path / ('alone' + path.suffix))
+    assert np.array_equal(identification.read_log(alone).forces, log.forces)
 
 
 def test_big_endian_joint_states_are_read_too(tmp_path):
@@ -340,21 +634,33 @@ def test_bag_errors_name_the_problem(tmp_path):
         identification.read_bag(tmp_path / 'bag')
     assert identification.read_bag(tmp_path / 'bag', joint_names=(
         'a', 'b', 'c')).lambdas.shape == (len(log.times), 3)
-    with pytest.raises(LogError, match='no topic /states'):
-        identification.read_bag(tmp_path / 'bag', topic='states')
+    for topic in ('states', '/states'):
+        with pytest.raises(LogError, match='no topic /states'):
+            identification.read_bag(tmp_path / 'bag', topic=topic)
     with pytest.raises(LogError, match='cannot read'):
         identification.read_bag(tmp_path / 'missing')
+    backwards = spoiled(log, 'times', 10, 0, log.times[9])
+    write_bag(tmp_path / 'late', backwards, 'sqlite3')
+    with pytest.raises(LogError, match='message 11 on /joint_states: time'):
+        identification.read_log(tmp_path / 'late')
 
 
-def test_identification_from_a_bag_equals_the_one_from_arrays(tmp_path,
-                                                              base):
+def test_a_csv_file_and_bags_of_both_storages_give_the_same_result(
+        tmp_path, base):
     log = synthetic_log(TRUE, 2, 5.0, 10, duration=10.0)
-    write_bag(tmp_path / 'bag', log, 'mcap')
-    from_bag = identification.identify(
-        NOMINAL, identification.read_log(tmp_path / 'bag'), base=base)
     direct = identification.identify(NOMINAL, log, base=base)
-    assert np.allclose(from_bag.values, direct.values, rtol=1e-9)
-    assert math.isfinite(from_bag.condition)
+    paths = [write_csv(tmp_path / 'log.csv', log)]
+    for storage in ('mcap', 'sqlite3'):
+        write_bag(tmp_path / storage, log, storage)
+        paths.append(tmp_path / storage)
+    for path in paths:
+        found = identification.identify(
+            NOMINAL, identification.read_log(path), base=base)
+        # Bags keep the stamps to the nanosecond: the same samples.
+        assert np.allclose(found.values, direct.values, rtol=1e-9), path
+        assert np.allclose(identification.standard_parameters(found.robot),
+                           identification.standard_parameters(direct.robot),
+                           rtol=1e-9), path
 
 
 def test_force_lag_realigns_forces_reported_late(base):
@@ -363,7 +669,7 @@ def test_force_lag_realigns_forces_reported_late(base):
     moved = Log(log.times, log.lambdas, np.column_stack(
         [np.interp(log.times - 0.002, log.times, log.forces[:, j])
          for j in range(3)]), 'late forces')
-    truth = base.matrix @ identification.standard_parameters(TRUE)
+    truth = truth_of(base)
     aligned = identification.identify(NOMINAL, log, base=base)
     off = identification.identify(NOMINAL, moved, base=base)
     fixed = identification.identify(NOMINAL, moved, base=base,

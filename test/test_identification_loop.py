@@ -9,13 +9,17 @@ joint states (the harness's recorder), the effort taken as applied half a
 plant step before its state (``force_lag``). Checked:
 
 - the identified base parameters lie within four standard deviations of
-  the plant's (twelve seconds of a loop on two busy cores: a few %; the
+  the plant's (twelve seconds of a loop on two busy cores: within 1 %; the
   demo's thirty seconds do better, see doc/identification.md);
 - on the paper's trajectory, PD + the identified feedforward tracks within
   1.5 times the RMS error of PD + the exact feedforward (the plant's own
-  robot), and better than PD + the nominal one; a pass in which the plant
-  was braked (a process stalled longer than the command timeout) or that
-  misses is run again once, which no model error passes;
+  robot), and better than PD + the nominal one: the median of three
+  interleaved passes of each, of six when three miss (one pass over DDS
+  varies severalfold with the load; ``closed_loop_harness.median_runs``),
+  a pass in which the plant was braked or the controller held (a process
+  stalled longer than the command timeout) run again once. The same
+  criterion without DDS, where a pass is deterministic, is
+  ``test_identification.py``'s;
 - the identified robot written as a parameters file starts the
   ``feedforward`` node (``--params-file``) with its values.
 
@@ -50,6 +54,7 @@ pytestmark = [pytest.mark.ros, pytest.mark.skipif(
 
 SEED, PERIOD, PASSES = 0, 6.0, 2
 CRITERION = 1.5
+REPEATS = 3         # passes of each compared case; the median counts
 SIGMAS = 4.0
 
 
@@ -104,25 +109,21 @@ def test_identified_base_parameters_are_the_plants(identified):
 def test_identified_feedforward_tracks_like_the_exact_one(loop, identified):
     result, _ = identified
 
-    def tracking(model):
-        def one_pass():
-            run = loop.run('paper', True, plant=harness.UNKNOWN_PLANT,
-                           model=model)
-            print(f'{run.label}: RMS {run.rms_mm:.3f} mm, max '
-                  f'{run.max_mm:.3f} mm, braked {run.braked}',
-                  file=sys.stderr)
-            return run
-        return one_pass
-
-    exact = tracking(harness.UNKNOWN_PLANT)()
-    if exact.braked:
-        exact = tracking(harness.UNKNOWN_PLANT)()
-    ident = tracking(result.robot)()
-    if ident.braked or ident.rms_mm > CRITERION * exact.rms_mm:
-        ident = tracking(result.robot)()
-    nominal = tracking(Robot())()
-    assert ident.rms_mm <= CRITERION * exact.rms_mm
-    assert ident.rms_mm < nominal.rms_mm
+    def report(text):
+        print(text, file=sys.stderr)
+    compared = {'identified': (True, result.robot),
+                'exact': (True, harness.UNKNOWN_PLANT)}
+    runs, passes = harness.median_runs(loop, 'paper', compared,
+                                       harness.UNKNOWN_PLANT, REPEATS, report)
+    if runs['identified'].rms_mm > CRITERION * runs['exact'].rms_mm:
+        # The medians of three still vary with the load: three more each.
+        runs, _ = harness.median_runs(loop, 'paper', compared,
+                                      harness.UNKNOWN_PLANT, REPEATS, report,
+                                      passes)
+    nominal, _ = harness.median_runs(loop, 'paper', {
+        'nominal': (True, Robot())}, harness.UNKNOWN_PLANT, 1, report)
+    assert runs['identified'].rms_mm <= CRITERION * runs['exact'].rms_mm
+    assert runs['identified'].rms_mm < nominal['nominal'].rms_mm
 
 
 def test_identified_parameters_file_starts_the_feedforward(context,

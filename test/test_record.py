@@ -4,10 +4,11 @@
 A JointState publisher in the test's process, ``orthoglide record`` as a
 process (the installed console script): every message published reaches
 the bag (reliable QoS, acknowledged before the stop), with its bytes
-unchanged, in MCAP or sqlite3, and ``identification.read_bag`` reads the
-positions and efforts back in the joint order asked for. The recorder
-stops on SIGINT or at the end of ``--duration``, exit code 0 either way;
-without a publisher it gives up after ``--wait`` with exit code 2.
+unchanged, in MCAP (the default, on the default topic ``/joint_states``)
+or sqlite3, and ``identification.read_bag`` reads the positions and
+efforts back in the joint order asked for. The recorder stops at the end
+of ``--duration`` or on SIGINT before it, exit code 0 either way; without
+a publisher it gives up after ``--wait`` with exit code 2.
 """
 
 import os
@@ -80,7 +81,9 @@ def test_record_writes_every_joint_state_into_an_mcap_bag(ros_context,
     node = rclpy.create_node('joint_state_source', context=ros_context)
     try:
         publisher = node.create_publisher(JointState, 'joint_states', QOS)
-        proc = record(['--output', str(tmp_path / 'bag')])
+        # Stopped by SIGINT long before its duration: a complete bag.
+        proc = record(['--output', str(tmp_path / 'bag'), '--duration',
+                       '600'])
         try:
             publish_states(node, publisher, proc)
             time.sleep(0.2)
@@ -114,7 +117,8 @@ def test_record_stops_by_itself_into_a_sqlite3_bag(ros_context, tmp_path):
 
 def test_record_without_a_publisher_exits_2(tmp_path):
     proc = record(['--output', str(tmp_path / 'bag'), '--topic',
-                   'nobody_publishes_this', '--wait', '1'])
+                   'nobody_publishes_this', '--wait', '1', '--duration',
+                   '10'])
     try:
         proc.wait(timeout=MATCH_TIMEOUT)
     finally:
