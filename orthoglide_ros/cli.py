@@ -623,86 +623,38 @@ def _fail(message):
     print(f'{PROG}: error: {" ".join(message.split())}', file=sys.stderr)
 
 
-def _pixels(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not MIN_PIXELS <= value <= MAX_PIXELS:
-        raise argparse.ArgumentTypeError(
-            f'must be an integer in [{MIN_PIXELS}, {MAX_PIXELS}] pixels, '
-            f'got {text!r}')
-    return value
+def _within(kind, low, high=math.inf, above=False, unit=''):
+    """
+    Return an argparse type: a finite ``kind`` (int or float) in range.
+
+    ``[low, high]``, or above ``low`` when ``above``; ``unit`` ends the
+    message of a refusal.
+    """
+    noun = 'an integer' if kind is int else 'a finite number'
+    span = (f'above {low:g}' if above else f'of at least {low:g}'
+            if high == math.inf else f'in [{low:g}, {high:g}]')
+
+    def parse(text):
+        try:
+            value = kind(text)
+        except ValueError:
+            value = math.nan
+        if not (math.isfinite(value) and value <= high
+                and (value > low if above else value >= low)):
+            raise argparse.ArgumentTypeError(
+                f'must be {noun} {span}{unit}, got {text!r}')
+        return value
+    return parse
 
 
-def _frames(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if not 1 <= value <= MAX_FRAMES:
-        raise argparse.ArgumentTypeError(
-            f'must be an integer in [1, {MAX_FRAMES}], got {text!r}')
-    return value
-
-
-def _fps(text):
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not 0.5 <= value <= 50.0:
-        raise argparse.ArgumentTypeError(
-            f'must be a number in [0.5, 50] frames/s, got {text!r}')
-    return value
-
-
-def _margin(text):
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not 0.0 <= value <= 0.99:
-        raise argparse.ArgumentTypeError(
-            f'must be a number in [0, 0.99], got {text!r}')
-    return value
-
-
-def _samples(text):
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 2:
-        raise argparse.ArgumentTypeError(
-            f'must be an integer of at least 2, got {text!r}')
-    return value
-
-
-def _positive_float(text):
-    try:
-        value = float(text)
-    except ValueError:
-        value = 0.0
-    if not (np.isfinite(value) and value > 0.0):
-        raise argparse.ArgumentTypeError(
-            f'must be a finite number above 0, got {text!r}')
-    return value
-
-
-def _count(text, least=0):
-    try:
-        value = int(text)
-    except ValueError:
-        value = least - 1
-    if value < least:
-        raise argparse.ArgumentTypeError(
-            f'must be an integer >= {least}, got {text!r}')
-    return value
-
-
-def _positive_count(text):
-    return _count(text, 1)
+_pixels = _within(int, MIN_PIXELS, MAX_PIXELS, unit=' pixels')
+_frames = _within(int, 1, MAX_FRAMES)
+_fps = _within(float, 0.5, 50.0, unit=' frames/s')
+_margin = _within(float, 0.0, 0.99)
+_samples = _within(int, 2)
+_positive_float = _within(float, 0.0, above=True)
+_count = _within(int, 0)
+_positive_count = _within(int, 1)
 
 
 def _version():
