@@ -13,6 +13,7 @@ README's test command:
 - ``ROS_LOG_DIR``: a temporary directory, so tests leave no logs behind.
 """
 
+from contextlib import contextmanager
 import os
 import tempfile
 
@@ -29,9 +30,8 @@ os.environ['ROS_DOMAIN_ID'] = str(_DOMAIN)
 os.environ.setdefault('ROS_LOG_DIR', tempfile.mkdtemp(prefix='orthoglide-ros-log-'))
 
 
-@pytest.fixture
-def ros_context():
-    """Give one test a fresh rclpy context, shut down afterwards."""
+@contextmanager
+def _fresh_context():
     rclpy = pytest.importorskip('rclpy')
     context = rclpy.context.Context()
     rclpy.init(context=context)
@@ -39,6 +39,29 @@ def ros_context():
         yield context
     finally:
         rclpy.try_shutdown(context=context)
+
+
+@pytest.fixture
+def ros_context():
+    """Give one test a fresh rclpy context, shut down afterwards."""
+    with _fresh_context() as context:
+        yield context
+
+
+@pytest.fixture(scope='module')
+def closed_loop():
+    """
+    Start the closed loop's nodes once for a module; stop them after.
+
+    ``closed_loop_harness.ClosedLoop`` in a context of its own; every node
+    must have exited 0.
+    """
+    harness = pytest.importorskip('closed_loop_harness')
+    with _fresh_context() as context:
+        with harness.ClosedLoop(context) as running:
+            yield running
+        assert all(code == 0 for code in running.exit_codes.values()), (
+            running.exit_codes, running.stderr)
 
 
 def pytest_collection_modifyitems(config, items):

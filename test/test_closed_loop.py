@@ -45,7 +45,7 @@ from node_harness import node_executable  # noqa: E402
 
 from orthoglide_ros import trajectory  # noqa: E402
 
-rclpy = pytest.importorskip('rclpy')
+pytest.importorskip('rclpy')
 harness = pytest.importorskip('closed_loop_harness')
 from orthoglide_ros.simulator import MAX_CATCH_UP  # noqa: E402
 
@@ -61,20 +61,6 @@ pytestmark = [pytest.mark.ros, pytest.mark.skipif(
         'simulator', 'feedforward', 'tracking_controller',
         'setpoint_publisher')),
     reason='the console scripts are not installed next to python')]
-
-
-@pytest.fixture(scope='module')
-def loop():
-    """Start the loop's nodes once for the module; stop them after."""
-    context = rclpy.context.Context()
-    rclpy.init(context=context)
-    try:
-        with harness.ClosedLoop(context) as running:
-            yield running
-        assert all(code == 0 for code in running.exit_codes.values()), (
-            running.exit_codes, running.stderr)
-    finally:
-        rclpy.try_shutdown(context=context)
 
 
 def report(run):
@@ -95,10 +81,10 @@ def second_pass_on_a_miss(run_pass, ok):
     return result if ok(result) else run_pass()
 
 
-def open_loop(loop, mass_factor):
+def open_loop(closed_loop, mass_factor):
     """Run the paper's pass with gains zero; its largest error (m) early."""
-    run = loop.run('paper', feedforward=True, kp=(0.0,) * 3, kd=(0.0,) * 3,
-                   mass_factor=mass_factor)
+    run = closed_loop.run('paper', feedforward=True, kp=(0.0,) * 3,
+                          kd=(0.0,) * 3, mass_factor=mass_factor)
     report(run)
     early = run.times <= OPEN_LOOP_SPAN
     assert early.sum() >= OPEN_LOOP_SPAN * MIN_SAMPLE_RATE
@@ -108,29 +94,29 @@ def open_loop(loop, mass_factor):
     return run, worst
 
 
-def test_open_loop_follows_the_trajectory(loop):
+def test_open_loop_follows_the_trajectory(closed_loop):
     """Gains zero, exact plant: the feedforward alone moves the platform."""
     run, worst = second_pass_on_a_miss(
-        lambda: open_loop(loop, 1.0), lambda r: r[1] <= OPEN_LOOP_BOUND)
+        lambda: open_loop(closed_loop, 1.0), lambda r: r[1] <= OPEN_LOOP_BOUND)
     assert run.samples >= trajectory.PAPER_DURATION * MIN_SAMPLE_RATE
     assert worst <= OPEN_LOOP_BOUND
 
 
-def test_open_loop_sees_a_two_percent_heavier_platform(loop):
+def test_open_loop_sees_a_two_percent_heavier_platform(closed_loop):
     """
     The bound is tight: a plant 2 % off the model breaks it.
 
     (Such a plant falls away from the trajectory and may reach the
     simulator's workspace limit, which stops it, before the pass ends.)
     """
-    _, worst = open_loop(loop, 1.02)
+    _, worst = open_loop(closed_loop, 1.02)
     assert worst > OPEN_LOOP_BOUND
 
 
-def test_feedforward_ten_times_better_exact_plant(loop):
+def test_feedforward_ten_times_better_exact_plant(closed_loop):
     """PD + feedforward: at least 10x smaller RMS error than PD alone."""
     def loop_pass(feedforward):
-        run = loop.run('paper', feedforward=feedforward)
+        run = closed_loop.run('paper', feedforward=feedforward)
         report(run)
         return run
 
@@ -145,16 +131,16 @@ def test_feedforward_ten_times_better_exact_plant(loop):
     assert pd.rms_mm >= 10.0 * ff.rms_mm
 
 
-def test_feedforward_better_mismatched_plant(loop):
+def test_feedforward_better_mismatched_plant(closed_loop):
     """With a 20 % heavier platform the feedforward still helps."""
-    pd = loop.run('paper', feedforward=False, mass_factor=harness.MISMATCH)
-    ff = loop.run('paper', feedforward=True, mass_factor=harness.MISMATCH)
+    pd = closed_loop.run('paper', feedforward=False, mass_factor=harness.MISMATCH)
+    ff = closed_loop.run('paper', feedforward=True, mass_factor=harness.MISMATCH)
     report(pd)
     report(ff)
     assert ff.rms_mm < pd.rms_mm
 
 
-def test_joint_trajectory_ten_times_better_like_the_stream(loop):
+def test_joint_trajectory_ten_times_better_like_the_stream(closed_loop):
     """
     The whole pass as one trajectory: the same 10x as the streamed mode.
 
@@ -163,7 +149,7 @@ def test_joint_trajectory_ten_times_better_like_the_stream(loop):
     tracking controller as joint_trajectory_controller would.
     """
     def loop_pass(feedforward):
-        run = loop.run('paper', feedforward=feedforward, mode='trajectory')
+        run = closed_loop.run('paper', feedforward=feedforward, mode='trajectory')
         report(run)
         return run
 

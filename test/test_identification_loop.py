@@ -59,34 +59,15 @@ SIGMAS = 4.0
 
 
 @pytest.fixture(scope='module')
-def context():
-    context = rclpy.context.Context()
-    rclpy.init(context=context)
-    try:
-        yield context
-    finally:
-        rclpy.try_shutdown(context=context)
-
-
-@pytest.fixture(scope='module')
-def loop(context):
-    """Start the loop's nodes once for the module; stop them after."""
-    with harness.ClosedLoop(context) as running:
-        yield running
-    assert all(code == 0 for code in running.exit_codes.values()), (
-        running.exit_codes, running.stderr)
-
-
-@pytest.fixture(scope='module')
-def identified(loop):
+def identified(closed_loop):
     """Excite the unknown plant, identify it: (Identification, run)."""
-    run = loop.run(harness.excitation_motion(SEED, PERIOD),
-                   feedforward=True, plant=harness.UNKNOWN_PLANT,
-                   model=Robot(), passes=PASSES)
+    run = closed_loop.run(harness.excitation_motion(SEED, PERIOD),
+                          feedforward=True, plant=harness.UNKNOWN_PLANT,
+                          model=Robot(), passes=PASSES)
     if run.braked:      # a stalled process spoiled the pass: once more
-        run = loop.run(harness.excitation_motion(SEED, PERIOD),
-                       feedforward=True, plant=harness.UNKNOWN_PLANT,
-                       model=Robot(), passes=PASSES)
+        run = closed_loop.run(harness.excitation_motion(SEED, PERIOD),
+                              feedforward=True, plant=harness.UNKNOWN_PLANT,
+                              model=Robot(), passes=PASSES)
     log = identification.crop(harness.log_of(run), harness.SETTLE)
     result = identification.identify(Robot(), log,
                                      force_lag=harness.force_lag())
@@ -106,27 +87,28 @@ def test_identified_base_parameters_are_the_plants(identified):
     assert (np.abs(result.values - truth) <= SIGMAS * result.std).all()
 
 
-def test_identified_feedforward_tracks_like_the_exact_one(loop, identified):
+def test_identified_feedforward_tracks_like_the_exact_one(closed_loop,
+                                                          identified):
     result, _ = identified
 
     def report(text):
         print(text, file=sys.stderr)
     compared = {'identified': (True, result.robot),
                 'exact': (True, harness.UNKNOWN_PLANT)}
-    runs, passes = harness.median_runs(loop, 'paper', compared,
+    runs, passes = harness.median_runs(closed_loop, 'paper', compared,
                                        harness.UNKNOWN_PLANT, REPEATS, report)
     if runs['identified'].rms_mm > CRITERION * runs['exact'].rms_mm:
         # The medians of three still vary with the load: three more each.
-        runs, _ = harness.median_runs(loop, 'paper', compared,
+        runs, _ = harness.median_runs(closed_loop, 'paper', compared,
                                       harness.UNKNOWN_PLANT, REPEATS, report,
                                       passes)
-    nominal, _ = harness.median_runs(loop, 'paper', {
+    nominal, _ = harness.median_runs(closed_loop, 'paper', {
         'nominal': (True, Robot())}, harness.UNKNOWN_PLANT, 1, report)
     assert runs['identified'].rms_mm <= CRITERION * runs['exact'].rms_mm
     assert runs['identified'].rms_mm < nominal['nominal'].rms_mm
 
 
-def test_identified_parameters_file_starts_the_feedforward(context,
+def test_identified_parameters_file_starts_the_feedforward(closed_loop,
                                                            identified,
                                                            tmp_path):
     result, _ = identified
@@ -137,6 +119,7 @@ def test_identified_parameters_file_starts_the_feedforward(context,
         result.robot, node='/identified/feedforward'))
     proc = start_node_process(['--ros-args', '--params-file', str(path),
                                '-r', '__ns:=/identified'])
+    context = closed_loop.context
     node = rclpy.create_node('identified_check', context=context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
