@@ -38,6 +38,8 @@ force (seeded generators). Checked:
 
 import math
 
+from identification_checks import assert_within_issue_tolerances, \
+    BASE_TOLERANCE
 from mechanics_reference import OTHER_ROBOT_VALUES
 import numpy as np
 from orthoglide_ros import identification, mechanics, trajectory
@@ -55,10 +57,6 @@ PERIOD = 6.0            # s, of the excitation
 QUANTUM = 1e-6          # m, of the measured lambda
 NOISE = 0.5             # N, standard deviation of the measured forces
 SIGMAS = 4.0
-# Issue 10's tolerances.
-BASE_TOLERANCE = 0.03
-LIGHTEST_TOLERANCE = 0.10
-FRICTION_TOLERANCE = 0.25
 VALIDATION_RMS = 1.0    # N, per actuator
 
 
@@ -176,18 +174,8 @@ def test_base_names_and_meanings_read_as_combinations(base):
 
 def test_base_parameters_within_the_issues_tolerances(base, result):
     """3 % (the lightest group 10 %), friction 25 %: issue 10's figures."""
-    truth = truth_of(base)
-    error = np.abs(result.values - truth) / truth
-    masses = [i for i, j in enumerate(base.independent) if j < 6]
-    lightest = min(masses, key=lambda i: truth[i])
-    assert base.names[lightest] == 'm1 + m2'
-    tolerance = np.full(len(truth), BASE_TOLERANCE)
-    tolerance[lightest] = LIGHTEST_TOLERANCE
-    assert (error <= tolerance).all(), dict(zip(base.names, error))
-    robot = result.robot
-    for found, true in ((robot.friction_viscous, TRUE.friction_viscous),
-                        (robot.friction_coulomb, TRUE.friction_coulomb)):
-        assert np.allclose(found, true, rtol=FRICTION_TOLERANCE, atol=0.0)
+    assert_within_issue_tolerances(base, result.values, truth_of(base),
+                                   result.robot, TRUE)
 
 
 def test_every_base_parameter_is_found_within_four_deviations(base, result):

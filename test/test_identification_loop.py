@@ -8,9 +8,11 @@ feedforward, then ``identification.identify`` on the plant's measured
 joint states (the harness's recorder), the effort taken as applied half a
 plant step before its state (``force_lag``). Checked:
 
-- the identified base parameters lie within four standard deviations of
-  the plant's (twelve seconds of a loop on two busy cores: within 1 %; the
-  demo's thirty seconds do better, see doc/identification.md);
+- the identified base parameters lie within issue 10's tolerances of the
+  plant's (3 %, the lightest group 10 %, friction 25 %; measured within
+  1 %). Not within a number of their standard deviations: those assume
+  white residuals, and a loop over DDS leaves correlated ones (measured:
+  errors of 0.07-0.16 % at 4.3-4.5 of the computed deviations);
 - on the paper's trajectory, PD + the identified feedforward tracks within
   1.5 times the RMS error of PD + the exact feedforward (the plant's own
   robot), and better than PD + the nominal one: the median of three
@@ -32,9 +34,9 @@ import os
 import sys
 import time
 
-import numpy as np
 import pytest
 
+from identification_checks import assert_within_issue_tolerances
 from node_harness import node_executable, start_node_process, stop_process
 
 from orthoglide_ros import identification, params_file
@@ -55,7 +57,6 @@ pytestmark = [pytest.mark.ros, pytest.mark.skipif(
 SEED, PERIOD, PASSES = 0, 6.0, 2
 CRITERION = 1.5
 REPEATS = 3         # passes of each compared case; the median counts
-SIGMAS = 4.0
 
 
 @pytest.fixture(scope='module')
@@ -84,7 +85,8 @@ def test_identified_base_parameters_are_the_plants(identified):
                                       truth, result.std):
         print(f'{name}: {value:.4f} (plant {true:.4f}, std {std:.3g})',
               file=sys.stderr)
-    assert (np.abs(result.values - truth) <= SIGMAS * result.std).all()
+    assert_within_issue_tolerances(result.base, result.values, truth,
+                                   result.robot, harness.UNKNOWN_PLANT)
 
 
 def test_identified_feedforward_tracks_like_the_exact_one(closed_loop,
