@@ -81,10 +81,7 @@ def main(argv=None):
                           f'error RMS {run.rms_mm:.3f} mm, max '
                           f'{run.max_mm:.3f} mm', flush=True)
                     runs[name, feedforward, mass] = run
-        failed = {k: v for k, v in loop.exit_codes.items() if v != 0}
-        if failed:
-            raise harness.LoopError(f'nodes exited with {failed}:\n'
-                                    + '\n'.join(loop.stderr.values()))
+        loop.check_exits()
     except harness.LoopError as error:
         print(f'closed_loop_demo: error: {error}', file=sys.stderr)
         return 1

@@ -103,10 +103,7 @@ def main(argv=None):
             identified = params_file.load_robot(identified_file)
             runs = validate(loop, names, nominal, identified, plant,
                             args.repeats)
-        failed = {k: v for k, v in loop.exit_codes.items() if v != 0}
-        if failed:
-            raise harness.LoopError(f'nodes exited with {failed}:\n'
-                                    + '\n'.join(loop.stderr.values()))
+        loop.check_exits()
     except harness.LoopError as error:
         print(f'identification_demo: error: {error}', file=sys.stderr)
         return 1

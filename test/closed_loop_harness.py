@@ -253,6 +253,13 @@ class ClosedLoop:
             self.recorder = None
         return False
 
+    def check_exits(self):
+        """After the ``with`` block: a LoopError unless every node exited 0."""
+        failed = {k: v for k, v in self.exit_codes.items() if v != 0}
+        if failed:
+            raise LoopError(f'nodes exited with {failed}:\n'
+                            + '\n'.join(self.stderr.values()))
+
     def run(self, name='paper', feedforward=True, kp=None, kd=None,
             mass_factor=1.0, plant=None, model=None, passes=1,
             mode='stream'):

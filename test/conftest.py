@@ -60,8 +60,7 @@ def closed_loop():
     with _fresh_context() as context:
         with harness.ClosedLoop(context) as running:
             yield running
-        assert all(code == 0 for code in running.exit_codes.values()), (
-            running.exit_codes, running.stderr)
+        running.check_exits()
 
 
 def pytest_collection_modifyitems(config, items):
