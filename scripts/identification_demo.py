@@ -167,8 +167,9 @@ def validate(loop, names, nominal, identified, plant, repeats):
     Track each validation motion in the four cases; return the runs.
 
     PD alone and PD + nominal once; the two cases the criterion compares
-    ``repeats`` times each, interleaved, their median pass kept
-    (:func:`closed_loop_harness.median_runs`).
+    ``repeats`` times each, interleaved, their median pass kept, and
+    ``repeats`` more each when the first medians miss the criterion
+    (:func:`closed_loop_harness.median_runs`), as the DDS test does.
     """
     models = {'PD': (False, nominal), 'PD + nominal FF': (True, nominal),
               'PD + identified FF': (True, identified),
@@ -178,11 +179,13 @@ def validate(loop, names, nominal, identified, plant, repeats):
         print('  ' + text, flush=True)
     runs = {}
     for name in names:
-        for group, times in (([c for c in CASES if c not in COMPARED], 1),
-                             (COMPARED, repeats)):
+        for group, times, enough in (
+                ([c for c in CASES if c not in COMPARED], 1, None),
+                (COMPARED, repeats, harness.within_factor(*COMPARED,
+                                                          CRITERION))):
             medians, _ = harness.median_runs(
                 loop, name, {case: models[case] for case in group}, plant,
-                times, report)
+                times, report, enough)
             runs.update({(name, case): run for case, run in medians.items()})
     return runs
 

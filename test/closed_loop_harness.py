@@ -408,7 +408,7 @@ class ClosedLoop:
 
 
 def median_runs(loop, name, cases, plant, repeats=3, report=None,
-                passes=None):
+                enough=None):
     """
     Run each case ``repeats`` times, interleaved; return its median runs.
 
@@ -418,14 +418,15 @@ def median_runs(loop, name, cases, plant, repeats=3, report=None,
     controller (a process stalled longer than the command timeout), is run
     again once.
     Returns ``(medians, passes)``: ``{label: Run}``, the pass of median
-    RMS error of each case, and ``{label: [Run, ...]}``, every pass (those
-    of ``passes`` given, a first round's, and this round's). One pass over
-    DDS varies severalfold with the machine's load (the pass's latency,
-    which the error includes), the same for every model. ``report(text)``
-    (optional) hears about every pass.
+    RMS error of each case, and ``{label: [Run, ...]}``, every pass. One
+    pass over DDS varies severalfold with the machine's load (the pass's
+    latency, which the error includes), the same for every model. ``report(text)``
+    (optional) hears about every pass. ``enough(medians)`` (optional):
+    when it is false after the first round, a second round of ``repeats``
+    passes each, the medians then over both rounds.
     """
-    passes = passes or {label: [] for label in cases}
-    for _ in range(repeats):
+    passes = {label: [] for label in cases}
+    for _ in range(repeats * (2 if enough else 1)):
         for label, (feedforward, model) in cases.items():
             run = loop.run(name, feedforward, plant=plant, model=model)
             tripped = (np.abs(run.joint_error) > PATH_TOLERANCE).any()
@@ -444,8 +445,22 @@ def median_runs(loop, name, cases, plant, repeats=3, report=None,
                        ' mm' + (f', braked {run.braked}' if run.braked
                                 else ''))
             passes[label].append(run)
-    return {label: sorted(runs, key=lambda r: r.rms_mm)[len(runs) // 2]
-            for label, runs in passes.items()}, passes
+        medians = {label: sorted(runs, key=lambda r: r.rms_mm)[
+            len(runs) // 2] for label, runs in passes.items()}
+        if enough and len(passes[label]) == repeats and enough(medians):
+            break
+    return medians, passes
+
+
+def within_factor(label, reference, factor):
+    """
+    Return a :func:`median_runs` ``enough``: ``label`` within ``factor``.
+
+    True when the median RMS error of ``label`` is at most ``factor`` times
+    that of ``reference``.
+    """
+    return lambda medians: (medians[label].rms_mm
+                            <= factor * medians[reference].rms_mm)
 
 
 def robot_parameters(robot):

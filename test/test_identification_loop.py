@@ -97,13 +97,10 @@ def test_identified_feedforward_tracks_like_the_exact_one(closed_loop,
         print(text, file=sys.stderr)
     compared = {'identified': (True, result.robot),
                 'exact': (True, harness.UNKNOWN_PLANT)}
-    runs, passes = harness.median_runs(closed_loop, 'paper', compared,
-                                       harness.UNKNOWN_PLANT, REPEATS, report)
-    if runs['identified'].rms_mm > CRITERION * runs['exact'].rms_mm:
-        # The medians of three still vary with the load: three more each.
-        runs, _ = harness.median_runs(closed_loop, 'paper', compared,
-                                      harness.UNKNOWN_PLANT, REPEATS, report,
-                                      passes)
+    runs, _ = harness.median_runs(
+        closed_loop, 'paper', compared, harness.UNKNOWN_PLANT, REPEATS,
+        report, enough=harness.within_factor('identified', 'exact',
+                                             CRITERION))
     nominal, _ = harness.median_runs(closed_loop, 'paper', {
         'nominal': (True, Robot())}, harness.UNKNOWN_PLANT, 1, report)
     assert runs['identified'].rms_mm <= CRITERION * runs['exact'].rms_mm

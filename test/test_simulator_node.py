@@ -326,7 +326,14 @@ def test_stop_with_clear_error_then_reset(graph, capfd):
     assert 'initial_position [0.0, 0.0, 0.0] m' in answer.message
     g.probe.clear()
     status = wait_diagnostics(g, lambda v: v['state'] == 'held')
-    assert status.level == DiagnosticStatus.OK
+    # The stop's ERROR is gone; the period that held the reset may still
+    # report a lag of the steps (a loaded machine), the only WARN left.
+    if status.level == DiagnosticStatus.WARN:
+        assert status.message.startswith('slower than real time'), \
+            status.message
+    else:
+        assert status.level == DiagnosticStatus.OK
+        assert status.message == 'held: waiting for a command'
     assert spin_until(g.executor, lambda: g.probe.joint_states, WAIT)
     assert tuple(g.probe.joint_states[-1].position) == ZERO
     assert core.plant.position == ZERO and core.plant.time == 0.0
