@@ -30,6 +30,7 @@ import argparse
 import math
 import os
 import signal
+import subprocess
 import sys
 import threading
 import time
@@ -436,36 +437,38 @@ def startup_signals(delays=(0.0, 0.05, 0.15, 0.3), names=NODES,
             for delay in delays:
                 proc = start_node_process(['--ros-args'],
                                           command=[node_executable(name)])
-                try:
-                    deadline = time.monotonic() + START_TIMEOUT
-                    while not catches_sigterm(proc.pid) and \
-                            time.monotonic() < deadline:
-                        time.sleep(0.0005)
-                    time.sleep(delay)
-                    proc.send_signal(getattr(signal, signame))
-                    try:
-                        proc.wait(10.0)
-                    except Exception:
-                        pass
-                finally:
-                    code, stderr = stop_process(proc)
-                outcomes.append((name, signame, delay, code, stderr))
+                outcomes.append((name, signame, delay) + _signalled(
+                    proc, signame, delay, from_handler=True))
     for delay in (0.9, 1.0, 1.1, 1.2):
         proc = start_node_process(
             ['--ros-args', '-p', 'duration:=0.3', '-p', 'start_delay:=0.0'],
             command=[node_executable('setpoint_publisher')])
-        try:
-            time.sleep(delay)
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(10.0)
-            except Exception:
-                pass
-        finally:
-            code, stderr = stop_process(proc)
-        outcomes.append(('setpoint_publisher end of pass', 'SIGINT', delay,
-                         code, stderr))
+        outcomes.append(('setpoint_publisher end of pass', 'SIGINT', delay)
+                        + _signalled(proc, 'SIGINT', delay))
     return outcomes
+
+
+def _signalled(proc, signame, delay, from_handler=False):
+    """
+    Send ``signame`` to ``proc`` ``delay`` s on; ``(code, stderr)``.
+
+    ``delay`` counts from the start, or with ``from_handler`` from the
+    moment ``proc`` catches SIGTERM (:func:`catches_sigterm`).
+    """
+    try:
+        deadline = time.monotonic() + START_TIMEOUT
+        while from_handler and not catches_sigterm(proc.pid) and \
+                time.monotonic() < deadline:
+            time.sleep(0.0005)
+        time.sleep(delay)
+        proc.send_signal(getattr(signal, signame))
+        try:
+            proc.wait(10.0)
+        except subprocess.TimeoutExpired:
+            pass                    # stop_process ends it
+    finally:
+        code, stderr = stop_process(proc)
+    return code, stderr
 
 
 def quiet(stderr):
