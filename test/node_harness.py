@@ -359,6 +359,21 @@ def node_executable(name='feedforward'):
     return os.path.join(os.path.dirname(sys.executable), name)
 
 
+def needs_scripts(*names):
+    """
+    Return a pytest mark: skip unless the console scripts are installed.
+
+    ``names`` default to the feedforward; the scripts are looked for next to
+    the running Python (:func:`node_executable`).
+    """
+    import pytest               # the demos use this module without pytest
+    missing = [name for name in names or ('feedforward',)
+               if not os.path.exists(node_executable(name))]
+    return pytest.mark.skipif(
+        bool(missing), reason='not installed next to python: '
+        + ', '.join(missing))
+
+
 def start_node_process(args, env=None, command=None, cwd=None):
     """
     Start ``command`` (default: the feedforward console script) + ``args``.

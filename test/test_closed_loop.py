@@ -35,13 +35,12 @@ stamp (see the harness).
   (:func:`second_pass_on_a_miss`).
 """
 
-import os
 import sys
 
 import numpy as np
 import pytest
 
-from node_harness import node_executable  # noqa: E402
+from node_harness import needs_scripts  # noqa: E402
 
 from orthoglide_ros import trajectory  # noqa: E402
 
@@ -56,11 +55,8 @@ OPEN_LOOP_SPAN = 1.0       # s: the first second of the pass
 # tick, after at most MAX_CATCH_UP steps when its ticks are late.
 MIN_SAMPLE_RATE = harness.PLANT_RATE / MAX_CATCH_UP
 
-pytestmark = [pytest.mark.ros, pytest.mark.skipif(
-    not all(os.path.exists(node_executable(name)) for name in (
-        'simulator', 'feedforward', 'tracking_controller',
-        'setpoint_publisher')),
-    reason='the console scripts are not installed next to python')]
+pytestmark = [pytest.mark.ros, needs_scripts(
+    'simulator', 'feedforward', 'tracking_controller', 'setpoint_publisher')]
 
 
 def report(run):

@@ -6,7 +6,6 @@ runs it; the test talks to it over DDS (on localhost, in the session's
 domain: see conftest) and stops it with SIGINT, as Ctrl-C does.
 """
 
-import os
 from pathlib import Path
 import sys
 import time
@@ -19,7 +18,7 @@ from orthoglide_ros.params_file import load_robot
 from orthoglide_ros.trajectory import paper_sample, paper_times
 
 from node_harness import (assert_vector, header_stamp,  # noqa: E402
-                          node_executable, Probe, spin_until,
+                          needs_scripts, Probe, spin_until,
                           start_node_process, stop_process, wait_exit)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -28,9 +27,7 @@ WAIT = 15.0         # s for one answer: generous, the machine is shared
 START_WAIT = 40.0   # s for the process to come up and answer
 PROMPT = 5.0        # s from SIGINT to exit
 
-pytestmark = [pytest.mark.ros, pytest.mark.skipif(
-    not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')]
+pytestmark = [pytest.mark.ros, needs_scripts()]
 
 
 @pytest.fixture

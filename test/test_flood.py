@@ -14,20 +14,17 @@ are in ``reliability_harness`` (shared with
 ``scripts/reliability_report.py``); the soak versions last 10 s.
 """
 
-import os
 import sys
 
 import pytest
 
-from node_harness import node_executable  # noqa: E402
+from node_harness import needs_scripts  # noqa: E402
 import reliability_harness as harness  # noqa: E402
 
 SHORT = 2.5         # s of flood / stream in the default run
 FULL = 10.0         # s in the soak run (the issue's)
 RATE = 1000         # Hz: half of what the node sustains (bench_node.py)
-pytestmark = [pytest.mark.ros, pytest.mark.skipif(
-    not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')]
+pytestmark = [pytest.mark.ros, needs_scripts()]
 
 
 def check(result, **which):

@@ -20,15 +20,12 @@ that ``scripts/reliability_report.sh`` runs too:
 10. the looping setpoint publisher's way back.
 """
 
-import os
 
 import pytest
 
-from node_harness import node_executable
+from node_harness import needs_scripts
 
-pytestmark = [pytest.mark.ros, pytest.mark.skipif(
-    not os.path.exists(node_executable()),
-    reason='the console scripts are not installed next to python')]
+pytestmark = [pytest.mark.ros, needs_scripts()]
 
 harness = pytest.importorskip('hostile_harness')
 import reliability_harness  # noqa: E402

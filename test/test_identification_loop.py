@@ -30,14 +30,13 @@ CLI's ``identify``, two validation motions, four cases) is
 ``scripts/identification_demo.sh``.
 """
 
-import os
 import sys
 import time
 
 import pytest
 
 from identification_checks import assert_within_issue_tolerances
-from node_harness import node_executable, start_node_process, stop_process
+from node_harness import needs_scripts, start_node_process, stop_process
 
 from orthoglide_ros import identification, params_file
 from orthoglide_ros.robot import Robot
@@ -48,11 +47,8 @@ from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter_client import AsyncParameterClient  # noqa: E402
 from rcl_interfaces.msg import ParameterType  # noqa: E402
 
-pytestmark = [pytest.mark.ros, pytest.mark.skipif(
-    not all(os.path.exists(node_executable(name)) for name in (
-        'simulator', 'feedforward', 'tracking_controller',
-        'setpoint_publisher')),
-    reason='the console scripts are not installed next to python')]
+pytestmark = [pytest.mark.ros, needs_scripts(
+    'simulator', 'feedforward', 'tracking_controller', 'setpoint_publisher')]
 
 SEED, PERIOD, PASSES = 0, 6.0, 2
 CRITERION = 1.5

@@ -17,7 +17,7 @@ import pytest
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 
-from node_harness import (node_executable, Probe,
+from node_harness import (needs_scripts, Probe,
                           spin_for, start_node_process, stop_process)
 from reliability_harness import process_environment
 
@@ -25,9 +25,7 @@ PARAMS = Path(__file__).resolve().parents[1] / 'config' / 'orthoglide.yaml'
 START_WAIT = 30.0   # s for the node to come up and answer
 QUIET = 3.0         # s the probe in the other domain listens and sends
 
-pytestmark = [pytest.mark.ros, pytest.mark.skipif(
-    not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')]
+pytestmark = [pytest.mark.ros, needs_scripts()]
 
 
 def _probe(domain, namespace):

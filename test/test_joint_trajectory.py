@@ -9,20 +9,17 @@ parameter's; a trajectory with any bad point, an empty one, or one beyond
 the limits publishes nothing and is counted by reason.
 """
 
-import os
 import time
 
 import numpy as np
 import pytest
 
 from hostile_harness import Nodes, Peer
-from node_harness import cartesian_message, node_executable
+from node_harness import cartesian_message, needs_scripts
 from orthoglide_ros import mechanics, trajectory
 from orthoglide_ros.robot import Robot
 
-pytestmark = [pytest.mark.ros, pytest.mark.skipif(
-    not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')]
+pytestmark = [pytest.mark.ros, needs_scripts()]
 
 from trajectory_msgs.msg import (JointTrajectory,  # noqa: E402
                                  MultiDOFJointTrajectory)

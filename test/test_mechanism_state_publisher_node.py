@@ -14,7 +14,6 @@ topics' QoS is the other nodes'. As a process: the console script answers,
 exits 0 on SIGINT and 2 on an invalid parameter.
 """
 
-import os
 import random
 
 from mechanics_reference import COMPLEX_STEP, leg_geometry, LEGS
@@ -33,7 +32,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 
 from node_harness import (
-    assert_clean_exit, node_executable, node_graphs, PROBE_QOS, run_to_exit,
+    assert_clean_exit, needs_scripts, node_executable, node_graphs, PROBE_QOS, run_to_exit,
     spin_until, start_node_process, timed_stop,
     wait_diagnostics as harness_wait_diagnostics)
 from urdf_harness import COMMITTED_URDF, cut_errors, load, TOLERANCE
@@ -200,9 +199,7 @@ def test_qos_overrides(ros_context):
         node.destroy_node()
 
 
-needs_script = pytest.mark.skipif(
-    not os.path.exists(EXECUTABLE),
-    reason='the mechanism_state_publisher console script is not installed')
+needs_script = needs_scripts('mechanism_state_publisher')
 
 
 @needs_script

@@ -39,7 +39,6 @@ outputs the model only moves forwards through the history. During (a) and
 
 from collections import Counter
 import math
-import os
 from pathlib import Path
 import sys
 import time
@@ -61,7 +60,7 @@ from orthoglide_ros import mechanics
 from orthoglide_ros.params_file import load_robot
 from orthoglide_ros.trajectory import paper_sample
 
-from node_harness import (close, node_executable, PROBE_QOS,  # noqa: E402
+from node_harness import (close, needs_scripts, PROBE_QOS,  # noqa: E402
                           start_node_process, stop_process)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -96,9 +95,7 @@ INVALID = [
 WATCHED = ['robot.m5', 'robot.l3', 'robot.gravity', 'pairing_timeout',
            'setpoint_timeout', 'joint_names', 'singularity_margin']
 
-pytestmark = [pytest.mark.ros, pytest.mark.skipif(
-    not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')]
+pytestmark = [pytest.mark.ros, needs_scripts()]
 
 
 def setpoint(k):

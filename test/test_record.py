@@ -11,13 +11,12 @@ of ``--duration`` or on SIGINT before it, exit code 0 either way; without
 a publisher it gives up after ``--wait`` with exit code 2.
 """
 
-import os
 import time
 
 import numpy as np
 import pytest
 
-from node_harness import node_executable, start_node_process, stop_process
+from node_harness import needs_scripts, node_executable, start_node_process, stop_process
 
 from orthoglide_ros import identification
 
@@ -27,9 +26,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile, \
     ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 
-pytestmark = [pytest.mark.ros, pytest.mark.skipif(
-    not os.path.exists(node_executable('orthoglide')),
-    reason='the orthoglide console script is not installed next to python')]
+pytestmark = [pytest.mark.ros, needs_scripts('orthoglide')]
 
 MESSAGES = 150
 QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=MESSAGES,

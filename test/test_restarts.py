@@ -18,17 +18,14 @@ The runs and the bounds are in ``reliability_harness`` (shared with
 ``scripts/reliability_report.py``).
 """
 
-import os
 import sys
 
 import pytest
 
-from node_harness import node_executable  # noqa: E402
+from node_harness import needs_scripts  # noqa: E402
 import reliability_harness as harness  # noqa: E402
 
-pytestmark = [pytest.mark.ros, pytest.mark.skipif(
-    not os.path.exists(node_executable()),
-    reason='the feedforward console script is not installed next to python')]
+pytestmark = [pytest.mark.ros, needs_scripts()]
 
 
 def check(result):

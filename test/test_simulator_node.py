@@ -34,7 +34,7 @@ from orthoglide_ros.simulator import MAX_CATCH_UP
 from orthoglide_ros.simulator_node import SimulatorNode
 
 from node_harness import (
-    assert_clean_exit, header_stamp, node_executable, node_graphs, PROBE_QOS,
+    assert_clean_exit, header_stamp, needs_scripts, node_executable, node_graphs, PROBE_QOS,
     run_to_exit, spin_for, spin_until, start_node_process, timed_stop,
     wait_diagnostics as harness_wait_diagnostics)
 
@@ -390,9 +390,7 @@ def simulator_command():
     return [node_executable('simulator')]
 
 
-needs_script = pytest.mark.skipif(
-    not os.path.exists(node_executable('simulator')),
-    reason='the simulator console script is not installed next to python')
+needs_script = needs_scripts('simulator')
 
 
 @needs_script

@@ -28,7 +28,7 @@ from orthoglide_ros.tracking import INPUTS, PARAMETERS, REASONS
 from orthoglide_ros.tracking_controller_node import TrackingControllerNode
 
 from node_harness import (
-    assert_clean_exit, call, diagnostic_values, node_executable, node_graphs,
+    assert_clean_exit, call, diagnostic_values, needs_scripts, node_executable, node_graphs,
     parameter_client, PROBE_QOS, run_to_exit, spin_for, spin_until,
     start_node_process, timed_stop,
     wait_diagnostics as harness_wait_diagnostics)
@@ -473,9 +473,7 @@ def test_invalid_start_parameters_raise(ros_context):
 
 # The console script ----------------------------------------------------------
 EXECUTABLE = node_executable('tracking_controller')
-needs_script = pytest.mark.skipif(
-    not os.path.exists(EXECUTABLE),
-    reason='the tracking_controller console script is not installed')
+needs_script = needs_scripts('tracking_controller')
 
 
 @needs_script
