@@ -84,13 +84,7 @@ def trajectory_point(buf):
     rotation, velocity or None, acceleration or None, time_from_start)``
     with ``time_from_start`` as ``(sec, nanosec)``.
     """
-    stamp, frame, offset = _header(buf)
-    names, offset = _count(buf, offset)
-    if names > MAX_JOINT_NAMES:
-        raise LimitError(f'{names} joint_names: at most {MAX_JOINT_NAMES}')
-    for _ in range(names):
-        length, offset = _count(buf, offset)
-        offset += length
+    stamp, frame, offset = _trajectory_header(buf)
     points, offset = _count(buf, offset)
     if points == 0:
         return stamp, frame, None
@@ -168,12 +162,7 @@ def cartesian_trajectory(buf):
     (a point's layout depends only on its start's alignment) and are
     checked with numpy instead of walked in Python.
     """
-    stamp, frame, offset = _header(buf)
-    names, offset = _count(buf, offset)
-    if names > MAX_JOINT_NAMES:
-        raise LimitError(f'{names} joint_names: at most {MAX_JOINT_NAMES}')
-    for _ in range(names):
-        _, offset = _string(buf, offset)
+    stamp, frame, offset = _trajectory_header(buf)
     points, offset = _count(buf, offset)
     # Each point holds at least three counts and a duration: 20 bytes.
     if 20 * points > len(buf) - offset:
@@ -476,6 +465,21 @@ def _header(buf):
     sec, nanosec = _unpack(_STAMP, buf, 4)
     frame, end = _string(buf, 12)
     return (sec, nanosec), frame, end
+
+
+def _trajectory_header(buf):
+    """
+    Read a trajectory's header and joint_names (at most MAX_JOINT_NAMES).
+
+    Returns the stamp, the frame and the offset of the points.
+    """
+    stamp, frame, offset = _header(buf)
+    names, offset = _count(buf, offset)
+    if names > MAX_JOINT_NAMES:
+        raise LimitError(f'{names} joint_names: at most {MAX_JOINT_NAMES}')
+    for _ in range(names):
+        _, offset = _string(buf, offset)
+    return stamp, frame, offset
 
 
 def _count(buf, offset):
