@@ -9,7 +9,10 @@ The node's ``run()`` (``node_runtime.run``) looks at :data:`STOP` before it
 starts and while it spins, so a signal at any moment, during the imports
 included, ends the process with exit code 0 and nothing on standard error
 (Python's defaults would print a KeyboardInterrupt traceback or die by the
-signal).
+signal). Once ``main()`` returns, both signals are ignored: Python's
+finalization puts the default action back for any other handler, and a
+signal during the exit (Fast DDS's teardown: tens of
+milliseconds) would kill the process with -2 or -15 instead of its code.
 
 This module imports only the standard library.
 """
@@ -34,7 +37,11 @@ def _record(number, frame):
 
 def _run(module):
     install_signal_handlers()
-    return importlib.import_module(f'orthoglide_ros.{module}').main()
+    try:
+        return importlib.import_module(f'orthoglide_ros.{module}').main()
+    finally:
+        for number in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(number, signal.SIG_IGN)
 
 
 def feedforward():

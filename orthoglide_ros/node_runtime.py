@@ -803,9 +803,6 @@ def run(node_class, name, args=None):
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
-        # rclpy's shutdown puts the default SIGINT handler back: a signal
-        # on the way out must still be only recorded.
-        install_signal_handlers()
     return 0
 
 

@@ -419,7 +419,8 @@ def catches_sigterm(pid):
 
 
 def startup_signals(delays=(0.0, 0.05, 0.15, 0.3), names=NODES,
-                    signals=('SIGINT', 'SIGTERM')):
+                    signals=('SIGINT', 'SIGTERM'),
+                    exit_delays=(0.0, 0.005, 0.02, 0.05)):
     """
     Signal a node ``delay`` s after the package's first line ran.
 
@@ -429,7 +430,8 @@ def startup_signals(delays=(0.0, 0.05, 0.15, 0.3), names=NODES,
     give exit code 0 and nothing on stderr. (Python's own start-up, before
     the package's code, is not the package's to guard.) Returns a list of
     ``(name, signal, delay, code, stderr)``; the last entries are the
-    setpoint publisher signalled as its pass ends (``duration`` 0.3 s).
+    setpoint publisher (``duration`` 0.3 s) signalled ``exit_delays`` s
+    after its end-of-pass summary, while it exits by itself.
     """
     outcomes = []
     for name in names:
@@ -438,27 +440,35 @@ def startup_signals(delays=(0.0, 0.05, 0.15, 0.3), names=NODES,
                 proc = start_node_process(['--ros-args'],
                                           command=[node_executable(name)])
                 outcomes.append((name, signame, delay) + _signalled(
-                    proc, signame, delay, from_handler=True))
-    for delay in (0.9, 1.0, 1.1, 1.2):
-        proc = start_node_process(
-            ['--ros-args', '-p', 'duration:=0.3', '-p', 'start_delay:=0.0'],
-            command=[node_executable('setpoint_publisher')])
-        outcomes.append(('setpoint_publisher end of pass', 'SIGINT', delay)
-                        + _signalled(proc, 'SIGINT', delay))
+                    proc, signame, delay, lambda p: catches_sigterm(p.pid)))
+    for signame in signals:
+        for delay in exit_delays:
+            proc = start_node_process(
+                ['--ros-args', '-p', 'duration:=0.3', '-p',
+                 'start_delay:=0.0'],
+                command=[node_executable('setpoint_publisher')])
+            outcomes.append(('setpoint_publisher end of pass', signame,
+                             delay) + _signalled(proc, signame, delay,
+                                                 _summary_written))
     return outcomes
 
 
-def _signalled(proc, signame, delay, from_handler=False):
-    """
-    Send ``signame`` to ``proc`` ``delay`` s on; ``(code, stderr)``.
+def _summary_written(proc):
+    """Whether the setpoint publisher logged its end-of-pass summary."""
+    err = proc.output_files[1]
+    err.seek(0)
+    return b']: published ' in err.read()
 
-    ``delay`` counts from the start, or with ``from_handler`` from the
-    moment ``proc`` catches SIGTERM (:func:`catches_sigterm`).
+
+def _signalled(proc, signame, delay, ready):
+    """
+    Send ``signame`` ``delay`` s after ``ready(proc)``; ``(code, stderr)``.
+
+    ``ready`` is polled every 0.5 ms, for START_TIMEOUT s at most.
     """
     try:
         deadline = time.monotonic() + START_TIMEOUT
-        while from_handler and not catches_sigterm(proc.pid) and \
-                time.monotonic() < deadline:
+        while not ready(proc) and time.monotonic() < deadline:
             time.sleep(0.0005)
         time.sleep(delay)
         proc.send_signal(getattr(signal, signame))
