@@ -297,12 +297,23 @@ class Simulator:
         before the first call, so that a caller's jitter below half a
         period makes exactly one step per wake-up; a grid more than
         MAX_CATCH_UP periods behind ``now`` drops the missed time
-        (``overruns``).
+        (``overruns``). A grid more than ``command_timeout`` behind (the
+        process itself stalled) also brakes: ``running``, the next step is
+        a timeout, whatever command arrived on waking up (it waited in a
+        queue: held on, it accelerated the plant for the tens of
+        milliseconds the controller took to answer, to 0.74 m/s after a
+        2 s SIGSTOP).
         """
         period = 1.0 / self.settings.rate_hz
         if self._grid is None:
             self._grid = now - 0.5 * period
         elif now - self._grid > MAX_CATCH_UP * period:
+            if now - self._grid > self.settings.command_timeout:
+                # This process stood still longer than the command timeout:
+                # a command read on waking up waited in the queue, of
+                # unknown age. Brake (the next tick times out), as a drive
+                # whose cycle stalled would.
+                self.latest_arrival = -math.inf
             self.overruns += 1
             late = now - (MAX_CATCH_UP - 0.5) * period
             self.dropped_time += late - self._grid

@@ -93,3 +93,34 @@ def test_grid_catches_up_then_drops_time():
     # The grid stood at 4.5 ms and restarts 9.5 periods before ``late``.
     assert sim.dropped_time == pytest.approx(
         late - (simulator.MAX_CATCH_UP - 0.5) * period - 0.0045, abs=1e-9)
+
+
+def test_own_stall_longer_than_the_command_timeout_brakes():
+    """
+    Woken up past command_timeout: the commands read then are not fresh.
+
+    A command that waited in the queue while the process stood still is
+    read "now"; held on, it would drive the plant until the controller
+    answers. The next step is a timeout instead; a later command resumes.
+    """
+    sim = simulator.Simulator(simulator.PARAMETERS.parse(
+        {'command_timeout': 0.1}), now=0.0)
+    sim.command([50.0, 50.0, 300.0], 0.0)
+    while sim.step_due(0.05) is not None:
+        pass
+    assert sim.state == simulator.RUNNING and sim.plant.velocity != (0.0,) * 3
+    # A stall shorter than the timeout: caught up, still running.
+    sim.command([50.0, 50.0, 300.0], 0.12)
+    tick, _ = sim.step_due(0.12)
+    assert tick.event is None and sim.state == simulator.RUNNING
+    while sim.step_due(0.12) is not None:
+        pass
+    # 2 s standing still; a queued command is read on waking, then the tick.
+    sim.command([80.0, 80.0, 120.0], 2.12)
+    tick, _ = sim.step_due(2.12)
+    assert (tick.event, tick.state) == ('timeout', simulator.HELD)
+    assert sim.plant.velocity == (0.0,) * 3 and sim.timed_out
+    # The controller's next command resumes from rest.
+    sim.command([0.0, 0.0, 256.5315], 2.125)
+    tick, _ = sim.step_due(2.126)
+    assert tick.state == simulator.RUNNING and tick.event is None
