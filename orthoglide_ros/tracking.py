@@ -49,6 +49,13 @@ Rules (``doc/tracking_controller.md`` states them for users):
   (a motion from the robot's state) re-arms joint_trajectory_controller. So
   a stream that moved on while a process of the loop stalled is never
   chased, neither when it is far away nor when it passes by at speed.
+- Stall: when more than ``stall_timeout`` passed since the last command
+  while following (this process, its measurements or its desired states
+  stopped; by then the plant has braked), the next desired state is
+  followed only if it starts where the robot is, by the same re-arm rule;
+  else the controller holds as above (counted in ``stall holds``). Within
+  the path tolerance a stream that moved on would otherwise be chased
+  with up to Kp x path_tolerance (1000 N with the defaults).
 """
 
 from collections import namedtuple
@@ -104,6 +111,12 @@ PARAMETERS = Table('ControllerSettings', (
          'following; beyond it the controller holds the measured position '
          '(ERROR) until a desired state comes within half of it; 0.0: no '
          'limit for that actuator', check=nonnegative_triple),
+    Spec('stall_timeout', 'double', 0.1,
+         'seconds (by arrival time) between two commands while following '
+         'beyond which the loop stalled: the next desired state is followed '
+         'only if it starts where the robot is (the re-arm rule of '
+         'path_tolerance), else the controller holds the measured position '
+         '(ERROR) until one does; 0.0: off', (0.0, 3600.0)),
 ))
 
 Command = namedtuple('Command', 'force error clipped')
@@ -165,6 +178,8 @@ class Tracking:
         self.clipped = 0
         self.mode = FOLLOWING
         self.trips = 0
+        self.stalls = 0
+        self._last_command = None   # monotonic time of the last command
         self.hold = None            # JointValues held while holding
         self.hold_message = None    # why it holds
         self._bias = None           # the last force sent while following
@@ -294,6 +309,15 @@ class Tracking:
         if not self.fresh(now):
             self.skipped['stale_measurement'] += 1
             return None
+        stall = settings.stall_timeout
+        if (stall and self.mode == FOLLOWING and self._last_command is not None
+                and now - self._last_command > stall
+                and not self._starts_here(values)):
+            self.stalls += 1
+            self._hold(values, (
+                f'holding: no command for {now - self._last_command:.3g} s '
+                f'(stall_timeout {stall:g} s) and the desired state does not '
+                'start where the robot is'))
         self._check_path(values)
         try:
             if self.mode == HOLDING:
@@ -306,6 +330,7 @@ class Tracking:
             self.rejected[source, rejection.reason] += 1
             raise
         self.commands += 1
+        self._last_command = now
         self.clipped += command.clipped
         self.latest = command
         return command
@@ -313,30 +338,49 @@ class Tracking:
     def _check_path(self, desired):
         """Trip to holding, or re-arm, by the path tolerance (see above)."""
         settings = self.settings
-        measured = self.measurement.position
-        errors = [d - m for d, m in zip(desired.position, measured)]
-        tolerance = settings.path_tolerance
         if self.mode == HOLDING:
-            speeds = self.measurement.velocity
-            if all((t == 0.0 or abs(e) <= 0.5 * t)
-                   and abs(v - w) <= REARM_SPEED for e, t, v, w in zip(
-                       errors, tolerance, desired.velocity, speeds)):
+            if self._starts_here(desired):
                 self.mode, self.hold, self.hold_message = FOLLOWING, None, None
             return
+        errors = [d - m for d, m in zip(desired.position,
+                                        self.measurement.position)]
+        tolerance = settings.path_tolerance
         beyond = [i for i, (e, t) in enumerate(zip(errors, tolerance))
                   if t > 0.0 and abs(e) > t]
         if not beyond:
             return
         i = beyond[0]
-        self.mode, self.trips = HOLDING, self.trips + 1
+        self.trips += 1
+        self._hold(desired, (
+            f'holding: path tolerance exceeded on '
+            f'{settings.joint_names[i]!r} (desired - measured = '
+            f'{errors[i]:.4g} m, path_tolerance {tolerance[i]:g} m)'))
+
+    def _starts_here(self, desired):
+        """
+        Whether ``desired`` starts where the robot is (the re-arm rule).
+
+        Within half of path_tolerance of the measured position (any
+        position where it is 0.0) and within REARM_SPEED of the measured
+        velocity, on every actuator.
+        """
+        measured = self.measurement
+        return all((t == 0.0 or abs(d - m) <= 0.5 * t)
+                   and abs(v - w) <= REARM_SPEED
+                   for d, m, t, v, w in zip(
+                       desired.position, measured.position,
+                       self.settings.path_tolerance, desired.velocity,
+                       measured.velocity))
+
+    def _hold(self, desired, why):
+        """Hold the measured position, with the bias of :meth:`_held_force`."""
+        measured = self.measurement.position
+        self.mode = HOLDING
         self.hold = JointValues(measured, _ZERO,
                                 self._held_force(desired.effort))
         self.hold_message = (
-            f'holding: path tolerance exceeded on '
-            f'{settings.joint_names[i]!r} (desired - measured = '
-            f'{errors[i]:.4g} m, path_tolerance {tolerance[i]:g} m); holds '
-            f'lambda = {[round(x, 6) for x in measured]} m, re-arms on a '
-            'desired state within half of path_tolerance and '
+            f'{why}; holds lambda = {[round(x, 6) for x in measured]} m, '
+            're-arms on a desired state within half of path_tolerance and '
             f'{REARM_SPEED:g} m/s of the measured state')
 
     def fresh(self, now):
@@ -350,7 +394,7 @@ class Tracking:
         Return the :class:`Status` of the period ending at ``now``.
 
         ERROR after an internal error or while holding (path tolerance
-        exceeded); WARN when desired states were
+        exceeded, or a stall); WARN when desired states were
         skipped (no fresh measurement) or joint states rejected in the
         period; else OK (``waiting for desired states`` until one came).
         """
@@ -396,6 +440,7 @@ class Tracking:
             ('trajectories received', self.trajectories),
             ('mode', self.mode),
             ('path tolerance trips', self.trips),
+            ('stall holds', self.stalls),
             ('feedforward', settings.feedforward),
             ('force_limit (N)', settings.force_limit),
             ('internal errors', internal_errors),

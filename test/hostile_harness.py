@@ -744,8 +744,8 @@ def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
     ``before`` s following the looping paper trajectory, then SIGSTOP,
     ``stall`` s, SIGCONT, ``after`` s. Returns per stalled process the
     largest |command| (N) and |lambdadot| (m/s) from the stall's start to
-    ``after`` s past its end, the controller's mode and trips, and the
-    trajectory's own peak |lambdadot|.
+    ``after`` s past its end, the controller's mode, trips and stall
+    holds, and the trajectory's own peak |lambdadot|.
     """
     peak = trajectory_peak_speed()
     result = dict(peak_speed=peak, force_limit=1000.0, stalls={}, alive={})
@@ -786,6 +786,7 @@ def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
                     max_speed=max(speeds, default=0.0),
                     commands=len(forces),
                     trips=int(values.get('path tolerance trips', -1)),
+                    stall_holds=int(values.get('stall holds', -1)),
                     mode=values.get('mode'))
                 result['alive'][name] = all(nodes.alive(n) for n in NODES)
     return result

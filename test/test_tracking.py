@@ -33,11 +33,13 @@ def settings(**changes):
     """
     Return validated settings: the defaults with ``changes``.
 
-    The path tolerance is off unless given: the law's tests use errors far
-    beyond it (its own tests below set it).
+    The path tolerance and the stall rule are off unless given: the law's
+    tests use errors far beyond the one and pauses beyond the other (their
+    own tests below set them).
     """
     values = default_controller_parameters()
     values['path_tolerance'] = [0.0] * 3
+    values['stall_timeout'] = 0.0
     values.update(changes)
     return controller_settings_from_parameters(values)
 
@@ -73,7 +75,7 @@ def test_specs_defaults_and_names():
     specs = {s.name: s for s in CONTROLLER_SPECS}
     assert list(specs) == ['kp', 'kd', 'feedforward', 'force_limit',
                            'joint_names', 'measurement_timeout',
-                           'rate_hz', 'path_tolerance']
+                           'rate_hz', 'path_tolerance', 'stall_timeout']
     assert specs['kp'].type == specs['kd'].type == 'double_array'
     assert specs['kp'].default == [20000.0] * 3
     assert specs['kd'].default == [1200.0] * 3
@@ -83,6 +85,7 @@ def test_specs_defaults_and_names():
     assert specs['measurement_timeout'].default == 0.05
     assert specs['path_tolerance'].default == [0.05] * 3
     assert specs['rate_hz'].default == 250.0
+    assert specs['stall_timeout'].default == 0.1
     for spec in CONTROLLER_SPECS:
         assert spec.description
     s = settings()
@@ -434,6 +437,68 @@ def test_path_tolerance_trips_holds_and_re_arms():
     assert core.mode == 'following' and core.trips == 1
     assert rearmed.force == pytest.approx((1.0, 1.0 + 100.0 * 0.02, 1.0))
     assert core.status(1.0).level == 0
+
+
+def test_stall_holds_unless_the_stream_starts_where_the_robot_is():
+    """
+    A pause of more than stall_timeout between commands: a new goal.
+
+    Within the path tolerance (0.03 m < 0.05 m) a stream that moved on
+    while the loop stalled would be chased with Kp x 0.03 m; it is held
+    (counted, ERROR) until a desired state starts where the robot is.
+    """
+    s = settings(path_tolerance=[0.05] * 3, stall_timeout=0.1,
+                 kp=[20000.0] * 3, kd=[0.0] * 3)
+    core = Tracking(s)
+    send_measured(core, (0.0, 0.0, 0.0), 0.0)
+    first = send_desired(core, (0.0, 0.0, 0.0), 0.01,
+                         effort=(1.0, 2.0, 3.0))
+    assert first.force == (1.0, 2.0, 3.0)
+    # A pause of 0.1 s is no stall; the robot stands, the stream moves on.
+    send_measured(core, (0.0, 0.0, 0.0), 0.11)
+    assert send_desired(core, (0.001, 0.0, 0.0), 0.11).force[0] == 20.0
+    assert core.mode == 'following' and core.stalls == 0
+    # 2 s without a command (the controller stopped), measurements fresh
+    # again: the stream is 0.03 m on and moving at 0.2 m/s.
+    send_measured(core, (0.0, 0.0, 0.0), 2.2)
+    held = send_desired(core, (0.03, 0.0, 0.0), 2.2,
+                        velocity=(0.2, 0.0, 0.0), effort=(5.0, 5.0, 5.0))
+    assert core.mode == 'holding' and core.stalls == 1 and core.trips == 0
+    assert held.force == (20.0, 0.0, 0.0)    # b: the last command sent
+    status = core.status(2.5)
+    assert status.level == 2 and 'no command for 2.09 s' in status.message
+    assert dict(status.values)['stall holds'] == 1
+    # A desired state where the robot is, at rest: following again.
+    rearmed = send_desired(core, (0.01, 0.0, 0.0), 2.21)
+    assert core.mode == 'following' and rearmed.force[0] == 200.0
+
+
+def test_stall_after_skips_and_resumption_in_place():
+    """Skipped desired states (stale measurements) are a pause too."""
+    s = settings(path_tolerance=[0.05] * 3, stall_timeout=0.1)
+    core = Tracking(s)
+    send_measured(core, (0.0, 0.0, 0.0), 0.0)
+    send_desired(core, (0.0, 0.0, 0.0), 0.01)
+    assert send_desired(core, (0.02, 0.0, 0.0), 0.5,
+                        velocity=(0.2, 0.0, 0.0)) is None    # stale
+    send_measured(core, (0.0, 0.0, 0.0), 0.6)
+    send_desired(core, (0.02, 0.0, 0.0), 0.6, velocity=(0.2, 0.0, 0.0))
+    assert core.mode == 'holding' and core.stalls == 1
+    # A stream that starts again where the robot is after a pause (a new
+    # pass from home) is followed at once: no hold, nothing counted.
+    resumed = Tracking(s)
+    send_measured(resumed, (0.0, 0.0, 0.0), 0.0)
+    send_desired(resumed, (0.0, 0.0, 0.0), 0.01)
+    send_measured(resumed, (0.0, 0.0, 0.0), 5.0)
+    send_desired(resumed, (0.001, 0.0, 0.0), 5.0, velocity=(0.005, 0.0, 0.0))
+    assert resumed.mode == 'following' and resumed.stalls == 0
+    # 0.0: off.
+    off = Tracking(settings(path_tolerance=[0.05] * 3, stall_timeout=0.0))
+    send_measured(off, (0.0, 0.0, 0.0), 0.0)
+    send_desired(off, (0.0, 0.0, 0.0), 0.01)
+    send_measured(off, (0.0, 0.0, 0.0), 5.0)
+    send_desired(off, (0.02, 0.0, 0.0), 5.0, velocity=(0.2, 0.0, 0.0))
+    assert off.mode == 'following' and off.stalls == 0
 
 
 def test_path_tolerance_zero_disables_an_actuator():

@@ -46,9 +46,11 @@ NAN = float('nan')
 DIAGNOSTIC_NAME = 'tracking_controller: Orthoglide tracking controller'
 # A slow machine must not make the measurement stale between the two
 # messages of a lock-step exchange; the stale tests set their own. The law
-# is checked with errors far beyond the path tolerance: off here (its own
-# tests are in test_tracking.py and test_hostile_peers.py).
-PATIENT = {'measurement_timeout': 30.0, 'path_tolerance': [0.0, 0.0, 0.0]}
+# is checked with errors far beyond the path tolerance and pauses beyond
+# stall_timeout: both off here (their own tests are in test_tracking.py and
+# test_hostile_peers.py).
+PATIENT = {'measurement_timeout': 30.0, 'path_tolerance': [0.0, 0.0, 0.0],
+           'stall_timeout': 0.0}
 
 
 class TrackingProbe(Node):
