@@ -75,8 +75,9 @@ def main(argv=None):
                                 args.plant_rate) as loop:
             for name in names:
                 for feedforward, mass in CASES:
-                    run = loop.run(name, feedforward, mass_factor=mass,
-                                   mode=args.mode)
+                    run = loop.run_unspoiled(
+                        name, feedforward, mass_factor=mass, mode=args.mode,
+                        report=lambda text: print('  ' + text, flush=True))
                     print(f'  {run.label}: {run.samples} samples, position '
                           f'error RMS {run.rms_mm:.3f} mm, max '
                           f'{run.max_mm:.3f} mm', flush=True)

@@ -303,6 +303,27 @@ class ClosedLoop:
                  + (', joint trajectory' if mode == 'trajectory' else ''))
         return _tracking(label, self.recorder, motion, duration)
 
+    def run_unspoiled(self, *args, report=None, **kwargs):
+        """
+        :meth:`run`, and once more when a stall spoiled the pass.
+
+        Spoiled: the plant was braked in it, or a joint error beyond the
+        path tolerance (the controller held: a process of the loop stalled
+        longer than the command timeout, which two busy cores do now and
+        then). ``report(text)`` (optional) hears about a second pass.
+        """
+        run = self.run(*args, **kwargs)
+        tripped = (np.abs(run.joint_error) > PATH_TOLERANCE).any()
+        if not (run.braked or tripped):
+            return run
+        if report:
+            report(f'{run.label}: ' + (
+                f'the plant was braked for {run.braked} states'
+                if run.braked else 'a joint error beyond the path tolerance '
+                'stopped the controller') + ' (a process stalled longer '
+                'than the command timeout): a second pass')
+        return self.run(*args, **kwargs)
+
     def _stream(self, motion, duration, passes):
         """Stream the motion from a setpoint_publisher process."""
         publisher = start_node_process([
@@ -413,10 +434,8 @@ def median_runs(loop, name, cases, plant, repeats=3, report=None,
     Run each case ``repeats`` times, interleaved; return its median runs.
 
     ``cases``: ``{label: (feedforward, model)}`` for :meth:`ClosedLoop.run`
-    of the motion ``name`` on ``plant``. A pass the plant was braked in, or
-    in which a joint error beyond the path tolerance stopped the
-    controller (a process stalled longer than the command timeout), is run
-    again once.
+    of the motion ``name`` on ``plant``, each pass by
+    :meth:`ClosedLoop.run_unspoiled`.
     Returns ``(medians, passes)``: ``{label: Run}``, the pass of median
     RMS error of each case, and ``{label: [Run, ...]}``, every pass. One
     pass over DDS varies severalfold with the machine's load (the pass's
@@ -428,17 +447,8 @@ def median_runs(loop, name, cases, plant, repeats=3, report=None,
     passes = {label: [] for label in cases}
     for _ in range(repeats * (2 if enough else 1)):
         for label, (feedforward, model) in cases.items():
-            run = loop.run(name, feedforward, plant=plant, model=model)
-            tripped = (np.abs(run.joint_error) > PATH_TOLERANCE).any()
-            if run.braked or tripped:
-                if report:
-                    report(f'{name}, {label}: ' + (
-                        f'the plant was braked for {run.braked} states'
-                        if run.braked else 'a joint error beyond the path '
-                        'tolerance stopped the controller') + ' (a process '
-                        'stalled longer than the command timeout): a '
-                        'second pass')
-                run = loop.run(name, feedforward, plant=plant, model=model)
+            run = loop.run_unspoiled(name, feedforward, plant=plant,
+                                     model=model, report=report)
             if report:
                 report(f'{name}, {label}: {run.samples} samples, position '
                        f'error RMS {run.rms_mm:.3f} mm, max {run.max_mm:.3f}'

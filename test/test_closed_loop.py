@@ -112,7 +112,7 @@ def test_open_loop_sees_a_two_percent_heavier_platform(closed_loop):
 def test_feedforward_ten_times_better_exact_plant(closed_loop):
     """PD + feedforward: at least 10x smaller RMS error than PD alone."""
     def loop_pass(feedforward):
-        run = closed_loop.run('paper', feedforward=feedforward)
+        run = closed_loop.run_unspoiled('paper', feedforward=feedforward)
         report(run)
         return run
 
@@ -129,8 +129,10 @@ def test_feedforward_ten_times_better_exact_plant(closed_loop):
 
 def test_feedforward_better_mismatched_plant(closed_loop):
     """With a 20 % heavier platform the feedforward still helps."""
-    pd = closed_loop.run('paper', feedforward=False, mass_factor=harness.MISMATCH)
-    ff = closed_loop.run('paper', feedforward=True, mass_factor=harness.MISMATCH)
+    pd = closed_loop.run_unspoiled('paper', feedforward=False,
+                                   mass_factor=harness.MISMATCH)
+    ff = closed_loop.run_unspoiled('paper', feedforward=True,
+                                   mass_factor=harness.MISMATCH)
     report(pd)
     report(ff)
     assert ff.rms_mm < pd.rms_mm
@@ -145,7 +147,7 @@ def test_joint_trajectory_ten_times_better_like_the_stream(closed_loop):
     tracking controller as joint_trajectory_controller would.
     """
     def loop_pass(feedforward):
-        run = closed_loop.run('paper', feedforward=feedforward, mode='trajectory')
+        run = closed_loop.run_unspoiled('paper', feedforward=feedforward, mode='trajectory')
         report(run)
         return run
 

@@ -58,13 +58,9 @@ REPEATS = 3         # passes of each compared case; the median counts
 @pytest.fixture(scope='module')
 def identified(closed_loop):
     """Excite the unknown plant, identify it: (Identification, run)."""
-    run = closed_loop.run(harness.excitation_motion(SEED, PERIOD),
-                          feedforward=True, plant=harness.UNKNOWN_PLANT,
-                          model=Robot(), passes=PASSES)
-    if run.braked:      # a stalled process spoiled the pass: once more
-        run = closed_loop.run(harness.excitation_motion(SEED, PERIOD),
-                              feedforward=True, plant=harness.UNKNOWN_PLANT,
-                              model=Robot(), passes=PASSES)
+    run = closed_loop.run_unspoiled(
+        harness.excitation_motion(SEED, PERIOD), feedforward=True,
+        plant=harness.UNKNOWN_PLANT, model=Robot(), passes=PASSES)
     log = identification.crop(harness.log_of(run), harness.SETTLE)
     result = identification.identify(Robot(), log,
                                      force_lag=harness.force_lag())
