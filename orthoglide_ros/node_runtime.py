@@ -94,6 +94,10 @@ REPLY_WAIT, REPLY_POLL = 0.1, 0.005
 REPLY_MATCH = 0.05
 # A reply that took this long timed out in rmw (its wait is 100 ms).
 REPLY_TIMED_OUT = 0.09
+# How long a reply waits, in all, while the graph lists more request
+# writers than reply readers: a client whose reply reader discovery has not
+# brought yet (on a loaded machine, beyond REPLY_WAIT), not a departed one.
+REPLY_DISCOVERY = 2.0
 # Parameter value types a request may carry (ParameterType's constants).
 _PARAMETER_TYPES = frozenset(range(ParameterType.PARAMETER_NOT_SET,
                                    ParameterType.PARAMETER_STRING_ARRAY + 1))
@@ -539,7 +543,11 @@ class InputNode(Node):
         waits first, without the GIL, until a reader has been on the
         service's reply topic (the graph) for REPLY_MATCH s, at most
         REPLY_WAIT; with none there it is dropped (the client has gone;
-        counted in :attr:`replies_dropped`). The graph can still list a
+        counted in :attr:`replies_dropped`), unless the graph lists more
+        request writers than reply readers: a client is there whose reply
+        reader is not discovered yet, and the reply waits for it up to
+        REPLY_DISCOVERY (a new client lost its reply on a loaded machine
+        otherwise, 100 ms after the request). The graph can still list a
         reader that has just left: that reply then times out in rmw (one
         100 ms stall, upstream), and the next replies wait, without the
         GIL, until the graph no longer lists it (dropped after REPLY_WAIT
@@ -547,6 +555,7 @@ class InputNode(Node):
         """
         callback, send = service.callback, service.send_response
         reply_topic = f'rr{service.service_name}Reply'
+        request_topic = f'rq{service.service_name}Request'
         srv_type = service.srv_type
 
         def guarded_callback(request, response):
@@ -568,8 +577,14 @@ class InputNode(Node):
         readers = {}    # reply readers seen: gid -> monotonic time first seen
         stale = set()   # the readers listed when a reply timed out
 
+        def discovering(seen):
+            """Whether a client's reply reader is still to be discovered."""
+            return len(self.get_publishers_info_by_topic(
+                request_topic, no_mangle=True)) > len(seen)
+
         def guarded_send(response, header):
-            deadline = time.monotonic() + REPLY_WAIT
+            begin = time.monotonic()
+            deadline = begin + REPLY_WAIT
             while True:
                 now = time.monotonic()
                 seen = {bytes(info.endpoint_gid): readers.get(
@@ -588,7 +603,9 @@ class InputNode(Node):
                     now - max(seen.values()) >= REPLY_MATCH
                 if ready or (now >= deadline and seen and not stale):
                     break
-                if now >= deadline:
+                if now >= deadline and (
+                        stale or now >= begin + REPLY_DISCOVERY
+                        or not discovering(seen)):
                     self.replies_dropped += 1
                     return
                 time.sleep(REPLY_POLL)
