@@ -37,6 +37,7 @@ import time
 
 import numpy as np
 import rclpy
+from rclpy.duration import Duration
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter_client import AsyncParameterClient
@@ -515,6 +516,13 @@ def log_amplification():
         for count in (4000, 100000):
             state = JointState(name=[f'joint_{i}' for i in range(count)])
             measured.publish(state)
+        # Both queues keep 10 messages: the big one must have reached the
+        # node and been taken before the flood, or the flood pushes it out
+        # (a loaded machine took longer than 10 flood messages to send it).
+        measured.wait_for_all_acked(Duration(seconds=START_TIMEOUT))
+        peer.wait(lambda: peer.diagnostics.get('tracking_controller', (
+            None, None, {}))[2].get('rejected measured oversize', '0') != '0',
+            START_TIMEOUT)
         good = serialize_message(JointState(name=['a'], position=[1.0]))
         for i in range(500):
             measured.publish(good[:8 + i % 16] + b'\xff' * (i % 7))
