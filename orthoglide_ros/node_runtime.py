@@ -36,9 +36,9 @@ one input does not delay another. Periodic work does not share the
 executor's thread with the services: rmw_fastrtps holds a reply for up to
 100 ms, with the GIL held, when the requesting client has gone (measured:
 100 requests, then a clean exit, stalled every thread of the process for
-6.3 s), so each reply first waits, without the GIL, for a client to listen
-on the reply topic and is dropped if none does (see
-:meth:`InputNode._guard_service`).
+6.3 s), so each reply first waits, without the GIL, for its client to
+listen on the reply topic and is dropped once that client has gone (see
+:meth:`InputNode._guard_service` and ``service_replies``).
 """
 
 import array
@@ -71,6 +71,8 @@ from rcl_interfaces.srv import SetParameters, SetParametersAtomically
 from orthoglide_ros.console import install_signal_handlers
 from orthoglide_ros.inputs import Rejected, SMALL_MESSAGE_BYTES
 from orthoglide_ros.parameters import ParameterError
+from orthoglide_ros.service_replies import (DROP, REPLY_POLL, REPLY_TIMED_OUT,
+                                            ReplyRoutes, SEND)
 
 # Reliable, keep-last 10 on every input and output; users override it with
 # the standard qos_overrides.<topic>.<publisher|subscription>.* parameters.
@@ -86,18 +88,6 @@ WARNING_PERIOD = 1.0        # s between two warnings of the same reason
 MIN_IDLE = 0.0005
 # Longest log line or reply reason made from a message's text (characters).
 TEXT_LIMIT = 2000
-# How long a reply waits for its client to listen (rmw_fastrtps waits as
-# long, 100 ms, but with the GIL held), and how often it looks (s).
-REPLY_WAIT, REPLY_POLL = 0.1, 0.005
-# How long a new client's reply reader must have been on the graph before
-# a reply is sent to it (s): the reply writer matches it meanwhile.
-REPLY_MATCH = 0.05
-# A reply that took this long timed out in rmw (its wait is 100 ms).
-REPLY_TIMED_OUT = 0.09
-# How long a reply waits, in all, while the graph lists more request
-# writers than reply readers: a client whose reply reader discovery has not
-# brought yet (on a loaded machine, beyond REPLY_WAIT), not a departed one.
-REPLY_DISCOVERY = 2.0
 # Parameter value types a request may carry (ParameterType's constants).
 _PARAMETER_TYPES = frozenset(range(ParameterType.PARAMETER_NOT_SET,
                                    ParameterType.PARAMETER_STRING_ARRAY + 1))
@@ -536,27 +526,17 @@ class InputNode(Node):
         is refused whole with the reason; any other exception is a defect,
         answered with the default response.
 
-        The reply. rmw_fastrtps sends a reply only to a reader its reply
-        writer has matched, and waits up to 100 ms for the match with the
-        GIL held, stopping every thread of the process: a client that left
-        after its requests stalls the node 100 ms per request. So a reply
-        waits first, without the GIL, until a reader has been on the
-        service's reply topic (the graph) for REPLY_MATCH s, at most
-        REPLY_WAIT; with none there it is dropped (the client has gone;
-        counted in :attr:`replies_dropped`), unless the graph lists more
-        request writers than reply readers: a client is there whose reply
-        reader is not discovered yet, and the reply waits for it up to
-        REPLY_DISCOVERY (a new client lost its reply on a loaded machine
-        otherwise, 100 ms after the request). The graph can still list a
-        reader that has just left: that reply then times out in rmw (one
-        100 ms stall, upstream), and the next replies wait, without the
-        GIL, until the graph no longer lists it (dropped after REPLY_WAIT
-        if it still does).
+        The reply waits, without the GIL, polling the graph, until
+        :class:`~orthoglide_ros.service_replies.ReplyRoutes` (the rule)
+        says it may go to rmw, which would otherwise wait for a departed
+        client's reader up to 100 ms with the GIL held; a reply the rule
+        drops is counted in :attr:`replies_dropped`.
         """
         callback, send = service.callback, service.send_response
         reply_topic = f'rr{service.service_name}Reply'
         request_topic = f'rq{service.service_name}Request'
         srv_type = service.srv_type
+        routes = ReplyRoutes()
 
         def guarded_callback(request, response):
             try:
@@ -574,47 +554,32 @@ class InputNode(Node):
                 response.result = result
             return response
 
-        readers = {}    # reply readers seen: gid -> monotonic time first seen
-        stale = set()   # the readers listed when a reply timed out
-
-        def discovering(seen):
-            """Whether a client's reply reader is still to be discovered."""
-            return len(self.get_publishers_info_by_topic(
-                request_topic, no_mangle=True)) > len(seen)
-
         def guarded_send(response, header):
+            # An rmw_service_info_t says when the request was received.
+            received = getattr(header, 'received_timestamp', 0) * 1e-9 \
+                or None
             begin = time.monotonic()
-            deadline = begin + REPLY_WAIT
             while True:
                 now = time.monotonic()
-                seen = {bytes(info.endpoint_gid): readers.get(
-                    bytes(info.endpoint_gid), now) for info in
-                    self.get_subscriptions_info_by_topic(
-                        reply_topic, no_mangle=True)}
-                readers.clear()
-                readers.update(seen)
-                if not stale <= seen.keys():
-                    stale.clear()   # the reader that left is off the graph
-                # A reader seen for less than REPLY_MATCH may not be
-                # matched by the reply writer yet, and while one that has
-                # left is still listed (stale) the reply may be for it: rmw
-                # would wait for either with the GIL held.
-                ready = seen and not stale and \
-                    now - max(seen.values()) >= REPLY_MATCH
-                if ready or (now >= deadline and seen and not stale):
+                routes.poll(
+                    time.time(), now,
+                    [info.endpoint_gid for info in
+                     self.get_publishers_info_by_topic(
+                         request_topic, no_mangle=True)],
+                    [info.endpoint_gid for info in
+                     self.get_subscriptions_info_by_topic(
+                         reply_topic, no_mangle=True)])
+                decision = routes.decide(received, now, begin)
+                if decision == SEND:
                     break
-                if now >= deadline and (
-                        stale or now >= begin + REPLY_DISCOVERY
-                        or not discovering(seen)):
+                if decision == DROP:
                     self.replies_dropped += 1
                     return
                 time.sleep(REPLY_POLL)
             start = time.monotonic()
             send(response, header)
             if time.monotonic() - start >= REPLY_TIMED_OUT:
-                # rmw waited its 100 ms in vain: a client has gone that
-                # the graph still lists.
-                stale.update(seen)
+                routes.timed_out(received)
 
         service.callback = guarded_callback
         service.send_response = guarded_send
