@@ -283,7 +283,10 @@ def hostile_report():
              f'~/reset, feedforward set): longest output gap '
              + ', '.join(f'{n} {g * 1e3:.0f} ms'
                          for n, g in r['gaps'].items())
-             + f'; replies dropped {r["dropped"]}')
+             + f'; replies dropped {r["dropped"]}; while the clients '
+             f'joined (apart): '
+             + ', '.join(f'{n} {g * 1e3:.0f} ms'
+                         for n, g in r['joining'].items()))
     r = run('simulator at 10 kHz', hostile.fast_simulator)
     if r is not None:
         line(r['received'] == r['sent'] and r['timeouts'] == 1,

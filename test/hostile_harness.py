@@ -551,16 +551,25 @@ def departed_clients(requests=100):
 
     The simulator publishes its held state every step (1 kHz) and the
     feedforward its newest result at ``rate_hz`` 500 (a looping setpoint
-    publisher keeps it fresh); three bursts from child processes:
-    parameter sets to the simulator, ``~/reset`` to the simulator,
-    parameter sets to the feedforward. Returns the longest gap (s) between
-    the stamps of two consecutive outputs of each stream during each burst
-    (the stamps say when a node published, whatever delays this recording
-    process: the simulator stamps each state with its step's time, the
-    feedforward each output with its setpoint's) over the bursts and their
-    replies, how long that was, and whether the nodes are alive.
+    publisher keeps it fresh); three bursts from child processes, one after
+    the other: parameter sets to the simulator, ``~/reset`` to the
+    simulator, parameter sets to the feedforward. Each child says when its
+    requests begin (it has found the service: its participant has joined).
+
+    Returns, for each stream, the longest gap (s) between the stamps of
+    two consecutive outputs that began while requests were being sent,
+    answered or dropped (``gaps``: from a child's first request to the next
+    child's start, and after the last child until its requests' replies
+    are over), and apart from it the longest gap that began while a child
+    was joining the graph (``joining``: its start-up and discovery, before
+    any request; a participant joining can stall a node by itself,
+    doc/robustness.md). The stamps say when a node published, whatever
+    delays this recording process: the simulator stamps each state with
+    its step's time, the feedforward each output with its setpoint's.
+    Also how long it took, the children's exit codes, the replies each
+    node dropped and whether the nodes are alive.
     """
-    result = dict(gaps={}, requests=requests, bursts=BURSTS)
+    result = dict(gaps={}, joining={}, requests=requests, bursts=BURSTS)
     with Nodes() as nodes, Peer() as peer:
         nodes.start('simulator')
         nodes.start('feedforward', '-p', 'rate_hz:=500.0')
@@ -573,28 +582,41 @@ def departed_clients(requests=100):
             raise HarnessError('the streams did not start')
         time.sleep(0.5)
         start = time.monotonic()
-        children = []
+        children, joins = [], []
         try:
             for what, target in BURSTS:
                 # One after the other: three Python start-ups at once would
                 # take both cores for a second, whatever the nodes do.
+                joins.append([time.monotonic(), math.inf])
                 children.append(start_node_process(
                     [what, target, str(requests)], command=[
                         sys.executable, os.path.abspath(__file__),
                         'burst']))
                 children[-1].wait(START_TIMEOUT)
         finally:
-            exits = [stop_process(child)[0] for child in children]
+            stopped = [stop_process(child) for child in children]
+        for join, (_, text) in zip(joins, stopped):
+            for line in text.splitlines():
+                if line.startswith(REQUESTS_BEGIN):
+                    join[1] = float(line.split()[-1])
         # The replies: each dropped after REPLY_WAIT (0.1 s) at most.
         time.sleep(0.12 * requests)
         end = time.monotonic()
+        # Stamps are wall time: on this host, monotonic = wall - offset.
+        offset = time.time() - time.monotonic()
         for stream, log in (('simulator joint_states', states),
                             ('feedforward joint_states', outputs)):
-            stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9
-                      for t, m in list(log) if start - 0.5 <= t <= end]
-            result['gaps'][stream] = max(np.diff(stamps), default=math.inf) \
-                if len(stamps) > 1 else math.inf
-        result.update(seconds=end - start, client_exits=exits)
+            stamps = np.array([
+                m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 - offset
+                for t, m in list(log) if start - 0.5 <= t <= end])
+            began, gaps = stamps[:-1], np.diff(stamps)
+            joining = np.zeros(len(gaps), bool)
+            for first, requesting in joins:
+                joining |= (began >= first) & (began < requesting)
+            result['gaps'][stream] = max(gaps[~joining], default=math.inf)
+            result['joining'][stream] = max(gaps[joining], default=0.0)
+        result.update(seconds=end - start,
+                      client_exits=[code for code, _ in stopped])
         result['dropped'] = {}
         for name in ('simulator', 'feedforward'):
             status = peer.status(name, timeout=3.0)
@@ -603,6 +625,11 @@ def departed_clients(requests=100):
         result['alive'] = {n: nodes.alive(n) for n in
                            ('simulator', 'feedforward')}
     return result
+
+
+# What a departing client prints (with its monotonic time) as its requests
+# begin.
+REQUESTS_BEGIN = 'requests begin at'
 
 
 BURSTS = (('set', 'simulator'), ('reset', 'simulator'),
@@ -628,6 +655,7 @@ def burst(args):
                 name=name, value=ParameterValue(type=3, double_value=value))])
     if not client.wait_for_service(timeout_sec=START_TIMEOUT):
         return 1
+    print(REQUESTS_BEGIN, time.monotonic(), flush=True)
     for _ in range(args.requests):
         client.call_async(make())
     node.destroy_node()
