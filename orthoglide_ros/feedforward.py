@@ -20,9 +20,13 @@ Rules (``doc/feedforward.md`` states them for users):
   when a newer setpoint completes (its partners can no longer come in order).
 - A complete setpoint is rejected, and counted by reason, if a frame is
   neither empty nor ``base_frame`` (``frame``), its orientation turns more than
-  1e-3 rad from the identity (``orientation``), or the mechanics refuse it
-  (``non_finite``, ``unreachable``, ``singular``, ``overflow``). A rejected
-  setpoint changes nothing: the previous result stays the newest.
+  1e-3 rad from the identity (``orientation``), its speed or acceleration
+  (norms) exceed ``max_speed`` or ``max_acceleration`` (``speed_limit``,
+  ``acceleration_limit``), the mechanics refuse it (``non_finite``,
+  ``unreachable``, ``singular``, ``overflow``) or an actuator would need a
+  force beyond ``max_force`` (``force_limit``): no force beyond it is ever
+  published. A rejected setpoint changes nothing: the previous result
+  stays the newest.
 - Freshness is judged by arrival time on a monotonic clock, never by stamp:
   the newest result is fresh for ``setpoint_timeout`` after its setpoint
   completed.
@@ -56,11 +60,13 @@ TRAJECTORY_MESSAGE_BYTES = 4 * 1024 * 1024
 CARTESIAN_TRAJECTORY_BYTES = 8 * 1024 * 1024
 # Why a whole Cartesian trajectory was refused: 'rejected trajectory <r>'.
 TRAJECTORY_REASONS = ('empty', 'frame', 'stamp', 'time', 'malformed',
-                      'orientation', 'non_finite', 'unreachable', 'singular',
+                      'orientation', 'non_finite', 'speed_limit',
+                      'acceleration_limit', 'unreachable', 'singular',
                       'overflow', 'velocity_limit', 'force_limit', 'oversize')
 
-REASONS = ('non_finite', 'unreachable', 'singular', 'overflow', 'frame',
-           'orientation', 'stamp', 'malformed', 'oversize', 'unpaired')
+REASONS = ('non_finite', 'speed_limit', 'acceleration_limit', 'unreachable',
+           'singular', 'overflow', 'force_limit', 'frame', 'orientation',
+           'stamp', 'malformed', 'oversize', 'unpaired')
 INPUTS = ('pose', 'twist', 'accel', 'trajectory')
 
 Conversion = namedtuple('Conversion', 'stamp frame time solution')
@@ -96,10 +102,13 @@ def convert_trajectory(settings, waypoints):
       or not after the previous point's;
     - ``orientation`` / ``non_finite``: a rotation more than
       ORIENTATION_TOLERANCE from the identity, or not finite;
+    - ``speed_limit`` / ``acceleration_limit``: a speed or acceleration of
+      G beyond ``max_speed`` or ``max_acceleration``;
     - the mechanics' refusals (``non_finite``, ``unreachable``,
       ``singular``, ``overflow``) of :func:`mechanics.solve_batch`;
     - ``velocity_limit`` / ``force_limit``: a |lambdadot| or |f| beyond
-      the node's limit of that actuator (0.0: none).
+      the node's limit of that actuator (0.0: none), or an |f| beyond
+      ``max_force``.
 
     Returns a :class:`Conversion`.
     """
@@ -143,6 +152,16 @@ def convert_trajectory(settings, waypoints):
                ((vector == 0.0) & (q[:, 3] == 0.0)),
                f'turns the platform more than {ORIENTATION_TOLERANCE:g} rad '
                'from the identity (the Orthoglide only translates)')
+    for reason, values, (bound, name, unit) in zip(
+            ('speed_limit', 'acceleration_limit'), (velocity, acceleration),
+            _motion_bounds(settings)):
+        with np.errstate(invalid='ignore'):
+            norms = np.hypot(np.hypot(values[:, 0], values[:, 1]),
+                             values[:, 2])
+            beyond = (norms > bound) & (norms < np.inf)
+        _first_bad(reason, beyond, (
+            f'has a {name.removeprefix("max_")} beyond {name} {bound:g} '
+            f'{unit}'))
     try:
         solution = mechanics.solve_batch(settings.robot, w.position,
                                          velocity, acceleration,
@@ -155,14 +174,22 @@ def convert_trajectory(settings, waypoints):
              'm/s'),
             ('force_limit', solution.force, settings.force_limit, 'N')):
         limit = np.where(np.asarray(limits) > 0.0, limits, np.inf)
+        if reason == 'force_limit':
+            limit = np.minimum(limit, settings.max_force)
         beyond = np.abs(values) > limit
         if beyond.any():
             row, leg = np.argwhere(beyond)[0]
             raise Rejected(reason, (
                 f'point {row}: actuator {"ABC"[leg]} needs '
-                f'{values[row, leg]:.6g} {unit}, beyond its {reason} '
-                f'{limits[leg]:g} {unit}'))
+                f'{values[row, leg]:.6g} {unit}, beyond its limit '
+                f'{limit[leg]:g} {unit}'))
     return Conversion(w.stamp, w.frame, w.time, solution)
+
+
+def _motion_bounds(settings):
+    """Return the (bound, name, unit) of a setpoint's speed and accel."""
+    return ((settings.max_speed, 'max_speed', 'm/s'),
+            (settings.max_acceleration, 'max_acceleration', 'm/s^2'))
 
 
 def _first_bad(reason, bad, what):
@@ -212,6 +239,17 @@ PARAMETERS = Table('Settings', (
          'largest |f| per actuator A, B, C (N) of a converted '
          'cartesian_trajectory: one beyond it is refused whole; 0.0: no '
          'limit', check=nonnegative_triple),
+    Spec('max_speed', 'double', 5.0,
+         'largest speed |v| of G (m/s) of a setpoint or a trajectory point: '
+         'one beyond it is refused (speed_limit)', (0.001, 1000.0)),
+    Spec('max_acceleration', 'double', 100.0,
+         'largest acceleration |a| of G (m/s^2) of a setpoint or a '
+         'trajectory point: one beyond it is refused (acceleration_limit)',
+         (0.001, 1.0e5)),
+    Spec('max_force', 'double', 10000.0,
+         'largest |f| (N) of any actuator force the node publishes: a '
+         'setpoint or trajectory that needs more is refused (force_limit)',
+         (0.001, 1.0e7)),
 ), rules=(_pairing_within_setpoint_timeout,), robot=True)
 
 
@@ -469,6 +507,16 @@ class Feedforward:
                     f'setpoint in frame {frame!r}, expected '
                     f'{settings.base_frame!r} (or empty)'))
         self._check_orientation(orientation)
+        for reason, vector, (bound, name, unit) in zip(
+                ('speed_limit', 'acceleration_limit'),
+                (velocity, acceleration), _motion_bounds(settings)):
+            # hypot: no squares to overflow; an infinity or a NaN is the
+            # mechanics' non_finite.
+            if bound < math.hypot(*vector) < math.inf:
+                self._reject(reason, (
+                    f'{name.removeprefix("max_")} '
+                    f'{mechanics.format_vector(vector)} {unit} is beyond '
+                    f'{name} {bound:g} {unit}'))
         start = time.perf_counter_ns()
         try:
             solution = mechanics.solve(
@@ -476,6 +524,11 @@ class Feedforward:
                 settings.singularity_margin)
         except mechanics.WorkspaceError as error:
             self._reject(error.reason, str(error))
+        largest = max(abs(f) for f in solution.force)
+        if largest > settings.max_force:
+            self._reject('force_limit', (
+                f'it needs {largest:.6g} N on an actuator, beyond max_force '
+                f'{settings.max_force:g} N'))
         spent = time.perf_counter_ns() - start
         self.computed += 1
         self.compute_ns_total += spent

@@ -94,6 +94,32 @@ class JointPlan:
         effort = e0 + s * (e1 - e0)
         return _floats(position), _floats(velocity), _floats(effort)
 
+    def peak_velocity(self):
+        """
+        Return ``(speed, joint)``: the largest |velocity| the plan samples.
+
+        Over the transition from the accepted state and every segment after
+        it: each cubic's velocity is a quadratic in its time, largest at an
+        end or at its vertex. ``joint``: the column (0, 1, 2) where it is.
+        """
+        first = self.first
+        if first >= len(self.times):
+            return 0.0, 0
+        p0 = np.vstack((self.state[0], self.positions[first:-1]))
+        v0 = np.vstack((self.state[1], self.velocities[first:-1]))
+        t0 = np.r_[self.accepted, self.times[first:-1]]
+        p1, v1 = self.positions[first:], self.velocities[first:]
+        h = (self.times[first:] - t0)[:, None]
+        # v(s) = a s^2 + b s + v0 (the derivative of sample's cubic).
+        a = (6 * (p0 - p1) + 3 * h * (v0 + v1)) / h
+        b = (6 * (p1 - p0) - h * (4 * v0 + 2 * v1)) / h
+        with np.errstate(divide='ignore', invalid='ignore'):
+            vertex = np.clip(np.where(a != 0.0, -b / (2 * a), 0.0), 0.0, 1.0)
+        middle = (a * vertex + b) * vertex + v0
+        speeds = np.maximum.reduce((np.abs(v0), np.abs(v1), np.abs(middle)))
+        row, joint = np.unravel_index(np.argmax(speeds), speeds.shape)
+        return float(speeds[row, joint]), int(joint)
+
     def finished(self, now):
         """Whether ``now`` (s, node clock) is past the last point."""
         return bool(now >= self.end)

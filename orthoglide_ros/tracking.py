@@ -21,9 +21,14 @@ Rules (``doc/tracking_controller.md`` states them for users):
   when one of ``joint_names`` is absent (``missing_joint``), its names repeat
   or an array is neither empty nor as long as the names (``malformed``), an
   array the rule needs is empty (``missing_position``, ``missing_velocity``,
-  ``missing_effort``), or a value it needs is NaN or infinite
-  (``non_finite``). A measurement needs positions and velocities; a desired
-  state needs them too, and efforts only with ``feedforward`` on.
+  ``missing_effort``), a value it needs is NaN or infinite
+  (``non_finite``), or implausible: a position beyond ``max_position``
+  (``position_limit``), a velocity beyond ``max_velocity``
+  (``velocity_limit``) or a desired effort beyond ``force_limit``
+  (``effort_limit``), in magnitude. A measurement needs positions and
+  velocities; a desired state needs them too, and efforts only with
+  ``feedforward`` on. A joint trajectory is refused whole by the same
+  rules on every point.
 - One command per accepted desired state, computed with the newest accepted
   measurement. When there is none yet, or it arrived more than
   ``measurement_timeout`` before (monotonic arrival time, never stamps),
@@ -41,8 +46,9 @@ Rules (``doc/tracking_controller.md`` states them for users):
       f_i = b_i + Kp_i (lambda_hold,i - lambda_i) - Kd_i lambdadot_i,
 
   clipped as above, with the bias ``b`` the last command sent while
-  following (the force that held the robot there; before any, the desired
-  effort with ``feedforward`` on, else zero). It re-arms by itself, back to
+  following that clipped no force (the force that held the robot there;
+  before any, the desired effort with ``feedforward`` on, else zero): a
+  saturated command is never held. It re-arms by itself, back to
   following, on the first desired state that starts where the robot holds:
   within half of ``path_tolerance`` of the measured position and within
   REARM_SPEED of the measured velocity on every actuator, as a new goal
@@ -56,10 +62,21 @@ Rules (``doc/tracking_controller.md`` states them for users):
   else the controller holds as above (counted in ``stall holds``). Within
   the path tolerance a stream that moved on would otherwise be chased
   with up to Kp x path_tolerance (1000 N with the defaults).
+- A joint trajectory that replaces the one being followed is planned from
+  the desired state of the old one at that instant (position, velocity and
+  effort continuous, as joint_trajectory_controller starts from its
+  desired state), never from the last command: a flood of replacements
+  cannot feed the commands back into the plan. At most one replacement is
+  taken per ``1 / rate_hz``: one that comes sooner waits for the next tick,
+  a newer one replacing it (counted in ``trajectories superseded``). A plan whose
+  desired velocity would exceed ``max_velocity`` anywhere, its transition
+  from the current state included, is refused (``velocity_limit``).
 """
 
 from collections import namedtuple
 import math
+
+import numpy as np
 
 from orthoglide_ros.inputs import (JointValues, read_joint_state,
                                    read_joint_trajectory, Rejected)
@@ -71,7 +88,8 @@ from orthoglide_ros.status import ERROR, first, OK, Period, Status, WARN
 FORCE_LIMIT_MAX = 1.0e6     # N: the largest force_limit accepted
 INPUTS = ('desired', 'measured', 'trajectory')
 REASONS = ('missing_joint', 'malformed', 'missing_position',
-           'missing_velocity', 'missing_effort', 'non_finite', 'overflow',
+           'missing_velocity', 'missing_effort', 'non_finite',
+           'position_limit', 'velocity_limit', 'effort_limit', 'overflow',
            'oversize', 'empty', 'time')
 SKIPS = ('no_measurement', 'stale_measurement', 'trajectory_active')
 FOLLOWING, HOLDING = 'following', 'holding'
@@ -94,7 +112,8 @@ PARAMETERS = Table('ControllerSettings', (
          'false: PD alone, desired efforts not needed'),
     Spec('force_limit', 'double', 1000.0,
          'largest force magnitude commanded per actuator (N); larger ones '
-         'are clipped to it and counted', (0.001, FORCE_LIMIT_MAX)),
+         'are clipped to it and counted; a desired effort beyond it is '
+         'refused (effort_limit)', (0.001, FORCE_LIMIT_MAX)),
     joint_names_spec(
         'names of the prismatic joints of actuators A, B, C: the order of '
         'the command\'s values; joint states are matched by these names'),
@@ -117,6 +136,15 @@ PARAMETERS = Table('ControllerSettings', (
          'only if it starts where the robot is (the re-arm rule of '
          'path_tolerance), else the controller holds the measured position '
          '(ERROR) until one does; 0.0: off', (0.0, 3600.0)),
+    Spec('max_position', 'double', 1.0,
+         'largest |lambda| (m) of a measured or desired slider position, '
+         'trajectory points included: a joint state or trajectory beyond '
+         'it is refused (position_limit); the paper\'s robot reaches '
+         '-0.80 to 0.85 m', (0.001, 100.0)),
+    Spec('max_velocity', 'double', 2.0,
+         'largest |lambdadot| (m/s) of a measured or desired slider '
+         'velocity, a joint trajectory\'s planned motion included: beyond '
+         'it the input is refused (velocity_limit)', (0.001, 1000.0)),
 ))
 
 Command = namedtuple('Command', 'force error clipped')
@@ -186,6 +214,9 @@ class Tracking:
         self.plan = None            # the joint trajectory followed, if any
         self.plan_finished = False  # past its last point (holding it)
         self.trajectories = 0
+        self.superseded = 0
+        self._incoming = None       # a trajectory waiting for the next tick
+        self._accepted = None       # monotonic time of the last acceptance
         self._period = Period(now)
 
     def configure(self, settings):
@@ -239,49 +270,86 @@ class Tracking:
         ``points``: :class:`orthoglide_ros.cdr.JointPoints`; ``clock``: the
         node clock now (s), the start when the header stamp is zero (else
         the stamp). Refused (counted, raised) by
-        :func:`read_joint_trajectory`, or as ``time`` when a non-zero
-        stamp makes it end before ``clock`` (as joint_trajectory_controller
-        refuses it). The plan goes from the newest measurement when it is
-        fresh, else from its first point at rest, with the force that
-        holds the robot (:meth:`_held_force`), to its first point ahead.
+        :func:`read_joint_trajectory` and the bounds of :func:`_bounded`,
+        or as ``time`` when a non-zero stamp makes it end before ``clock``
+        (as joint_trajectory_controller refuses it). Accepted at once
+        (:meth:`_accept`) unless one was accepted less than ``1 / rate_hz``
+        ago: then it waits for the next :meth:`tick`.
         """
         self.received['trajectory'] += 1
         settings = self.settings
         try:
             times, positions, velocities, efforts = read_joint_trajectory(
                 settings.joint_names, points, settings.feedforward)
+            _bounded(settings, positions, velocities,
+                     efforts if settings.feedforward else None)
+            sec, nanosec = points.stamp
+            start = clock if (sec, nanosec) == (0, 0) \
+                else sec + nanosec * 1e-9
+            if (sec, nanosec) != (0, 0) and start + times[-1] < clock:
+                raise Rejected('time', (
+                    f'it ends in the past: its last point at '
+                    f'{start + times[-1]:.9f} s, received at {clock:.9f} s '
+                    '(node clock)'))
         except Rejected as rejection:
             self.rejected['trajectory', rejection.reason] += 1
             raise
-        sec, nanosec = points.stamp
-        start = clock if (sec, nanosec) == (0, 0) else sec + nanosec * 1e-9
-        if (sec, nanosec) != (0, 0) and start + times[-1] < clock:
-            self.rejected['trajectory', 'time'] += 1
-            raise Rejected('time', (
-                f'it ends in the past: its last point at {start + times[-1]:.9f}'
-                f' s, received at {clock:.9f} s (node clock)'))
-        held = self._held_force(tuple(efforts[0]))
-        state = (self.measurement.position, self.measurement.velocity,
-                 held) if self.fresh(now) else (tuple(positions[0]), _ZERO,
-                                                held)
-        self.plan = JointPlan(start, times, positions, velocities, efforts,
-                              state, clock)
+        if self._incoming is not None:
+            self.superseded += 1
+        self._incoming = (start, times, positions, velocities, efforts)
+        if (self._accepted is None
+                or now - self._accepted >= 1.0 / settings.rate_hz):
+            self._accept(clock, now)
+
+    def _accept(self, clock, now):
+        """
+        Make the waiting trajectory the plan, from the state at ``clock``.
+
+        From the desired state of the plan being followed, if any (a
+        replacement); else from the newest measurement when it is fresh,
+        else from the first point at rest, with the force that holds the
+        robot (:meth:`_held_force`). Refused (``velocity_limit``, counted,
+        raised) when the plan's motion exceeds ``max_velocity``.
+        """
+        start, times, positions, velocities, efforts = self._incoming
+        self._incoming = None
+        if self.plan is not None and self.mode == FOLLOWING:
+            state = self.plan.sample(clock)
+        else:
+            held = self._held_force(tuple(efforts[0]))
+            state = (self.measurement.position, self.measurement.velocity,
+                     held) if self.fresh(now) else (tuple(positions[0]),
+                                                    _ZERO, held)
+        plan = JointPlan(start, times, positions, velocities, efforts,
+                         state, clock)
+        peak, joint = plan.peak_velocity()
+        if peak > self.settings.max_velocity:
+            self.rejected['trajectory', 'velocity_limit'] += 1
+            raise Rejected('velocity_limit', (
+                f'its motion from the current state needs {peak:.4g} m/s on '
+                f'{self.settings.joint_names[joint]!r}, beyond max_velocity '
+                f'{self.settings.max_velocity:g} m/s'))
+        self.plan = plan
         self.plan_finished = False
         self.trajectories += 1
+        self._accepted = now
 
     def tick(self, clock, now):
         """
         Sample the joint trajectory; return its Command.
 
         ``clock``: the node clock now (s); ``now``: the monotonic time.
-        The plan is sampled at the instant the newest measurement arrived
-        (``clock`` less its age), as joint_trajectory_controller samples
-        its trajectory at the instant it read the state interfaces: the
-        desired and the measured state then describe the same instant.
-        None when no trajectory is followed or no measurement is fresh
-        (skipped, counted). The same law and path tolerance as a desired
-        state's.
+        A trajectory waiting since :meth:`trajectory` is accepted first
+        (raising its refusal, if any). The plan is sampled at the instant
+        the newest measurement arrived (``clock`` less its age), as
+        joint_trajectory_controller samples its trajectory at the instant
+        it read the state interfaces: the desired and the measured state
+        then describe the same instant. None when no trajectory is
+        followed or no measurement is fresh (skipped, counted). The same
+        law and path tolerance as a desired state's.
         """
+        if self._incoming is not None:
+            self._accept(clock, now)
         if self.plan is None:
             return None
         if self.measurement_arrival is not None:
@@ -294,8 +362,9 @@ class Tracking:
         """
         Return the force that holds the robot where it is (N, 3-tuple).
 
-        The last command sent while following; before any, ``effort`` (the
-        desired one) with the feedforward on, else zero.
+        The last command sent while following that clipped no force;
+        before any, ``effort`` (the desired one) with the feedforward on,
+        else zero.
         """
         return tuple(self._bias or (effort if self.settings.feedforward
                                     else _ZERO))
@@ -325,7 +394,8 @@ class Tracking:
                                       self.hold, self.measurement)
             else:
                 command = control_law(settings, values, self.measurement)
-                self._bias = command.force
+                if not command.clipped:
+                    self._bias = command.force
         except Rejected as rejection:
             self.rejected[source, rejection.reason] += 1
             raise
@@ -383,6 +453,11 @@ class Tracking:
             're-arms on a desired state within half of path_tolerance and '
             f'{REARM_SPEED:g} m/s of the measured state')
 
+    @property
+    def idle(self):
+        """Whether no joint trajectory is followed or waiting."""
+        return self.plan is None and self._incoming is None
+
     def fresh(self, now):
         """Whether the newest measurement arrived within the timeout."""
         return (self.measurement_arrival is not None
@@ -438,6 +513,7 @@ class Tracking:
             ('trajectory', 'none' if self.plan is None else
              'holding its last point' if self.plan_finished else 'running'),
             ('trajectories received', self.trajectories),
+            ('trajectories superseded', self.superseded),
             ('mode', self.mode),
             ('path tolerance trips', self.trips),
             ('stall holds', self.stalls),
@@ -448,9 +524,43 @@ class Tracking:
         return Status(level, message, values)
 
     def _read(self, source, names, position, velocity, effort, need_effort):
+        settings = self.settings
         try:
-            return read_joint_state(self.settings.joint_names, names,
-                                    position, velocity, effort, need_effort)
+            values = read_joint_state(settings.joint_names, names, position,
+                                      velocity, effort, need_effort)
+            _bounded(settings, (values.position,), (values.velocity,),
+                     (values.effort,) if need_effort else None)
         except Rejected as rejection:
             self.rejected[source, rejection.reason] += 1
             raise
+        return values
+
+
+def _bounded(settings, positions, velocities, efforts):
+    """
+    Refuse values beyond the plausibility bounds, naming the joint.
+
+    ``positions``, ``velocities``, ``efforts`` (None: not checked):
+    sequences of rows of three (m, m/s, N), bounded in magnitude by
+    ``max_position``, ``max_velocity`` and ``force_limit``. Raises
+    :class:`Rejected` (``position_limit``, ``velocity_limit``,
+    ``effort_limit``), not counted here.
+    """
+    for reason, rows, bound, name, unit in (
+            ('position_limit', positions, settings.max_position,
+             'max_position', 'm'),
+            ('velocity_limit', velocities, settings.max_velocity,
+             'max_velocity', 'm/s'),
+            ('effort_limit', efforts, settings.force_limit, 'force_limit',
+             'N')):
+        if rows is None:
+            continue
+        values = np.asarray(rows, dtype=float)
+        beyond = np.abs(values) > bound
+        if beyond.any():
+            point, joint = np.argwhere(beyond)[0]
+            where = f'point {point}: ' if len(values) > 1 else ''
+            raise Rejected(reason, (
+                f'{where}{settings.joint_names[joint]!r} at '
+                f'{values[point, joint]:.4g} {unit}, beyond {name} '
+                f'{bound:g} {unit}'))

@@ -91,7 +91,7 @@ class TrackingControllerNode(InputNode):
 
     # The trajectory loop (its own thread) ---------------------------------
     def _on_tick(self):
-        if self._core.plan is None:     # idle: not even the lock
+        if self._core.idle:     # no trajectory: not even the lock
             return
         with self.lock:
             mode = self._core.mode

@@ -19,7 +19,9 @@ the tests assert on and the report prints:
 - :func:`departed_clients`: 100 requests from a client that then leaves;
 - :func:`fast_simulator`: the simulator at 10 kHz with commands at 500 Hz;
 - :func:`stall_resume`: the closed loop, one process stopped for 2 s;
-- :func:`setpoint_loop`: the looping setpoint publisher's way back.
+- :func:`setpoint_loop`: the looping setpoint publisher's way back;
+- :func:`trajectory_flood`: a new joint trajectory every millisecond to
+  the tracking controller (issue 16).
 
 (Big messages on an input are ``reliability_harness.big_messages``: they
 need its producer and recorder.) Every child process is stopped in a
@@ -27,6 +29,7 @@ need its producer and recorder.) Every child process is stopped in a
 """
 
 import argparse
+from dataclasses import dataclass
 import math
 import os
 import signal
@@ -53,7 +56,8 @@ from rcl_interfaces.srv import (GetParameters, SetParameters,
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
-from trajectory_msgs.msg import (MultiDOFJointTrajectory,
+from trajectory_msgs.msg import (JointTrajectory, JointTrajectoryPoint,
+                                 MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
 from node_harness import (node_executable, qos_profile, start_node_process,
@@ -826,6 +830,81 @@ def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
                     mode=values.get('mode'))
                 result['alive'][name] = all(nodes.alive(n) for n in NODES)
     return result
+
+
+# 11. A flood of joint trajectories (issue 16) ---------------------------------
+@dataclass
+class Flood:
+    """What :func:`trajectory_flood` saw (forces in N, speeds in m/s)."""
+
+    sent: int                   # one-point trajectories published
+    commands: int               # commands during the flood and after it
+    saturated: int              # of them, a force at force_limit
+    max_force: float
+    max_speed: float            # largest |lambdadot| measured
+    final_error: float          # |lambda| after the normal trajectory, m
+    mode: str                   # the controller's mode at the end
+    superseded: int             # replacements that waited for a tick
+    alive: bool
+
+
+def trajectory_flood(flood=1.5, period=0.001, after=1.5):
+    """
+    Flood the tracking controller with one-point joint trajectories.
+
+    The simulator as plant, the controller with the defaults; every
+    ``period`` s a new trajectory with one point 50 ms ahead, its target
+    alternating between 0 and 10 mm on every slider (efforts zero, header
+    stamp zero: "now"), for ``flood`` s; then one normal trajectory, home
+    in 1 s with the force that holds it there, followed for ``after`` s.
+    """
+    force_limit = 1000.0
+    with Nodes() as nodes, Peer() as peer:
+        commands = peer.record('commands', Float64MultiArray)
+        states = peer.record('joint_states', JointState)
+        nodes.start('simulator')
+        nodes.start('tracking_controller')
+        _running(peer, ('simulator', 'tracking_controller'))
+        pub = peer.publisher(JointTrajectory, 'joint_trajectory', 100)
+        if not peer.wait(lambda: pub.get_subscription_count()
+                         and len(states) > 10, START_TIMEOUT):
+            raise HarnessError('the controller did not subscribe')
+        names = ['slider_a', 'slider_b', 'slider_c']
+
+        def one_point(position, effort, seconds):
+            return JointTrajectory(joint_names=names, points=[
+                JointTrajectoryPoint(
+                    positions=[position] * 3, velocities=[0.0] * 3,
+                    effort=list(effort), time_from_start=Duration(
+                        seconds=seconds).to_msg())])
+        messages = [one_point(0.01 * (i % 2), (0.0,) * 3, 0.05)
+                    for i in range(2)]
+        first = len(commands)
+        start = time.monotonic()
+        sent = 0
+        while time.monotonic() < start + flood:
+            pub.publish(messages[sent % 2])
+            sent += 1
+            wait = start + sent * period - time.monotonic()
+            if wait > 0:
+                time.sleep(wait)
+        pub.publish(one_point(0.0, HOLD, 1.0))
+        time.sleep(after)
+        forces = [max(abs(f) for f in m.data) for _, m in commands[first:]]
+        speeds = [max(abs(v) for v in m.velocity)
+                  for t, m in list(states) if t >= start and len(m.velocity)]
+        status = peer.status('tracking_controller', timeout=3.0)
+        values = status[2] if status else {}
+        return Flood(
+            sent=sent, commands=len(forces),
+            saturated=sum(f >= force_limit for f in forces),
+            max_force=max(forces, default=0.0),
+            max_speed=max(speeds, default=0.0),
+            final_error=max(abs(x) for x in states[-1][1].position),
+            mode=values.get('mode'),
+            superseded=int(values.get('trajectories superseded', -1)),
+            alive=nodes.alive('simulator')
+            and nodes.alive('tracking_controller'))
 
 
 def main(argv=None):

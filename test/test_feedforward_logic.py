@@ -320,13 +320,41 @@ def test_singularity_margin_setting_used():
     assert ff.latest is out
 
 
-@pytest.mark.parametrize('which', [1, 2], ids=['velocity', 'acceleration'])
-def test_overflow_rejected(which):
+@pytest.mark.parametrize('which, reason', [(1, 'speed_limit'),
+                                           (2, 'acceleration_limit')],
+                         ids=['velocity', 'acceleration'])
+def test_absurd_motion_refused_before_the_mechanics(which, reason):
+    """Issue 16: finite but absurd (1e160, 1e200) is refused by its bound."""
     ff = core()
     sample = [SAMPLES[0][0], ZERO, ZERO]
     sample[which] = HUGE[which]
-    rejected(ff, 'overflow', lambda: complete(ff, (1, 0), sample, 0.0))
+    error = rejected(ff, reason, lambda: complete(ff, (1, 0), sample, 0.0))
+    assert ('max_speed' if which == 1 else 'max_acceleration') in str(error)
     assert ff.latest is None and ff.computed == 0
+
+
+@pytest.mark.parametrize('which, bound', [(1, 'max_speed'),
+                                          (2, 'max_acceleration')])
+def test_motion_bounds_are_the_parameters(which, bound):
+    """Just within the bound passes, just beyond it is refused."""
+    ff = core(**{bound: 2.0})
+    sample = [SAMPLES[0][0], ZERO, ZERO]
+    sample[which] = (0.0, 1.2, 1.6)         # norm 2.0
+    assert complete(ff, (1, 0), sample, 0.0) is not None
+    sample[which] = (0.0, 1.2, 1.61)
+    rejected(ff, 'speed_limit' if which == 1 else 'acceleration_limit',
+             lambda: complete(ff, (2, 0), sample, 0.0))
+
+
+def test_no_force_beyond_max_force_is_computed():
+    """A setpoint whose force exceeds max_force is refused, not published."""
+    position = SAMPLES[0][0]
+    largest = max(abs(f) for f in mechanics.solve(Robot(), position).force)
+    ff = core(max_force=largest * 1.001)
+    assert complete(ff, (1, 0), (position, ZERO, ZERO), 0.0) is not None
+    error = rejected(ff, 'force_limit', lambda: complete(
+        ff, (2, 0), (position, ZERO, (0.0, 0.0, 5.0)), 0.0))
+    assert 'max_force' in str(error) and ff.computed == 1
 
 
 def test_rejection_order_frame_then_orientation_then_mechanics():
@@ -462,7 +490,8 @@ def test_default_settings():
     assert s == Settings(Robot(), ('slider_a', 'slider_b', 'slider_c'),
                          'base_link', 0.0, 0.1, 0.05,
                          mechanics.DEFAULT_SINGULARITY_MARGIN, False,
-                         (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+                         (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 5.0, 100.0,
+                         10000.0)
     assert settings_from_parameters({}) == s
     assert s.robot.m4 == s.robot.m2 and s.robot.m6 == s.robot.m3
 

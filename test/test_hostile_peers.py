@@ -146,3 +146,18 @@ def test_looping_setpoints_go_back_smoothly():
     assert result['passes'] >= 2, result
     assert result['jump_p'] <= result['jump_p_bound'], result
     assert result['jump_v'] <= result['jump_v_bound'], result
+
+
+def test_a_trajectory_flood_never_saturates_and_a_normal_one_follows():
+    """
+    Issue 16: a new joint trajectory every millisecond to the controller.
+
+    Alternating targets 0 and 10 mm, 50 ms ahead, with the simulator as
+    plant: no command at force_limit, no slider faster than 0.5 m/s, and
+    the normal trajectory sent afterwards brings the robot home.
+    """
+    result = harness.trajectory_flood()
+    assert result.alive and result.sent > 1000, result
+    assert result.commands > 500 and result.saturated == 0, result
+    assert result.max_speed <= 0.5, result
+    assert result.mode == 'following' and result.final_error < 1e-3, result

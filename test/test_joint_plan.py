@@ -20,6 +20,7 @@ from orthoglide_ros.cdr import JointPoints
 from orthoglide_ros.inputs import Rejected
 from orthoglide_ros.joint_plan import JointPlan
 from orthoglide_ros.robot import Robot
+from orthoglide_ros.simulation import Plant
 from orthoglide_ros.tracking import PARAMETERS, Tracking
 
 NAMES = ('slider_a', 'slider_b', 'slider_c')
@@ -161,9 +162,16 @@ def test_zero_stamp_starts_at_reception_and_a_new_one_replaces_it():
     core.trajectory(points([0.5], [[0.01] * 3], [ZERO], [ZERO],
                            stamp=(0, 0)), 20.0, 0.0)
     assert core.plan.start == 20.0
+    # Sooner than 1 / rate_hz after the first: it waits for the next tick.
     core.trajectory(points([0.5], [[0.02] * 3], [ZERO], [ZERO],
                            stamp=(30, 500_000_000)), 20.0, 0.0)
+    assert core.plan.start == 20.0 and core.trajectories == 1
+    core.tick(20.004, 0.004)
     assert core.plan.start == 30.5 and core.trajectories == 2
+    # Later than 1 / rate_hz: at once.
+    core.trajectory(points([0.5], [[0.03] * 3], [ZERO], [ZERO],
+                           stamp=(0, 0)), 21.0, 1.0)
+    assert core.plan.start == 21.0 and core.trajectories == 3
 
 
 def test_accepting_a_plan_does_not_change_the_force():
@@ -221,3 +229,83 @@ def test_a_bad_trajectory_is_refused_whole_and_counted(reason, build):
     assert info.value.reason == reason
     assert core.rejected['trajectory', reason] == 1
     assert core.plan is None
+
+
+# A flood of replacements (issue 16) ----------------------------------------
+def flood_loop(flood_seconds=1.0, after=None, clock=100.0):
+    """
+    Run the controller on the simulated robot under a trajectory flood.
+
+    Every millisecond a new one-point trajectory, its target alternating
+    between 0 and 10 mm on every slider 50 ms ahead (efforts zero), as the
+    hostile peer of issue 16 sends it; the robot measured every
+    millisecond, the controller ticking at its rate_hz, the command held
+    by the plant (RK4, 1 kHz). ``after``: a trajectory sent once the flood
+    is over, followed for 1.5 s. Returns the commands and slider speeds.
+    """
+    robot = Robot()
+    plant = Plant(robot, force_limit=1000.0)
+    core = controller()
+    settings = core.settings
+    ticks_per = round(1000.0 / settings.rate_hz)
+    force, commands, speeds = mechanics.solve(robot, ZERO).force, [], []
+    steps = int(flood_seconds * 1000) + (1500 if after is not None else 0)
+    for k in range(steps):
+        now = k * 1e-3
+        lam, lamdot = plant.joint_state()
+        speeds.append(max(abs(v) for v in lamdot))
+        core.measured(NAMES, lam, lamdot, [], now)
+        if k < flood_seconds * 1000:
+            target = [0.01 * (k % 2)] * 3
+            core.trajectory(points([0.05], [target], [ZERO], [ZERO],
+                                   stamp=(0, 0)), clock + now, now)
+        elif k == flood_seconds * 1000:
+            core.trajectory(after(lam), clock + now, now)
+        if k % ticks_per == 0:
+            command = core.tick(clock + now, now)
+            if command is not None:
+                force = command.force
+                commands.append(command)
+        plant.step(force, 1e-3)
+    return core, commands, np.array(speeds)
+
+
+def test_a_flood_of_replacements_never_saturates_nor_runs_away():
+    """
+    Issue 16: 1 kHz of alternating one-point trajectories, then a normal one.
+
+    Each replacement starts from the desired state being followed, never
+    from the last command, and at most one is taken per tick: no command
+    clips, no slider exceeds 0.5 m/s, and the normal trajectory that
+    follows (10 mm back to home in 1 s) is followed to within 1 mm.
+    """
+    def back_home(lam):
+        return points([1.0], [ZERO], [ZERO], [mechanics.solve(
+            Robot(), ZERO).force], stamp=(0, 0))
+
+    core, commands, speeds = flood_loop(after=back_home)
+    assert sum(c.clipped for c in commands) == 0
+    assert max(max(abs(f) for f in c.force) for c in commands) < 500.0
+    assert speeds.max() <= 0.5
+    assert core.mode == 'following' and core.plan_finished
+    assert max(abs(e) for e in commands[-1].error) < 1e-3
+    assert core.superseded > 0
+
+
+def test_implausible_trajectories_are_refused_whole():
+    """Issue 16: efforts, positions, velocities of 1e300; a 15 m/s plan."""
+    huge = [[0.0, 0.0, 1e300]]
+    for reason, build in (
+            ('effort_limit', lambda: points([0.5], [ZERO], [ZERO], huge)),
+            ('position_limit', lambda: points([0.5], huge, [ZERO], [ZERO])),
+            ('velocity_limit', lambda: points([0.5], [ZERO], huge, [ZERO])),
+            # Reachable only at 15 m/s from where the robot is.
+            ('velocity_limit', lambda: points([0.001], [[0.01] * 3], [ZERO],
+                                              [ZERO], stamp=(0, 0)))):
+        core = controller()
+        core.measured(NAMES, ZERO, ZERO, [], 0.0)
+        with pytest.raises(Rejected) as info:
+            core.trajectory(build(), 10.0, 0.0)
+        assert info.value.reason == reason, info.value
+        assert core.rejected['trajectory', reason] == 1
+        assert core.plan is None

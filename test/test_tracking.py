@@ -24,6 +24,7 @@ controller_settings_from_parameters = PARAMETERS.parse
 default_controller_parameters = PARAMETERS.defaults
 
 NAMES = ('slider_a', 'slider_b', 'slider_c')
+ZERO3 = (0.0, 0.0, 0.0)
 NAN = float('nan')
 INF = float('inf')
 EPS = 2.0 ** -52
@@ -75,7 +76,8 @@ def test_specs_defaults_and_names():
     specs = {s.name: s for s in CONTROLLER_SPECS}
     assert list(specs) == ['kp', 'kd', 'feedforward', 'force_limit',
                            'joint_names', 'measurement_timeout',
-                           'rate_hz', 'path_tolerance', 'stall_timeout']
+                           'rate_hz', 'path_tolerance', 'stall_timeout',
+                           'max_position', 'max_velocity']
     assert specs['kp'].type == specs['kd'].type == 'double_array'
     assert specs['kp'].default == [20000.0] * 3
     assert specs['kd'].default == [1200.0] * 3
@@ -277,9 +279,15 @@ def test_read_effort_not_needed():
         assert values.effort is None
 
 
+# Within the default plausibility bounds (max_position, max_velocity,
+# force_limit).
+positions = st.tuples(*[st.floats(-1.0, 1.0)] * 3)
+velocities = st.tuples(*[st.floats(-2.0, 2.0)] * 3)
+
+
 @hypothesis_settings(max_examples=100, deadline=None)
-@given(order=st.permutations(range(3)), lam_d=triple, dlam_d=triple,
-       f_ff=triple, lam=triple, dlam=triple)
+@given(order=st.permutations(range(3)), lam_d=positions, dlam_d=velocities,
+       f_ff=triple, lam=positions, dlam=velocities)
 def test_name_order_does_not_matter(order, lam_d, dlam_d, f_ff, lam, dlam):
     """Permuting a message's joints leaves the command unchanged."""
     def shuffled(values):
@@ -521,3 +529,47 @@ def test_hold_bias_before_any_command():
     off = Tracking(settings(path_tolerance=[0.05] * 3, feedforward=False))
     send_measured(off, (0.0, 0.0, 0.0), 0.0)
     assert send_desired(off, (0.0, 0.0, 0.3), 0.01).force == (0.0,) * 3
+
+
+# Plausibility bounds and the hold's bias (issue 16) --------------------------
+@pytest.mark.parametrize('source, position, velocity, effort, reason', [
+    ('measured', (0.0, 5.0, 0.0), ZERO3, ZERO3, 'position_limit'),
+    ('measured', ZERO3, (0.0, 0.0, 1e300), ZERO3, 'velocity_limit'),
+    ('desired', (0.0, 0.0, -1.5), ZERO3, ZERO3, 'position_limit'),
+    ('desired', ZERO3, (2.5, 0.0, 0.0), ZERO3, 'velocity_limit'),
+    ('desired', ZERO3, ZERO3, (0.0, 1e300, 0.0), 'effort_limit'),
+])
+def test_implausible_joint_states_are_refused_and_change_nothing(
+        source, position, velocity, effort, reason):
+    """A spoofed 5 m or 1e300 is refused by reason, never used."""
+    core = Tracking(settings())
+    send_measured(core, ZERO3, 0.0)
+    call = core.measured if source == 'measured' else core.desired
+    with pytest.raises(Rejected) as info:
+        call(NAMES, position, velocity, effort, 0.001)
+    assert info.value.reason == reason
+    assert core.rejected[source, reason] == 1
+    assert core.measurement.position == ZERO3 and core.commands == 0
+    # The bound is the parameter: raised, the same value passes.
+    looser = Tracking(settings(max_position=10.0, max_velocity=1e3,
+                               force_limit=1e6))
+    send_measured(looser, ZERO3, 0.0)
+    if max(map(abs, velocity + effort)) < 1e3:
+        call = looser.measured if source == 'measured' else looser.desired
+        call(NAMES, position, velocity, effort, 0.001)
+
+
+def test_a_saturated_command_is_never_the_hold_bias():
+    """The bias is the last command that clipped nothing."""
+    core = Tracking(settings(path_tolerance=[0.05] * 3, kp=[1e4] * 3,
+                             kd=[0.0] * 3, force_limit=1000.0))
+    send_measured(core, ZERO3, 0.0)
+    calm = send_desired(core, (0.001, 0.0, 0.0), 0.001,
+                        effort=(10.0, 20.0, 30.0))
+    assert calm.clipped == 0
+    saturated = send_desired(core, (0.049, 0.0, 0.0), 0.002,
+                             effort=(900.0, 20.0, 30.0))
+    assert saturated.clipped == 1 and saturated.force[0] == 1000.0
+    held = send_desired(core, (0.2, 0.0, 0.0), 0.003)
+    assert core.mode == 'holding'
+    assert held.force == pytest.approx(calm.force)

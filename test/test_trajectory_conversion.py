@@ -162,6 +162,25 @@ def test_limits_refuse_with_point_actuator_and_value():
     assert convert_trajectory(settings(force_limit=(force + 1.0).tolist()), w)
 
 
+def test_absurd_points_refused_and_no_force_beyond_max_force():
+    """
+    Issue 16: a point accelerating at 1e200 m/s^2 gave 2.45e201 N.
+
+    Now refused by the plausibility bounds, naming the point; max_force
+    bounds every published effort even with no per-actuator limit.
+    """
+    w = paper()
+    for field, reason in (('linear_acceleration', 'acceleration_limit'),
+                          ('linear_velocity', 'speed_limit')):
+        values = getattr(w, field).copy()
+        values[17] = (0.0, 0.0, 1e200)
+        error = refused(reason, changed(w, **{field: values}), 17)
+        assert 'max_' in str(error)
+    force = np.abs(convert_trajectory(settings(), w).solution.force).max()
+    refused('force_limit', w, max_force=float(force) * 0.99)
+    assert convert_trajectory(settings(max_force=float(force) * 1.01), w)
+
+
 def test_core_counts_trajectories_apart_from_setpoints():
     core = Feedforward(settings())
     conversion = convert_trajectory(settings(), paper(50))
