@@ -30,6 +30,8 @@ import io
 import json
 import math
 import os
+import re
+import stat
 import sys
 import tempfile
 
@@ -55,6 +57,10 @@ INPUT_GROUPS = (('time', ('t',), False),
                 ('position', ('x', 'y', 'z'), True),
                 ('velocity', ('vx', 'vy', 'vz'), False),
                 ('acceleration', ('ax', 'ay', 'az'), False))
+# The output options of every subcommand, checked before anything is
+# computed or written.
+OUTPUT_OPTIONS = ('output', 'report', 'csv', 'plot')
+TOPIC_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
 UNITS = {'lambda': 'm', 'lambdadot': 'm/s', 'lambdaddot': 'm/s^2',
          'force': 'N', 'power': 'W'}
 DEFAULT_SAMPLES = 201
@@ -87,6 +93,9 @@ def main(argv=None):
         parser.print_help(sys.stderr)
         return 2
     try:
+        if args.command != 'record':    # a bag: the recorder's own checks
+            for option in OUTPUT_OPTIONS:
+                _check_output(getattr(args, option, None), option)
         robot = _robot(getattr(args, 'params', None))
         return args.run(robot, args)
     except CliError as error:
@@ -448,15 +457,20 @@ def _identification_png(source, result):
 
 def run_record(robot, args):
     """Record topics into a rosbag2 bag until the duration or Ctrl-C."""
+    topics = [_topic(name) for name in args.topic or
+              [identification.DEFAULT_TOPIC]]
+    full = ['/' + name.lstrip('/') for name in topics]
+    repeated = sorted({name for name in full if full.count(name) > 1})
+    if repeated:
+        raise CliError(f'--topic {repeated[0]} given more than once')
     from orthoglide_ros import console
     console.install_signal_handlers()
     try:
         from orthoglide_ros import recorder_node
     except ImportError as error:
         raise CliError(f'record needs ROS 2 (rclpy): {error}') from None
-    return recorder_node.main(
-        args.output, args.topic or [identification.DEFAULT_TOPIC],
-        args.storage, args.duration, args.wait)
+    return recorder_node.main(args.output, topics, args.storage,
+                              args.duration, args.wait)
 
 
 # -- urdf -------------------------------------------------------------------
@@ -574,13 +588,56 @@ def _png(figure):
     return buffer.getvalue()
 
 
+def _check_output(path, option):
+    """
+    Refuse an output path that cannot be written, before anything is.
+
+    None and ``-`` (standard output) pass. A symbolic link is followed to
+    its target; the target must be a regular file, a device or a FIFO, or
+    not exist in an existing directory.
+    """
+    if path is None or path == '-':
+        return
+    target = os.path.realpath(path)
+    if os.path.isdir(target):
+        raise CliError(f'--{option} {path}: is a directory')
+    directory = os.path.dirname(target)
+    if not os.path.isdir(directory):
+        raise CliError(f'--{option} {path}: no such directory: {directory}')
+    if not os.path.exists(target) and not os.access(directory, os.W_OK):
+        raise CliError(f'--{option} {path}: cannot write in {directory}')
+
+
 def _write_output(path, data):
-    """Write bytes to ``path`` atomically (temp file, os.replace)."""
+    """
+    Write bytes to ``path``; atomically where it is a regular file.
+
+    A regular file (or a new one) is written to a temporary file renamed
+    over it (os.replace); a symbolic link is followed to its target; a
+    device or a FIFO is written through, as any Unix tool does, never
+    replaced.
+    """
     if path is None or path == '-':
         sys.stdout.write(data.decode('utf-8'))
         sys.stdout.flush()
         return
-    directory = os.path.dirname(os.path.abspath(path))
+    target = os.path.realpath(path)
+    try:
+        special = not stat.S_ISREG(os.stat(target).st_mode)
+    except FileNotFoundError:
+        special = False
+    except OSError as error:
+        raise CliError(f'cannot write {path}: {error.strerror}') from None
+    if special:
+        try:
+            with open(target, 'wb') as stream:
+                stream.write(data)
+        except OSError as error:
+            raise CliError(f'cannot write {path}: {error.strerror}') \
+                from None
+        return
+    path = target
+    directory = os.path.dirname(path)
     try:
         mode = os.stat(path).st_mode & 0o777
     except OSError:
@@ -600,6 +657,21 @@ def _write_output(path, data):
     except OSError as error:
         os.unlink(tmp)
         raise CliError(f'cannot write {path}: {error.strerror}') from None
+
+
+def _topic(name):
+    """
+    Return a ROS topic name as given, or refuse it (CliError).
+
+    rcl's rules for a topic name without substitutions: tokens of letters,
+    digits and underscores, not starting with a digit, separated by single
+    slashes; an optional leading slash, no trailing one.
+    """
+    if not TOPIC_NAME.fullmatch(name):
+        raise CliError(f'--topic {name!r}: not a valid ROS topic name '
+                       '(letters, digits, underscores and single slashes, '
+                       'no token starting with a digit)')
+    return name
 
 
 def _robot(path):

@@ -13,7 +13,10 @@ apply the same rules here:
 - a double needs a decimal point or an exponent (``0.0``, not ``0``), an array
   must not mix integers and floats, booleans are not numbers;
 - a plain scalar such as ``1e-3`` is a double, as in rcl (YAML 1.1, which
-  PyYAML implements, would read it as a string).
+  PyYAML implements, would read it as a string);
+- a file is UTF-8 text of at most MAX_FILE_BYTES, without aliases
+  (``*name``: an alias bomb expands a small file without bound) and nested
+  at most MAX_DEPTH deep: anything else is refused with one message.
 
 :func:`robot_file_text` writes a robot as such a file (``orthoglide
 identify`` does), with the same typing.
@@ -26,6 +29,10 @@ import yaml
 from orthoglide_ros.parameters import robot_from_parameters
 
 NODE_NAME = 'feedforward'     # the node whose robot the tools read
+# A parameters file is small: config/orthoglide.yaml takes 4 kB.
+MAX_FILE_BYTES = 1024 * 1024
+# Deepest nesting of mappings and sequences (robot: {gravity: [...]} is 3).
+MAX_DEPTH = 32
 
 
 class ParametersFileError(ValueError):
@@ -33,7 +40,30 @@ class ParametersFileError(ValueError):
 
 
 class _RclLoader(yaml.SafeLoader):
-    """SafeLoader that also reads ``1e-3``-style plain scalars as doubles."""
+    """
+    SafeLoader that also reads ``1e-3``-style plain scalars as doubles.
+
+    It refuses aliases and nesting deeper than MAX_DEPTH while composing,
+    before anything is expanded.
+    """
+
+    _depth = 0
+
+    def compose_node(self, parent, index):
+        """Compose one node; refuse an alias or a node too deep."""
+        if self.check_event(yaml.AliasEvent):
+            raise yaml.composer.ComposerError(
+                None, None, 'aliases (*name) are not supported in a '
+                'parameters file', self.peek_event().start_mark)
+        if self._depth >= MAX_DEPTH:
+            raise yaml.composer.ComposerError(
+                None, None, f'nested more than {MAX_DEPTH} deep',
+                self.peek_event().start_mark)
+        self._depth += 1
+        try:
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
 
 
 _RclLoader.add_implicit_resolver(
@@ -50,12 +80,24 @@ def load_parameters(path, node=NODE_NAME):
     YAML, or has no section for the node.
     """
     try:
-        with open(path, encoding='utf-8') as stream:
-            document = yaml.load(stream, Loader=_RclLoader)
+        with open(path, 'rb') as stream:
+            data = stream.read(MAX_FILE_BYTES + 1)
     except OSError as error:
         raise ParametersFileError(f'{path}: {error.strerror}') from None
+    if len(data) > MAX_FILE_BYTES:
+        raise ParametersFileError(
+            f'{path}: larger than {MAX_FILE_BYTES} bytes: not a parameters '
+            'file')
+    try:
+        document = yaml.load(data.decode('utf-8'), Loader=_RclLoader)
+    except UnicodeDecodeError as error:
+        raise ParametersFileError(
+            f'{path}: not UTF-8 text (byte {error.start})') from None
     except yaml.YAMLError as error:
         raise ParametersFileError(f'{path}: not valid YAML: {error}') from None
+    except ValueError as error:     # e.g. an integer of over 4300 digits
+        raise ParametersFileError(f'{path}: a value cannot be read: '
+                                  f'{error}') from None
     if not isinstance(document, dict):
         raise ParametersFileError(f'{path}: not a ROS 2 parameters file')
     keys = ('/**', node, '/' + node)

@@ -203,7 +203,7 @@ def report(results, fuzz, args, elapsed):
 
 def hostile_report():
     """Run the issue-13 cases; return the report's lines and a failure."""
-    lines, hard = ['', 'Hostile peers and stalls (issue 13):'], False
+    lines, hard = ['', 'Hostile peers and stalls (issues 13, 16):'], False
 
     def line(ok, text):
         nonlocal hard
@@ -302,6 +302,21 @@ def hostile_report():
              f'{r["jump_p_bound"] * 1e3:.3f}), largest velocity step '
              f'{r["jump_v"] * 1e3:.3f} mm/s (bound '
              f'{r["jump_v_bound"] * 1e3:.3f})')
+    r = run('trajectory flood', hostile.trajectory_flood)
+    if r is not None:
+        line(r.saturated == 0 and r.max_speed <= 0.5
+             and r.mode == 'following' and r.final_error < 1e-3,
+             f'a new joint trajectory every ms ({r.sent}), targets 0/10 mm: '
+             f'{r.saturated} of {r.commands} commands saturated, largest '
+             f'{r.max_force:.0f} N, {r.max_speed:.3f} m/s; '
+             f'{r.superseded} superseded; then home within '
+             f'{r.final_error * 1e3:.3f} mm ({r.mode})')
+    r = run('absurd values', hostile.absurd_values)
+    if r is not None:
+        line(r.feedforward_outputs == 0 and r.commands == 0,
+             f'1e200 m/s^2, 1e300 N and m/s, 5 m: {r.feedforward_outputs} '
+             f'outputs, {r.commands} commands; {r.feedforward_rejected}, '
+             f'{r.controller_rejected}')
     return lines, hard
 
 

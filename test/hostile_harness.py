@@ -21,7 +21,9 @@ the tests assert on and the report prints:
 - :func:`stall_resume`: the closed loop, one process stopped for 2 s;
 - :func:`setpoint_loop`: the looping setpoint publisher's way back;
 - :func:`trajectory_flood`: a new joint trajectory every millisecond to
-  the tracking controller (issue 16).
+  the tracking controller (issue 16);
+- :func:`absurd_values`: finite but absurd values (1e200, 1e300, 5 m) on
+  the inputs of the feedforward and the controller (issue 16).
 
 (Big messages on an input are ``reliability_harness.big_messages``: they
 need its producer and recorder.) Every child process is stopped in a
@@ -904,6 +906,85 @@ def trajectory_flood(flood=1.5, period=0.001, after=1.5):
             mode=values.get('mode'),
             superseded=int(values.get('trajectories superseded', -1)),
             alive=nodes.alive('simulator')
+            and nodes.alive('tracking_controller'))
+
+
+# 12. Finite but absurd values (issue 16) -------------------------------------
+@dataclass
+class Absurd:
+    """What :func:`absurd_values` saw: outputs and the refusals counted."""
+
+    feedforward_outputs: int    # joint states and joint trajectories
+    commands: int               # the controller's commands
+    feedforward_rejected: dict  # diagnostics key -> count
+    controller_rejected: dict
+    alive: bool
+
+
+def absurd_values():
+    """
+    Send finite but absurd values to the feedforward and the controller.
+
+    The feedforward gets a setpoint and a cartesian_trajectory point
+    accelerating at 1e200 m/s^2 (once a 2.45e201 N effort); the tracking
+    controller a measurement at 5 m and one at 1e300 m/s, a desired
+    effort and a joint trajectory effort of 1e300 N. Returns what each
+    published and the ``rejected ...`` counters of their diagnostics.
+    """
+    with Nodes() as nodes, Peer() as peer:
+        nodes.start('feedforward')
+        nodes.start('tracking_controller')
+        outputs = peer.record('feedforward/joint_states', JointState)
+        trajectories = peer.record('feedforward/joint_trajectory',
+                                   JointTrajectory)
+        commands = peer.record('commands', Float64MultiArray)
+        pubs = {topic: peer.publisher(kind, topic) for topic, kind in (
+            ('setpoint/trajectory', MultiDOFJointTrajectory),
+            ('cartesian_trajectory', MultiDOFJointTrajectory),
+            ('joint_states', JointState),
+            ('feedforward/joint_states', JointState),
+            ('joint_trajectory', JointTrajectory))}
+        _running(peer, ('feedforward', 'tracking_controller'))
+        if not peer.wait(lambda: all(p.get_subscription_count() >= 1
+                                     for p in pubs.values()), START_TIMEOUT):
+            raise HarnessError('the nodes did not subscribe')
+        names = ['slider_a', 'slider_b', 'slider_c']
+        setpoint = _setpoint('', (5, 0))
+        setpoint.points[0].accelerations[0].linear.z = 1e200
+        pubs['setpoint/trajectory'].publish(setpoint)
+        whole = _setpoint('', (0, 0))
+        whole.points[0].accelerations[0].linear.z = 1e200
+        pubs['cartesian_trajectory'].publish(whole)
+        for position, velocity in (([0.0, 5.0, 0.0], [0.0] * 3),
+                                   ([0.0] * 3, [0.0, 0.0, 1e300])):
+            pubs['joint_states'].publish(JointState(
+                name=names, position=position, velocity=velocity))
+        pubs['joint_states'].publish(JointState(
+            name=names, position=[0.0] * 3, velocity=[0.0] * 3))
+        pubs['feedforward/joint_states'].publish(JointState(
+            name=names, position=[0.0] * 3, velocity=[0.0] * 3,
+            effort=[0.0, 1e300, 0.0]))
+        pubs['joint_trajectory'].publish(JointTrajectory(
+            joint_names=names, points=[JointTrajectoryPoint(
+                positions=[0.0] * 3, velocities=[0.0] * 3,
+                effort=[0.0, 0.0, 1e300],
+                time_from_start=Duration(seconds=0.5).to_msg())]))
+        start = time.monotonic()
+        statuses = {}
+        for name in ('feedforward', 'tracking_controller'):
+            status = peer.status(name, after=start + 0.3, timeout=5.0)
+            statuses[name] = {k: int(v) for k, v in (
+                status[2] if status else {}).items()
+                if k.startswith('rejected') and v.isdigit() and int(v)}
+        # The peer's own desired state arrives here too: not an output.
+        mine = sum(len(m.effort) == 3 and m.effort[1] == 1e300
+                   for _, m in outputs)
+        return Absurd(
+            feedforward_outputs=len(outputs) - mine + len(trajectories),
+            commands=len(commands),
+            feedforward_rejected=statuses['feedforward'],
+            controller_rejected=statuses['tracking_controller'],
+            alive=nodes.alive('feedforward')
             and nodes.alive('tracking_controller'))
 
 

@@ -161,3 +161,23 @@ def test_a_trajectory_flood_never_saturates_and_a_normal_one_follows():
     assert result.commands > 500 and result.saturated == 0, result
     assert result.max_speed <= 0.5, result
     assert result.mode == 'following' and result.final_error < 1e-3, result
+
+
+def test_absurd_finite_values_are_refused_by_reason_never_published():
+    """
+    Issue 16: 1e200 m/s^2, 1e300 N and m/s, a spoofed 5 m.
+
+    The feedforward publishes no joint state and no joint trajectory for
+    them, the controller no command; each is counted under its reason.
+    """
+    result = harness.absurd_values()
+    assert result.alive, result
+    assert result.feedforward_outputs == 0 and result.commands == 0, result
+    assert result.feedforward_rejected == {
+        'rejected acceleration_limit': 1,
+        'rejected trajectory acceleration_limit': 1}, result
+    assert result.controller_rejected == {
+        'rejected measured position_limit': 1,
+        'rejected measured velocity_limit': 1,
+        'rejected desired effort_limit': 1,
+        'rejected trajectory effort_limit': 1}, result

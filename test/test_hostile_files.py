@@ -1,0 +1,201 @@
+"""
+Hostile files and paths against the ``orthoglide`` tool (issue 16).
+
+Every case is a file or a path a user (or an attacker) can hand the tool;
+the rule for each: exit 2 with one line ``orthoglide: error: ...``, no
+traceback, nothing written, memory bounded; and an output path is never
+replaced by something else (a device or a FIFO is written through, a
+symbolic link followed to its target, a regular file replaced
+atomically).
+"""
+
+import os
+import stat
+import threading
+
+import pytest
+
+from orthoglide_ros import csvfile
+from test_cli import assert_bad_input, run, write_trajectory
+
+TRAJECTORY = [(0.0, 0.0, 0.0, 0.0), (0.1, 0.01, 0.0, 0.0)]
+
+
+@pytest.fixture
+def trajectory_csv(tmp_path):
+    return write_trajectory(tmp_path / 'in.csv', ('t', 'x', 'y', 'z'),
+                            TRAJECTORY)
+
+
+def device(path, minor):
+    """Make a character device of the memory driver (3 null, 7 full)."""
+    try:
+        os.mknod(path, stat.S_IFCHR | 0o666, os.makedev(1, minor))
+    except (PermissionError, OSError) as error:
+        pytest.skip(f'cannot make a device node here: {error}')
+    return path
+
+
+# -- outputs ------------------------------------------------------------------
+
+def test_a_full_device_is_written_through_and_stays_a_device(
+        capsys, tmp_path, trajectory_csv):
+    """As root, --output /dev/full once became a 1.3 MB regular file."""
+    full = device(tmp_path / 'full', 7)
+    code, out, err = run(capsys, 'batch', '--input', trajectory_csv,
+                         '--output', full)
+    assert_bad_input(code, out, err, 'No space left on device')
+    assert stat.S_ISCHR(os.stat(full).st_mode)
+    null = device(tmp_path / 'null', 3)
+    assert run(capsys, 'batch', '--input', trajectory_csv,
+               '--output', null)[0] == 0
+    assert stat.S_ISCHR(os.stat(null).st_mode)
+
+
+def test_a_fifo_is_written_through(capsys, tmp_path, trajectory_csv):
+    fifo = tmp_path / 'fifo'
+    os.mkfifo(fifo)
+    received = []
+    reader = threading.Thread(target=lambda: received.append(
+        fifo.read_bytes()), daemon=True)
+    reader.start()
+    code = run(capsys, 'batch', '--input', trajectory_csv, '--output',
+               fifo)[0]
+    reader.join(10.0)
+    if reader.is_alive():   # nothing opened the FIFO: release the reader
+        os.close(os.open(fifo, os.O_WRONLY | os.O_NONBLOCK))
+    assert code == 0 and stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert received and received[0].startswith(b't,x,y,z,lambda_a')
+
+
+def test_a_symbolic_link_is_followed_to_its_target(capsys, tmp_path,
+                                                   trajectory_csv):
+    target, link = tmp_path / 'target.csv', tmp_path / 'link.csv'
+    target.write_text('old\n')
+    link.symlink_to(target)
+    assert run(capsys, 'batch', '--input', trajectory_csv, '--output',
+               link)[0] == 0
+    assert link.is_symlink() and os.readlink(link) == str(target)
+    assert target.read_text().startswith('t,x,y,z,lambda_a')
+    dangling = tmp_path / 'dangling.csv'
+    dangling.symlink_to(tmp_path / 'new.csv')
+    assert run(capsys, 'batch', '--input', trajectory_csv, '--output',
+               dangling)[0] == 0
+    assert dangling.is_symlink() and (tmp_path / 'new.csv').is_file()
+
+
+def test_every_output_is_checked_before_any_is_written(capsys, tmp_path):
+    """An `identify --report DIR` once wrote the parameters file, then failed."""
+    from test_cli import identification_log
+    source, _ = identification_log(tmp_path, duration=2.0)
+    out, directory = tmp_path / 'out.yaml', tmp_path / 'report.png'
+    directory.mkdir()
+    code, stdout, err = run(capsys, 'identify', '--input', source,
+                            '--output', out, '--report', directory)
+    assert_bad_input(code, stdout, err, '--report', 'is a directory')
+    assert not out.exists()
+    code, stdout, err = run(capsys, 'identify', '--input', source,
+                            '--output', tmp_path / 'nowhere' / 'out.yaml')
+    assert_bad_input(code, stdout, err, '--output', 'no such directory')
+
+
+# -- parameters files -----------------------------------------------------------
+
+BOMB = ''.join(
+    f'{name}: &{name} [{", ".join([f"*{previous}"] * 9)}]\n'
+    for previous, name in zip('abcdefgh', 'bcdefghi'))
+PARAMS = {
+    'alias_bomb': ('a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n'
+                   + BOMB + 'feedforward: {ros__parameters: {robot: *i}}\n',
+                   'aliases'),
+    'recursive_alias': ('feedforward: &x\n  ros__parameters: *x\n',
+                        'aliases'),
+    'nested_brackets': ('feedforward: {ros__parameters: {robot: {m5: '
+                        + '[' * 100_000 + ']' * 100_000 + '}}}\n',
+                        'nested more than'),
+    'long_integer': ('feedforward: {ros__parameters: {robot: {m5: '
+                     + '9' * 5000 + '}}}\n', '4300 digits'),
+    'not_utf8': (b'feedforward:\n  ros__parameters: {robot: {m5: 15.0}}'
+                 b' # \xff\xfe\n', 'not UTF-8'),
+    'huge': ('feedforward: {ros__parameters: {robot: {m5: 15.0}}}\n'
+             + '#' * (2 * 1024 * 1024) + '\n', 'larger than'),
+}
+
+
+@pytest.mark.parametrize('name', sorted(PARAMS))
+def test_a_hostile_parameters_file_is_refused_in_one_line(capsys, tmp_path,
+                                                          name):
+    text, words = PARAMS[name]
+    path = tmp_path / 'params.yaml'
+    if isinstance(text, bytes):
+        path.write_bytes(text)
+    else:
+        path.write_text(text)
+    code, out, err = run(capsys, 'solve', '--position', 0, 0, 0,
+                         '--params', path)
+    assert_bad_input(code, out, err, str(path), words)
+
+
+# -- CSV files --------------------------------------------------------------------
+
+# Each after the header of the command's input: its last column spoiled.
+CSV = {
+    'long_field': ('0,' * 3 + '1' * 140_000 + '\n',
+                   'field larger than field limit'),
+    'unterminated_quote': ('0,' * 3 + '"0\n' + '1,' * 3 + '0\n',
+                           'is not a finite number'),
+    'not_utf8': (b'0,0,0,\xff\n', 'not a UTF-8 text file'),
+}
+HEADERS = {'batch': 't,x,y,z', 'animate': 't,x,y,z'}
+
+
+@pytest.mark.parametrize('command', ['batch', 'identify', 'animate'])
+@pytest.mark.parametrize('name', sorted(CSV))
+def test_a_hostile_csv_is_refused_in_one_line(capsys, tmp_path, name,
+                                              command):
+    text, words = CSV[name]
+    path = tmp_path / 'in.csv'
+    header = HEADERS.get(command, 't,lambda_a,lambda_b,lambda_c,force_a,'
+                                  'force_b,force_c') + '\n'
+    if command == 'identify':   # three more columns before the spoiled one
+        text = (b'0,0,0,' if isinstance(text, bytes) else '0,0,0,') + text
+    path.write_bytes(header.encode() + (
+        text if isinstance(text, bytes) else text.encode()))
+    output = {'batch': 'out.csv', 'identify': 'out.yaml',
+              'animate': 'out.gif'}[command]
+    code, out, err = run(capsys, command, '--input', path, '--output',
+                         tmp_path / output)
+    assert_bad_input(code, out, err, words)
+    assert not (tmp_path / output).exists()
+
+
+def test_a_csv_beyond_the_row_limit_is_refused_without_reading_it_all(
+        capsys, tmp_path, monkeypatch):
+    """The rule of MAX_ROWS (2,000,000), shown on a limit of 100."""
+    monkeypatch.setattr(csvfile, 'MAX_ROWS', 100)
+    rows = [(0.001 * i, 0.0, 0.0, 0.0) for i in range(101)]
+    path = write_trajectory(tmp_path / 'in.csv', ('t', 'x', 'y', 'z'), rows)
+    code, out, err = run(capsys, 'batch', '--input', path)
+    assert_bad_input(code, out, err, 'more than 100 data rows')
+    path = write_trajectory(tmp_path / 'ok.csv', ('t', 'x', 'y', 'z'),
+                            rows[:100])
+    assert run(capsys, 'batch', '--input', path)[0] == 0
+
+
+# -- record's topics ---------------------------------------------------------------
+
+@pytest.mark.parametrize('topics, words', [
+    (['bad topic!!'], ["'bad topic!!'", 'not a valid ROS topic name']),
+    ([''], ["''", 'not a valid ROS topic name']),
+    (['/x/'], ["'/x/'"]),
+    (['/1x'], ["'/1x'"]),
+    (['/joint_states', 'joint_states'], ['/joint_states given more than']),
+])
+def test_record_refuses_bad_and_repeated_topics_at_once(capsys, tmp_path,
+                                                        topics, words):
+    """Refused before anything starts: no wait, no bag, no ROS needed."""
+    argv = [arg for topic in topics for arg in ('--topic', topic)]
+    code, out, err = run(capsys, 'record', '--output', tmp_path / 'bag',
+                         '--duration', 1, *argv)
+    assert_bad_input(code, out, err, *words)
+    assert not (tmp_path / 'bag').exists()
