@@ -152,13 +152,16 @@ def convert_trajectory(settings, waypoints):
                ((vector == 0.0) & (q[:, 3] == 0.0)),
                f'turns the platform more than {ORIENTATION_TOLERANCE:g} rad '
                'from the identity (the Orthoglide only translates)')
+    finite = np.isfinite(w.position).all(1) & np.isfinite(
+        velocity).all(1) & np.isfinite(acceleration).all(1)
     for reason, values, (bound, name, unit) in zip(
             ('speed_limit', 'acceleration_limit'), (velocity, acceleration),
             _motion_bounds(settings)):
+        # A NaN or an infinity in a point is the mechanics' non_finite.
         with np.errstate(invalid='ignore'):
             norms = np.hypot(np.hypot(values[:, 0], values[:, 1]),
                              values[:, 2])
-            beyond = (norms > bound) & (norms < np.inf)
+            beyond = (norms > bound) & finite
         _first_bad(reason, beyond, (
             f'has a {name.removeprefix("max_")} beyond {name} {bound:g} '
             f'{unit}'))
@@ -507,12 +510,14 @@ class Feedforward:
                     f'setpoint in frame {frame!r}, expected '
                     f'{settings.base_frame!r} (or empty)'))
         self._check_orientation(orientation)
+        # A NaN or an infinity anywhere is the mechanics' non_finite.
+        finite = all(math.isfinite(c) for c in (*position, *velocity,
+                                                 *acceleration))
         for reason, vector, (bound, name, unit) in zip(
                 ('speed_limit', 'acceleration_limit'),
                 (velocity, acceleration), _motion_bounds(settings)):
-            # hypot: no squares to overflow; an infinity or a NaN is the
-            # mechanics' non_finite.
-            if bound < math.hypot(*vector) < math.inf:
+            # hypot: no squares to overflow.
+            if finite and math.hypot(*vector) > bound:
                 self._reject(reason, (
                     f'{name.removeprefix("max_")} '
                     f'{mechanics.format_vector(vector)} {unit} is beyond '

@@ -249,8 +249,13 @@ def test_bad_inputs_rejected_counted_and_node_goes_on(graph):
     trajectory(bad_stamp(), ZERO, v=None)                   # malformed
     trajectory(bad_stamp(), ZERO, a=None)                   # malformed
     good('trajectory')
-    expected = {'non_finite': 2, 'unreachable': 1, 'singular': 1,
-                'overflow': 0, 'frame': 1, 'orientation': 2, 'stamp': 3,
+    topics(bad_stamp(), ZERO, v=(0.0, 0.0, 6.0))            # speed_limit
+    good('topics')
+    trajectory(bad_stamp(), ZERO, a=(0.0, 1e200, 0.0))      # acceleration
+    good('trajectory')
+    expected = {'non_finite': 2, 'speed_limit': 1, 'acceleration_limit': 1,
+                'unreachable': 1, 'singular': 1, 'overflow': 0,
+                'force_limit': 0, 'frame': 1, 'orientation': 2, 'stamp': 3,
                 'malformed': 4, 'oversize': 0, 'unpaired': 1}
     assert set(expected) == set(REASONS)
     n = len(good_stamps)

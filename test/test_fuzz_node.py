@@ -160,11 +160,21 @@ class Model:
         angle = 2.0 * math.atan2(math.hypot(*q[:3]), abs(q[3]))
         if angle > ORIENTATION_TOLERANCE:
             return self.reject('orientation')
+        settings = self.settings
+        if all(math.isfinite(c) for part in state for c in part):
+            for reason, vector, bound in (
+                    ('speed_limit', state[1], settings.max_speed),
+                    ('acceleration_limit', state[2],
+                     settings.max_acceleration)):
+                if math.hypot(*vector) > bound:
+                    return self.reject(reason)
         try:
-            solution = mechanics.solve(self.settings.robot, *state,
-                                       self.settings.singularity_margin)
+            solution = mechanics.solve(settings.robot, *state,
+                                       settings.singularity_margin)
         except mechanics.WorkspaceError as error:
             return self.reject(error.reason)
+        if max(abs(f) for f in solution.force) > settings.max_force:
+            return self.reject('force_limit')
         return ('output', stamp, solution)
 
     def flush(self):
