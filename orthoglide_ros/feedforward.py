@@ -511,8 +511,8 @@ class Feedforward:
                     f'{settings.base_frame!r} (or empty)'))
         self._check_orientation(orientation)
         # A NaN or an infinity anywhere is the mechanics' non_finite.
-        finite = all(math.isfinite(c) for c in (*position, *velocity,
-                                                 *acceleration))
+        finite = all(math.isfinite(c)
+                     for c in (*position, *velocity, *acceleration))
         for reason, vector, (bound, name, unit) in zip(
                 ('speed_limit', 'acceleration_limit'),
                 (velocity, acceleration), _motion_bounds(settings)):
