@@ -17,7 +17,9 @@ if int(setuptools.__version__.split('.')[0]) < 72:
 setup(
     name=package_name,
     version='0.1.0',
-    packages=[package_name],
+    # The layers: model, formats, cores, ros (the glue), tools.
+    packages=setuptools.find_packages(include=[package_name,
+                                               package_name + '.*']),
     data_files=[
         ('share/ament_index/resource_index/packages',
             ['resource/' + package_name]),
@@ -48,13 +50,13 @@ setup(
         'console_scripts': [
             # The nodes start through console.py: signals are taken over
             # before anything heavy is imported.
-            'feedforward = orthoglide_ros.console:feedforward',
-            'orthoglide = orthoglide_ros.cli:main',
-            'setpoint_publisher = orthoglide_ros.console:setpoint_publisher',
-            'tracking_controller = orthoglide_ros.console:tracking_controller',
-            'simulator = orthoglide_ros.console:simulator',
+            'feedforward = orthoglide_ros.ros.console:feedforward',
+            'orthoglide = orthoglide_ros.tools.cli:main',
+            'setpoint_publisher = orthoglide_ros.ros.console:setpoint_publisher',
+            'tracking_controller = orthoglide_ros.ros.console:tracking_controller',
+            'simulator = orthoglide_ros.ros.console:simulator',
             'mechanism_state_publisher = '
-            'orthoglide_ros.console:mechanism_state_publisher',
+            'orthoglide_ros.ros.console:mechanism_state_publisher',
         ],
     },
     **legacy_kwargs,

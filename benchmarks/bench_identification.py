@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """
-Benchmark the identification (orthoglide_ros.identification).
+Benchmark the identification (orthoglide_ros.tools.identification).
 
 A synthetic log as the tests make it (30 s at 1 kHz of the excitation of
 seed 0, period 6 s, of a robot unlike the paper's, lambda quantised to
@@ -31,8 +31,9 @@ TARGET_SAMPLES = 30_000
 def make_log(samples):
     """Return the synthetic log of the module docstring (N samples)."""
     import numpy as np
-    from orthoglide_ros import identification, mechanics, trajectory
-    from orthoglide_ros.robot import Robot
+    from orthoglide_ros.model import mechanics, trajectory
+    from orthoglide_ros.tools import identification
+    from orthoglide_ros.model.robot import Robot
     true = Robot(m5=18.75, m3=2.875, friction_viscous=(30.0, 40.0, 50.0),
                  friction_coulomb=(5.0, 3.0, 4.0))
     times = np.arange(samples) * 1e-3
@@ -49,8 +50,8 @@ def make_log(samples):
 def one_run(samples):
     """Time the steps in this process; print one line of seconds."""
     start = time.perf_counter()
-    from orthoglide_ros import identification
-    from orthoglide_ros.robot import Robot
+    from orthoglide_ros.tools import identification
+    from orthoglide_ros.model.robot import Robot
     import scipy.signal  # noqa: F401 (its import is part of the cost)
     imported = time.perf_counter()
     log = make_log(samples)

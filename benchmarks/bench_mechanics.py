@@ -34,8 +34,9 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), '..'))
 
-from orthoglide_ros import mechanics, trajectory  # noqa: E402
-from orthoglide_ros.robot import Robot  # noqa: E402
+from orthoglide_ros.model import trajectory  # noqa: E402
+from orthoglide_ros.model import mechanics  # noqa: E402
+from orthoglide_ros.model.robot import Robot  # noqa: E402
 
 SINGLE_TARGET_US = 25.0
 FORWARD_TARGET_US = 100.0

@@ -31,11 +31,12 @@ ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..')
 sys.path.insert(0, ROOT)
 sys.path.insert(0, os.path.join(ROOT, 'test'))
 
-from orthoglide_ros import mechanics, trajectory  # noqa: E402
-from orthoglide_ros.mechanism_state import (  # noqa: E402
+from orthoglide_ros.model import trajectory  # noqa: E402
+from orthoglide_ros.model import mechanics  # noqa: E402
+from orthoglide_ros.cores.mechanism_state_publisher import (  # noqa: E402
     joint_state, MechanismState, PARAMETERS)
-from orthoglide_ros.robot import Robot  # noqa: E402
-from orthoglide_ros.urdf import urdf  # noqa: E402
+from orthoglide_ros.model.robot import Robot  # noqa: E402
+from orthoglide_ros.model.urdf import urdf  # noqa: E402
 
 NAMES = ['slider_a', 'slider_b', 'slider_c']
 

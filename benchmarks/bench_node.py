@@ -60,8 +60,8 @@ sys.path.insert(0, os.path.join(ROOT, 'test'))
 
 from node_harness import (cpu_seconds, INPUT_TOPICS, interrupt,  # noqa: E402
                           Producer, qos_profile)
-from orthoglide_ros.trajectory import PAPER_DURATION  # noqa: E402
-from orthoglide_ros.trajectory import paper_sample  # noqa: E402
+from orthoglide_ros.model.trajectory import PAPER_DURATION  # noqa: E402
+from orthoglide_ros.model.trajectory import paper_sample  # noqa: E402
 
 TARGETS = ('node', 'echo-single', 'echo-events')
 NODES = ('node',)

@@ -38,7 +38,7 @@ def serve(kind, seconds):
     from rclpy.experimental import EventsExecutor
     from rclpy.node import Node
 
-    from orthoglide_ros.node_runtime import InputNode
+    from orthoglide_ros.ros.node_runtime import InputNode
     rclpy.init()
     node = (InputNode if kind == 'guarded' else Node)('victim')
     node.declare_parameter('x', 1.0)

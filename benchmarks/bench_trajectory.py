@@ -39,10 +39,12 @@ from trajectory_msgs.msg import (JointTrajectory,  # noqa: E402
 
 from hostile_harness import Nodes, Peer  # noqa: E402
 from node_harness import cartesian_message  # noqa: E402
-from orthoglide_ros import cdr, mechanics, trajectory  # noqa: E402
-from orthoglide_ros.feedforward import (convert_trajectory,  # noqa: E402
-                                        PARAMETERS)
-from orthoglide_ros.robot import Robot  # noqa: E402
+from orthoglide_ros.model import trajectory  # noqa: E402
+from orthoglide_ros.formats import cdr  # noqa: E402
+from orthoglide_ros.model import mechanics  # noqa: E402
+from orthoglide_ros.cores.feedforward import (convert_trajectory,  # noqa: E402
+                                              PARAMETERS)
+from orthoglide_ros.model.robot import Robot  # noqa: E402
 
 SIZES = (100, 1000, 10000)
 

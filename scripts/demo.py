@@ -48,9 +48,11 @@ from sensor_msgs.msg import JointState  # noqa: E402
 from std_msgs.msg import Float64MultiArray  # noqa: E402
 from trajectory_msgs.msg import MultiDOFJointTrajectory  # noqa: E402
 
-from orthoglide_ros import drawing, mechanics, trajectory  # noqa: E402
-from orthoglide_ros.cli import CSV_COLUMNS  # noqa: E402
-from orthoglide_ros.params_file import load_robot  # noqa: E402
+from orthoglide_ros.model import trajectory  # noqa: E402
+from orthoglide_ros.model import mechanics  # noqa: E402
+from orthoglide_ros.tools import drawing  # noqa: E402
+from orthoglide_ros.tools.cli import CSV_COLUMNS  # noqa: E402
+from orthoglide_ros.formats.params_file import load_robot  # noqa: E402
 from node_harness import interrupt  # noqa: E402
 
 BIN = Path(sys.executable).parent

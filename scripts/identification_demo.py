@@ -50,8 +50,9 @@ import rclpy  # noqa: E402
 import closed_loop_harness as harness  # noqa: E402
 from node_harness import node_executable, start_node_process, \
     stop_process  # noqa: E402
-from orthoglide_ros import identification, params_file  # noqa: E402
-from orthoglide_ros.robot import Robot  # noqa: E402
+from orthoglide_ros.formats import params_file  # noqa: E402
+from orthoglide_ros.tools import identification  # noqa: E402
+from orthoglide_ros.model.robot import Robot  # noqa: E402
 
 CRITERION = 1.5     # PD + identified within this factor of PD + exact
 RECORD_MARGIN = 60.0    # s the recording may last beyond the passes

@@ -58,9 +58,9 @@ from trajectory_msgs.msg import MultiDOFJointTrajectory
 from node_harness import (cartesian_message, node_executable,
                           start_node_process, stop_process)
 
-from orthoglide_ros import mechanics, trajectory
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.tracking import PARAMETERS
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.cores.tracking_controller import PARAMETERS
 
 LOOP_RATE = 250.0       # Hz: setpoints, feedforward and commands
 PLANT_RATE = 500.0      # Hz: the simulator's steps
@@ -507,7 +507,7 @@ def _tracking(label, recorder, motion, duration):
 
 def log_of(run):
     """Return a run's measurements as an ``identification.Log``."""
-    from orthoglide_ros.identification import Log
+    from orthoglide_ros.tools.identification import Log
     return Log(run.times, run.lambdas, run.efforts, run.label)
 
 

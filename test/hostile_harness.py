@@ -64,8 +64,8 @@ from trajectory_msgs.msg import (JointTrajectory, JointTrajectoryPoint,
 
 from node_harness import (node_executable, qos_profile, start_node_process,
                           stop_process)
-from orthoglide_ros import mechanics, trajectory
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.model.robot import Robot
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -742,7 +742,7 @@ def setpoint_loop(duration=0.6, return_duration=0.6, rate_hz=500.0,
                    pt.velocities[0].linear.z] for _, pt in samples])
     dt = np.diff(t)
     dense = np.linspace(0.0, duration + return_duration, 2001)
-    from orthoglide_ros.setpoint_publisher import PARAMETERS, Stream
+    from orthoglide_ros.cores.setpoint_publisher import PARAMETERS, Stream
     stream = Stream(PARAMETERS.parse({
         'loop': True, 'duration': float(duration),
         'return_duration': float(return_duration)}))
@@ -765,7 +765,7 @@ def setpoint_loop(duration=0.6, return_duration=0.6, rate_hz=500.0,
 def trajectory_peak_speed(duration=trajectory.PAPER_DURATION,
                           return_duration=trajectory.RETURN_DURATION):
     """Largest |lambdadot| (m/s) of the looped paper motion, any slider."""
-    from orthoglide_ros.setpoint_publisher import PARAMETERS, Stream
+    from orthoglide_ros.cores.setpoint_publisher import PARAMETERS, Stream
     stream = Stream(PARAMETERS.parse({'loop': True}))
     times = np.linspace(0.0, duration + return_duration, 3001)
     samples = [stream.sample(t) for t in times]

@@ -50,9 +50,9 @@ import numpy as np
 
 from node_harness import (cpu_seconds, INPUT_TOPICS, interrupt, Producer,
                           qos_profile, start_node_process, stop_process)
-from orthoglide_ros import mechanics
-from orthoglide_ros.params_file import load_robot
-from orthoglide_ros.trajectory import paper_sample
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.formats.params_file import load_robot
+from orthoglide_ros.model.trajectory import paper_sample
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)

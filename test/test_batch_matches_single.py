@@ -9,9 +9,9 @@ batch's internal chunk boundary too.
 
 from mechanics_reference import OTHER_ROBOT_VALUES
 import numpy as np
-from orthoglide_ros.mechanics import BATCH_CHUNK, Solution, solve, \
+from orthoglide_ros.model.mechanics import BATCH_CHUNK, Solution, solve, \
     solve_batch
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 RELATIVE = 1e-12

@@ -2,7 +2,7 @@
 The raw CDR reader reads what rclpy's deserializer reads.
 
 Messages built with random contents (hypothesis) are serialized by rclpy
-(the rmw's own encoding) and read back by ``orthoglide_ros.cdr``; every
+(the rmw's own encoding) and read back by ``orthoglide_ros.formats.cdr``; every
 field the node uses must come back bit for bit.
 """
 
@@ -11,7 +11,7 @@ import math
 from hypothesis import example, given, settings, strategies as st
 import pytest
 
-from orthoglide_ros import cdr
+from orthoglide_ros.formats import cdr
 
 pytest.importorskip('rclpy')
 from geometry_msgs.msg import (AccelStamped, PoseStamped,  # noqa: E402

@@ -1,4 +1,4 @@
-"""Tests of the ``orthoglide`` command-line tool (orthoglide_ros.cli)."""
+"""Tests of the ``orthoglide`` command-line tool (orthoglide_ros.tools.cli)."""
 
 import csv
 import io
@@ -13,8 +13,9 @@ import sys
 import numpy as np
 import pytest
 
-from orthoglide_ros import cli, mechanics, trajectory
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.tools import cli
+from orthoglide_ros.model.robot import Robot
 
 ROOT = Path(__file__).resolve().parents[1]
 HEADER = ('t,x,y,z,lambda_a,lambda_b,lambda_c,lambdadot_a,lambdadot_b,'
@@ -397,7 +398,7 @@ def test_excitation_writes_the_batch_input_columns(capsys, tmp_path):
 
 
 def test_excitation_condition_number_is_the_libraries(capsys, tmp_path):
-    from orthoglide_ros import identification
+    from orthoglide_ros.tools import identification
     code, out, _ = run(capsys, 'excitation', '--duration', 4, '--output',
                        tmp_path / 'e.csv')
     assert code == 0
@@ -456,7 +457,8 @@ def identification_log(tmp_path, name='log.csv', seed=0, duration=20.0):
 
 
 def test_identify_writes_a_parameters_file_the_tools_read(capsys, tmp_path):
-    from orthoglide_ros import identification, params_file
+    from orthoglide_ros.formats import params_file
+    from orthoglide_ros.tools import identification
     source, log = identification_log(tmp_path)
     out = tmp_path / 'identified.yaml'
     code, stdout, err = run(capsys, 'identify', '--input', source,
@@ -479,7 +481,7 @@ def test_identify_writes_a_parameters_file_the_tools_read(capsys, tmp_path):
 
 def test_identify_reports_what_the_issue_lists(capsys, tmp_path):
     """Each base parameter, meaning, estimate, rel. std; condition; RMS; samples, span."""
-    from orthoglide_ros import identification
+    from orthoglide_ros.tools import identification
     source, log = identification_log(tmp_path)
     code, out, _ = run(capsys, 'identify', '--input', source, '--output',
                        tmp_path / 'out.yaml', '--start', 1.0)
@@ -532,7 +534,7 @@ def test_identify_validates_on_another_log(capsys, tmp_path):
 @pytest.fixture(scope='module')
 def from_csv(tmp_path_factory):
     """Return the robot identify finds from a 6 s CSV log."""
-    from orthoglide_ros import params_file
+    from orthoglide_ros.formats import params_file
     tmp_path = tmp_path_factory.mktemp('from_csv')
     source, _ = identification_log(tmp_path, duration=6.0)
     assert cli.main(['identify', '--input', str(source), '--output',
@@ -546,7 +548,8 @@ def from_csv(tmp_path_factory):
 def test_identify_reads_bags_of_both_storages(capsys, tmp_path, from_csv,
                                               storage, form, topic):
     """A bag directory or its storage file: the robot of the same CSV log."""
-    from orthoglide_ros import identification, params_file
+    from orthoglide_ros.formats import params_file
+    from orthoglide_ros.tools import identification
     from test_identification import (storage_file, synthetic_log, TRUE,
                                      write_bag)
     write_bag(tmp_path / 'bag', synthetic_log(TRUE, 0, 5.0, 11,
@@ -668,7 +671,7 @@ def test_help_gives_units(capsys, command, units):
 
 def test_cli_imports_neither_rclpy_nor_matplotlib():
     # Nor scipy and rosbags, which only identification's steps need.
-    code = ('import sys; from orthoglide_ros import cli; '
+    code = ('import sys; from orthoglide_ros.tools import cli; '
             'assert cli.main(["paper"]) == 0; '
             'bad = {"rclpy", "matplotlib", "scipy", "rosbags"} '
             '& set(sys.modules); '

@@ -42,11 +42,11 @@ import pytest
 
 from node_harness import needs_scripts  # noqa: E402
 
-from orthoglide_ros import trajectory  # noqa: E402
+from orthoglide_ros.model import trajectory  # noqa: E402
 
 pytest.importorskip('rclpy')
 harness = pytest.importorskip('closed_loop_harness')
-from orthoglide_ros.simulator import MAX_CATCH_UP  # noqa: E402
+from orthoglide_ros.cores.simulator import MAX_CATCH_UP  # noqa: E402
 
 # Measured: see the module docstring and doc/measurements.md (closed loop).
 OPEN_LOOP_BOUND = 0.025    # m, largest position error in the first second

@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from mechanics_reference import (
     CUBE, cube_points, leg_geometry, LEGS, OTHER_ROBOT_VALUES, U1)
 import numpy as np
-from orthoglide_ros.mechanics import elements
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.mechanics import elements
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 ROBOTS = {'paper': Robot(), 'other': Robot(**OTHER_ROBOT_VALUES)}

@@ -3,7 +3,7 @@
 
 Builds the repository into a temporary directory (build, install and log
 there, the source tree untouched) and runs what ``ros2 run orthoglide_ros
-feedforward`` runs: ``install/orthoglide_ros/lib/orthoglide_ros/feedforward``
+feedforward`` runs: ``install/orthoglide_ros/lib/orthoglide_ros/cores/feedforward``
 with the install tree's site-packages first on PYTHONPATH, so the code under
 test is the installed copy.
 """
@@ -16,9 +16,9 @@ import sys
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.params_file import load_robot
-from orthoglide_ros.trajectory import paper_sample
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.formats.params_file import load_robot
+from orthoglide_ros.model.trajectory import paper_sample
 
 from node_harness import (close, header_stamp, node_executable,  # noqa: E402
                           Probe, spin_until, start_node_process,
@@ -69,10 +69,10 @@ def install_env(prefix):
 
 def test_install_layout(install):
     """Executables, config, URDF, package.xml and the ament index are installed."""
-    for relative in ('lib/orthoglide_ros/feedforward',
+    for relative in ('lib/orthoglide_ros/cores/feedforward',
                      'lib/orthoglide_ros/orthoglide',
                      'lib/orthoglide_ros/tracking_controller',
-                     'lib/orthoglide_ros/simulator',
+                     'lib/orthoglide_ros/cores/simulator',
                      'lib/orthoglide_ros/mechanism_state_publisher'):
         path = install / relative
         assert path.is_file() and os.access(path, os.X_OK), relative

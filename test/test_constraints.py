@@ -21,8 +21,8 @@ from hypothesis import given, settings
 from mechanics_reference import (
     cube_points, LEGS, OTHER_ROBOT_VALUES, skew, U2, U3, vectors)
 import numpy as np
-from orthoglide_ros.mechanics import elements, solve
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.mechanics import elements, solve
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 ROBOTS = {'paper': Robot(), 'other': Robot(**OTHER_ROBOT_VALUES)}

@@ -13,7 +13,7 @@ import sys
 
 import pytest
 
-from orthoglide_ros.cli import CSV_COLUMNS
+from orthoglide_ros.tools.cli import CSV_COLUMNS
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 

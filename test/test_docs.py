@@ -46,11 +46,11 @@ FORBIDDEN = ('these machines', 'shared/')
 
 # Node page -> module holding the node's PARAMETERS table.
 NODE_PAGES = {
-    'feedforward.md': 'orthoglide_ros.feedforward',
-    'simulator.md': 'orthoglide_ros.simulator',
-    'tracking_controller.md': 'orthoglide_ros.tracking',
-    'setpoint_publisher.md': 'orthoglide_ros.setpoint_publisher',
-    'mechanism_state_publisher.md': 'orthoglide_ros.mechanism_state',
+    'feedforward.md': 'orthoglide_ros.cores.feedforward',
+    'simulator.md': 'orthoglide_ros.cores.simulator',
+    'tracking_controller.md': 'orthoglide_ros.cores.tracking_controller',
+    'setpoint_publisher.md': 'orthoglide_ros.cores.setpoint_publisher',
+    'mechanism_state_publisher.md': 'orthoglide_ros.cores.mechanism_state_publisher',
 }
 
 

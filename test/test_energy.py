@@ -25,9 +25,9 @@ from mechanics_reference import (
     derivative, FAST_TRAJECTORIES, kinetic_energy, OTHER_ROBOT_VALUES,
     potential_energy)
 import numpy as np
-from orthoglide_ros.mechanics import solve
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.trajectory import (
+from orthoglide_ros.model.mechanics import solve
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.trajectory import (
     PAPER_OMEGA, paper_sample, PAPER_TARGET)
 import pytest
 

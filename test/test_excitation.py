@@ -13,8 +13,8 @@ differences of the positions, not against the formulas.
 
 from mechanics_reference import derivative
 import numpy as np
-from orthoglide_ros import mechanics, trajectory
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 SEEDS = (0, 1, 17, 123456)

@@ -1,5 +1,5 @@
 """
-Tests of the feedforward's ROS-free logic (orthoglide_ros.feedforward).
+Tests of the feedforward's ROS-free logic (orthoglide_ros.cores.feedforward).
 
 Time is driven by hand: every call takes ``now`` (s, monotonic). Every
 output is compared with :func:`mechanics.solve` exactly (``==``), since the
@@ -11,14 +11,14 @@ import math
 
 import pytest
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.feedforward import (Feedforward, INPUTS, MAX_PENDING,
-                                        ORIENTATION_TOLERANCE, PARAMETERS,
-                                        REASONS)
-from orthoglide_ros.inputs import Rejected
-from orthoglide_ros.parameters import ROBOT_SPECS
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.trajectory import paper_sample
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.cores.feedforward import (Feedforward, INPUTS, MAX_PENDING,
+                                              ORIENTATION_TOLERANCE, PARAMETERS,
+                                              REASONS)
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.parameters import ROBOT_SPECS
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.trajectory import paper_sample
 
 default_parameters, settings_from_parameters = (PARAMETERS.defaults,
                                                 PARAMETERS.parse)

@@ -19,11 +19,11 @@ from rclpy.qos import ReliabilityPolicy
 
 from diagnostic_msgs.msg import DiagnosticStatus
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.feedforward import PARAMETERS, REASONS
-from orthoglide_ros.feedforward_node import FeedforwardNode
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.trajectory import paper_sample, paper_times
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.cores.feedforward import PARAMETERS, REASONS
+from orthoglide_ros.ros.feedforward_node import FeedforwardNode
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.trajectory import paper_sample, paper_times
 
 from node_harness import (
     assert_vector, call, close, diagnostic_values, header_stamp, node_graphs,

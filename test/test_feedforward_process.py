@@ -13,9 +13,9 @@ import time
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.params_file import load_robot
-from orthoglide_ros.trajectory import paper_sample, paper_times
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.formats.params_file import load_robot
+from orthoglide_ros.model.trajectory import paper_sample, paper_times
 
 from node_harness import (assert_vector, header_stamp,  # noqa: E402
                           needs_scripts, Probe, spin_until,

@@ -23,9 +23,9 @@ errors of order 10%.
 from mechanics_reference import (
     derivative, FAST_TRAJECTORIES, LEGS, OTHER_ROBOT_VALUES, unskew)
 import numpy as np
-from orthoglide_ros.mechanics import elements
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.trajectory import (
+from orthoglide_ros.model.mechanics import elements
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.trajectory import (
     PAPER_OMEGA, paper_sample, PAPER_TARGET)
 import pytest
 

@@ -35,10 +35,10 @@ from mechanics_reference import (
     cube_points, lagrange_forces, lambda_jacobian, mass_matrix,
     OTHER_ROBOT_VALUES, potential_gradient, vectors)
 import numpy as np
-from orthoglide_ros.mechanics import (
+from orthoglide_ros.model.mechanics import (
     BATCH_CHUNK, forward_dynamics, forward_dynamics_batch, solve,
     WorkspaceError)
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 ROUNDING = 1e-14

@@ -13,9 +13,9 @@ from hypothesis import given, settings
 from mechanics_reference import (
     actuator_displacements, CUBE, cube_points, OTHER_ROBOT_VALUES)
 import numpy as np
-from orthoglide_ros.mechanics import (
+from orthoglide_ros.model.mechanics import (
     forward_kinematics, solve, solve_batch, WorkspaceError)
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 TOLERANCE = 1e-12  # m

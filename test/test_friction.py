@@ -21,8 +21,8 @@ import math
 
 from mechanics_reference import OTHER_ROBOT_VALUES
 import numpy as np
-from orthoglide_ros import mechanics
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 # Unequal per actuator, so that a mix-up of actuators shows.

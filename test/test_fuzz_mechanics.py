@@ -20,10 +20,10 @@ from hypothesis import example, given, HealthCheck, settings, \
     strategies as st
 from mechanics_reference import OTHER_ROBOT_VALUES
 import numpy as np
-from orthoglide_ros import feedforward
-from orthoglide_ros.mechanics import (forward_kinematics, REASONS, Solution,
-                                      solve, solve_batch, WorkspaceError)
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.cores import feedforward
+from orthoglide_ros.model.mechanics import (forward_kinematics, REASONS, Solution,
+                                            solve, solve_batch, WorkspaceError)
+from orthoglide_ros.model.robot import Robot
 
 RELATIVE = 1e-12
 ROBOTS = (Robot(), Robot(**OTHER_ROBOT_VALUES))

@@ -40,9 +40,10 @@ from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
 from trajectory_msgs.msg import (MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
-from orthoglide_ros import cdr, mechanics
-from orthoglide_ros.feedforward import INPUTS, ORIENTATION_TOLERANCE
-from orthoglide_ros.feedforward_node import FeedforwardNode, raw_decoder
+from orthoglide_ros.formats import cdr
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.cores.feedforward import INPUTS, ORIENTATION_TOLERANCE
+from orthoglide_ros.ros.feedforward_node import FeedforwardNode, raw_decoder
 
 from fuzz_strategies import any_float, inside, states
 from node_harness import header_stamp, Probe, spin_until

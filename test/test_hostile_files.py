@@ -15,7 +15,7 @@ import threading
 
 import pytest
 
-from orthoglide_ros import csvfile
+from orthoglide_ros.formats import csvfile
 from test_cli import assert_bad_input, run, write_trajectory
 
 TRAJECTORY = [(0.0, 0.0, 0.0, 0.0), (0.1, 0.01, 0.0, 0.0)]

@@ -42,10 +42,11 @@ from identification_checks import assert_within_issue_tolerances, \
     BASE_TOLERANCE
 from mechanics_reference import OTHER_ROBOT_VALUES
 import numpy as np
-from orthoglide_ros import identification, mechanics, trajectory
-from orthoglide_ros.identification import (
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.tools import identification
+from orthoglide_ros.tools.identification import (
     IdentificationError, Log, LogError, STANDARD)
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 NOMINAL = Robot()
@@ -255,7 +256,7 @@ def closed_loop(model, sample, duration, loop_rate=250.0, plant_rate=500.0,
     force held over the step that led to it (as the simulator publishes
     them; ``lambda`` quantised to 1 um) and the RMS position error (m).
     """
-    from orthoglide_ros.simulation import Plant
+    from orthoglide_ros.model.plant import Plant
     plant = Plant(TRUE)
     kp, kd = gains
     steps = round(plant_rate / loop_rate)

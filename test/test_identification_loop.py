@@ -38,8 +38,9 @@ import pytest
 from identification_checks import assert_within_issue_tolerances
 from node_harness import needs_scripts, start_node_process, stop_process
 
-from orthoglide_ros import identification, params_file
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.formats import params_file
+from orthoglide_ros.tools import identification
+from orthoglide_ros.model.robot import Robot
 
 rclpy = pytest.importorskip('rclpy')
 harness = pytest.importorskip('closed_loop_harness')

@@ -15,13 +15,13 @@ import math
 import numpy as np
 import pytest
 
-from orthoglide_ros import mechanics, trajectory
-from orthoglide_ros.cdr import JointPoints
-from orthoglide_ros.inputs import Rejected
-from orthoglide_ros.joint_plan import JointPlan
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.simulation import Plant
-from orthoglide_ros.tracking import PARAMETERS, Tracking
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.formats.cdr import JointPoints
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.model.joint_plan import JointPlan
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.plant import Plant
+from orthoglide_ros.cores.tracking_controller import PARAMETERS, Tracking
 
 NAMES = ('slider_a', 'slider_b', 'slider_c')
 ZERO = (0.0, 0.0, 0.0)

@@ -16,8 +16,8 @@ import pytest
 
 from hostile_harness import Nodes, Peer
 from node_harness import cartesian_message, needs_scripts
-from orthoglide_ros import mechanics, trajectory
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.model.robot import Robot
 
 pytestmark = [pytest.mark.ros, needs_scripts()]
 

@@ -12,9 +12,9 @@ from mechanics_reference import (
     COMPLEX_STEP, cube_points, lambda_jacobian, leg_geometry, LEGS,
     OTHER_ROBOT_VALUES, vectors)
 import numpy as np
-from orthoglide_ros.mechanics import (
+from orthoglide_ros.model.mechanics import (
     leg_joints, platform_velocity, WorkspaceError)
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 ROBOTS = {'paper': Robot(), 'other': Robot(**OTHER_ROBOT_VALUES)}

@@ -22,8 +22,8 @@ from mechanics_reference import (
     cube_points, lagrange_forces, lambda_jacobian, mass_matrix,
     OTHER_ROBOT_VALUES, potential_gradient, vectors)
 import numpy as np
-from orthoglide_ros.mechanics import elements, solve, solve_batch
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.mechanics import elements, solve, solve_batch
+from orthoglide_ros.model.robot import Robot
 
 DM_RELATIVE = 1e-8
 ROUNDING = 1e-12

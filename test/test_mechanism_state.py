@@ -9,12 +9,12 @@ reason, the status ladder) are driven by hand, time included.
 
 from mechanics_reference import COMPLEX_STEP, leg_geometry
 import numpy as np
-from orthoglide_ros import mechanics, trajectory
-from orthoglide_ros.inputs import Rejected
-from orthoglide_ros.mechanism_state import (
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.mechanism_state_publisher import (
     joint_state, MechanismState, PARAMETERS, REASONS)
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.status import ERROR, OK, WARN
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.cores.status import ERROR, OK, WARN
 import pytest
 
 NAMES = ('slider_a', 'slider_b', 'slider_c')

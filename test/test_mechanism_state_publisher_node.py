@@ -18,10 +18,10 @@ import random
 
 from mechanics_reference import COMPLEX_STEP, leg_geometry, LEGS
 import numpy as np
-from orthoglide_ros import mechanics, trajectory
-from orthoglide_ros.mechanism_state_publisher_node import \
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.ros.mechanism_state_publisher_node import \
     MechanismStatePublisherNode
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.robot import Robot
 import pytest
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node

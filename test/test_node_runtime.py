@@ -17,7 +17,7 @@ from rclpy.node import Node
 from std_msgs.msg import Float64
 
 from node_harness import spin_until
-from orthoglide_ros.node_runtime import default_qos, InputNode
+from orthoglide_ros.ros.node_runtime import default_qos, InputNode
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 

@@ -12,9 +12,9 @@ acceleration, ``rddot_G(0) = r* (pi/3)^2``.
 import math
 
 import numpy as np
-from orthoglide_ros.mechanics import solve, solve_batch
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.trajectory import (
+from orthoglide_ros.model.mechanics import solve, solve_batch
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.trajectory import (
     paper_batch, paper_sample, paper_times)
 import pytest
 

@@ -56,9 +56,9 @@ from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import (MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.params_file import load_robot
-from orthoglide_ros.trajectory import paper_sample
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.formats.params_file import load_robot
+from orthoglide_ros.model.trajectory import paper_sample
 
 from node_harness import (close, needs_scripts, PROBE_QOS,  # noqa: E402
                           start_node_process, stop_process)

@@ -13,10 +13,10 @@ import math
 import os
 import textwrap
 
-from orthoglide_ros.parameters import robot_from_parameters
-from orthoglide_ros.params_file import (
+from orthoglide_ros.cores.parameters import robot_from_parameters
+from orthoglide_ros.formats.params_file import (
     load_parameters, load_robot, ParametersFileError)
-from orthoglide_ros.robot import Robot, RobotParameterError
+from orthoglide_ros.model.robot import Robot, RobotParameterError
 import pytest
 
 CONFIG = os.path.join(os.path.dirname(__file__), os.pardir, 'config',
@@ -175,11 +175,11 @@ def test_shipped_config_sections_hold_the_defaults(node):
     simulator's robot is absent from its section (the paper's by default).
     """
     if node == 'simulator':
-        from orthoglide_ros.simulator import PARAMETERS
+        from orthoglide_ros.cores.simulator import PARAMETERS
     elif node == 'mechanism_state_publisher':
-        from orthoglide_ros.mechanism_state import PARAMETERS
+        from orthoglide_ros.cores.mechanism_state_publisher import PARAMETERS
     else:
-        from orthoglide_ros.tracking import PARAMETERS
+        from orthoglide_ros.cores.tracking_controller import PARAMETERS
     specs, parse = PARAMETERS.specs, PARAMETERS.parse
     values = load_parameters(CONFIG, node)
     assert values and set(values) <= {s.name for s in specs}

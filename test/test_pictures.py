@@ -10,9 +10,10 @@ are ``mechanics.elements``' (checked on the scene's lines).
 import struct
 
 import numpy as np
-from orthoglide_ros import cli, drawing, mechanics
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.urdf import urdf
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.tools import cli, drawing
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.urdf import urdf
 import pytest
 from urdf_harness import COMMITTED_URDF
 

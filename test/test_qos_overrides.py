@@ -16,8 +16,8 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-from orthoglide_ros.feedforward_node import FeedforwardNode
-from orthoglide_ros.setpoint_publisher_node import SetpointPublisher
+from orthoglide_ros.ros.feedforward_node import FeedforwardNode
+from orthoglide_ros.ros.setpoint_publisher_node import SetpointPublisher
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 

@@ -18,7 +18,7 @@ import pytest
 
 from node_harness import needs_scripts, node_executable, start_node_process, stop_process
 
-from orthoglide_ros import identification
+from orthoglide_ros.tools import identification
 
 rclpy = pytest.importorskip('rclpy')
 from rclpy.duration import Duration  # noqa: E402

@@ -14,7 +14,7 @@ import dataclasses
 import math
 
 import numpy as np
-from orthoglide_ros.robot import Robot, RobotParameterError
+from orthoglide_ros.model.robot import Robot, RobotParameterError
 import pytest
 
 POSITIVE = ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm4', 'm5',

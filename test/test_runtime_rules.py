@@ -10,10 +10,10 @@ The rules of the node runtime that need no DDS.
 
 import pytest
 
-from orthoglide_ros import feedforward, simulator
-from orthoglide_ros.inputs import Rejected
+from orthoglide_ros.cores import feedforward, simulator
+from orthoglide_ros.cores.inputs import Rejected
 
-node_runtime = pytest.importorskip('orthoglide_ros.node_runtime')
+node_runtime = pytest.importorskip('orthoglide_ros.ros.node_runtime')
 from rcl_interfaces.msg import Parameter, ParameterValue  # noqa: E402
 from rcl_interfaces.srv import (GetParameters,  # noqa: E402
                                 SetParameters, SetParametersAtomically)

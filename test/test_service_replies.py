@@ -3,12 +3,12 @@ The rule that decides when a service reply goes to rmw (no ROS needed).
 
 Each case is a sequence of graph polls, as ``node_runtime`` makes them while
 a reply waits, and the decision expected from the rule of
-``orthoglide_ros.service_replies``.
+``orthoglide_ros.ros.service_replies``.
 """
 
-from orthoglide_ros.service_replies import (DROP, REPLY_DISCOVERY,
-                                            REPLY_MATCH, REPLY_WAIT,
-                                            ReplyRoutes, SEND, WAIT)
+from orthoglide_ros.ros.service_replies import (DROP, REPLY_DISCOVERY,
+                                                REPLY_MATCH, REPLY_WAIT,
+                                                ReplyRoutes, SEND, WAIT)
 
 
 def gid(client, entity):

@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from orthoglide_ros import trajectory
+from orthoglide_ros.model import trajectory
 
 rclpy = pytest.importorskip('rclpy')
 
@@ -25,7 +25,7 @@ from rclpy.qos import (HistoryPolicy, QoSProfile,  # noqa: E402
                        ReliabilityPolicy)
 from trajectory_msgs.msg import MultiDOFJointTrajectory  # noqa: E402
 
-from orthoglide_ros.setpoint_publisher_node import (  # noqa: E402
+from orthoglide_ros.ros.setpoint_publisher_node import (  # noqa: E402
     SetpointPublisher)
 from node_harness import (start_node_process, stop_process,  # noqa: E402
                           wait_exit)

@@ -11,8 +11,8 @@ pieces: the issue-13 defect was a 343.7 mm jump back to home.
 import numpy as np
 import pytest
 
-from orthoglide_ros import trajectory
-from orthoglide_ros.setpoint_publisher import PARAMETERS, Stream
+from orthoglide_ros.model import trajectory
+from orthoglide_ros.cores.setpoint_publisher import PARAMETERS, Stream
 
 
 def stream(**changes):

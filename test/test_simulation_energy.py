@@ -69,11 +69,11 @@ from mechanics_reference import (
     actuator_displacements, CUBE, FAST_TRAJECTORIES, kinetic_energy,
     OTHER_ROBOT_VALUES, potential_energy)
 import numpy as np
-from orthoglide_ros import mechanics
-from orthoglide_ros.mechanics import WorkspaceError
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.simulation import Plant, PlantStep, rk4_step
-from orthoglide_ros.trajectory import paper_sample, PAPER_OMEGA, \
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.mechanics import WorkspaceError
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.plant import Plant, PlantStep, rk4_step
+from orthoglide_ros.model.trajectory import paper_sample, PAPER_OMEGA, \
     PAPER_TARGET
 import pytest
 

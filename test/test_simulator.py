@@ -1,8 +1,8 @@
 """
-Tests of the simulator's ROS-free logic (orthoglide_ros.simulator).
+Tests of the simulator's ROS-free logic (orthoglide_ros.cores.simulator).
 
 Time is driven by hand: every call takes ``now`` (s, monotonic). Each step
-is compared with :func:`simulation.rk4_step` on the same state exactly
+is compared with :func:`plant.rk4_step` on the same state exactly
 (``==``): the core must hand the plant's numbers over untouched.
 """
 
@@ -11,12 +11,13 @@ import math
 
 import pytest
 
-from orthoglide_ros import mechanics, simulator
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.inputs import Rejected
-from orthoglide_ros.parameters import ROBOT_SPECS
-from orthoglide_ros.simulation import rk4_step
-from orthoglide_ros.simulator import (
+from orthoglide_ros.cores import simulator
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.parameters import ROBOT_SPECS
+from orthoglide_ros.model.plant import rk4_step
+from orthoglide_ros.cores.simulator import (
     COMMAND_REASONS, HELD, PARAMETERS, RUNNING, Simulator, STOPPED)
 
 SIMULATOR_SPECS = PARAMETERS.specs
@@ -330,7 +331,7 @@ def test_holding_force_at_home_stays_at_home():
 
 
 def test_module_examples():
-    """The docstring examples of orthoglide_ros.simulator hold."""
+    """The docstring examples of orthoglide_ros.cores.simulator hold."""
     failures, tried = doctest.testmod(simulator)
     assert tried > 0 and failures == 0
 

@@ -6,7 +6,7 @@ rclpy context and the EventsExecutor the node runs on; messages still go
 through Fast DDS. The step timer runs in real time (1 kHz by default), so
 the tests compare by step count: the ``steps`` value of the diagnostics
 says how many steps were integrated, and the same number of
-:meth:`simulation.Plant.step` calls must give the same floats.
+:meth:`plant.Plant.step` calls must give the same floats.
 
 As a process, the console script ``simulator`` is started as a user runs
 it and stopped with SIGINT, as Ctrl-C does.
@@ -27,11 +27,11 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.simulation import Plant
-from orthoglide_ros.simulator import MAX_CATCH_UP
-from orthoglide_ros.simulator_node import SimulatorNode
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.plant import Plant
+from orthoglide_ros.cores.simulator import MAX_CATCH_UP
+from orthoglide_ros.ros.simulator_node import SimulatorNode
 
 from node_harness import (
     assert_clean_exit, header_stamp, needs_scripts, node_executable, node_graphs, PROBE_QOS,

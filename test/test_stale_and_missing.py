@@ -24,10 +24,10 @@ from rclpy.parameter import Parameter
 
 from diagnostic_msgs.msg import DiagnosticStatus
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.feedforward_node import FeedforwardNode
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.trajectory import paper_sample
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.ros.feedforward_node import FeedforwardNode
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.trajectory import paper_sample
 
 from node_harness import (diagnostic_values, header_stamp,
                           Probe, spin_for, spin_until, stamp_of)

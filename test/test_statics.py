@@ -38,8 +38,8 @@ and, at rest at home, ``f = M_dyn rddot_G - M_static g``.
 
 from mechanics_reference import mass_matrix
 import numpy as np
-from orthoglide_ros.mechanics import solve, solve_batch
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.mechanics import solve, solve_batch
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 HOME = (0.0, 0.0, 0.0)

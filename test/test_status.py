@@ -13,10 +13,15 @@ import math
 
 import pytest
 
-from orthoglide_ros import feedforward, simulator, status, tracking
-from orthoglide_ros.inputs import Rejected
-from orthoglide_ros.status import ERROR, OK, WARN
-from orthoglide_ros.trajectory import paper_sample
+from orthoglide_ros.cores import (
+    feedforward,
+    simulator,
+    status,
+    tracking_controller,
+)
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.status import ERROR, OK, WARN
+from orthoglide_ros.model.trajectory import paper_sample
 
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
 NAMES = ['slider_a', 'slider_b', 'slider_c']
@@ -151,9 +156,9 @@ def test_simulator_rejected_commands_warn_for_one_period():
 
 # Tracking controller ---------------------------------------------------------
 def tracking_core(**changes):
-    values_ = tracking.PARAMETERS.defaults()
+    values_ = tracking_controller.PARAMETERS.defaults()
     values_.update(changes)
-    return tracking.Tracking(tracking.PARAMETERS.parse(values_), now=0.0)
+    return tracking_controller.Tracking(tracking_controller.PARAMETERS.parse(values_), now=0.0)
 
 
 def test_tracking_waits_then_ok():

@@ -1,5 +1,5 @@
 """
-Tests of the tracking controller's ROS-free logic (orthoglide_ros.tracking).
+Tests of the tracking controller's ROS-free logic (orthoglide_ros.cores.tracking_controller).
 
 Time is driven by hand: every call takes ``now`` (s, monotonic). The law is
 checked against an independent computation (math.fsum of the three terms,
@@ -12,10 +12,10 @@ from hypothesis import given, settings as hypothesis_settings, strategies as st
 import numpy as np
 import pytest
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.inputs import Rejected
-from orthoglide_ros.tracking import (
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.tracking_controller import (
     Command, control_law, FORCE_LIMIT_MAX, INPUTS, JointValues, PARAMETERS,
     read_joint_state, REASONS, SKIPS, Tracking)
 

@@ -24,8 +24,8 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from orthoglide_ros.tracking import INPUTS, PARAMETERS, REASONS
-from orthoglide_ros.tracking_controller_node import TrackingControllerNode
+from orthoglide_ros.cores.tracking_controller import INPUTS, PARAMETERS, REASONS
+from orthoglide_ros.ros.tracking_controller_node import TrackingControllerNode
 
 from node_harness import (
     assert_clean_exit, call, diagnostic_values, needs_scripts, node_executable, node_graphs,

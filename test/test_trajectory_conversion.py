@@ -12,11 +12,11 @@ import math
 import numpy as np
 import pytest
 
-from orthoglide_ros import mechanics, trajectory
-from orthoglide_ros.cdr import Waypoints
-from orthoglide_ros.feedforward import (convert_trajectory, Feedforward,
-                                        PARAMETERS, TRAJECTORY_REASONS)
-from orthoglide_ros.inputs import Rejected
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.formats.cdr import Waypoints
+from orthoglide_ros.cores.feedforward import (convert_trajectory, Feedforward,
+                                              PARAMETERS, TRAJECTORY_REASONS)
+from orthoglide_ros.cores.inputs import Rejected
 
 
 def settings(**changes):

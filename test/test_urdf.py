@@ -1,12 +1,12 @@
 """
-The URDF (orthoglide_ros.urdf) read by an independent library, yourdfpy.
+The URDF (orthoglide_ros.model.urdf) read by an independent library, yourdfpy.
 
 - The committed ``urdf/orthoglide.urdf`` is what ``orthoglide urdf`` writes
   for the paper's robot (so it cannot drift).
 - Names and tree: the links and joints the issue fixes, a cut tree.
 - Masses, centres and inertias equal doc/model.md's bodies table, written
   out here; the total mass is the model's.
-- Kinematics: with the joint state of ``mechanism_state.joint_state``, on
+- Kinematics: with the joint state of ``mechanism_state_publisher.joint_state``, on
   random reachable configurations and on the paper's trajectory, yourdfpy's
   forward kinematics puts ``platform`` at G (``mechanics.forward_kinematics``
   of the sliders) with frame 0's orientation, each ``x_leg_end`` on its
@@ -22,11 +22,11 @@ import math
 from mechanics_reference import (
     CUBE, leg_geometry, LEGS, OTHER_ROBOT_VALUES)
 import numpy as np
-from orthoglide_ros import mechanics, trajectory
-from orthoglide_ros.mechanism_state import joint_state
-from orthoglide_ros.parameters import JOINT_NAMES
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.urdf import joint_limits, link_name, moving_joints, \
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.cores.mechanism_state_publisher import joint_state
+from orthoglide_ros.cores.parameters import JOINT_NAMES
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.urdf import joint_limits, link_name, moving_joints, \
     rpy, urdf
 import pytest
 from urdf_harness import COMMITTED_URDF, cut_errors, load, TOLERANCE

@@ -18,9 +18,9 @@ trajectory (gravity) and on a fast one without gravity (inertia alone).
 from mechanics_reference import (
     COMPLEX_STEP, FAST_TRAJECTORIES, lambda_jacobian, leg_geometry)
 import numpy as np
-from orthoglide_ros import mechanics, trajectory
-from orthoglide_ros.robot import Robot
-from orthoglide_ros.urdf import moving_joints
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.urdf import moving_joints
 import pytest
 from urdf_harness import COMMITTED_URDF
 

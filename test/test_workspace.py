@@ -17,10 +17,10 @@ import itertools
 import math
 
 import numpy as np
-from orthoglide_ros.mechanics import (
+from orthoglide_ros.model.mechanics import (
     DEFAULT_SINGULARITY_MARGIN, elements, REASONS, solve, solve_batch,
     workspace_status, WorkspaceError)
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model.robot import Robot
 import pytest
 
 L3 = Robot().l3

@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.robot import Robot
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.robot import Robot
 
 # Eq. (6): r_G(t) = r* (1 - cos(pi t / 3)), over 2 s from rest at home.
 PAPER_TARGET = (0.05, 0.10, -0.20)

@@ -29,8 +29,8 @@ import time
 
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from orthoglide_ros import console
-from orthoglide_ros.node_runtime import InputNode, run
+from orthoglide_ros.ros import console
+from orthoglide_ros.ros.node_runtime import InputNode, run
 
 # Largest message recorded (bytes): a longer one is refused before it is
 # read, counted and warned about (an oversize input of any node).

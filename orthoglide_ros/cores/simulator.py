@@ -1,8 +1,8 @@
 """
 The simulator's logic without ROS: actuator forces in, measured state out.
 
-:class:`Simulator` wraps a :class:`simulation.Plant` (RK4 with the command
-held over each step, a zero-order hold: see :mod:`orthoglide_ros.simulation`)
+:class:`Simulator` wraps a :class:`plant.Plant` (RK4 with the command
+held over each step, a zero-order hold: see :mod:`orthoglide_ros.model.plant`)
 in the state machine of the ``simulator`` node, and keeps the counters its
 status reports. Its parameters are one table, :data:`PARAMETERS`. The ROS
 node (``simulator_node``) only converts messages and runs the timer, so
@@ -58,14 +58,14 @@ from collections import namedtuple
 import math
 import time
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.inputs import Rejected
-from orthoglide_ros.mechanics import DEFAULT_SINGULARITY_MARGIN, \
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, \
     format_vector, ZERO
-from orthoglide_ros.parameters import joint_names_spec, ParameterError, \
+from orthoglide_ros.cores.parameters import joint_names_spec, ParameterError, \
     Spec, Table, triple
-from orthoglide_ros.simulation import Plant
-from orthoglide_ros.status import ERROR, first, OK, Period, Status, WARN
+from orthoglide_ros.model.plant import Plant
+from orthoglide_ros.cores.status import ERROR, first, OK, Period, Status, WARN
 
 HELD, RUNNING, STOPPED = 'held', 'running', 'stopped'
 # Why a command was rejected: the keys of Simulator.rejected.
@@ -153,7 +153,7 @@ class Simulator:
     :meth:`command` takes a command, :meth:`tick` makes one step (or none)
     and returns what to publish, :meth:`reset` starts over; every method
     that needs the time takes ``now``, a monotonic time in seconds, so
-    tests drive time. ``plant`` is the :class:`simulation.Plant`; ``state``
+    tests drive time. ``plant`` is the :class:`plant.Plant`; ``state``
     one of ``held``, ``running``, ``stopped``; ``timed_out`` says that the
     last ``running`` ended by the command timeout; ``stop_reason`` and
     ``stop_message`` why the simulation stopped.

@@ -38,8 +38,8 @@ Units: m, m/s, m/s^2, N, s; vectors in the base frame 0.
 from collections import namedtuple
 import math
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.mechanics import (
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.mechanics import (
     DEFAULT_SINGULARITY_MARGIN, WorkspaceError, ZERO)
 
 PlantStep = namedtuple('PlantStep', ('acceleration', 'force', 'clipped'))
@@ -69,7 +69,7 @@ def rk4_step(robot, position, velocity, force, dt,
     past a singularity), and a non-finite end state raises it with the
     reason ``overflow``. ``dt`` must be finite and positive (ValueError).
 
-    >>> from orthoglide_ros.robot import Robot
+    >>> from orthoglide_ros.model.robot import Robot
     >>> robot = Robot(gravity=(0.0, 0.0, 0.0))
     >>> rk4_step(robot, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0),
     ...          1e-3)
@@ -121,7 +121,7 @@ class Plant:
     respects. The initial state is checked like any step's end
     (:class:`mechanics.WorkspaceError`).
 
-    >>> from orthoglide_ros.robot import Robot
+    >>> from orthoglide_ros.model.robot import Robot
     >>> plant = Plant(Robot(), force_limit=200.0)
     >>> plant.step((0.0, 0.0, 300.0), 1e-3).clipped
     (False, False, True)

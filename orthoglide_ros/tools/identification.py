@@ -46,10 +46,11 @@ import os
 
 import numpy as np
 
-from orthoglide_ros import cdr, mechanics
-from orthoglide_ros.csvfile import CsvError, read_columns
-from orthoglide_ros.parameters import JOINT_NAMES
-from orthoglide_ros.robot import DESCRIPTIONS, LIMITS
+from orthoglide_ros.formats import cdr
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.formats.csvfile import CsvError, read_columns
+from orthoglide_ros.cores.parameters import JOINT_NAMES
+from orthoglide_ros.model.robot import DESCRIPTIONS, LIMITS
 
 MASSES = ('m1', 'm2', 'm3', 'm4', 'm5', 'm6')
 FRICTIONS = ('viscous', 'coulomb')

@@ -13,7 +13,7 @@ for the bodies they describe.
 from dataclasses import dataclass, field, fields
 import math
 
-from orthoglide_ros.kernel import kernel_constants
+from orthoglide_ros.model.kernel import kernel_constants
 
 # The paper's example robot (section 2): lengths in m, masses in kg.
 PAPER_VALUES = {
@@ -21,6 +21,9 @@ PAPER_VALUES = {
     'm1': 0.35, 'm2': 0.2, 'm3': 2.5, 'm5': 15.0,
 }
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+# The prismatic joints of actuators A, B, C: the default joint_names of
+# every node, of the URDF and of the logs.
+JOINT_NAMES = ('slider_a', 'slider_b', 'slider_c')
 # Friction on the sliders (not in the paper, which neglects it): none by
 # default, so that the paper's figures stand. The smoothing speed of the
 # Coulomb term: tanh(1) = 76 % of the Coulomb force at 1 mm/s.

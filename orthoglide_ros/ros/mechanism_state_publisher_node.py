@@ -1,8 +1,8 @@
 """
 The ``mechanism_state_publisher`` ROS 2 node: three sliders in, every joint out.
 
-A thin layer over :class:`orthoglide_ros.mechanism_state.MechanismState`:
-it declares the parameters of :data:`orthoglide_ros.mechanism_state.PARAMETERS`,
+A thin layer over :class:`orthoglide_ros.cores.mechanism_state_publisher.MechanismState`:
+it declares the parameters of :data:`orthoglide_ros.cores.mechanism_state_publisher.PARAMETERS`,
 hands each ``joint_states`` message's arrays to the core, publishes every
 non-fixed joint of the Orthoglide's URDF on ``mechanism/joint_states`` with
 the input's stamp, logs throttled warnings and publishes the core's status
@@ -19,10 +19,10 @@ from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from sensor_msgs.msg import JointState
 
-from orthoglide_ros import cdr
-from orthoglide_ros.inputs import Rejected
-from orthoglide_ros.mechanism_state import MechanismState, PARAMETERS
-from orthoglide_ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.formats import cdr
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.mechanism_state_publisher import MechanismState, PARAMETERS
+from orthoglide_ros.ros.node_runtime import default_qos, InputNode, run
 
 
 class MechanismStatePublisherNode(InputNode):

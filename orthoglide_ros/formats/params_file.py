@@ -26,7 +26,7 @@ import re
 
 import yaml
 
-from orthoglide_ros.parameters import robot_from_parameters
+from orthoglide_ros.cores.parameters import robot_from_parameters
 
 NODE_NAME = 'feedforward'     # the node whose robot the tools read
 # A parameters file is small: config/orthoglide.yaml takes 4 kB.
@@ -122,7 +122,7 @@ def load_robot(path):
     Return the :class:`Robot` of the ``robot.*`` keys in the file ``path``.
 
     Read with :func:`load_parameters` and validated by the one parameter
-    mechanism (:func:`orthoglide_ros.parameters.robot_from_parameters`).
+    mechanism (:func:`orthoglide_ros.cores.parameters.robot_from_parameters`).
     """
     return robot_from_parameters(load_parameters(path))
 
@@ -148,7 +148,7 @@ def robot_file_text(robot, comments=(), node=NODE_NAME):
     explicit. ``comments``: lines put first, each after ``# ``.
     :func:`load_robot` reads the file back to an equal robot.
 
-    >>> from orthoglide_ros.robot import Robot
+    >>> from orthoglide_ros.model.robot import Robot
     >>> print(robot_file_text(Robot(m5=18.0)).splitlines()[12])
           m5: 18.0
     """

@@ -1,7 +1,7 @@
 """
 The mechanism state publisher's logic without ROS: sliders in, every joint out.
 
-The URDF of the Orthoglide (:mod:`orthoglide_ros.urdf`) is a cut tree: the
+The URDF of the Orthoglide (:mod:`orthoglide_ros.model.urdf`) is a cut tree: the
 three slider positions alone do not tell ``robot_state_publisher`` where the
 bars are. :func:`joint_state` solves every non-fixed joint of the URDF from
 the sliders in closed form: the platform centre G by the forward kinematics
@@ -35,12 +35,12 @@ Rules (``doc/mechanism_state_publisher.md`` states them for users):
 from collections import namedtuple
 import math
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.inputs import read_joint_state, Rejected
-from orthoglide_ros.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
-from orthoglide_ros.parameters import joint_names_spec, Spec, Table
-from orthoglide_ros.status import first, OK, Period, Status, WARN
-from orthoglide_ros.urdf import moving_joints, RATES
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.cores.inputs import read_joint_state, Rejected
+from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
+from orthoglide_ros.cores.parameters import joint_names_spec, Spec, Table
+from orthoglide_ros.cores.status import first, OK, Period, Status, WARN
+from orthoglide_ros.model.urdf import moving_joints, RATES
 
 REASONS = ('missing_joint', 'malformed', 'missing_position', 'non_finite',
            'unreachable', 'singular', 'overflow', 'oversize')
@@ -75,7 +75,7 @@ def joint_state(robot, joint_names, lam, lambdadot=None,
     :class:`mechanics.WorkspaceError` (``non_finite``, ``unreachable``,
     ``singular``, ``overflow``) where there is no such state.
 
-    >>> from orthoglide_ros.robot import Robot
+    >>> from orthoglide_ros.model.robot import Robot
     >>> state = joint_state(Robot(), ('a', 'b', 'c'), (0.0, 0.0, 0.0))
     >>> state.names[3:6], state.position[3:6]
     (('a_phi21', 'a_phi32', 'a_phi62'), (0.0, 0.0, 0.0))

@@ -22,7 +22,7 @@ accelerations, and its linear effort:
 - after the last point: the last point's position, velocity zero, its
   effort, held until something else comes.
 
-No ROS: the tracking controller (``tracking.py``) samples it at its loop
+No ROS: the tracking controller (``cores/tracking_controller.py``) samples it at its loop
 rate; tests drive it with plain numbers.
 
 >>> plan = JointPlan(10.0, [1.0, 2.0], [[0.0] * 3, [1.0] * 3],

@@ -78,12 +78,12 @@ import math
 
 import numpy as np
 
-from orthoglide_ros.inputs import (JointValues, read_joint_state,
-                                   read_joint_trajectory, Rejected)
-from orthoglide_ros.joint_plan import JointPlan
-from orthoglide_ros.parameters import joint_names_spec, \
+from orthoglide_ros.cores.inputs import (JointValues, read_joint_state,
+                                         read_joint_trajectory, Rejected)
+from orthoglide_ros.model.joint_plan import JointPlan
+from orthoglide_ros.cores.parameters import joint_names_spec, \
     nonnegative_triple, Spec, Table
-from orthoglide_ros.status import ERROR, first, OK, Period, Status, WARN
+from orthoglide_ros.cores.status import ERROR, first, OK, Period, Status, WARN
 
 FORCE_LIMIT_MAX = 1.0e6     # N: the largest force_limit accepted
 INPUTS = ('desired', 'measured', 'trajectory')
@@ -267,7 +267,7 @@ class Tracking:
         """
         Take a joint trajectory; it replaces any other, from its own start.
 
-        ``points``: :class:`orthoglide_ros.cdr.JointPoints`; ``clock``: the
+        ``points``: :class:`orthoglide_ros.formats.cdr.JointPoints`; ``clock``: the
         node clock now (s), the start when the header stamp is zero (else
         the stamp). Refused (counted, raised) by
         :func:`read_joint_trajectory` and the bounds of :func:`_bounded`,

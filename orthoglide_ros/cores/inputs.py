@@ -148,7 +148,7 @@ def read_joint_trajectory(joint_names, points, need_effort):
     """
     Pick ``joint_names``' columns out of a JointTrajectory's points.
 
-    ``points``: :class:`orthoglide_ros.cdr.JointPoints` (names, lengths,
+    ``points``: :class:`orthoglide_ros.formats.cdr.JointPoints` (names, lengths,
     positions, velocities, accelerations, efforts, time). Returns ``(times
     (N,) s, positions, velocities, efforts)``, (N, 3) arrays in
     ``joint_names`` order (efforts zero unless ``need_effort``). Raises

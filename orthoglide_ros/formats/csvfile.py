@@ -3,7 +3,7 @@ Read columns of numbers from a CSV file by their header names, without ROS.
 
 The one reader of the package's CSV inputs: the trajectories of
 ``orthoglide batch`` and the logs of ``orthoglide identify``
-(:func:`orthoglide_ros.identification.read_csv`). Rules:
+(:func:`orthoglide_ros.tools.identification.read_csv`). Rules:
 
 - columns are matched by header name, case-insensitively after trimming
   spaces, in any order; other columns are ignored; a known column may not

@@ -14,7 +14,7 @@ Subcommands (``orthoglide SUBCOMMAND --help`` for details):
   report on standard output (and ``--report``, a PNG).
 - ``record``: joint states into a rosbag2 bag (MCAP or sqlite3); the one
   subcommand that needs ROS (rclpy).
-- ``urdf``: the robot's URDF (a cut tree, see :mod:`orthoglide_ros.urdf`).
+- ``urdf``: the robot's URDF (a cut tree, see :mod:`orthoglide_ros.model.urdf`).
 - ``draw``: a picture of the robot at one platform position (PNG).
 - ``animate``: the robot moving along a trajectory, with its actuator
   forces (GIF).
@@ -37,14 +37,15 @@ import tempfile
 
 import numpy as np
 
-from orthoglide_ros import identification, mechanics, params_file, \
-    trajectory
-from orthoglide_ros.csvfile import CsvError, read_columns
-from orthoglide_ros.identification import DEFAULT_CUTOFF
-from orthoglide_ros.parameters import JOINT_NAMES, joint_names
-from orthoglide_ros.params_file import (load_parameters, load_robot,
-                                        ParametersFileError)
-from orthoglide_ros.robot import Robot, RobotParameterError
+from orthoglide_ros.formats import params_file
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.tools import identification
+from orthoglide_ros.formats.csvfile import CsvError, read_columns
+from orthoglide_ros.tools.identification import DEFAULT_CUTOFF
+from orthoglide_ros.cores.parameters import JOINT_NAMES, joint_names
+from orthoglide_ros.formats.params_file import (load_parameters, load_robot,
+                                                ParametersFileError)
+from orthoglide_ros.model.robot import Robot, RobotParameterError
 
 PROG = 'orthoglide'
 LEGS = ('a', 'b', 'c')
@@ -463,10 +464,10 @@ def run_record(robot, args):
     repeated = sorted({name for name in full if full.count(name) > 1})
     if repeated:
         raise CliError(f'--topic {repeated[0]} given more than once')
-    from orthoglide_ros import console
+    from orthoglide_ros.ros import console
     console.install_signal_handlers()
     try:
-        from orthoglide_ros import recorder_node
+        from orthoglide_ros.ros import recorder_node
     except ImportError as error:
         raise CliError(f'record needs ROS 2 (rclpy): {error}') from None
     return recorder_node.main(args.output, topics, args.storage,
@@ -477,7 +478,7 @@ def run_record(robot, args):
 
 def run_urdf(robot, args):
     """Write the robot's URDF (standard output or ``--output``)."""
-    from orthoglide_ros import urdf
+    from orthoglide_ros.model import urdf
     try:
         names = joint_names(args.joint_names)
     except ValueError as error:
@@ -535,7 +536,7 @@ def run_animate(robot, args):
 
 def _drawing():
     try:
-        from orthoglide_ros import drawing
+        from orthoglide_ros.tools import drawing
         import matplotlib  # noqa: F401
     except ImportError:
         raise CliError('drawing needs matplotlib (pip install matplotlib)',

@@ -32,8 +32,8 @@ True
 (True, True)
 """
 
-from orthoglide_ros import trajectory
-from orthoglide_ros.parameters import ParameterError, Spec, Table, triple
+from orthoglide_ros.model import trajectory
+from orthoglide_ros.cores.parameters import ParameterError, Spec, Table, triple
 
 INPUTS = ('trajectory', 'topics')
 MOTIONS = ('paper', 'excitation')

@@ -6,13 +6,13 @@ The ROS glue shared by the package's nodes: threads, parameters, main loop.
   simulator's steps, ``/diagnostics``) runs on threads of its own too, and
   whose executor serves only the services (parameters, ``~/reset``);
 - :func:`declare_specs` and :func:`spec_values`: ROS parameters declared
-  from a node's :class:`orthoglide_ros.parameters.Table` and read back as
+  from a node's :class:`orthoglide_ros.cores.parameters.Table` and read back as
   plain Python values; :meth:`InputNode.declare_settings` and
   :meth:`InputNode.apply_changes_with`: run-time changes validated as a
   whole set and applied at once;
 - :func:`default_qos`: the reliable keep-last 10 profile of every topic;
 - :meth:`InputNode.publish_status`: a core's
-  :class:`orthoglide_ros.status.Status` on ``/diagnostics`` once a second;
+  :class:`orthoglide_ros.cores.status.Status` on ``/diagnostics`` once a second;
 - :func:`clip`: the one place that shortens text taken from messages
   before it reaches a log line or a reply;
 - :func:`run`: ``main()`` of a node: start-up errors, signals, spinning;
@@ -68,11 +68,11 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange,
                                 SetParametersResult)
 from rcl_interfaces.srv import SetParameters, SetParametersAtomically
 
-from orthoglide_ros.console import install_signal_handlers
-from orthoglide_ros.inputs import Rejected, SMALL_MESSAGE_BYTES
-from orthoglide_ros.parameters import ParameterError
-from orthoglide_ros.service_replies import (DROP, REPLY_POLL, REPLY_TIMED_OUT,
-                                            ReplyRoutes, SEND)
+from orthoglide_ros.ros.console import install_signal_handlers
+from orthoglide_ros.cores.inputs import Rejected, SMALL_MESSAGE_BYTES
+from orthoglide_ros.cores.parameters import ParameterError
+from orthoglide_ros.ros.service_replies import (DROP, REPLY_POLL, REPLY_TIMED_OUT,
+                                                ReplyRoutes, SEND)
 
 # Reliable, keep-last 10 on every input and output; users override it with
 # the standard qos_overrides.<topic>.<publisher|subscription>.* parameters.
@@ -356,7 +356,7 @@ class InputNode(Node):
         """
         Declare the parameters of ``table``; return its parsed settings.
 
-        ``table``: the node's :class:`orthoglide_ros.parameters.Table`. An
+        ``table``: the node's :class:`orthoglide_ros.cores.parameters.Table`. An
         invalid start-up set raises ValueError naming the parameter
         (:func:`run` exits 2).
         """
@@ -527,7 +527,7 @@ class InputNode(Node):
         answered with the default response.
 
         The reply waits, without the GIL, polling the graph, until
-        :class:`~orthoglide_ros.service_replies.ReplyRoutes` (the rule)
+        :class:`~orthoglide_ros.ros.service_replies.ReplyRoutes` (the rule)
         says it may go to rmw, which would otherwise wait for a departed
         client's reader up to 100 ms with the GIL held; a reply the rule
         drops is counted in :attr:`replies_dropped`.

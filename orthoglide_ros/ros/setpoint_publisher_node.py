@@ -1,10 +1,10 @@
 """
 The ``setpoint_publisher`` ROS 2 node: streams eq. (6) or the excitation.
 
-A thin layer over :class:`orthoglide_ros.setpoint_publisher.Stream` (the
+A thin layer over :class:`orthoglide_ros.cores.setpoint_publisher.Stream` (the
 paper's trajectory or, with ``motion: excitation``, the periodic motion
 for identification): it declares the parameters of
-:data:`orthoglide_ros.setpoint_publisher.PARAMETERS`, waits for its
+:data:`orthoglide_ros.cores.setpoint_publisher.PARAMETERS`, waits for its
 subscribers, publishes one setpoint per timer tick and logs a summary at
 the end. With ``input`` ``trajectory`` a setpoint is one
 MultiDOFJointTrajectory on ``setpoint/trajectory`` (one point,
@@ -26,8 +26,8 @@ from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
 from trajectory_msgs.msg import (MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
-from orthoglide_ros.node_runtime import default_qos, InputNode, run
-from orthoglide_ros.setpoint_publisher import PARAMETERS, Stream
+from orthoglide_ros.ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.cores.setpoint_publisher import PARAMETERS, Stream
 
 # The platform centre G as the one multi-DOF "joint" of a trajectory.
 JOINT_NAME = 'platform'

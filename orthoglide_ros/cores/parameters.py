@@ -32,11 +32,10 @@ rate_hz: must be a double, got 1
 from collections import namedtuple
 import math
 
-from orthoglide_ros.robot import DESCRIPTIONS, LIMITS, Robot, \
-    RobotParameterError, UNITS
+from orthoglide_ros.model.robot import DESCRIPTIONS, JOINT_NAMES, LIMITS, \
+    Robot, RobotParameterError, UNITS
 
 ROBOT_PREFIX = 'robot.'
-JOINT_NAMES = ('slider_a', 'slider_b', 'slider_c')
 TYPES = ('double', 'double_array', 'integer', 'string', 'string_array',
          'bool')
 _SCALAR = {'double': float, 'integer': int, 'string': str, 'bool': bool}

@@ -1,8 +1,8 @@
 """
 The ``simulator`` ROS 2 node: actuator forces in, measured joint states out.
 
-A thin layer over :class:`orthoglide_ros.simulator.Simulator`: it declares
-the parameters of :data:`orthoglide_ros.simulator.PARAMETERS`, reads
+A thin layer over :class:`orthoglide_ros.cores.simulator.Simulator`: it declares
+the parameters of :data:`orthoglide_ros.cores.simulator.PARAMETERS`, reads
 the commands, runs the step timer, publishes, serves ``~/reset`` and
 publishes the core's status on ``/diagnostics``. Run it with ``ros2 run
 orthoglide_ros simulator``; ``doc/simulator.md`` has the topics,
@@ -26,10 +26,10 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
-from orthoglide_ros import cdr
-from orthoglide_ros.inputs import Rejected
-from orthoglide_ros.node_runtime import default_qos, InputNode, run
-from orthoglide_ros.simulator import PARAMETERS, Simulator, STOPPED
+from orthoglide_ros.formats import cdr
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.cores.simulator import PARAMETERS, Simulator, STOPPED
 
 # Longest span (s) of the two monotonic reads around a node-clock read.
 CLOCK_READ = 20e-6

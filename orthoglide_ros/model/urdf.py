@@ -47,9 +47,9 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
-from orthoglide_ros.parameters import JOINT_NAMES
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
+from orthoglide_ros.model.robot import JOINT_NAMES
 
 LEGS = ('A', 'B', 'C')
 BASE_LINK = 'base_link'

@@ -22,8 +22,8 @@ import tempfile
 
 import numpy as np
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.urdf import LEG_COLOURS
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.urdf import LEG_COLOURS
 
 # Half side of the paper's tested workspace, |x|, |y|, |z| <= 0.3 m.
 WORKSPACE_CUBE = 0.3

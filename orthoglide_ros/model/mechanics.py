@@ -22,7 +22,7 @@ not finite, not reachable or nearer a singularity than the margin raises
 :class:`WorkspaceError` (whose ``reason`` a caller can test); no result ever
 holds a NaN or an infinity.
 
->>> from orthoglide_ros.robot import Robot
+>>> from orthoglide_ros.model.robot import Robot
 >>> s = solve(Robot(), (0.0, 0.0, 0.0))
 >>> [round(f, 3) for f in s.force]
 [0.0, 0.0, 256.532]
@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from orthoglide_ros import kernel
+from orthoglide_ros.model import kernel
 
 # Smallest accepted singularity distance (see workspace_status): below it a
 # point is refused as too near a singularity of J1 or J2.
@@ -243,7 +243,7 @@ def friction_force(robot, lambdadot):
     ``lambdadot`` (m/s): a 3-sequence (returns a 3-tuple) or an (N, 3)
     array (returns one).
 
-    >>> from orthoglide_ros.robot import Robot
+    >>> from orthoglide_ros.model.robot import Robot
     >>> robot = Robot(friction_viscous=(10.0, 0.0, 0.0),
     ...               friction_coulomb=(0.0, 2.0, 0.0))
     >>> [round(f, 6) for f in friction_force(robot, (0.1, -1.0, 0.3))]
@@ -290,7 +290,7 @@ def forward_dynamics(robot, position, velocity, force,
     ``singular``), a non-finite position, velocity or force
     (``non_finite``) and a result that is not finite (``overflow``).
 
-    >>> from orthoglide_ros.robot import Robot
+    >>> from orthoglide_ros.model.robot import Robot
     >>> robot = Robot()
     >>> f = solve(robot, (0.05, 0.1, -0.2), (0.1, 0.0, 0.3),
     ...           (1.0, -2.0, 0.5)).force
@@ -468,7 +468,7 @@ def platform_velocity(robot, position, lambdadot):
     that the result is not finite; near a singularity the result is large
     (callers that need a margin check it, as :func:`leg_joints` does).
 
-    >>> from orthoglide_ros.robot import Robot
+    >>> from orthoglide_ros.model.robot import Robot
     >>> rates = solve(Robot(), (0.05, 0.1, -0.2), (0.1, -0.2, 0.3)).lambdadot
     >>> [round(v, 12) for v in platform_velocity(
     ...     Robot(), (0.05, 0.1, -0.2), rates)]
@@ -503,7 +503,7 @@ def leg_joints(robot, position, velocity=ZERO,
     Refuses what :func:`solve` and :func:`solve_batch` refuse
     (:class:`WorkspaceError`).
 
-    >>> from orthoglide_ros.robot import Robot
+    >>> from orthoglide_ros.model.robot import Robot
     >>> leg = leg_joints(Robot(), (0.0, 0.0, -0.425))['A']
     >>> round(math.degrees(leg.phi32), 9), leg.phi21
     (30.0, 0.0)

@@ -1,8 +1,8 @@
 """
 The ``tracking_controller`` ROS 2 node: desired and measured joints in, forces out.
 
-A thin layer over :class:`orthoglide_ros.tracking.Tracking`: it declares the
-parameters of :data:`orthoglide_ros.tracking.PARAMETERS`, hands the
+A thin layer over :class:`orthoglide_ros.cores.tracking_controller.Tracking`: it declares the
+parameters of :data:`orthoglide_ros.cores.tracking_controller.PARAMETERS`, hands the
 joint states' arrays to the core, publishes the commands, logs throttled
 warnings and publishes the core's status on ``/diagnostics``. Run it
 with ``ros2 run orthoglide_ros tracking_controller``;
@@ -18,11 +18,11 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
-from orthoglide_ros import cdr
-from orthoglide_ros.inputs import Rejected
-from orthoglide_ros.node_runtime import default_qos, InputNode, run
-from orthoglide_ros.tracking import (HOLDING, PARAMETERS, Tracking,
-                                     TRAJECTORY_BYTES)
+from orthoglide_ros.formats import cdr
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.cores.tracking_controller import (HOLDING, PARAMETERS, Tracking,
+                                                      TRAJECTORY_BYTES)
 
 
 class TrackingControllerNode(InputNode):

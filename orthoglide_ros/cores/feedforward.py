@@ -42,11 +42,11 @@ import time
 
 import numpy as np
 
-from orthoglide_ros import mechanics
-from orthoglide_ros.inputs import check_stamp, NANOSECONDS, Rejected
-from orthoglide_ros.parameters import joint_names_spec, \
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.cores.inputs import check_stamp, NANOSECONDS, Rejected
+from orthoglide_ros.cores.parameters import joint_names_spec, \
     nonnegative_triple, ParameterError, Spec, Table
-from orthoglide_ros.status import first, OK, Period, Status, WARN
+from orthoglide_ros.cores.status import first, OK, Period, Status, WARN
 
 # Largest rotation of the platform accepted as "the identity" (rad).
 ORIENTATION_TOLERANCE = 1e-3
@@ -87,7 +87,7 @@ def convert_trajectory(settings, waypoints):
     """
     Convert every point of a Cartesian trajectory, or refuse it whole.
 
-    ``waypoints``: :class:`orthoglide_ros.cdr.Waypoints` (the arrays of a
+    ``waypoints``: :class:`orthoglide_ros.formats.cdr.Waypoints` (the arrays of a
     MultiDOFJointTrajectory). The rules, in this order, the first broken
     one raising :class:`Rejected` with a reason of TRAJECTORY_REASONS and,
     where a point is at fault, its 0-based index:

@@ -1,8 +1,8 @@
 """
 The ``feedforward`` ROS 2 node: setpoints in, joint states and forces out.
 
-A thin layer over :class:`orthoglide_ros.feedforward.Feedforward`: it declares
-the parameters of :data:`orthoglide_ros.feedforward.PARAMETERS`, converts
+A thin layer over :class:`orthoglide_ros.cores.feedforward.Feedforward`: it declares
+the parameters of :data:`orthoglide_ros.cores.feedforward.PARAMETERS`, converts
 messages to plain values and back, publishes, logs throttled warnings and
 publishes the core's status on ``/diagnostics``. Run it with ``ros2 run
 orthoglide_ros feedforward``; ``doc/feedforward.md`` has the topics,
@@ -20,12 +20,12 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from trajectory_msgs.msg import JointTrajectory, MultiDOFJointTrajectory
 
-from orthoglide_ros import cdr
-from orthoglide_ros.feedforward import (
+from orthoglide_ros.formats import cdr
+from orthoglide_ros.cores.feedforward import (
     CARTESIAN_TRAJECTORY_BYTES, convert_trajectory, Feedforward, PARAMETERS,
     TRAJECTORY_MESSAGE_BYTES)
-from orthoglide_ros.inputs import Rejected, SMALL_MESSAGE_BYTES
-from orthoglide_ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.cores.inputs import Rejected, SMALL_MESSAGE_BYTES
+from orthoglide_ros.ros.node_runtime import default_qos, InputNode, run
 
 # Longest message of another encoding than little-endian CDR that is read.
 FALLBACK_BYTES = SMALL_MESSAGE_BYTES
