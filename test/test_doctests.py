@@ -15,8 +15,8 @@ import pytest
 
 import orthoglide_ros
 
-MODULES = sorted(m.name for m in pkgutil.iter_modules(
-    orthoglide_ros.__path__, 'orthoglide_ros.'))
+MODULES = sorted(m.name for m in pkgutil.walk_packages(
+    orthoglide_ros.__path__, 'orthoglide_ros.') if not m.ispkg)
 
 
 @pytest.mark.parametrize('name', MODULES)

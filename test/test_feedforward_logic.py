@@ -422,9 +422,10 @@ def test_trajectory_point_without_velocities_malformed(missing):
 
 
 def test_reject_malformed_counts():
+    """A message refused before it was read: counted, nothing raised."""
     ff = core()
-    rejected(ff, 'malformed', lambda: ff.reject(
-        'trajectory', Rejected('malformed', 'empty')))
+    assert ff.reject('trajectory', Rejected('malformed', 'empty')) is None
+    assert ff.rejected['malformed'] == 1 and ff.received['trajectory'] == 1
 
 
 # Freshness -------------------------------------------------------------------

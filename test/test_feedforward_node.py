@@ -116,7 +116,7 @@ def test_paper_trajectory(graph, form, executor):
     spin_for(g.executor, 0.05)
     assert len(g.probe.joint_states) == 50
     assert len(g.probe.forces) == len(g.probe.power) == 50
-    core = g.node._core
+    core = g.node.core
     assert core.computed == 50
     assert not any(core.rejected.values())
 
@@ -136,7 +136,7 @@ def test_inputs_keep_pace_whatever_spins_the_node(graph, executor):
         t = 0.002 * k
         g.probe.send(stamp_of(t), *paper_sample(t))
         wait_outputs(g, k + 1, timeout=1.0)
-    assert g.node._core.rejected['unpaired'] == 0
+    assert g.node.core.rejected['unpaired'] == 0
 
 
 def test_out_of_order_three_topic_input(graph):
@@ -161,7 +161,7 @@ def test_out_of_order_three_topic_input(graph):
     g.probe.send(s2, p2, v2, a2, order=('twist',))
     wait_outputs(g, 14)
     assert_output(g.probe, 13, s2, solve(p2, v2, a2))
-    assert not any(g.node._core.rejected.values())
+    assert not any(g.node.core.rejected.values())
 
 
 def test_trajectory_stamps_and_points(graph):
@@ -188,7 +188,7 @@ def test_trajectory_stamps_and_points(graph):
     sec, nanosec = header_stamp(g.probe.joint_states[2])
     assert before + 500_000_000 <= sec * 10**9 + nanosec <= after + 500_000_000
     assert_output(g.probe, 2, (sec, nanosec), solve(p, v, a))
-    assert not any(g.node._core.rejected.values())
+    assert not any(g.node.core.rejected.values())
 
 
 # Bad input -------------------------------------------------------------------
@@ -282,7 +282,7 @@ def test_malformed_trajectories_counted_received(graph):
     g.probe.send_trajectory(stamp_of(0.3), ZERO, velocity=None)
     g.probe.send_trajectory(stamp_of(0.4), ZERO)
     wait_outputs(g, 1)
-    core = g.node._core
+    core = g.node.core
     assert core.rejected['malformed'] == 3
     assert core.received['trajectory'] == 4
 
@@ -439,7 +439,7 @@ def test_invalid_parameter_changes_refused(graph):
     assert list(values[4].string_array_value) == JOINT_NAMES
     assert values[5].double_value == 0.0
     assert values[6].double_value == Robot().alpha
-    assert g.node._core.settings.robot == Robot()
+    assert g.node.core.settings.robot == Robot()
     p, v, a = paper_sample(1.2)
     probe.send(stamp_of(1.2), p, v, a)
     wait_outputs(g, 1)
@@ -501,7 +501,7 @@ def test_declared_parameters_and_qos_override(graph):
             r = descriptor.floating_point_range[0]
             assert (r.from_value, r.to_value) == spec.range
     assert node.get_parameter('robot.m4').value == 0.25
-    assert node._core.settings.robot == Robot(m4=0.25)
+    assert node.core.settings.robot == Robot(m4=0.25)
 
     def reliability(topic_name):
         infos = [i for i in node.get_subscriptions_info_by_topic(topic_name)

@@ -383,10 +383,10 @@ class Run:
     def __init__(self, rig):
         self.rig = rig
         node = rig.node
-        core = node._core
+        core = node.core
         self.model = Model(core.received, core.rejected, core.settings)
         self.expected = []      # (stamp or Window, Solution), in order
-        self.published = node._core.published
+        self.published = node.core.published
 
     def stamp(self, spec):
         if spec[0] == 'fresh':
@@ -409,8 +409,8 @@ class Run:
                 fields[2] is not None:
             fields, window = self.point_stamp(fields, before, after)
         outcome = self.model.take(source, fields)
-        published = node._core.published - self.published
-        self.published = node._core.published
+        published = node.core.published - self.published
+        self.published = node.core.published
         if outcome is not None and outcome[0] == 'output':
             assert published == 1, (source, fields, outcome)
             stamp = window if outcome[1] is NOW else outcome[1]
@@ -418,7 +418,7 @@ class Run:
         else:
             assert published == 0, (source, fields, outcome)
         assert node.internal_errors == 0
-        core = node._core
+        core = node.core
         assert core.received == self.model.received, (source, fields)
         assert core.rejected == self.model.rejected, (source, fields,
                                                       outcome)
@@ -481,10 +481,10 @@ class Run:
         for item in items:
             getattr(self, item.item)(item)
         # The partials left: dropped and counted by node and model.
-        self.rig.node._core.expire(time.monotonic() + 1e6)
+        self.rig.node.core.expire(time.monotonic() + 1e6)
         self.model.flush()
-        assert self.rig.node._core.rejected == self.model.rejected
-        assert self.rig.node._core.pending == 0
+        assert self.rig.node.core.rejected == self.model.rejected
+        assert self.rig.node.core.pending == 0
 
 
 def wait_outputs(rig, count):
@@ -523,21 +523,21 @@ def set_node(rig, pose_only, margin):
         Parameter('pose_only', value=pose_only),
         Parameter('singularity_margin', value=margin)])
     assert all(r.successful for r in results), [r.reason for r in results]
-    settings = rig.node._core.settings
+    settings = rig.node.core.settings
     assert (settings.pose_only, settings.singularity_margin) == (
         pose_only, margin)
 
 
 def fresh_start(rig):
     """Drop partials left (by a failed example); forget earlier outputs."""
-    rig.node._core.expire(time.monotonic() + 1e6)
+    rig.node.core.expire(time.monotonic() + 1e6)
     spin_until(rig.executor, lambda: False, 0.01)
     rig.probe.clear()
 
 
 def test_fuzzed_setpoints(rig):
     """Topic groups, trajectories and garbage: finite, exact, counted."""
-    names = list(rig.node._core.settings.joint_names)
+    names = list(rig.node.core.settings.joint_names)
     totals = {'outputs': 0}
 
     @settings(FUZZ, max_examples=200)
@@ -555,14 +555,14 @@ def test_fuzzed_setpoints(rig):
     check()
     assert rig.node.internal_errors == 0
     assert totals['outputs'] > 0
-    print(f'fuzzed node: {sum(rig.node._core.received.values())} inputs, '
-          f'{rig.node._core.published} outputs, rejected '
-          f'{dict(rig.node._core.rejected)}')
+    print(f'fuzzed node: {sum(rig.node.core.received.values())} inputs, '
+          f'{rig.node.core.published} outputs, rejected '
+          f'{dict(rig.node.core.rejected)}')
 
 
 def test_random_bytes_on_every_input(rig):
     """Any byte string on any input: no exception, counted, never wrong."""
-    names = list(rig.node._core.settings.joint_names)
+    names = list(rig.node.core.settings.joint_names)
 
     @settings(FUZZ, max_examples=150)
     @given(st.lists(garbage, min_size=1, max_size=8))
@@ -574,4 +574,4 @@ def test_random_bytes_on_every_input(rig):
 
     check()
     assert rig.node.internal_errors == 0
-    assert rig.node._core.rejected['malformed'] > 0
+    assert rig.node.core.rejected['malformed'] > 0

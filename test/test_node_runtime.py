@@ -30,8 +30,7 @@ class SlowReader(InputNode):
     def __init__(self, context):
         super().__init__('slow_reader', context=context)
         self.seen = []      # (value, arrival, monotonic time of the call)
-        self.create_input(Float64, 'values', self._on_value, default_qos(),
-                          'values')
+        self.create_input(Float64, 'values', self._on_value, 'values')
         self.start_threads()
 
     def _on_value(self, msg):

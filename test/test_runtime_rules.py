@@ -1,7 +1,7 @@
 """
 The rules of the node runtime that need no DDS.
 
-- ``node_runtime.clip``: the one place text from messages is shortened;
+- ``inputs.clip``: the one place text from messages is shortened;
 - the set-parameters requests refused before rclpy sees them;
 - the feedforward's trajectory stamp rule (header + time_from_start, the
   zero header meaning "now", nanosec in [0, 1e9) on both);
@@ -11,9 +11,10 @@ The rules of the node runtime that need no DDS.
 import pytest
 
 from orthoglide_ros.cores import feedforward, simulator
+from orthoglide_ros.cores import inputs
 from orthoglide_ros.cores.inputs import Rejected
 
-node_runtime = pytest.importorskip('orthoglide_ros.ros.node_runtime')
+reply_guard = pytest.importorskip('orthoglide_ros.ros.reply_guard')
 from rcl_interfaces.msg import Parameter, ParameterValue  # noqa: E402
 from rcl_interfaces.srv import (GetParameters,  # noqa: E402
                                 SetParameters, SetParametersAtomically)
@@ -23,10 +24,10 @@ ZERO = (0.0, 0.0, 0.0)
 
 
 def test_clip_keeps_short_text_and_cuts_long_text_in_the_middle():
-    assert node_runtime.clip('short') == 'short'
+    assert inputs.clip('short') == 'short'
     text = 'a' * 1000 + 'b' * 5_000_000 + 'c' * 1000
-    cut = node_runtime.clip(text)
-    assert len(cut) <= node_runtime.TEXT_LIMIT + 60
+    cut = inputs.clip(text)
+    assert len(cut) <= inputs.TEXT_LIMIT + 60
     assert cut.startswith('a' * 1000) and cut.endswith('c' * 1000)
     assert '5000000 characters cut' in cut
 
@@ -37,12 +38,12 @@ def test_a_value_type_that_does_not_exist_is_refused(srv_type):
     bad = srv_type.Request(parameters=[
         Parameter(name='rate_hz', value=ParameterValue(type=3)),
         Parameter(name='x' * 500, value=ParameterValue(type=200))])
-    reason = node_runtime._malformed_parameters(srv_type, bad)
+    reason = reply_guard._malformed_parameters(srv_type, bad)
     assert reason.startswith('malformed request') and '200' in reason
     assert len(reason) < 300
     good = srv_type.Request(parameters=bad.parameters[:1])
-    assert node_runtime._malformed_parameters(srv_type, good) is None
-    assert node_runtime._malformed_parameters(
+    assert reply_guard._malformed_parameters(srv_type, good) is None
+    assert reply_guard._malformed_parameters(
         GetParameters, GetParameters.Request()) is None
 
 

@@ -165,7 +165,7 @@ def test_held_publishes_every_tick_until_the_first_command(graph):
     assert status.message == 'held: waiting for a command'
     v = values(status)
     assert (v['state'], v['steps'], v['sim time (s)']) == ('held', '0', '0')
-    assert g.node._core.plant.time == 0.0
+    assert g.node.core.plant.time == 0.0
 
 
 def test_static_holding_force_keeps_the_platform_at_home(graph):
@@ -184,7 +184,7 @@ def test_static_holding_force_keeps_the_platform_at_home(graph):
     assert len(running) > 100, len(running)
     worst = max(abs(c) for m in running for c in (*m.position, *m.velocity))
     assert worst <= 1e-9, worst
-    assert g.node._core.clipped == 0
+    assert g.node.core.clipped == 0
 
 
 def test_constant_command_follows_the_plant_step_for_step(graph):
@@ -245,7 +245,7 @@ def test_constant_command_follows_the_plant_step_for_step(graph):
     held = g.probe.joint_states[-1]
     assert tuple(held.position) == states[-1][1]
     assert tuple(held.velocity) == ZERO and tuple(held.effort) == ZERO
-    assert g.node._core.plant.position == states[-1][0]
+    assert g.node.core.plant.position == states[-1][0]
 
 
 def test_publish_rate_samples_the_steps(graph):
@@ -299,7 +299,7 @@ def test_stop_with_clear_error_then_reset(graph, capfd):
     assert '(singular)' in status.message and '~/reset' in status.message
     v = values(status)
     assert v['state'] == 'stopped'
-    core = g.node._core
+    core = g.node.core
     frozen = core.plant.position
     assert mechanics.workspace_status(Robot(), frozen).ok
     # Commands are ignored, the frozen state is published at rest.
@@ -353,7 +353,7 @@ def test_bad_commands_rejected_by_reason(graph):
     assert status.level == DiagnosticStatus.WARN
     assert values(status)['state'] == 'held'
     assert values(status)['commands received'] == '0'
-    assert g.node._core.steps == 0
+    assert g.node.core.steps == 0
 
 
 def test_parameter_changes_live_and_at_reset(graph):
@@ -371,7 +371,7 @@ def test_parameter_changes_live_and_at_reset(graph):
                                    Parameter('rate_hz', value=500.0)])
     assert all(r.successful for r in results)
     send_for(g, HOLD, 0.1)
-    core = node._core
+    core = node.core
     assert core.plant.robot == Robot() and core.pending_reset
     clipped = (0.0, 0.0, 100.0)
     assert any(tuple(m.effort) == clipped for m in g.probe.joint_states)

@@ -57,7 +57,7 @@ def graph(ros_context):
         assert spin_until(executor, lambda: probe.matched(node), WAIT), (
             'probe and node did not match')
         return SimpleNamespace(node=node, probe=probe, executor=executor,
-                               core=node._core)
+                               core=node.core)
 
     yield make
     for executor, node, probe in made:

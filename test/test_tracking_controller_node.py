@@ -109,7 +109,7 @@ def graph(ros_context):
 def received(g, source):
     """Return how many ``source`` joint states the node has taken."""
     with g.node.lock:
-        return g.node._core.received[source]
+        return g.node.core.received[source]
 
 
 def measure(g, position, velocity=ZERO, names=NAMES):
@@ -244,7 +244,7 @@ def test_law_exact_on_published_commands(graph):
         measure(g, lam, dlam)
         msg = command(g, lam_d, dlam_d, f_ff)
         assert_command(msg, law(kp, kd, lam_d, dlam_d, f_ff, lam, dlam))
-    core = g.node._core
+    core = g.node.core
     assert core.commands == 12 and core.clipped == 0
     assert not any(core.rejected.values())
     assert not any(core.skipped.values())
@@ -279,7 +279,7 @@ def test_feedforward_off_is_pd_alone(graph):
     assert_command(command(g, lam_d, dlam_d, (500.0, 500.0, 500.0)),
                    expected)
     assert_command(command(g, lam_d, dlam_d, effort=None), expected)
-    assert not any(g.node._core.rejected.values())
+    assert not any(g.node.core.rejected.values())
 
 
 def test_clipping_counted(graph):
@@ -288,7 +288,7 @@ def test_clipping_counted(graph):
     measure(g, ZERO)
     msg = command(g, (0.01, -0.01, 0.0001), ZERO, (0.0, 0.0, 1.0))
     assert list(msg.data) == [50.0, -50.0, pytest.approx(3.0)]
-    assert g.node._core.clipped == 2
+    assert g.node.core.clipped == 2
     wait_diagnostics(g, lambda d: d['clipped forces'] == '2')
 
 
@@ -313,15 +313,15 @@ def test_missing_then_stale_measurement_commands_nothing(graph):
     measure(g, ZERO)
     assert list(command(g, (0.001, 0.0, 0.0)).data)[0] == \
         pytest.approx(20.0)
-    assert g.node._core.skipped == {'no_measurement': 1,
-                                    'stale_measurement': 1,
-                                    'trajectory_active': 0}
+    assert g.node.core.skipped == {'no_measurement': 1,
+                                   'stale_measurement': 1,
+                                   'trajectory_active': 0}
 
 
 def test_bad_inputs_rejected_counted_and_node_goes_on(graph):
     """Missing joint, NaN, missing velocity or effort: no command, counted."""
     g = graph(PATIENT)
-    core = g.node._core
+    core = g.node.core
     measure(g, ZERO)
     no_command(g, (0.0, 0.0), names=['slider_a', 'slider_b'])
     no_command(g, (0.0, NAN, 0.0))
@@ -345,7 +345,7 @@ def test_bad_inputs_rejected_counted_and_node_goes_on(graph):
 def test_internal_error_reported_and_node_goes_on(graph):
     """A defect in a callback: counted, ERROR in diagnostics, node lives."""
     g = graph(PATIENT)
-    core = g.node._core
+    core = g.node.core
     original = core.desired
 
     def broken(*args):

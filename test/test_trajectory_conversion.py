@@ -185,8 +185,7 @@ def test_core_counts_trajectories_apart_from_setpoints():
     core = Feedforward(settings())
     conversion = convert_trajectory(settings(), paper(50))
     core.count_trajectory(conversion, 0.004)
-    with pytest.raises(Rejected):
-        core.reject_trajectory(Rejected('time', 'point 3 ...'))
+    core.reject('cartesian_trajectory', Rejected('time', 'point 3 ...'))
     assert (core.trajectories, core.trajectory_points) == (1, 50)
     assert core.trajectory_rejected['time'] == 1
     assert not any(core.rejected.values())

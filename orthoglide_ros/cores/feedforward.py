@@ -52,12 +52,8 @@ from orthoglide_ros.cores.status import first, OK, Period, Status, WARN
 ORIENTATION_TOLERANCE = 1e-3
 # Most partial setpoints held at once; beyond, the oldest is dropped.
 MAX_PENDING = 1000
-# Byte limit of a setpoint/trajectory message (its first point is used):
-# 4 MiB, about 20,000 points.
-TRAJECTORY_MESSAGE_BYTES = 4 * 1024 * 1024
-# Byte limit of a cartesian_trajectory message (every point is converted):
-# 8 MiB, about 45,000 points (10,000 points take 1.8 MB).
-CARTESIAN_TRAJECTORY_BYTES = 8 * 1024 * 1024
+# Period of the tick while rate_hz is 0.0 (it then only waits), s.
+IDLE_TICK = 0.1
 # Why a whole Cartesian trajectory was refused: 'rejected trajectory <r>'.
 TRAJECTORY_REASONS = ('empty', 'frame', 'stamp', 'time', 'malformed',
                       'orientation', 'non_finite', 'speed_limit',
@@ -352,6 +348,7 @@ class Feedforward:
                         '[0, 1e9)'))
         except Rejected as rejection:
             self.reject('trajectory', rejection)
+            raise
         if header_stamp == (0, 0):
             header_stamp = clock_stamp
         stamp = divmod((header_stamp[0] + time_from_start[0]) * NANOSECONDS
@@ -372,16 +369,18 @@ class Feedforward:
         self.trajectory_seconds_max = max(self.trajectory_seconds_max,
                                           seconds)
 
-    def reject_trajectory(self, rejection):
-        """Count a Cartesian trajectory refused whole; re-raise."""
-        self.trajectory_rejected[rejection.reason] += 1
-        raise rejection
-
     def reject(self, source, rejection):
-        """Count a message on input ``source`` refused whole; re-raise."""
-        self.received[source] += 1
-        self.rejected[rejection.reason] += 1
-        raise rejection
+        """
+        Count a message on input ``source`` refused whole.
+
+        ``cartesian_trajectory`` counts among the trajectories' refusals,
+        any other input among the setpoints'.
+        """
+        if source == 'cartesian_trajectory':
+            self.trajectory_rejected[rejection.reason] += 1
+        else:
+            self.received[source] += 1
+            self.rejected[rejection.reason] += 1
 
     def expire(self, now):
         """Drop the partial setpoints older than pairing_timeout; count them."""
@@ -405,6 +404,35 @@ class Feedforward:
     def tick(self, now):
         """Return the newest result if it is fresh, else None (timer mode)."""
         return self.latest if self.fresh(now) else None
+
+    def output_now(self, output):
+        """
+        Return ``output`` (a completed setpoint, or None) to publish at once.
+
+        With ``rate_hz`` 0.0 each setpoint is published once, as it
+        completes; else None (the tick publishes). Counts it as published.
+        """
+        if output is None or self.settings.rate_hz != 0.0:
+            return None
+        self.published += 1
+        return output
+
+    def output_at_tick(self, now):
+        """
+        Return the result to publish at a tick of the fixed rate, or None.
+
+        None with ``rate_hz`` 0.0 (each setpoint is published as it
+        completes) or when stale (:meth:`tick`). Counts it as published.
+        """
+        output = self.tick(now) if self.settings.rate_hz != 0.0 else None
+        if output is not None:
+            self.published += 1
+        return output
+
+    def tick_period(self):
+        """Return the tick's period (s): 1 / rate_hz, IDLE_TICK at 0.0."""
+        rate = self.settings.rate_hz
+        return 1.0 / rate if rate > 0.0 else IDLE_TICK
 
     @property
     def pending(self):

@@ -125,11 +125,10 @@ class MechanismState:
         """Use new settings from the next message on."""
         self.settings = settings
 
-    def reject(self, rejection):
-        """Count a message refused before it was read; raise it."""
+    def reject(self, source, rejection):
+        """Count a message refused before it was read (one input)."""
         self.received += 1
         self._count(rejection)
-        raise rejection
 
     def joint_state(self, names, position, velocity, now):
         """

@@ -331,8 +331,14 @@ class Simulator:
         Every wake-up's last state with ``publish_rate_hz`` 0.0; else the
         first state at or after each instant of the publish grid (period
         1/publish_rate_hz, instants a late wake-up skipped are dropped);
-        always a state that ends in an event (a timeout, a stop).
+        always a state that ends in an event (a timeout, a stop). A state
+        to publish is counted as published.
         """
+        due = self._publish_due(tick, instant)
+        self.published += due
+        return due
+
+    def _publish_due(self, tick, instant):
         settings = self.settings
         if settings.publish_rate_hz == 0.0 or tick.event is not None:
             return True
@@ -462,13 +468,14 @@ class Simulator:
         self._solution = mechanics.solve(plant.robot, plant.position,
                                          plant.velocity, ZERO, plant.margin)
 
-    def reject(self, rejection):
-        """Count a command refused before it was read; re-raise it."""
+    def reject(self, source, rejection):
+        """Count a command refused before it was read (one input)."""
         self.rejected[rejection.reason] += 1
-        raise rejection
 
     def _reject(self, reason, message):
-        self.reject(Rejected(reason, message))
+        rejection = Rejected(reason, message)
+        self.reject('commands', rejection)
+        raise rejection
 
 
 def _plant_model(settings):

@@ -93,9 +93,6 @@ REASONS = ('missing_joint', 'malformed', 'missing_position',
            'oversize', 'empty', 'time')
 SKIPS = ('no_measurement', 'stale_measurement', 'trajectory_active')
 FOLLOWING, HOLDING = 'following', 'holding'
-# Byte limit of a joint_trajectory message: 8 MiB, about 60,000 points of
-# three joints (a 10,000-point trajectory takes 1.4 MB).
-TRAJECTORY_BYTES = 8 * 1024 * 1024
 # Largest |lambdadot_d - lambdadot| (m/s) of a desired state that re-arms.
 REARM_SPEED = 0.01
 _ZERO = (0.0, 0.0, 0.0)
@@ -233,7 +230,6 @@ class Tracking:
         """Count a message on ``source`` refused before it was read."""
         self.received[source] += 1
         self.rejected[source, rejection.reason] += 1
-        raise rejection
 
     def measured(self, names, position, velocity, effort, now):
         """Take a measured joint state; it becomes the newest measurement."""

@@ -38,7 +38,7 @@ def _record(number, frame):
 def _run(module):
     install_signal_handlers()
     try:
-        return importlib.import_module(f'orthoglide_ros.{module}').main()
+        return importlib.import_module(f'orthoglide_ros.ros.{module}').main()
     finally:
         for number in (signal.SIGINT, signal.SIGTERM):
             signal.signal(number, signal.SIG_IGN)

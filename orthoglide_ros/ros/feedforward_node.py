@@ -12,7 +12,6 @@ parameters and rules.
 import array
 import time
 
-from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.serialization import deserialize_message, serialize_message
 
 from geometry_msgs.msg import AccelStamped, PoseStamped, TwistStamped
@@ -20,17 +19,16 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 from trajectory_msgs.msg import JointTrajectory, MultiDOFJointTrajectory
 
+from orthoglide_ros.cores.feedforward import (convert_trajectory, Feedforward,
+                                              PARAMETERS)
+from orthoglide_ros.cores.inputs import (CARTESIAN_TRAJECTORY_BYTES, Rejected,
+                                         SMALL_MESSAGE_BYTES,
+                                         TRAJECTORY_MESSAGE_BYTES)
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.cores.feedforward import (
-    CARTESIAN_TRAJECTORY_BYTES, convert_trajectory, Feedforward, PARAMETERS,
-    TRAJECTORY_MESSAGE_BYTES)
-from orthoglide_ros.cores.inputs import Rejected, SMALL_MESSAGE_BYTES
-from orthoglide_ros.ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.ros.node_runtime import InputNode, run
 
 # Longest message of another encoding than little-endian CDR that is read.
 FALLBACK_BYTES = SMALL_MESSAGE_BYTES
-# Period of the tick thread while rate_hz is 0.0 (it then only waits), s.
-IDLE_TICK = 0.1
 
 
 class FeedforwardNode(InputNode):
@@ -46,97 +44,79 @@ class FeedforwardNode(InputNode):
     def __init__(self, **kwargs):
         super().__init__('feedforward', **kwargs)
         # Raises ValueError on an invalid start-up set (run() reports it).
-        self._core = Feedforward(self.declare_settings(PARAMETERS),
-                                 time.monotonic())
-
-        overrides = QoSOverridingOptions.with_default_policies()
-        self._pub_joints = self.create_publisher(
-            JointState, 'feedforward/joint_states', default_qos(),
-            qos_overriding_options=overrides)
-        self._pub_forces = self.create_publisher(
-            Float64MultiArray, 'feedforward/forces', default_qos(),
-            qos_overriding_options=overrides)
-        self._pub_power = self.create_publisher(
-            Float64MultiArray, 'feedforward/power', default_qos(),
-            qos_overriding_options=overrides)
+        self.core = Feedforward(self.declare_settings(PARAMETERS),
+                                time.monotonic())
+        self._pub_joints = self.create_output(JointState,
+                                              'feedforward/joint_states')
+        self._pub_forces = self.create_output(Float64MultiArray,
+                                              'feedforward/forces')
+        self._pub_power = self.create_output(Float64MultiArray,
+                                             'feedforward/power')
         # Raw inputs: cdr reads the few fields used straight from the
         # serialized message, several times cheaper than rclpy's conversion.
         for kind, reader, method in (
-                (PoseStamped, cdr.pose_stamped, self._core.pose),
-                (TwistStamped, cdr.vector3_stamped, self._core.twist),
-                (AccelStamped, cdr.vector3_stamped, self._core.accel)):
+                (PoseStamped, cdr.pose_stamped, self.core.pose),
+                (TwistStamped, cdr.vector3_stamped, self.core.twist),
+                (AccelStamped, cdr.vector3_stamped, self.core.accel)):
             source = kind.__name__.replace('Stamped', '').lower()
             self.create_input(
                 kind, f'setpoint/{source}',
-                lambda fields, method=method: self._take(method, *fields),
-                default_qos(), source, decode=raw_decoder(reader, kind),
-                qos_overriding_options=overrides)
+                lambda fields, method=method: self._publish_now(
+                    method(*fields, self.arrival)),
+                source, decode=raw_decoder(reader, kind))
         self.create_input(
             MultiDOFJointTrajectory, 'setpoint/trajectory',
-            self._on_trajectory, default_qos(), 'trajectory',
-            decode=raw_decoder(cdr.trajectory_point, MultiDOFJointTrajectory),
-            max_bytes=TRAJECTORY_MESSAGE_BYTES,
-            qos_overriding_options=overrides)
+            self._on_trajectory, 'trajectory',
+            decode=raw_decoder(_trajectory_point, MultiDOFJointTrajectory),
+            max_bytes=TRAJECTORY_MESSAGE_BYTES)
         # Whole trajectories on a thread of their own: converting 10,000
         # points must not hold the setpoints back.
-        self._pub_trajectory = self.create_publisher(
-            JointTrajectory, 'feedforward/joint_trajectory', default_qos(),
-            qos_overriding_options=overrides)
+        self._pub_trajectory = self.create_output(
+            JointTrajectory, 'feedforward/joint_trajectory')
         self._read_waypoints = raw_decoder(cdr.cartesian_trajectory,
                                            MultiDOFJointTrajectory)
         self.create_input(
             MultiDOFJointTrajectory, 'cartesian_trajectory',
-            self._on_cartesian_trajectory, default_qos(),
-            'cartesian_trajectory', decode=self._convert,
-            max_bytes=CARTESIAN_TRAJECTORY_BYTES, group='trajectories',
-            qos_overriding_options=overrides)
+            self._on_cartesian_trajectory, 'cartesian_trajectory',
+            decode=self._convert, max_bytes=CARTESIAN_TRAJECTORY_BYTES,
+            group='trajectories')
 
         self._joints = JointState()
         self._forces = _vector_message()
         self._power = _vector_message()
         self._set_joint_names()
-        self.create_periodic(self._tick_period, self._on_tick, 'tick')
-        self.publish_status('Orthoglide feedforward', self._core)
+        self.create_periodic(self.core.tick_period, self._on_tick, 'tick')
+        self.publish_status('Orthoglide feedforward', self.core)
         self.apply_changes_with(self._swap)
         self.start_threads()
 
     # Parameters -----------------------------------------------------------
     def _swap(self, settings):
         """Swap in the new settings (lock held): the next setpoint uses them."""
-        old = self._core.settings
-        self._core.configure(settings)
-        if self._core.settings.joint_names != old.joint_names:
+        old = self.core.settings
+        self.core.configure(settings)
+        if self.core.settings.joint_names != old.joint_names:
             self._set_joint_names()
 
     def _set_joint_names(self):
-        self._joints.name = list(self._core.settings.joint_names)
+        self._joints.name = list(self.core.settings.joint_names)
 
     # Inputs (input thread, lock held) -------------------------------------
     def _on_trajectory(self, fields):
-        stamp, frame, point = fields
-        if point is None:
-            self.on_input_rejected('trajectory', Rejected(
-                'malformed', 'trajectory without a point holding a '
-                'transform'))
-            return
-        position, orientation, velocity, acceleration, offset = point
-        self._take(self._core.trajectory_message, stamp, offset,
-                   self.get_clock().now().seconds_nanoseconds(), frame,
-                   position, orientation, velocity, acceleration)
+        stamp, frame, (position, orientation, velocity, acceleration,
+                       offset) = fields
+        self._publish_now(self.core.trajectory_message(
+            stamp, offset, self.get_clock().now().seconds_nanoseconds(),
+            frame, position, orientation, velocity, acceleration,
+            self.arrival))
 
-    def on_input_rejected(self, source, rejection):
-        """Count a message refused before it was read (oversize, malformed)."""
-        try:
-            if source == 'cartesian_trajectory':
-                self._core.reject_trajectory(rejection)
-            else:
-                self._core.reject(source, rejection)
-        except Rejected:
-            what = 'trajectory' if source == 'cartesian_trajectory' \
-                else 'setpoint'
-            self.warn_throttled((source, rejection.reason),
-                                f'{what} rejected ({rejection.reason}): '
-                                f'{rejection}')
+    def on_inputs_idle(self):
+        """Drop the partial setpoints whose partners did not come in time."""
+        dropped = self.core.expire(time.monotonic())
+        if dropped:
+            self.warn_throttled('unpaired', (
+                f'{dropped} partial setpoint(s) dropped without partners '
+                'within pairing_timeout'))
 
     # Whole trajectories (their input thread) ------------------------------
     def _convert(self, data):
@@ -144,10 +124,10 @@ class FeedforwardNode(InputNode):
         Read, convert and serialize a Cartesian trajectory (no lock held).
 
         The settings are read once (one immutable tuple, swapped whole);
-        a refusal raises Rejected, which :meth:`on_input_rejected` counts.
-        Returns the conversion and the JointTrajectory's bytes.
+        a refusal raises Rejected, which the core then counts. Returns the
+        conversion and the JointTrajectory's bytes.
         """
-        settings = self._core.settings
+        settings = self.core.settings
         conversion = convert_trajectory(settings, self._read_waypoints(data))
         s = conversion.solution
         return conversion, cdr.joint_trajectory(
@@ -157,44 +137,21 @@ class FeedforwardNode(InputNode):
     def _on_cartesian_trajectory(self, converted):
         conversion, data = converted
         self._pub_trajectory.publish(data)
-        self._core.count_trajectory(conversion,
-                                    time.monotonic() - self.arrival)
-
-    def _take(self, method, *args):
-        """Call the core; publish a completed setpoint, warn on a rejection."""
-        try:
-            output = method(*args, self.arrival)
-        except Rejected as rejection:
-            self._warn(rejection.reason, str(rejection))
-            return
-        except Exception:   # a defect, not bad input: publish nothing, go on
-            self.report_defect('on a setpoint, nothing published')
-            return
-        if output is not None and self._core.settings.rate_hz == 0.0:
-            self._publish(output)
-
-    def on_inputs_idle(self):
-        """Drop the partial setpoints whose partners did not come in time."""
-        dropped = self._core.expire(time.monotonic())
-        if dropped:
-            self._warn('unpaired', f'{dropped} partial setpoint(s) dropped '
-                       'without partners within pairing_timeout')
+        self.core.count_trajectory(conversion,
+                                   time.monotonic() - self.arrival)
 
     # Fixed-rate tick (its own thread) -------------------------------------
-    def _tick_period(self):
-        rate = self._core.settings.rate_hz
-        return 1.0 / rate if rate > 0.0 else IDLE_TICK
-
     def _on_tick(self):
         with self.lock:
-            if self._core.settings.rate_hz == 0.0:
-                return
-            output = self._core.tick(time.monotonic())
-            if output is not None:
-                self._publish(output)
+            self._publish(self.core.output_at_tick(time.monotonic()))
 
     # Outputs --------------------------------------------------------------
+    def _publish_now(self, output):
+        self._publish(self.core.output_now(output))
+
     def _publish(self, output):
+        if output is None:
+            return
         s = output.solution
         header = self._joints.header
         header.stamp.sec, header.stamp.nanosec = output.stamp
@@ -207,11 +164,15 @@ class FeedforwardNode(InputNode):
         self._pub_forces.publish(self._forces)
         self._power.data = array.array('d', s.power)
         self._pub_power.publish(self._power)
-        self._core.published += 1
 
-    def _warn(self, reason, message):
-        self.warn_throttled(reason,
-                            f'setpoint rejected ({reason}): {message}')
+
+def _trajectory_point(data):
+    """Read a setpoint/trajectory message; refuse one without a point."""
+    stamp, frame, point = cdr.trajectory_point(data)
+    if point is None:
+        raise Rejected('malformed', 'trajectory without a point holding a '
+                       'transform')
+    return stamp, frame, point
 
 
 def raw_decoder(reader, kind):

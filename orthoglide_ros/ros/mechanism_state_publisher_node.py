@@ -15,14 +15,12 @@ every body. Run it with ``ros2 run orthoglide_ros mechanism_state_publisher``;
 import array
 import time
 
-from rclpy.qos_overriding_options import QoSOverridingOptions
-
 from sensor_msgs.msg import JointState
 
+from orthoglide_ros.cores.mechanism_state_publisher import (MechanismState,
+                                                            PARAMETERS)
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.cores.inputs import Rejected
-from orthoglide_ros.cores.mechanism_state_publisher import MechanismState, PARAMETERS
-from orthoglide_ros.ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.ros.node_runtime import InputNode, run
 
 
 class MechanismStatePublisherNode(InputNode):
@@ -38,35 +36,23 @@ class MechanismStatePublisherNode(InputNode):
     def __init__(self, **kwargs):
         super().__init__('mechanism_state_publisher', **kwargs)
         # Raises ValueError on an invalid start-up set (run() reports it).
-        self._core = MechanismState(self.declare_settings(PARAMETERS),
-                                    time.monotonic())
-        overrides = QoSOverridingOptions.with_default_policies()
-        self._publisher = self.create_publisher(
-            JointState, 'mechanism/joint_states', default_qos(),
-            qos_overriding_options=overrides)
-        self.create_input(
-            JointState, 'joint_states', self._on_joint_state, default_qos(),
-            'joint_states', decode=cdr.joint_state,
-            qos_overriding_options=overrides)
+        self.core = MechanismState(self.declare_settings(PARAMETERS),
+                                   time.monotonic())
+        self._publisher = self.create_output(JointState,
+                                             'mechanism/joint_states')
+        self.create_input(JointState, 'joint_states', self._on_joint_state,
+                          'joint_states', decode=cdr.joint_state)
         self._message = JointState()
         self._names = None
-        self.publish_status('Orthoglide mechanism state', self._core)
+        self.publish_status('Orthoglide mechanism state', self.core)
         # The core swaps its settings at once (under the lock).
-        self.apply_changes_with(self._core.configure)
+        self.apply_changes_with(self.core.configure)
         self.start_threads()
 
     def _on_joint_state(self, fields):
         """Solve one joint state and publish it (input thread, lock held)."""
         stamp, frame, names, position, velocity, _ = fields
-        try:
-            state = self._core.joint_state(names, position, velocity,
-                                           self.arrival)
-        except Rejected as rejection:
-            self._warn(rejection)
-            return
-        except Exception:   # a defect, not bad input: publish nothing, go on
-            self.report_defect('on a joint state, nothing published')
-            return
+        state = self.core.joint_state(names, position, velocity, self.arrival)
         message = self._message
         message.header.stamp.sec, message.header.stamp.nanosec = stamp
         message.header.frame_id = frame
@@ -76,19 +62,6 @@ class MechanismStatePublisherNode(InputNode):
         message.position = array.array('d', state.position)
         message.velocity = array.array('d', state.velocity)
         self._publisher.publish(message)
-
-    def on_input_rejected(self, source, rejection):
-        """Count a joint state refused before it was read."""
-        try:
-            self._core.reject(rejection)
-        except Rejected:
-            self._warn(rejection)
-
-    def _warn(self, rejection):
-        self.warn_throttled(
-            rejection.reason,
-            f'joint state rejected ({rejection.reason}), nothing published: '
-            f'{rejection}')
 
 
 def main(args=None):

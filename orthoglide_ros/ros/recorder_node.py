@@ -29,12 +29,10 @@ import time
 
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from orthoglide_ros.cores.inputs import RECORD_MESSAGE_BYTES
 from orthoglide_ros.ros import console
 from orthoglide_ros.ros.node_runtime import InputNode, run
 
-# Largest message recorded (bytes): a longer one is refused before it is
-# read, counted and warned about (an oversize input of any node).
-RECORD_MESSAGE_BYTES = 4 * 1024 * 1024
 # History of each subscription: the messages that may wait for the writer.
 RECORD_DEPTH = 1000
 STORAGES = ('mcap', 'sqlite3')
@@ -116,7 +114,8 @@ class Recorder(InputNode):
         self.output = output
         self.counts = dict.fromkeys(found, 0)
         for index, (topic, type_name) in enumerate(found.items()):
-            self.create_input(
+            # The publishers' QoS, not the package's: read_input.
+            self.read_input(
                 _message_class(type_name), topic,
                 functools.partial(self._write, topic, index),
                 self._qos(topic), topic, decode=bytes,

@@ -18,7 +18,6 @@ input:=topics``; ``doc/setpoint_publisher.md`` has the parameters.
 """
 
 from rclpy.duration import Duration
-from rclpy.qos_overriding_options import QoSOverridingOptions
 from rclpy.task import Future
 
 from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
@@ -26,7 +25,7 @@ from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
 from trajectory_msgs.msg import (MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
-from orthoglide_ros.ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.ros.node_runtime import InputNode, run
 from orthoglide_ros.cores.setpoint_publisher import PARAMETERS, Stream
 
 # The platform centre G as the one multi-DOF "joint" of a trajectory.
@@ -46,7 +45,6 @@ class SetpointPublisher(InputNode):
         # Raises ValueError on an invalid start-up set (run() reports it).
         settings = self.declare_settings(PARAMETERS)
         self._stream = Stream(settings)
-        overrides = QoSOverridingOptions.with_default_policies()
         frame = settings.frame_id
         if settings.input == 'trajectory':
             self._trajectory = MultiDOFJointTrajectory(
@@ -55,9 +53,8 @@ class SetpointPublisher(InputNode):
                     transforms=[Transform()], velocities=[Twist()],
                     accelerations=[Twist()])])
             self._trajectory.header.frame_id = frame
-            self._publishers = [self.create_publisher(
-                MultiDOFJointTrajectory, 'setpoint/trajectory',
-                default_qos(), qos_overriding_options=overrides)]
+            self._publishers = [self.create_output(MultiDOFJointTrajectory,
+                                                   'setpoint/trajectory')]
         else:
             # Default orientation: the identity quaternion (w = 1).
             self._pose, self._twist, self._accel = (
@@ -65,9 +62,7 @@ class SetpointPublisher(InputNode):
             for msg in (self._pose, self._twist, self._accel):
                 msg.header.frame_id = frame
             self._publishers = [
-                self.create_publisher(kind, f'setpoint/{name}',
-                                      default_qos(),
-                                      qos_overriding_options=overrides)
+                self.create_output(kind, f'setpoint/{name}')
                 for kind, name in ((PoseStamped, 'pose'),
                                    (TwistStamped, 'twist'),
                                    (AccelStamped, 'accel'))]

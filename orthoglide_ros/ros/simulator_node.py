@@ -19,7 +19,6 @@ import array
 import time
 
 from rclpy.duration import Duration
-from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from geometry_msgs.msg import PoseStamped
 from sensor_msgs.msg import JointState
@@ -27,8 +26,7 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.cores.inputs import Rejected
-from orthoglide_ros.ros.node_runtime import default_qos, InputNode, run
+from orthoglide_ros.ros.node_runtime import InputNode, run
 from orthoglide_ros.cores.simulator import PARAMETERS, Simulator, STOPPED
 
 # Longest span (s) of the two monotonic reads around a node-clock read.
@@ -48,29 +46,21 @@ class SimulatorNode(InputNode):
     def __init__(self, **kwargs):
         super().__init__('simulator', **kwargs)
         # Raises ValueError on an invalid start-up set (run() reports it).
-        self._core = Simulator(self.declare_settings(PARAMETERS),
-                               time.monotonic())
-
-        overrides = QoSOverridingOptions.with_default_policies()
-        self._pub_joints = self.create_publisher(
-            JointState, 'joint_states', default_qos(),
-            qos_overriding_options=overrides)
-        self._pub_pose = self.create_publisher(
-            PoseStamped, 'platform/pose', default_qos(),
-            qos_overriding_options=overrides)
-        self.create_input(
-            Float64MultiArray, 'commands', self._on_command, default_qos(),
-            'commands', decode=cdr.float64_array,
-            qos_overriding_options=overrides)
+        self.core = Simulator(self.declare_settings(PARAMETERS),
+                              time.monotonic())
+        self._pub_joints = self.create_output(JointState, 'joint_states')
+        self._pub_pose = self.create_output(PoseStamped, 'platform/pose')
+        self.create_input(Float64MultiArray, 'commands', self._on_command,
+                          'commands', decode=cdr.float64_array)
         self.create_service(Trigger, '~/reset', self._on_reset)
 
         self._joints = JointState()
         self._pose = PoseStamped()
         self._pose.pose.orientation.w = 1.0
         self._apply_names()
-        self.create_periodic(lambda: 1.0 / self._core.settings.rate_hz,
+        self.create_periodic(lambda: 1.0 / self.core.settings.rate_hz,
                              self._on_steps, 'steps')
-        self.publish_status('Orthoglide simulator', self._core)
+        self.publish_status('Orthoglide simulator', self.core)
         # Last: the QoS override parameters declared above are no concern.
         self.apply_changes_with(self._configure)
         self.start_threads()
@@ -78,14 +68,14 @@ class SimulatorNode(InputNode):
     # Parameters -----------------------------------------------------------
     def _configure(self, settings):
         """Apply the live settings at once (lock held); the plant's wait."""
-        self._core.configure(settings)
+        self.core.configure(settings)
         self._apply_names()
-        if self._core.pending_reset:
+        if self.core.pending_reset:
             self.log('info', 'new robot, initial_position or '
                      'singularity_margin: applies at the next ~/reset')
 
     def _apply_names(self):
-        settings = self._core.settings
+        settings = self.core.settings
         self._joints.name = list(settings.joint_names)
         self._joints.header.frame_id = ''
         self._pose.header.frame_id = settings.base_frame
@@ -93,31 +83,14 @@ class SimulatorNode(InputNode):
     # Inputs ---------------------------------------------------------------
     def _on_command(self, forces):
         """Take one command (input thread, lock held)."""
-        try:
-            self._core.command(forces, self.arrival)
-        except Rejected as rejection:
-            self._warn_rejected(rejection)
-        else:
-            if self._core.state == STOPPED:
-                self.warn_throttled(
-                    'ignored', 'command ignored: the simulation is stopped '
-                    '(call ~/reset)')
-
-    def on_input_rejected(self, source, rejection):
-        """Count a command refused before it was read."""
-        try:
-            self._core.reject(rejection)
-        except Rejected:
-            self._warn_rejected(rejection)
-
-    def _warn_rejected(self, rejection):
-        self.warn_throttled(rejection.reason,
-                            f'command rejected ({rejection.reason}): '
-                            f'{rejection}')
+        self.core.command(forces, self.arrival)
+        if self.core.state == STOPPED:
+            self.warn_throttled('ignored', 'command ignored: the simulation '
+                                'is stopped (call ~/reset)')
 
     def _on_reset(self, request, response):
         with self.lock:
-            response.message = self._core.reset()
+            response.message = self.core.reset()
         response.success = True
         self.log('info', f'reset: {response.message}')
         return response
@@ -129,7 +102,7 @@ class SimulatorNode(InputNode):
         last = None
         while True:
             with self.lock:
-                step = self._core.step_due(now)
+                step = self.core.step_due(now)
                 if step is None:
                     break
                 last = step
@@ -139,15 +112,15 @@ class SimulatorNode(InputNode):
             return
         tick, instant = last
         with self.lock:
-            publish = self._core.publish_due(tick, instant)
+            publish = self.core.publish_due(tick, instant)
         if publish:
             self._publish(tick, instant)
         if tick.event == 'stopped':
-            self.log('error', self._core.stop_message)
+            self.log('error', self.core.stop_message)
         elif tick.event == 'timeout':
             self.warn_throttled('timeout', (
                 f'no valid command for command_timeout '
-                f'{self._core.settings.command_timeout:g} s: braked, held '
+                f'{self.core.settings.command_timeout:g} s: braked, held '
                 'until the next command'))
 
     def _publish(self, tick, instant):
@@ -163,8 +136,6 @@ class SimulatorNode(InputNode):
         p.x, p.y, p.z = tick.position
         self._pub_joints.publish(joints)
         self._pub_pose.publish(pose)
-        with self.lock:
-            self._core.published += 1
 
     def _node_time(self, instant):
         """

@@ -12,17 +12,15 @@ with ``ros2 run orthoglide_ros tracking_controller``;
 import array
 import time
 
-from rclpy.qos_overriding_options import QoSOverridingOptions
-
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.cores.inputs import Rejected
-from orthoglide_ros.ros.node_runtime import default_qos, InputNode, run
-from orthoglide_ros.cores.tracking_controller import (HOLDING, PARAMETERS, Tracking,
-                                                      TRAJECTORY_BYTES)
+from orthoglide_ros.ros.node_runtime import InputNode, run
+from orthoglide_ros.cores.inputs import JOINT_TRAJECTORY_BYTES
+from orthoglide_ros.cores.tracking_controller import (HOLDING, PARAMETERS,
+                                                      Tracking)
 
 
 class TrackingControllerNode(InputNode):
@@ -40,68 +38,54 @@ class TrackingControllerNode(InputNode):
     def __init__(self, **kwargs):
         super().__init__('tracking_controller', **kwargs)
         # Raises ValueError on an invalid start-up set (run() reports it).
-        self._core = Tracking(self.declare_settings(PARAMETERS),
-                              time.monotonic())
-
-        overrides = QoSOverridingOptions.with_default_policies()
-        self._pub_commands = self.create_publisher(
-            Float64MultiArray, 'commands', default_qos(),
-            qos_overriding_options=overrides)
+        self.core = Tracking(self.declare_settings(PARAMETERS),
+                             time.monotonic())
+        self._pub_commands = self.create_output(Float64MultiArray, 'commands')
         # Measured first: when both inputs are ready in one wake-up of the
         # input thread, the measurements are taken before the desired
         # states, so a command uses the newest measurement.
-        self.create_input(
-            JointState, 'joint_states', self._on_measured, default_qos(),
-            'measured', decode=cdr.joint_state,
-            qos_overriding_options=overrides)
-        self.create_input(
-            JointState, 'feedforward/joint_states', self._on_desired,
-            default_qos(), 'desired', decode=cdr.joint_state,
-            qos_overriding_options=overrides)
+        self.create_input(JointState, 'joint_states', self._on_measured,
+                          'measured', decode=cdr.joint_state)
+        self.create_input(JointState, 'feedforward/joint_states',
+                          self._on_desired, 'desired', decode=cdr.joint_state)
         # A joint_trajectory_controller's input: whole trajectories.
         self.create_input(
             JointTrajectory, 'joint_trajectory', self._on_trajectory,
-            default_qos(), 'trajectory', decode=cdr.joint_trajectory_points,
-            max_bytes=TRAJECTORY_BYTES, group='trajectories',
-            qos_overriding_options=overrides)
-        self.create_periodic(lambda: 1.0 / self._core.settings.rate_hz,
-                             self._on_tick, 'trajectory loop')
+            'trajectory', decode=cdr.joint_trajectory_points,
+            max_bytes=JOINT_TRAJECTORY_BYTES, group='trajectories')
+        self.create_periodic(lambda: 1.0 / self.core.settings.rate_hz,
+                             self._on_tick, 'trajectory')
 
         self._command = Float64MultiArray()
         self._command.layout.dim = [
             MultiArrayDimension(label='actuator', size=3, stride=3)]
-        self.publish_status('Orthoglide tracking controller', self._core)
+        self.publish_status('Orthoglide tracking controller', self.core)
         # The core swaps its settings at once (under the lock).
-        self.apply_changes_with(self._core.configure)
+        self.apply_changes_with(self.core.configure)
         self.start_threads()
 
     # Inputs (input thread, self.lock held) --------------------------------
     def _on_measured(self, fields):
-        self._take('measured', self._core.measured, fields)
+        _, _, names, position, velocity, effort = fields
+        self.core.measured(names, position, velocity, effort, self.arrival)
 
     def _on_desired(self, fields):
-        mode = self._core.mode
-        self._send(self._take('desired', self._core.desired, fields), mode)
+        _, _, names, position, velocity, effort = fields
+        mode = self.core.mode
+        self._send(self.core.desired(names, position, velocity, effort,
+                                     self.arrival), mode)
 
     def _on_trajectory(self, points):
-        try:
-            self._core.trajectory(points, self._node_seconds(), self.arrival)
-        except Rejected as rejection:
-            self._warn('trajectory', rejection)
+        self.core.trajectory(points, self._node_seconds(), self.arrival)
 
     # The trajectory loop (its own thread) ---------------------------------
     def _on_tick(self):
-        if self._core.idle:     # no trajectory: not even the lock
+        if self.core.idle:      # no trajectory: not even the lock
             return
         with self.lock:
-            mode = self._core.mode
-            try:
-                command = self._core.tick(self._node_seconds(),
-                                          time.monotonic())
-            except Rejected as rejection:
-                self._warn('trajectory', rejection)
-                return
-            self._send(command, mode)
+            mode = self.core.mode
+            self._send(self.core.tick(self._node_seconds(),
+                                      time.monotonic()), mode)
 
     def _node_seconds(self):
         """Return the node clock's time now (s), the trajectories' clock."""
@@ -109,38 +93,13 @@ class TrackingControllerNode(InputNode):
 
     def _send(self, command, mode):
         """Publish a command (None: none); log a change of mode."""
-        if self._core.mode != mode:
-            self.log('error' if self._core.mode == HOLDING else 'info',
-                     self._core.hold_message or 'path tolerance re-armed: '
+        if self.core.mode != mode:
+            self.log('error' if self.core.mode == HOLDING else 'info',
+                     self.core.hold_message or 'path tolerance re-armed: '
                      'following the desired states again')
         if command is not None:
             self._command.data = array.array('d', command.force)
             self._pub_commands.publish(self._command)
-
-    def on_input_rejected(self, source, rejection):
-        """Count a joint state refused before it was read."""
-        try:
-            self._core.reject(source, rejection)
-        except Rejected:
-            self._warn(source, rejection)
-
-    def _take(self, source, method, fields):
-        """Hand one joint state to the core; warn on a rejection."""
-        _, _, names, position, velocity, effort = fields
-        try:
-            return method(names, position, velocity, effort, self.arrival)
-        except Rejected as rejection:
-            self._warn(source, rejection)
-        except Exception:   # a defect, not bad input: publish nothing, go on
-            self.report_defect(f'on a {source} joint state, nothing '
-                               'published')
-        return None
-
-    def _warn(self, source, rejection):
-        self.warn_throttled(
-            (source, rejection.reason),
-            f'{source} joint state rejected ({rejection.reason}): '
-            f'{rejection}')
 
 
 def main(args=None):
