@@ -20,10 +20,6 @@ from orthoglide_ros.cores.parameters import ROBOT_SPECS
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.trajectory import paper_sample
 
-default_parameters, settings_from_parameters = (PARAMETERS.defaults,
-                                                PARAMETERS.parse)
-SPECS, NODE_SPECS, Settings = (PARAMETERS.specs, PARAMETERS.own_specs,
-                               PARAMETERS.Settings)
 
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
 ZERO = (0.0, 0.0, 0.0)
@@ -40,9 +36,9 @@ NEAR_J2 = (0.8, 0.0, 0.0)           # 1/kappa_F(J_lambda) = 0.162
 
 def settings(**changes):
     """Return validated settings: the defaults with ``changes`` (by name)."""
-    values = default_parameters()
+    values = PARAMETERS.defaults()
     values.update(changes)
-    return settings_from_parameters(values)
+    return PARAMETERS.parse(values)
 
 
 def core(**changes):
@@ -487,28 +483,27 @@ def test_configure_takes_effect_for_next_setpoint():
 
 # Settings --------------------------------------------------------------------
 def test_default_settings():
-    s = settings_from_parameters(default_parameters())
-    assert s == Settings(Robot(), ('slider_a', 'slider_b', 'slider_c'),
-                         'base_link', 0.0, 0.1, 0.05,
-                         mechanics.DEFAULT_SINGULARITY_MARGIN, False,
-                         (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 5.0, 100.0,
-                         10000.0)
-    assert settings_from_parameters({}) == s
+    s = PARAMETERS.parse(PARAMETERS.defaults())
+    assert s == PARAMETERS.Settings(
+        Robot(), ('slider_a', 'slider_b', 'slider_c'), 'base_link', 0.0, 0.1,
+        0.05, mechanics.DEFAULT_SINGULARITY_MARGIN, False, (0.0, 0.0, 0.0),
+        (0.0, 0.0, 0.0), 5.0, 100.0, 10000.0)
+    assert PARAMETERS.parse({}) == s
     assert s.robot.m4 == s.robot.m2 and s.robot.m6 == s.robot.m3
 
 
 def test_spec_table():
-    names = [spec.name for spec in SPECS]
+    names = [spec.name for spec in PARAMETERS.specs]
     assert len(names) == len(set(names))
     assert [s.name for s in ROBOT_SPECS] == [
         'robot.' + n for n in Robot.parameter_names()]
-    assert {s.name for s in NODE_SPECS} == set(Settings._fields) - {'robot'}
-    for spec in SPECS:
+    assert {s.name for s in PARAMETERS.own_specs} == set(PARAMETERS.Settings._fields) - {'robot'}
+    for spec in PARAMETERS.specs:
         assert spec.type in ('double', 'double_array', 'string',
                              'string_array', 'bool')
         assert spec.description
-    assert 'robot.m4' not in default_parameters()
-    assert 'robot.m6' not in default_parameters()
+    assert 'robot.m4' not in PARAMETERS.defaults()
+    assert 'robot.m6' not in PARAMETERS.defaults()
 
 
 def test_robot_parameters_used():
@@ -536,7 +531,7 @@ def test_friction_parameters_reach_the_forces_and_powers():
             rigid.force[j] + law, rel=1e-12, abs=1e-9)
         assert out.solution.power[j] == pytest.approx(
             rigid.lambdadot[j] * (rigid.force[j] + law), rel=1e-12)
-    assert default_parameters()['robot.friction_velocity'] == 0.001
+    assert PARAMETERS.defaults()['robot.friction_velocity'] == 0.001
 
 
 @pytest.mark.parametrize('changes', [

@@ -135,9 +135,10 @@ def test_simulator_at_10_khz_keeps_taking_commands_and_says_it_is_slow():
     assert result['alive']
     assert result['received'] == result['sent'], result
     assert result['timeouts'] == 1, result      # the brake at the end
-    if result['step_rate'] < 0.9 * 10000.0:
-        assert result['level'] == 1, result
-        assert 'slower than real time' in result['message'], result
+    # Every run: real time kept, or a WARN that says it is not.
+    slow = result['step_rate'] < 0.9 * 10000.0
+    assert not slow or (result['level'] == 1 and 'slower than real time'
+                        in result['message']), result
 
 
 def test_looping_setpoints_go_back_smoothly():

@@ -23,7 +23,6 @@ from orthoglide_ros.ros.mechanism_state_publisher_node import \
     MechanismStatePublisherNode
 from orthoglide_ros.model.robot import Robot
 import pytest
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
@@ -32,16 +31,14 @@ from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 
 from node_harness import (
-    assert_clean_exit, needs_scripts, node_executable, node_graphs, PROBE_QOS, run_to_exit,
-    spin_until, start_node_process, timed_stop,
-    wait_diagnostics as harness_wait_diagnostics)
+    needs_scripts, node_executable, node_graphs, PROBE_QOS, run_to_exit,
+    spin_until, wait_diagnostics as harness_wait_diagnostics)
 from urdf_harness import COMMITTED_URDF, cut_errors, load, TOLERANCE
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 
 WAIT = 10.0
 START_WAIT = 40.0
-PROMPT = 5.0
 NAMES = ['slider_a', 'slider_b', 'slider_c']
 ROBOT = Robot()
 EXECUTABLE = node_executable('mechanism_state_publisher')
@@ -200,29 +197,6 @@ def test_qos_overrides(ros_context):
 
 
 needs_script = needs_scripts('mechanism_state_publisher')
-
-
-@needs_script
-def test_process_answers_and_exits_0_on_sigint(ros_context):
-    probe = MechanismProbe(ros_context)
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(probe)
-    proc = start_node_process([], command=[EXECUTABLE])
-    try:
-        assert spin_until(executor, probe.matched, START_WAIT)
-        k = 0
-        while not probe.outputs:    # until the input is matched too
-            assert k < 200, 'no mechanism/joint_states'
-            k += 1
-            probe.send((1, k), [0.01, 0.02, -0.03])
-            spin_until(executor, lambda: bool(probe.outputs), 0.2)
-        assert len(probe.outputs[0].name) == 18
-        assert proc.poll() is None
-    finally:
-        stopped = timed_stop(proc)
-        executor.shutdown()
-        probe.destroy_node()
-    assert_clean_exit(*stopped, PROMPT)
 
 
 @needs_script

@@ -13,11 +13,9 @@ it and stopped with SIGINT, as Ctrl-C does.
 """
 
 import math
-import os
 import time
 
 import pytest
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
@@ -34,17 +32,14 @@ from orthoglide_ros.cores.simulator import MAX_CATCH_UP
 from orthoglide_ros.ros.simulator_node import SimulatorNode
 
 from node_harness import (
-    assert_clean_exit, header_stamp, needs_scripts, node_executable, node_graphs, PROBE_QOS,
-    run_to_exit, spin_for, spin_until, start_node_process, timed_stop,
-    wait_diagnostics as harness_wait_diagnostics)
+    header_stamp, needs_scripts, node_executable, node_graphs, PROBE_QOS,
+    run_to_exit, spin_for, spin_until, wait_diagnostics as
+    harness_wait_diagnostics)
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 
-CONFIG = os.path.join(os.path.dirname(os.path.abspath(__file__)),
-                      os.pardir, 'config', 'orthoglide.yaml')
 WAIT = 10.0         # s: generous, the machine is shared
 START_WAIT = 40.0   # s for a process to come up and answer
-PROMPT = 5.0        # s from SIGINT to exit
 ZERO = (0.0, 0.0, 0.0)
 DT = 1e-3           # s: one step at the default rate_hz
 STAMP_SLACK = 1e5   # ns: two clock reads per stamp, microseconds apart
@@ -391,30 +386,6 @@ def simulator_command():
 
 
 needs_script = needs_scripts('simulator')
-
-
-@needs_script
-def test_process_publishes_joint_states_and_exits_0_on_sigint(ros_context):
-    """``simulator``: joint states at rest, then Ctrl-C -> exit 0."""
-    probe = SimProbe(ros_context)
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(probe)
-    # The shipped parameters file, then an override, as a user would.
-    proc = start_node_process(['--ros-args', '--params-file', CONFIG, '-p',
-                               'rate_hz:=100.0'],
-                              command=simulator_command())
-    try:
-        assert spin_until(executor, lambda: len(probe.joint_states) >= 10,
-                          START_WAIT), 'no joint states from the process'
-        msg = probe.joint_states[-1]
-        assert list(msg.name) == JOINT_NAMES
-        assert tuple(msg.position) == ZERO and tuple(msg.effort) == ZERO
-        assert proc.poll() is None, 'the node exited by itself'
-    finally:
-        stopped = timed_stop(proc)
-        executor.shutdown()
-        probe.destroy_node()
-    assert_clean_exit(*stopped, PROMPT)
 
 
 @needs_script

@@ -11,13 +11,11 @@ answers, exits 0 on SIGINT and 2 on an invalid parameter.
 """
 
 import math
-import os
 import time
 
 import pytest
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.executors import SingleThreadedExecutor
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from sensor_msgs.msg import JointState
@@ -28,18 +26,14 @@ from orthoglide_ros.cores.tracking_controller import INPUTS, PARAMETERS, REASONS
 from orthoglide_ros.ros.tracking_controller_node import TrackingControllerNode
 
 from node_harness import (
-    assert_clean_exit, call, diagnostic_values, needs_scripts, node_executable, node_graphs,
+    call, diagnostic_values, needs_scripts, node_executable, node_graphs,
     parameter_client, PROBE_QOS, run_to_exit, spin_for, spin_until,
-    start_node_process, timed_stop,
     wait_diagnostics as harness_wait_diagnostics)
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 
-CONFIG = os.path.join(os.path.dirname(os.path.abspath(__file__)),
-                      os.pardir, 'config', 'orthoglide.yaml')
 WAIT = 10.0         # s: generous, the machine is shared
 START_WAIT = 40.0   # s for a process to come up and answer
-PROMPT = 5.0        # s from SIGINT to exit
 NAMES = ['slider_a', 'slider_b', 'slider_c']
 ZERO = (0.0, 0.0, 0.0)
 NAN = float('nan')
@@ -476,36 +470,6 @@ def test_invalid_start_parameters_raise(ros_context):
 # The console script ----------------------------------------------------------
 EXECUTABLE = node_executable('tracking_controller')
 needs_script = needs_scripts('tracking_controller')
-
-
-@needs_script
-def test_process_answers_and_exits_0_on_sigint(ros_context):
-    """The console script commands over DDS; Ctrl-C ends it with 0."""
-    probe = TrackingProbe(ros_context)
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(probe)
-    # The shipped parameters file, then an override, as a user would.
-    proc = start_node_process(['--ros-args', '--params-file', CONFIG, '-p',
-                               'measurement_timeout:=30.0'],
-                              command=[EXECUTABLE])
-    try:
-        assert spin_until(executor, probe.matched, START_WAIT), \
-            'the node did not appear on the graph'
-        deadline = time.monotonic() + START_WAIT
-        while not probe.commands:   # until both inputs are matched too
-            assert time.monotonic() < deadline, 'no command'
-            probe.send('measured', ZERO)
-            spin_for(executor, 0.1)
-            probe.send('desired', (0.001, 0.0, 0.0), ZERO, (1.0, 2.0, 3.0))
-            spin_until(executor, lambda: bool(probe.commands), 0.5)
-        assert list(probe.commands[0].data) == pytest.approx(
-            [21.0, 2.0, 3.0])
-        assert proc.poll() is None, 'the node exited by itself'
-    finally:
-        stopped = timed_stop(proc)
-        executor.shutdown()
-        probe.destroy_node()
-    assert_clean_exit(*stopped, PROMPT)
 
 
 @needs_script

@@ -50,6 +50,9 @@ _LITTLE_ENDIAN_CDR = (b'\x00\x01', b'\x00\x03')   # CDR_LE, PL_CDR_LE
 # Joint names a MultiDOFJointTrajectory may carry (the platform's one, and
 # room to spare): the reader skips them one by one.
 MAX_JOINT_NAMES = 64
+# The rosbag2 storages of the logs the package writes (orthoglide record)
+# and reads (orthoglide identify): the first is the default.
+BAG_STORAGES = ('mcap', 'sqlite3')
 
 
 class CdrError(ValueError):

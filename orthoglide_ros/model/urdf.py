@@ -292,7 +292,7 @@ def _leg(root, robot, leg, slider_joint, home, limits, masses, radius):
                link_name(leg, body), rotation @ (frame['origin'] - origin),
                rotation @ frame['rotation'].T, limits[variable],
                SLIDER_EFFORT if body == 1 else 0.0)
-        _body_shapes(link, robot, body, home, colour, radius)
+        _body_shapes(link, body, home, colour, radius)
     joints = home['joints']
     for body, side in ((6, 'bar'), (4, 'rod')):
         frame = bodies[body]
@@ -303,7 +303,7 @@ def _leg(root, robot, leg, slider_joint, home, limits, masses, radius):
                frame['rotation'] @ bodies[6]['rotation'].T)
 
 
-def _body_shapes(link, robot, body, home, colour, radius):
+def _body_shapes(link, body, home, colour, radius):
     """Add the visual and collision shapes of one body (its own frame)."""
     frame = home['bodies'][body]
 

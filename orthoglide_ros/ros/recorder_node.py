@@ -35,7 +35,6 @@ from orthoglide_ros.ros.node_runtime import InputNode, run
 
 # History of each subscription: the messages that may wait for the writer.
 RECORD_DEPTH = 1000
-STORAGES = ('mcap', 'sqlite3')
 BAG_VERSION = 9
 GRAPH_POLL = 0.05   # s between two looks at the graph while waiting
 

@@ -37,7 +37,7 @@ import tempfile
 
 import numpy as np
 
-from orthoglide_ros.formats import params_file
+from orthoglide_ros.formats import cdr, params_file
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools import identification
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
@@ -97,7 +97,8 @@ def main(argv=None):
         if args.command != 'record':    # a bag: the recorder's own checks
             for option in OUTPUT_OPTIONS:
                 _check_output(getattr(args, option, None), option)
-        robot = _robot(getattr(args, 'params', None))
+        # Every subcommand but record reads the robot (--params).
+        robot = _robot(args.params) if 'params' in args else None
         return args.run(robot, args)
     except CliError as error:
         _fail(str(error))
@@ -935,8 +936,8 @@ def _parser():
     record.add_argument('--topic', action='append', metavar='NAME',
                         help='topic to record, repeatable (default '
                         f'{identification.DEFAULT_TOPIC})')
-    record.add_argument('--storage', choices=('mcap', 'sqlite3'),
-                        default='mcap', help='storage (default mcap, as '
+    record.add_argument('--storage', choices=cdr.BAG_STORAGES,
+                        default=cdr.BAG_STORAGES[0], help='storage (default mcap, as '
                         'ros2 bag record)')
     record.add_argument('--wait', type=_positive_float, default=10.0,
                         metavar='S', help='longest wait for each topic\'s '
