@@ -3,7 +3,7 @@
 
 Builds the repository into a temporary directory (build, install and log
 there, the source tree untouched) and runs what ``ros2 run orthoglide_ros
-feedforward`` runs: ``install/orthoglide_ros/lib/orthoglide_ros/cores/feedforward``
+feedforward`` runs: ``install/orthoglide_ros/lib/orthoglide_ros/feedforward``
 with the install tree's site-packages first on PYTHONPATH, so the code under
 test is the installed copy.
 """
@@ -69,10 +69,10 @@ def install_env(prefix):
 
 def test_install_layout(install):
     """Executables, config, URDF, package.xml and the ament index are installed."""
-    for relative in ('lib/orthoglide_ros/cores/feedforward',
+    for relative in ('lib/orthoglide_ros/feedforward',
                      'lib/orthoglide_ros/orthoglide',
                      'lib/orthoglide_ros/tracking_controller',
-                     'lib/orthoglide_ros/cores/simulator',
+                     'lib/orthoglide_ros/simulator',
                      'lib/orthoglide_ros/mechanism_state_publisher'):
         path = install / relative
         assert path.is_file() and os.access(path, os.X_OK), relative
