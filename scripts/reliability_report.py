@@ -220,21 +220,21 @@ def hostile_report():
 
     r = run('malformed parameter requests', hostile.malformed_parameters)
     if r is not None:
-        line(all(o['refused'] and o['alive'] and o['answers_after']
-                 and o['code'] == 0 for o in r.values()),
+        line(all(o.refused and o.alive and o.answers_after and o.code == 0
+                 for o in r.values()),
              'malformed parameter request (type 200), set and atomic: '
-             + ', '.join(n + (' refused, up' if o['refused'] and o['alive']
+             + ', '.join(n + (' refused, up' if o.refused and o.alive
                               else ' FAILED') for n, o in r.items()))
     r = run('absurd parameters', hostile.absurd_parameters)
     if r is not None:
-        refused = all(not ok for changes in r['runtime'].values()
+        refused = all(not ok for changes in r.runtime.values()
                       for ok, _ in changes.values())
-        line(refused and all(r['alive'].values()) and all(
-            code == 2 for code, _ in r['startup'].values()),
+        line(refused and all(r.alive.values()) and all(
+            code == 2 for code, _ in r.startup.values()),
              f'absurd values ({", ".join(hostile.ABSURD["simulator"])}, '
              f'...): refused at run time {refused}, nodes up '
-             f'{all(r["alive"].values())}; -p robot.l3:=1e200 at start: '
-             f'exit {[code for code, _ in r["startup"].values()]}')
+             f'{all(r.alive.values())}; -p robot.l3:=1e200 at start: '
+             f'exit {[code for code, _ in r.startup.values()]}')
     r = run('big messages', harness.big_messages, say=say)
     if r is not None:
         line(r['missing'] == 0 and r['crashes'] == 0
@@ -248,60 +248,58 @@ def hostile_report():
              f'{r["latency_during_p99"] * 1e3:.1f}); {r["rejected"]}')
     r = run('stall and resume', hostile.stall_resume)
     if r is not None:
-        worst_f = max(s['max_force'] for s in r['stalls'].values())
-        worst_v = max(s['max_speed'] for s in r['stalls'].values())
-        line(worst_f < r['force_limit'] and worst_v <= 2 * r['peak_speed'],
+        worst_f = max(s.max_force for s in r.stalls.values())
+        worst_v = max(s.max_speed for s in r.stalls.values())
+        line(worst_f < r.force_limit and worst_v <= 2 * r.peak_speed,
              f'2 s SIGSTOP of each process of the closed loop: largest '
-             f'|command| {worst_f:.0f} N (limit {r["force_limit"]:.0f}), '
+             f'|command| {worst_f:.0f} N (limit {r.force_limit:.0f}), '
              f'largest |lambdadot| {worst_v:.3f} m/s (trajectory peak '
-             f'{r["peak_speed"]:.3f}); per process '
-             + ', '.join(f'{n} {s["max_force"]:.0f} N {s["max_speed"]:.3f} '
-                         f'm/s' for n, s in r['stalls'].items()))
+             f'{r.peak_speed:.3f}); per process '
+             + ', '.join(f'{n} {s.max_force:.0f} N {s.max_speed:.3f} m/s'
+                         for n, s in r.stalls.items()))
     r = run('stamps', hostile.stamps)
     if r is not None:
-        line(r['outputs'] == 0 and r['good'] == 2,
-             f'nanosec >= 1e9 on every input: {r["outputs"]} outputs, '
-             f'{r["rejected_stamp"]} rejected (stamp); the same instants '
-             f'written right: {r["good"]} of 2 served')
+        line(r.outputs == 0 and r.good == 2,
+             f'nanosec >= 1e9 on every input: {r.outputs} outputs, '
+             f'{r.rejected_stamp} rejected (stamp); the same instants '
+             f'written right: {r.good} of 2 served')
     r = run('signals while starting', hostile.startup_signals)
     if r is not None:
-        bad = [(n, s, d, c) for n, s, d, c, e in r
-               if c != 0 or not hostile.quiet(e)]
+        bad = [(t.name, t.signal, t.delay, t.code) for t in r
+               if t.code != 0 or not hostile.quiet(t.stderr)]
         line(not bad, f'SIGINT/SIGTERM 0-0.3 s after the first line, every '
              f'node, and at the end of a pass: {len(r)} tries, '
              f'{len(bad)} not exit 0 quietly {bad[:3]}')
     r = run('log amplification', hostile.log_amplification)
     if r is not None:
-        line(all(o['longest'] <= hostile.LOG_LINE_LIMIT for o in r.values()),
+        line(all(o.longest <= hostile.LOG_LINE_LIMIT for o in r.values()),
              'long text and malformed floods: longest log line '
-             + ', '.join(f'{n} {o["longest"]} chars ({o["lines"]} lines)'
+             + ', '.join(f'{n} {o.longest} chars ({o.lines} lines)'
                          for n, o in r.items()))
     r = run('departed clients', hostile.departed_clients)
     if r is not None:
-        line(max(r['gaps'].values()) <= 0.2,
-             f'{r["requests"]} requests then gone, x3 (simulator set and '
+        line(max(r.gaps.values()) <= 0.2,
+             f'{r.requests} requests then gone, x3 (simulator set and '
              f'~/reset, feedforward set): longest output gap '
-             + ', '.join(f'{n} {g * 1e3:.0f} ms'
-                         for n, g in r['gaps'].items())
-             + f'; replies dropped {r["dropped"]}; while the clients '
+             + ', '.join(f'{n} {g * 1e3:.0f} ms' for n, g in r.gaps.items())
+             + f'; replies dropped {r.dropped}; while the clients '
              f'joined (apart): '
              + ', '.join(f'{n} {g * 1e3:.0f} ms'
-                         for n, g in r['joining'].items()))
+                         for n, g in r.joining.items()))
     r = run('simulator at 10 kHz', hostile.fast_simulator)
     if r is not None:
-        line(r['received'] == r['sent'] and r['timeouts'] == 1,
-             f'simulator rate_hz 10000, commands at 500 Hz: {r["received"]}'
-             f'/{r["sent"]} taken, {r["timeouts"] - 1} spurious timeouts, '
-             f'{r["step_rate"]:.0f} steps/s, status {r["message"]!r}')
+        line(r.received == r.sent and r.timeouts == 1,
+             f'simulator rate_hz 10000, commands at 500 Hz: {r.received}'
+             f'/{r.sent} taken, {r.timeouts - 1} spurious timeouts, '
+             f'{r.step_rate:.0f} steps/s, status {r.message!r}')
     r = run('setpoint loop', hostile.setpoint_loop)
     if r is not None:
-        line(r['jump_p'] <= r['jump_p_bound']
-             and r['jump_v'] <= r['jump_v_bound'],
-             f'looping setpoint publisher, {r["passes"]} passes: largest '
-             f'step {r["jump_p"] * 1e3:.3f} mm (bound '
-             f'{r["jump_p_bound"] * 1e3:.3f}), largest velocity step '
-             f'{r["jump_v"] * 1e3:.3f} mm/s (bound '
-             f'{r["jump_v_bound"] * 1e3:.3f})')
+        line(r.jump_p <= r.jump_p_bound and r.jump_v <= r.jump_v_bound,
+             f'looping setpoint publisher, {r.passes} passes: largest '
+             f'step {r.jump_p * 1e3:.3f} mm (bound '
+             f'{r.jump_p_bound * 1e3:.3f}), largest velocity step '
+             f'{r.jump_v * 1e3:.3f} mm/s (bound '
+             f'{r.jump_v_bound * 1e3:.3f})')
     r = run('trajectory flood', hostile.trajectory_flood)
     if r is not None:
         line(r.saturated == 0 and r.max_speed <= 0.5

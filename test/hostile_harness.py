@@ -81,6 +81,124 @@ class HarnessError(RuntimeError):
     """A case could not run (a node did not start, a peer failed)."""
 
 
+# What each case saw: named results, one dataclass per case ------------------
+@dataclass
+class Refusal:
+    """One node under :func:`malformed_parameters`."""
+
+    answered: bool          # both requests got a response
+    refused: bool           # every result unsuccessful, naming the request
+    reasons: list
+    answers_after: bool = False     # get_parameters answered afterwards
+    alive: bool = False
+    code: int = None        # exit code of the stop
+    stderr: str = ''
+
+
+@dataclass
+class AbsurdParameters:
+    """:func:`absurd_parameters`: per node, per parameter, what happened."""
+
+    runtime: dict           # node -> {parameter: (successful, reason)}
+    alive: dict             # node -> alive after the requests
+    startup: dict           # node -> (exit code, stderr) of -p l3:=1e200
+
+
+@dataclass
+class Stamps:
+    """:func:`stamps`: outputs of the bad and of the good instants."""
+
+    outputs: int            # for the bad ones: should be 0
+    good: int               # for the same instants written right
+    rejected_stamp: int
+    alive: bool
+
+
+@dataclass
+class Signalled:
+    """One try of :func:`startup_signals`."""
+
+    name: str
+    signal: str
+    delay: float            # s after the first line (or the summary)
+    code: int
+    stderr: str
+
+
+@dataclass
+class Logged:
+    """One node under :func:`log_amplification`."""
+
+    alive: bool
+    code: int
+    lines: int              # stderr lines
+    longest: int            # characters of the longest
+    counters: dict          # the non-zero 'rejected ...' diagnostics
+
+
+@dataclass
+class Departed:
+    """:func:`departed_clients`: the longest gap of each output stream."""
+
+    requests: int
+    bursts: tuple
+    gaps: dict              # stream -> s, while requests were handled
+    joining: dict           # stream -> s, while a client joined (apart)
+    seconds: float
+    client_exits: list
+    dropped: dict           # node -> replies dropped (client gone)
+    alive: dict
+
+
+@dataclass
+class FastSimulator:
+    """:func:`fast_simulator`: commands taken and the status said."""
+
+    received: int
+    sent: int
+    timeouts: int           # one is the brake after the last command
+    level: int
+    message: str
+    step_rate: float
+    alive: bool
+
+
+@dataclass
+class SetpointLoop:
+    """:func:`setpoint_loop`: the largest jumps and what the motion allows."""
+
+    samples: int
+    span: float
+    passes: int
+    jump_p: float
+    jump_p_bound: float
+    jump_v: float
+    jump_v_bound: float
+    peak_speed: float
+
+
+@dataclass
+class Stall:
+    """One stalled process of :func:`stall_resume`."""
+
+    max_force: float        # N, from the stall's start to its end + after
+    max_speed: float        # m/s
+    commands: int
+    trips: int
+    stall_holds: int
+    mode: str
+
+
+@dataclass
+class Stalls:
+    """:func:`stall_resume`: each stalled process and the bounds."""
+
+    peak_speed: float       # the trajectory's own, m/s
+    force_limit: float
+    stalls: dict            # process -> Stall
+    alive: dict             # process -> every node alive after
+
+
 # A peer in this process ------------------------------------------------------
 class Peer:
     """
@@ -287,7 +405,7 @@ def malformed_parameters(type_code=200):
                 SetParametersAtomically.Request(parameters=[bad]))
             results = ([] if single is None else list(single.results)) + (
                 [] if atomic is None else [atomic.result])
-            result[name] = dict(
+            result[name] = Refusal(
                 answered=single is not None and atomic is not None,
                 refused=len(results) == 2 and all(
                     not r.successful and 'malformed' in r.reason
@@ -295,13 +413,13 @@ def malformed_parameters(type_code=200):
                 reasons=[r.reason for r in results])
         time.sleep(1.0)
         for name in NODES:
-            result[name]['answers_after'] = peer.call(
+            result[name].answers_after = peer.call(
                 GetParameters, f'/{name}/get_parameters',
                 GetParameters.Request(names=['use_sim_time']),
                 5.0) is not None
-            result[name]['alive'] = nodes.alive(name)
+            result[name].alive = nodes.alive(name)
         for name in NODES:
-            result[name]['code'], result[name]['stderr'] = nodes.stop(name)
+            result[name].code, result[name].stderr = nodes.stop(name)
     return result
 
 
@@ -344,7 +462,7 @@ def absurd_parameters():
             except Exception:
                 pass
             startup[name] = nodes.stop(name)
-    return dict(runtime=runtime, alive=alive, startup=startup)
+    return AbsurdParameters(runtime, alive, startup)
 
 
 # 5. Stamps -------------------------------------------------------------------
@@ -393,9 +511,9 @@ def stamps():
         peer.wait(lambda: len(outputs) >= bad + 2, 5.0)
         status = peer.status('feedforward', timeout=3.0)
         values = status[2] if status else {}
-        return dict(outputs=bad, good=len(outputs) - bad,
-                    rejected_stamp=int(values.get('rejected stamp', -1)),
-                    alive=nodes.alive('feedforward'))
+        return Stamps(outputs=bad, good=len(outputs) - bad,
+                      rejected_stamp=int(values.get('rejected stamp', -1)),
+                      alive=nodes.alive('feedforward'))
 
 
 def _setpoint(frame, stamp=(5, 0), offset=(0, 0)):
@@ -446,17 +564,17 @@ def startup_signals(delays=(0.0, 0.05, 0.15, 0.3), names=NODES,
             for delay in delays:
                 proc = start_node_process(['--ros-args'],
                                           command=[node_executable(name)])
-                outcomes.append((name, signame, delay) + _signalled(
-                    proc, signame, delay, lambda p: catches_sigterm(p.pid)))
+                outcomes.append(Signalled(name, signame, delay, *_signalled(
+                    proc, signame, delay, lambda p: catches_sigterm(p.pid))))
     for signame in signals:
         for delay in exit_delays:
             proc = start_node_process(
                 ['--ros-args', '-p', 'duration:=0.3', '-p',
                  'start_delay:=0.0'],
                 command=[node_executable('setpoint_publisher')])
-            outcomes.append(('setpoint_publisher end of pass', signame,
-                             delay) + _signalled(proc, signame, delay,
-                                                 _summary_written))
+            outcomes.append(Signalled(
+                'setpoint_publisher end of pass', signame, delay,
+                *_signalled(proc, signame, delay, _summary_written)))
     return outcomes
 
 
@@ -542,7 +660,7 @@ def log_amplification():
             code, stderr = nodes.stop(name)
             lines = _lines(stderr)
             values = status[name][2] if status[name] else {}
-            result[name] = dict(
+            result[name] = Logged(
                 alive=alive, code=code, lines=len(lines),
                 longest=max((len(line) for line in lines), default=0),
                 counters={k: v for k, v in values.items()
@@ -575,7 +693,7 @@ def departed_clients(requests=100):
     Also how long it took, the children's exit codes, the replies each
     node dropped and whether the nodes are alive.
     """
-    result = dict(gaps={}, joining={}, requests=requests, bursts=BURSTS)
+    gaps_of, joining_of = {}, {}
     with Nodes() as nodes, Peer() as peer:
         nodes.start('simulator')
         nodes.start('feedforward', '-p', 'rate_hz:=500.0')
@@ -619,18 +737,18 @@ def departed_clients(requests=100):
             joining = np.zeros(len(gaps), bool)
             for first, requesting in joins:
                 joining |= (began >= first) & (began < requesting)
-            result['gaps'][stream] = max(gaps[~joining], default=math.inf)
-            result['joining'][stream] = max(gaps[joining], default=0.0)
-        result.update(seconds=end - start,
-                      client_exits=[code for code, _ in stopped])
-        result['dropped'] = {}
+            gaps_of[stream] = max(gaps[~joining], default=math.inf)
+            joining_of[stream] = max(gaps[joining], default=0.0)
+        dropped = {}
         for name in ('simulator', 'feedforward'):
             status = peer.status(name, timeout=3.0)
-            result['dropped'][name] = int(status[2].get(
+            dropped[name] = int(status[2].get(
                 'replies dropped (client gone)', -1)) if status else -1
-        result['alive'] = {n: nodes.alive(n) for n in
-                           ('simulator', 'feedforward')}
-    return result
+        return Departed(
+            requests=requests, bursts=BURSTS, gaps=gaps_of,
+            joining=joining_of, seconds=end - start,
+            client_exits=[code for code, _ in stopped], dropped=dropped,
+            alive={n: nodes.alive(n) for n in ('simulator', 'feedforward')})
 
 
 # What a departing client prints (with its monotonic time) as its requests
@@ -705,7 +823,7 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
         after = peer.status('simulator', timeout=3.0)
         values = after[2] if after else {}
         level, message, seen = during if during else (None, '', {})
-        return dict(
+        return FastSimulator(
             received=int(values.get('commands received', -1)),
             sent=commands, timeouts=int(values.get('timeouts', -1)),
             level=level, message=message,
@@ -751,14 +869,15 @@ def setpoint_loop(duration=0.6, return_duration=0.6, rate_hz=500.0,
     accel = max(np.linalg.norm(m[2]) for m in motion)
     jumps_p = np.linalg.norm(np.diff(p, axis=0), axis=1)
     jumps_v = np.linalg.norm(np.diff(v, axis=0), axis=1)
-    return dict(samples=len(t), span=float(t[-1] - t[0]) if len(t) else 0.0,
-                passes=int((t[-1] - t[0]) // (duration + return_duration))
-                + 1 if len(t) else 0,
-                jump_p=float(jumps_p.max()), jump_p_bound=float(
-                    (speed * dt).max() * 1.01 + 1e-12),
-                jump_v=float(jumps_v.max()), jump_v_bound=float(
-                    (accel * dt).max() * 1.01 + 1e-12),
-                peak_speed=speed)
+    return SetpointLoop(
+        samples=len(t), span=float(t[-1] - t[0]) if len(t) else 0.0,
+        passes=int((t[-1] - t[0]) // (duration + return_duration)) + 1
+        if len(t) else 0,
+        jump_p=float(jumps_p.max()),
+        jump_p_bound=float((speed * dt).max() * 1.01 + 1e-12),
+        jump_v=float(jumps_v.max()),
+        jump_v_bound=float((accel * dt).max() * 1.01 + 1e-12),
+        peak_speed=speed)
 
 
 # 4. A stall of one process of the closed loop ---------------------------------
@@ -790,7 +909,7 @@ def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
     holds, and the trajectory's own peak |lambdadot|.
     """
     peak = trajectory_peak_speed()
-    result = dict(peak_speed=peak, force_limit=1000.0, stalls={}, alive={})
+    result = Stalls(peak_speed=peak, force_limit=1000.0, stalls={}, alive={})
     with Peer() as peer:
         commands = peer.record('commands', Float64MultiArray)
         states = peer.record('joint_states', JointState)
@@ -823,14 +942,14 @@ def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
                           if start <= t <= end and len(m.velocity)]
                 status = peer.status('tracking_controller', timeout=3.0)
                 values = status[2] if status else {}
-                result['stalls'][name] = dict(
+                result.stalls[name] = Stall(
                     max_force=max(forces, default=0.0),
                     max_speed=max(speeds, default=0.0),
                     commands=len(forces),
                     trips=int(values.get('path tolerance trips', -1)),
                     stall_holds=int(values.get('stall holds', -1)),
                     mode=values.get('mode'))
-                result['alive'][name] = all(nodes.alive(n) for n in NODES)
+                result.alive[name] = all(nodes.alive(n) for n in NODES)
     return result
 
 

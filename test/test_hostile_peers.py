@@ -32,22 +32,21 @@ import reliability_harness  # noqa: E402
 
 
 def test_malformed_parameter_request_is_refused_and_the_node_stays_up():
-    result = harness.malformed_parameters()
-    for name, outcome in result.items():
-        assert outcome['answered'] and outcome['refused'], (name, outcome)
-        assert outcome['answers_after'] and outcome['alive'], (name, outcome)
-        assert outcome['code'] == 0, (name, outcome['stderr'])
-        assert 'Traceback' not in outcome['stderr'], outcome['stderr']
+    for name, node in harness.malformed_parameters().items():
+        assert node.answered and node.refused, (name, node)
+        assert node.answers_after and node.alive, (name, node)
+        assert node.code == 0, (name, node.stderr)
+        assert 'Traceback' not in node.stderr, node.stderr
 
 
 def test_absurd_lengths_refused_at_run_time_exit_2_at_start():
     result = harness.absurd_parameters()
-    for name, changes in result['runtime'].items():
+    for name, changes in result.runtime.items():
         for key, (successful, reason) in changes.items():
             assert successful is False, (name, key, reason)
             assert reason, (name, key)
-        assert result['alive'][name], name
-    for name, (code, stderr) in result['startup'].items():
+        assert result.alive[name], name
+    for name, (code, stderr) in result.startup.items():
         assert code == 2, (name, code, stderr)
         assert 'robot.l3' in stderr and 'Traceback' not in stderr, stderr
 
@@ -77,37 +76,37 @@ def test_big_messages_do_not_starve_a_stream_on_the_same_input():
 def test_stalled_process_never_makes_the_loop_saturate_or_race():
     result = harness.stall_resume()
     print(result)
-    assert all(result['alive'].values()), result
-    for name, stall in result['stalls'].items():
-        assert stall['commands'] > 0, (name, stall)
-        assert stall['max_force'] < result['force_limit'], (name, stall)
-        assert stall['max_speed'] <= 2.0 * result['peak_speed'], (name, stall)
+    assert all(result.alive.values()), result
+    for name, stall in result.stalls.items():
+        assert stall.commands > 0, (name, stall)
+        assert stall.max_force < result.force_limit, (name, stall)
+        assert stall.max_speed <= 2.0 * result.peak_speed, (name, stall)
 
 
 def test_nanoseconds_beyond_a_second_are_rejected_on_every_input():
     result = harness.stamps()
-    assert result['outputs'] == 0, result
-    assert result['good'] == 2, result
+    assert result.outputs == 0, result
+    assert result.good == 2, result
     # Pose, twist and accel each, and three trajectory messages.
-    assert result['rejected_stamp'] == 6, result
-    assert result['alive']
+    assert result.rejected_stamp == 6, result
+    assert result.alive
 
 
 def test_signals_while_starting_exit_0_quietly():
-    for name, signame, delay, code, stderr in harness.startup_signals():
-        assert code == 0, (name, signame, delay, code, stderr)
-        assert harness.quiet(stderr), (name, signame, delay, stderr)
+    for tried in harness.startup_signals():
+        assert tried.code == 0, tried
+        assert harness.quiet(tried.stderr), tried
 
 
 def test_text_from_messages_never_makes_long_or_many_log_lines():
     result = harness.log_amplification()
-    for name, outcome in result.items():
-        assert outcome['alive'] and outcome['code'] == 0, (name, outcome)
-        assert outcome['longest'] <= harness.LOG_LINE_LIMIT, (name, outcome)
-        assert outcome['lines'] <= 20, (name, outcome)
-    assert int(result['feedforward']['counters']['rejected frame']) == 1
-    assert int(result['feedforward']['counters']['rejected oversize']) == 1
-    counters = result['tracking_controller']['counters']
+    for name, node in result.items():
+        assert node.alive and node.code == 0, (name, node)
+        assert node.longest <= harness.LOG_LINE_LIMIT, (name, node)
+        assert node.lines <= 20, (name, node)
+    assert int(result['feedforward'].counters['rejected frame']) == 1
+    assert int(result['feedforward'].counters['rejected oversize']) == 1
+    counters = result['tracking_controller'].counters
     assert int(counters['rejected measured oversize']) == 1, counters
     assert int(counters['rejected measured malformed']) >= 400, counters
 
@@ -115,7 +114,7 @@ def test_text_from_messages_never_makes_long_or_many_log_lines():
 def test_departed_clients_pause_no_output_stream():
     result = harness.departed_clients()
     print(result)
-    if max(result['gaps'].values()) > 0.2:
+    if max(result.gaps.values()) > 0.2:
         # A second pass when only the timing missed (see above); one
         # 100 ms stall per departure can remain (doc/robustness.md). Gaps
         # that began while a child was joining the graph are reported
@@ -123,30 +122,30 @@ def test_departed_clients_pause_no_output_stream():
         # itself, without any request (doc/robustness.md).
         result = harness.departed_clients()
         print(result)
-    assert all(result['alive'].values()), result
-    assert result['client_exits'] == [0, 0, 0], result
-    for stream, gap in result['gaps'].items():
+    assert all(result.alive.values()), result
+    assert result.client_exits == [0, 0, 0], result
+    for stream, gap in result.gaps.items():
         assert gap <= 0.2, (stream, gap)
 
 
 def test_simulator_at_10_khz_keeps_taking_commands_and_says_it_is_slow():
     result = harness.fast_simulator()
     print(result)
-    assert result['alive']
-    assert result['received'] == result['sent'], result
-    assert result['timeouts'] == 1, result      # the brake at the end
+    assert result.alive
+    assert result.received == result.sent, result
+    assert result.timeouts == 1, result      # the brake at the end
     # Every run: real time kept, or a WARN that says it is not.
-    slow = result['step_rate'] < 0.9 * 10000.0
-    assert not slow or (result['level'] == 1 and 'slower than real time'
-                        in result['message']), result
+    slow = result.step_rate < 0.9 * 10000.0
+    assert not slow or (result.level == 1 and 'slower than real time'
+                        in result.message), result
 
 
 def test_looping_setpoints_go_back_smoothly():
     result = harness.setpoint_loop()
     print(result)
-    assert result['passes'] >= 2, result
-    assert result['jump_p'] <= result['jump_p_bound'], result
-    assert result['jump_v'] <= result['jump_v_bound'], result
+    assert result.passes >= 2, result
+    assert result.jump_p <= result.jump_p_bound, result
+    assert result.jump_v <= result.jump_v_bound, result
 
 
 def test_a_trajectory_flood_never_saturates_and_a_normal_one_follows():
