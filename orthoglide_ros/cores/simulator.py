@@ -38,7 +38,7 @@ so a caller woken late catches up (with the command held, as a drive holds
 it), up to MAX_CATCH_UP steps; beyond that the missed time is dropped and
 counted (``overruns``: the plant then runs slower than real time, and the
 status says so). :meth:`Simulator.publish_due` says which states to
-publish: every wake-up's last one, or with ``publish_rate_hz`` the first at
+publish: every step's, or with ``publish_rate_hz`` the first at
 or after each instant of a coarser grid (a sampled encoder).
 
 :meth:`Simulator.reset` puts the platform back at ``initial_position``, at
@@ -328,11 +328,13 @@ class Simulator:
         """
         Say whether to publish the state at grid time ``instant``.
 
-        Every wake-up's last state with ``publish_rate_hz`` 0.0; else the
-        first state at or after each instant of the publish grid (period
-        1/publish_rate_hz, instants a late wake-up skipped are dropped);
-        always a state that ends in an event (a timeout, a stop). A state
-        to publish is counted as published.
+        Every step's state with ``publish_rate_hz`` 0.0, those a late
+        wake-up catches up with included (a log of the states then has no
+        gap where the process was late); else the first state at or after
+        each instant of the publish grid (period 1/publish_rate_hz,
+        instants a late wake-up skipped are dropped); always a state that
+        ends in an event (a timeout, a stop). A state to publish is
+        counted as published.
         """
         due = self._publish_due(tick, instant)
         self.published += due

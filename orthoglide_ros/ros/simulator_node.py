@@ -97,31 +97,26 @@ class SimulatorNode(InputNode):
 
     # Steps (their own thread) ---------------------------------------------
     def _on_steps(self):
-        """Make every step due, the lock released between two steps."""
+        """Make every step due, each published as the core says."""
         now = time.monotonic()
-        last = None
         while True:
             with self.lock:
                 step = self.core.step_due(now)
                 if step is None:
-                    break
-                last = step
-                if step[0].event is not None:
-                    break
-        if last is None:
-            return
-        tick, instant = last
-        with self.lock:
-            publish = self.core.publish_due(tick, instant)
-        if publish:
-            self._publish(tick, instant)
-        if tick.event == 'stopped':
-            self.log('error', self.core.stop_message)
-        elif tick.event == 'timeout':
-            self.warn_throttled('timeout', (
-                f'no valid command for command_timeout '
-                f'{self.core.settings.command_timeout:g} s: braked, held '
-                'until the next command'))
+                    return
+                tick, instant = step
+                publish = self.core.publish_due(tick, instant)
+            if publish:
+                self._publish(tick, instant)
+            if tick.event == 'stopped':
+                self.log('error', self.core.stop_message)
+            elif tick.event == 'timeout':
+                self.warn_throttled('timeout', (
+                    f'no valid command for command_timeout '
+                    f'{self.core.settings.command_timeout:g} s: braked, '
+                    'held until the next command'))
+            if tick.event is not None:
+                return
 
     def _publish(self, tick, instant):
         """Publish a state, stamped with the node-clock time of ``instant``."""
