@@ -651,7 +651,10 @@ def log_amplification():
         for i in range(500):
             measured.publish(good[:8 + i % 16] + b'\xff' * (i % 7))
             time.sleep(0.002)
-        time.sleep(1.5)
+        # Taken and counted (at least the 400 the test asks for).
+        peer.wait(lambda: int(peer.diagnostics.get('tracking_controller', (
+            None, None, {}))[2].get('rejected measured malformed', '0'))
+            >= 400, START_TIMEOUT)
         status = {name: peer.status(name, timeout=3.0) for name in
                   ('feedforward', 'tracking_controller')}
         result = {}

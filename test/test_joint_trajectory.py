@@ -9,7 +9,6 @@ parameter's; a trajectory with any bad point, an empty one, or one beyond
 the limits publishes nothing and is counted by reason.
 """
 
-import time
 
 import numpy as np
 import pytest
@@ -45,6 +44,9 @@ def paper(n):
     return p, v, a, t
 
 
+HANDSHAKE = (1, 0)      # the stamp of the fixture's first trajectories
+
+
 @pytest.fixture(scope='module')
 def graph():
     """
@@ -63,7 +65,14 @@ def graph():
         assert peer.wait(lambda: pub.get_subscription_count() > 0, WAIT)
         assert peer.wait(lambda: peer.node.count_publishers(
             'feedforward/joint_trajectory') > 0, WAIT)
-        time.sleep(0.5)
+        # Both sides of both topics matched: a good trajectory, sent until
+        # its output comes back (the node's reader may see this writer
+        # after this writer saw it, and drops what comes before).
+        # Its stamp (1, 0) is no test's: send() keeps to its own output.
+        p, v, a, times = paper(2)
+        assert peer.wait(lambda: pub.publish(cartesian(
+            p, v, a, times, stamp=HANDSHAKE)) or len(out) > 0, WAIT), \
+            'no output to a handshake'
         yield peer, pub, out, nodes
         assert nodes.alive('feedforward')
 
@@ -71,14 +80,29 @@ def graph():
 def send(graph, msg, expect_output):
     """Publish ``msg``; return the JointTrajectory it gave (or None)."""
     peer, pub, out, _ = graph
-    before = len(out)
+    before, refused = len(out), rejections(peer)
     pub.publish(msg)
+
+    def own():
+        stamp = (msg.header.stamp.sec, msg.header.stamp.nanosec)
+        return [m for _, m in out[before:]
+                if (m.header.stamp.sec, m.header.stamp.nanosec) == stamp]
     if expect_output:
-        assert peer.wait(lambda: len(out) > before, WAIT), 'no output'
-        return out[-1][1]
-    time.sleep(0.5)
-    assert len(out) == before, 'a refused trajectory gave an output'
+        assert peer.wait(lambda: own(), WAIT), 'no output'
+        return own()[0]
+    # Refused: once the node has counted it, no output can follow.
+    assert peer.wait(lambda: rejections(peer) > refused, WAIT), \
+        'the refusal was not counted'
+    assert not own(), 'a refused trajectory gave an output'
     return None
+
+
+def rejections(peer):
+    """Count the feedforward's refused trajectories (its diagnostics)."""
+    with peer.lock:
+        found = peer.diagnostics.get('feedforward')
+    return sum(int(v) for k, v in (found[2] if found else {}).items()
+               if k.startswith('rejected trajectory '))
 
 
 @pytest.mark.parametrize('n', [1, 2, 5000])

@@ -42,11 +42,13 @@ def record(args):
 def publish_states(node, publisher, proc):
     """Publish MESSAGES joint states once the recorder listens; return them."""
     deadline = time.monotonic() + MATCH_TIMEOUT
+    # The recorder makes its reader only once it sees this publisher, so
+    # its reader matches this writer as it is made: once this writer sees
+    # the reader, both sides are matched.
     while publisher.get_subscription_count() < 1:
         assert proc.poll() is None, stop_process(proc)
         assert time.monotonic() < deadline, 'the recorder never subscribed'
         time.sleep(0.05)
-    time.sleep(0.3)     # the recorder's side of the match
     sent = []
     for k in range(MESSAGES):
         msg = JointState(name=['slider_c', 'slider_a', 'slider_b'],
