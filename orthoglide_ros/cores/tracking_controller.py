@@ -524,8 +524,8 @@ class Tracking:
         try:
             values = read_joint_state(settings.joint_names, names, position,
                                       velocity, effort, need_effort)
-            _bounded(settings, (values.position,), (values.velocity,),
-                     (values.effort,) if need_effort else None)
+            _bounded(settings, values.position, values.velocity,
+                     values.effort if need_effort else None)
         except Rejected as rejection:
             self.rejected[source, rejection.reason] += 1
             raise
@@ -536,27 +536,34 @@ def _bounded(settings, positions, velocities, efforts):
     """
     Refuse values beyond the plausibility bounds, naming the joint.
 
-    ``positions``, ``velocities``, ``efforts`` (None: not checked):
-    sequences of rows of three (m, m/s, N), bounded in magnitude by
+    ``positions``, ``velocities``, ``efforts`` (None: not checked): a
+    joint state's 3-tuples (m, m/s, N; plain floats, the per-message
+    path) or a trajectory's (N, 3) arrays, bounded in magnitude by
     ``max_position``, ``max_velocity`` and ``force_limit``. Raises
     :class:`Rejected` (``position_limit``, ``velocity_limit``,
     ``effort_limit``), not counted here.
     """
-    for reason, rows, bound, name, unit in (
+    for reason, values, bound, name, unit in (
             ('position_limit', positions, settings.max_position,
              'max_position', 'm'),
             ('velocity_limit', velocities, settings.max_velocity,
              'max_velocity', 'm/s'),
             ('effort_limit', efforts, settings.force_limit, 'force_limit',
              'N')):
-        if rows is None:
+        if values is None:
             continue
-        values = np.asarray(rows, dtype=float)
-        beyond = np.abs(values) > bound
-        if beyond.any():
-            point, joint = np.argwhere(beyond)[0]
-            where = f'point {point}: ' if len(values) > 1 else ''
-            raise Rejected(reason, (
-                f'{where}{settings.joint_names[joint]!r} at '
-                f'{values[point, joint]:.4g} {unit}, beyond {name} '
-                f'{bound:g} {unit}'))
+        if isinstance(values, np.ndarray):
+            beyond = np.argwhere(np.abs(values) > bound)
+            if not len(beyond):
+                continue
+            point, joint = beyond[0]
+            where, value = f'point {point}: ', values[point, joint]
+        else:
+            joint = next((j for j, v in enumerate(values) if abs(v) > bound),
+                         None)
+            if joint is None:
+                continue
+            where, value = '', values[joint]
+        raise Rejected(reason, (
+            f'{where}{settings.joint_names[joint]!r} at {value:.4g} {unit}, '
+            f'beyond {name} {bound:g} {unit}'))

@@ -164,7 +164,10 @@ class InputNode(InputThreads, ReplyGuard, Node):
 
     def take_input(self, source, handle, value, rejection):
         """
-        Handle one input's outcome (lock held): the one place for it.
+        Handle one input's outcome: the one place for it.
+
+        The input threads call it with :attr:`lock` held; periodic work
+        (``handle`` its run, no value) takes the lock itself.
 
         ``handle(value)``, or the core counts ``rejection`` (a message
         refused before it was read). A :class:`Rejected` (the core has
