@@ -118,12 +118,17 @@ SETTLE = 0.5
 START_TIMEOUT = 20.0    # s for the nodes to start and match
 PASS_MARGIN = 15.0      # s beyond a pass's duration before giving up
 CALL_TIMEOUT = 5.0      # s for one service call
+# A pass is spoiled when the plant skipped a stretch of simulated time
+# longer than this (s): the simulator's default command timeout, the stall
+# the loop's other processes are held to (``ClosedLoop.run_unspoiled``).
+SKIP_LIMIT = 0.1
+ATTEMPTS = 3            # passes run_unspoiled runs before it gives up
 QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
                  reliability=ReliabilityPolicy.RELIABLE)
 
 Run = namedtuple('Run', (
     'label', 'times', 'position_error', 'joint_error', 'rms_mm', 'max_mm',
-    'samples', 'start_ns', 'lambdas', 'efforts', 'braked'))
+    'samples', 'start_ns', 'lambdas', 'efforts', 'braked', 'skipped_s'))
 Run.__doc__ = """One pass of the closed loop.
 
 ``times`` (s since the pass's first setpoint), ``position_error`` (N, 3)
@@ -134,7 +139,9 @@ node clock); ``lambdas`` and ``efforts``: (N, 3) the measured joint
 positions (m) and the forces the plant applied (N): a log to identify
 from (:func:`log_of`); ``braked``: states published while the plant was
 held after it had started (zero effort: no command for the simulator's
-``command_timeout``, a process stalled), which spoil a pass.
+``command_timeout``, a process stalled), which spoil a pass; ``skipped_s``:
+the longest stretch of simulated time the plant skipped (s: a stalled
+simulator drops what it cannot catch up with, ``cores/simulator.py``).
 """
 
 
@@ -301,28 +308,31 @@ class ClosedLoop:
                  f'{"PD + feedforward" if feedforward else "PD"}, '
                  f'plant m5 x{plant.m5 / model.m5:g}'
                  + (', joint trajectory' if mode == 'trajectory' else ''))
-        return _tracking(label, self.recorder, motion, duration)
+        return _tracking(label, self.recorder, motion, duration,
+                         1.0 / self.plant_rate)
 
     def run_unspoiled(self, *args, report=None, **kwargs):
         """
-        :meth:`run`, and once more when a stall spoiled the pass.
+        :meth:`run` until a pass is not spoiled by a stall, ATTEMPTS at most.
 
-        Spoiled: the plant was braked in it, or a joint error beyond the
-        path tolerance (the controller held: a process of the loop stalled
-        longer than the command timeout, which two busy cores do now and
-        then). ``report(text)`` (optional) hears about a second pass.
+        Spoiled: the plant was braked in it, a joint error beyond the path
+        tolerance (the controller held), or the plant skipped more than
+        SKIP_LIMIT of simulated time at once: a process of the loop stalled
+        longer than the command timeout, which busy cores do now and then,
+        and the pass measured the stall, not the loop. Returns the first
+        unspoiled pass, else the last. ``report(text)`` (optional) hears
+        about every spoiled pass.
         """
-        run = self.run(*args, **kwargs)
-        tripped = (np.abs(run.joint_error) > PATH_TOLERANCE).any()
-        if not (run.braked or tripped):
-            return run
-        if report:
-            report(f'{run.label}: ' + (
-                f'the plant was braked for {run.braked} states'
-                if run.braked else 'a joint error beyond the path tolerance '
-                'stopped the controller') + ' (a process stalled longer '
-                'than the command timeout): a second pass')
-        return self.run(*args, **kwargs)
+        for attempt in range(1, ATTEMPTS + 1):
+            run = self.run(*args, **kwargs)
+            spoiled = spoiled_by(run)
+            if spoiled is None:
+                return run
+            if report:
+                report(f'{run.label}: {spoiled} (a process stalled longer '
+                       f'than the command timeout), pass {attempt} of '
+                       f'{ATTEMPTS}')
+        return run
 
     def _stream(self, motion, duration, passes):
         """Stream the motion from a setpoint_publisher process."""
@@ -479,8 +489,23 @@ def robot_parameters(robot):
             for name, value in robot.as_parameters().items()]
 
 
-def _tracking(label, recorder, motion, duration):
-    """Compare the recorded pass with the motion: a :class:`Run`."""
+def spoiled_by(run):
+    """Return what spoiled a :class:`Run` (text), None if nothing did."""
+    if run.braked:
+        return f'the plant was braked for {run.braked} states'
+    if (np.abs(run.joint_error) > PATH_TOLERANCE).any():
+        return 'a joint error beyond the path tolerance stopped the controller'
+    if run.skipped_s > SKIP_LIMIT:
+        return f'the plant skipped {run.skipped_s:.3f} s of simulated time'
+    return None
+
+
+def _tracking(label, recorder, motion, duration, period):
+    """
+    Compare the recorded pass with the motion: a :class:`Run`.
+
+    ``period``: the plant's step (s), for the time it skipped.
+    """
     if recorder.first_setpoint is None:
         raise LoopError(f'{label}: no setpoint seen')
     start = recorder.first_setpoint
@@ -502,7 +527,8 @@ def _tracking(label, recorder, motion, duration):
     return Run(label, times, position_error, lam - desired_lam,
                float(np.sqrt(np.mean(norm_mm ** 2))), float(norm_mm.max()),
                len(samples), start, lam, efforts,
-               int(held[started:].sum()))
+               int(held[started:].sum()),
+               float(max(np.diff(times).max() - period, 0.0)))
 
 
 def log_of(run):

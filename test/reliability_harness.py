@@ -76,6 +76,8 @@ RECOVERY_LIMIT = 2.0            # s from a node's start to its first output
 # Producer log: stamp, publish time, call duration, lateness (ns), voluntary
 # context switches during the call.
 LOG_COLUMNS = 5
+# A flood ends with a few setpoints at a steady pace (:func:`_tail`).
+TAIL_COUNT, TAIL_PERIOD = 10, 0.01
 BEST_EFFORT_INPUT = '-p', (
     'qos_overrides./setpoint/{}.subscription.reliability:=best_effort')
 # Where every output must reach the recorder: a deep output queue, so that
@@ -159,7 +161,8 @@ def produce(args):
     Says ``ready`` once its publishers match the node, publishes warm-up
     setpoints (epoch ``--warm-epoch``) every 20 ms until ``go`` arrives on
     stdin, then setpoints from ``--epoch`` on: at ``--rate`` Hz (deadline
-    schedule, as bench_node), or as fast as it can with rate 0. Stops on
+    schedule, as bench_node), or as fast as it can with rate 0 (then a
+    steady tail, :func:`_tail`). Stops on
     ``stop``, SIGINT or after ``--duration`` s; waits up to 2 s for reliable
     readers to acknowledge; writes LOG_COLUMNS numbers per setpoint to
     ``--log``; says ``done count last``.
@@ -244,7 +247,27 @@ def _stream(producer, args, log, buffer, stop):
             if after - start >= limit or {'stop', 'eof'} & set(
                     _stdin_lines(buffer)):
                 break
+    if not args.rate:
+        i = _tail(producer, base + i * step, log)
     return i
+
+
+def _tail(producer, stamp, log):
+    """
+    End a flood with TAIL_COUNT setpoints TAIL_PERIOD s apart; return them.
+
+    Best effort drops what a full transport cannot take, the flood's last
+    setpoint included now and then on a busy machine: the newest setpoint
+    the node must end on is sent once the flood has drained.
+    """
+    for k in range(TAIL_COUNT):
+        time.sleep(TAIL_PERIOD)
+        producer.fill(stamp, sample_at(stamp))
+        before = time.monotonic_ns()
+        producer.publish()
+        log.extend((stamp, before, time.monotonic_ns() - before, 0, 0))
+        stamp += FLOOD_STEP_NS
+    return len(log) // LOG_COLUMNS
 
 
 def record(args):

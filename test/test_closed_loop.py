@@ -15,7 +15,8 @@ stamp (see the harness).
   12.8 mm), and better than PD alone with a plant whose platform is 20 %
   heavier than the model.
 - A process stalled longer than the command timeout spoils a real-time
-  pass now and then: such a pass is run again once
+  pass now and then (the plant braked or skipped simulated time, or the
+  controller held): such a pass is run again, three passes at most
   (``ClosedLoop.run_unspoiled``, the one home of that rule).
 """
 
