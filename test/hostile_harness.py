@@ -372,6 +372,33 @@ def _running(peer, names, timeout=START_TIMEOUT):
             raise HarnessError(f'{name} did not answer')
 
 
+def _handshake(peer, publish, arrived, timeout=START_TIMEOUT, every=0.05):
+    """
+    ``publish(k)`` every ``every`` s until ``arrived()``; return how many.
+
+    A reliable writer matches its reader before the reader matches the
+    writer, and a volatile reader drops what came before: the first
+    message whose effect is seen proves the path. A HarnessError after
+    ``timeout`` s.
+    """
+    deadline = time.monotonic() + timeout
+    sent = 0
+    while True:
+        publish(sent)
+        sent += 1
+        if peer.wait(arrived, every):
+            return sent
+        if time.monotonic() > deadline:
+            raise HarnessError('no message went through')
+
+
+def _counter(peer, node, key):
+    """Return a counter of ``node``'s newest diagnostics (-1: none yet)."""
+    with peer.lock:
+        found = peer.diagnostics.get(node)
+    return int(found[2].get(key, -1)) if found else -1
+
+
 def _lines(text):
     """Return the log lines of a stderr text (stdout part included)."""
     return [line for line in text.splitlines() if line.strip()]
@@ -483,10 +510,6 @@ def stamps():
                     ('accel', AccelStamped),
                     ('trajectory', MultiDOFJointTrajectory))}
         _running(peer, ('feedforward',))
-        if not peer.wait(lambda: all(p.get_subscription_count()
-                                     for p in pubs.values()), START_TIMEOUT):
-            raise HarnessError('the feedforward did not subscribe')
-        time.sleep(0.3)
 
         def topics(sec, nanosec):
             for name, kind in (('pose', PoseStamped), ('twist', TwistStamped),
@@ -500,19 +523,25 @@ def stamps():
         def point(header, offset):
             pubs['trajectory'].publish(_setpoint('', header, offset))
 
+        # Both forms reach the node (stamps older than the test's).
+        _handshake(peer, lambda k: point((1, k), (0, 0)), lambda: outputs)
+        shaken = len(outputs)
+        _handshake(peer, lambda k: topics(2, k),
+                   lambda: len(outputs) > shaken)
+        shaken = len(outputs)
         topics(100, 1_500_000_000)          # = 101.5 s, written wrong
         point((200, 2_000_000_000), (0, 0))     # header wrong
         point((300, 0), (0, 1_000_000_000))     # offset wrong
         point((0, 1_000_000_000), (0, 0))   # "zero" sec, wrong nanosec
-        time.sleep(0.5)
-        bad = len(outputs)
+        peer.wait(lambda: _counter(peer, 'feedforward', 'rejected stamp')
+                  >= 6, START_TIMEOUT)
+        bad = len(outputs) - shaken
         topics(101, 500_000_000)            # the same instant, written right
         point((400, 5), (1, 999_999_999))
-        peer.wait(lambda: len(outputs) >= bad + 2, 5.0)
-        status = peer.status('feedforward', timeout=3.0)
-        values = status[2] if status else {}
-        return Stamps(outputs=bad, good=len(outputs) - bad,
-                      rejected_stamp=int(values.get('rejected stamp', -1)),
+        peer.wait(lambda: len(outputs) >= shaken + bad + 2, 5.0)
+        return Stamps(outputs=bad, good=len(outputs) - shaken - bad,
+                      rejected_stamp=_counter(peer, 'feedforward',
+                                              'rejected stamp'),
                       alive=nodes.alive('feedforward'))
 
 
@@ -630,11 +659,14 @@ def log_amplification():
         setpoints = peer.publisher(MultiDOFJointTrajectory,
                                    'setpoint/trajectory')
         measured = peer.publisher(JointState, 'joint_states')
+        outputs = peer.record('feedforward/joint_states', JointState)
         _running(peer, ('feedforward', 'tracking_controller'))
-        if not peer.wait(lambda: setpoints.get_subscription_count() and
-                         measured.get_subscription_count(), START_TIMEOUT):
-            raise HarnessError('the nodes did not subscribe')
-        time.sleep(0.3)
+        _handshake(peer, lambda k: setpoints.publish(_setpoint('', (1, k))),
+                   lambda: outputs)
+        _handshake(peer, lambda k: measured.publish(JointState(
+            name=['unknown'], position=[0.0])), lambda: _counter(
+            peer, 'tracking_controller', 'rejected measured missing_joint')
+            > 0)
         for frame in ('f' * 60000, 'g' * 5_000_000):
             setpoints.publish(_setpoint(frame))
         for count in (4000, 100000):
@@ -803,12 +835,12 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
     with Nodes() as nodes, Peer() as peer:
         nodes.start('simulator', '-p', f'rate_hz:={rate_hz}')
         pub = peer.publisher(Float64MultiArray, 'commands')
+        states = peer.record('joint_states', JointState)
         _running(peer, ('simulator',))
-        if not peer.wait(lambda: pub.get_subscription_count(),
-                         START_TIMEOUT):
-            raise HarnessError('the simulator did not subscribe')
-        time.sleep(0.3)
         msg = Float64MultiArray(data=list(HOLD))
+        # The first command starts the plant: its efforts are the command's.
+        _handshake(peer, lambda k: pub.publish(msg), lambda: any(
+            any(state.effort) for _, state in list(states)))
         start = time.monotonic()
         during = None
         for i in range(commands):
@@ -822,9 +854,11 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
                     found = peer.diagnostics.get('simulator')
                 if found is not None and found[3] > start + 1.0:
                     during = found[:3]
-        time.sleep(0.5)
-        after = peer.status('simulator', timeout=3.0)
-        values = after[2] if after else {}
+        # The brake after the last command, once its diagnostics say so.
+        peer.wait(lambda: _counter(peer, 'simulator', 'timeouts') > 0,
+                  START_TIMEOUT)
+        with peer.lock:
+            values = peer.diagnostics.get('simulator', (None, None, {}))[2]
         level, message, seen = during if during else (None, '', {})
         return FastSimulator(
             received=int(values.get('commands received', -1)),

@@ -84,13 +84,14 @@ def send(g, form, t):
         g.probe.send(stamp_of(t), *sample(t))
 
 
-def stream(g, form, first_t, duration=STREAM, until=None):
+def stream(g, form, first_t, duration=STREAM, until=None, sent_at=None):
     """
     Publish setpoints at PRODUCER_HZ, spinning in between; return them.
 
     Setpoint k has t = first_t + k / PRODUCER_HZ. Stops after
     ``duration`` s, or (if given) once ``until()`` holds. Behind schedule
-    it does not burst: one setpoint, then at least one spin.
+    it does not burst: one setpoint, then at least one spin. ``sent_at``
+    (a list, optional) gets each setpoint's ``time.monotonic()``.
     """
     period = 1.0 / PRODUCER_HZ
     start = time.monotonic()
@@ -108,6 +109,8 @@ def stream(g, form, first_t, duration=STREAM, until=None):
             t = first_t + len(sent) * period
             send(g, form, t)
             sent.append(t)
+            if sent_at is not None:
+                sent_at.append(time.monotonic())
             due = max(due + period, now)
         g.executor.spin_once(timeout_sec=max(0.0, min(due - now, period)))
     return sent
@@ -185,13 +188,23 @@ def test_producer_stops_then_comes_back(graph, rate, form):
     assert spin_until(g.executor, lambda: len(probe.joint_states) > n,
                       WAIT), 'no output after the producer came back'
     assert_output(g, n, resume)
+    # Back to OK at the next diagnostics, unless this process (the
+    # producer) itself fell silent longer than the timeout meanwhile.
     index = len(probe.diagnostics)
-    stream(g, form, resume + 1.0,
-           until=lambda: len(probe.diagnostics) > index)
-    msg = probe.diagnostics[index]
+    sent_at = [time.monotonic()]
+    stream(g, form, resume + 1.0, sent_at=sent_at, until=lambda: any(
+        m.status[0].level == DiagnosticStatus.OK
+        for m in probe.diagnostics[index:]))
+    first = probe.diagnostics[index].status[0]
+    if first.level != DiagnosticStatus.OK:
+        silence = max(b - a for a, b in zip(sent_at, sent_at[1:]))
+        assert first.message.startswith('stale') and silence > timeout, (
+            f'{first.message} while the producer sent every '
+            f'{silence:.3f} s or more often')
+    msg = next(m for m in probe.diagnostics[index:]
+               if m.status[0].level == DiagnosticStatus.OK)
     status, values = msg.status[0], diagnostic_values(msg)
-    assert (status.level, status.message) == (DiagnosticStatus.OK, 'ok'), (
-        status.message)
+    assert status.message == 'ok', status.message
     assert values['stale'] == 'false'
     assert not any(core.rejected.values()), core.rejected
     assert g.node.internal_errors == 0
