@@ -12,8 +12,9 @@ those of ``test/reliability_harness.py`` (the tests run them shorter):
   ``harness.LOSSLESS_DEPTH`` (nothing may be lost) and at the default
   keep-last 10 (the loss is measured);
 - ``--cycles`` SIGKILL/restart cycles of the node at 500 Hz, with the Fast
-  DDS profile ``config/fastdds_discovery.xml`` on every process and with
-  Fast DDS defaults;
+  DDS profile ``config/fastdds_one_host.xml`` on every process (inside a
+  network namespace, as root: ``test/netns.py``; reported as not done
+  where none can be made) and with Fast DDS defaults;
 - producer restarts (SIGKILL then SIGINT, later then earlier stamps) on
   both inputs; SIGINT and SIGTERM mid-stream;
 - ``test/test_fuzz_node.py`` and ``test/test_fuzz_mechanics.py`` (when
@@ -53,6 +54,8 @@ sys.path.insert(0, os.path.join(ROOT, 'test'))
 import numpy as np  # noqa: E402
 
 import hostile_harness as hostile  # noqa: E402
+import live_graph_harness as live_graph  # noqa: E402
+import netns  # noqa: E402
 import reliability_harness as harness  # noqa: E402
 
 
@@ -70,14 +73,22 @@ def runs(args):
                                                           duration=d)
     yield 'reliable 1 kHz, keep-last 10', harness.reliable_stream, dict(
         rate=1000, duration=d, depth=10)
-    yield 'kill/restart, profile', harness.kill_restart, dict(
-        cycles=args.cycles)
+    yield 'kill/restart, profile', in_namespace, dict(
+        case='kill_restart', cycles=args.cycles)
     yield 'kill/restart, default', harness.kill_restart, dict(
         cycles=args.cycles, discovery=None)
     yield 'producer restarts trajectory', harness.producer_restart, {}
     yield 'producer restarts topics', harness.producer_restart, dict(
         kind='topics')
     yield 'SIGINT/SIGTERM mid-stream', harness.stop_mid_stream, {}
+
+
+def in_namespace(case, say, **kwargs):
+    """Run a ``live_graph_harness`` case in a network namespace of its own."""
+    reason = netns.unavailable()
+    if reason:
+        raise harness.HarnessError(reason)
+    return live_graph.in_namespace(case, **kwargs)
 
 
 def run_fuzz(args, domain):

@@ -11,8 +11,8 @@
 source "$(dirname "${BASH_SOURCE[0]}")/ros_env.sh" reliability_report \
     ORTHOGLIDE_TEST_DOMAIN_ID
 
-# The runs measure Fast DDS defaults and config/fastdds_discovery.xml
-# themselves: no profile from the caller.
+# The runs measure Fast DDS defaults and config/fastdds_one_host.xml (in a
+# network namespace, as root) themselves: no profile from the caller.
 unset FASTRTPS_DEFAULT_PROFILES_FILE
 # One domain for the runs and for the fuzz tests' pytest (test/conftest.py).
 export ORTHOGLIDE_TEST_DOMAIN_ID="$ROS_DOMAIN_ID"

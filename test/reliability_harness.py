@@ -68,10 +68,12 @@ WARM_PERIOD = 0.02              # s between two warm-up setpoints
 START_TIMEOUT = 30.0            # s for a process to come up and answer
 TOL = 1e-9                      # relative (above 1) or absolute tolerance
 NODE_ARGS = ('--ros-args', '--params-file', PARAMS)
-# Fast DDS profile: announcements every 0.25 s, user data over loopback UDP
-# (doc/deployment.md, restarts).
-DISCOVERY_PROFILE = os.path.join(ROOT, 'config', 'fastdds_discovery.xml')
+# The one-host Fast DDS profile (doc/deployment.md, "One host"): UDP on
+# 127.0.0.1 only, announcements every 0.25 s; with the range SYSTEM_DEFAULT,
+# so only inside a network namespace (netns.py).
+ONE_HOST_PROFILE = os.path.join(ROOT, 'config', 'fastdds_one_host.xml')
 PROFILE_VARIABLE = 'FASTRTPS_DEFAULT_PROFILES_FILE'
+RANGE_VARIABLE = 'ROS_AUTOMATIC_DISCOVERY_RANGE'
 RECOVERY_LIMIT = 2.0            # s from a node's start to its first output
 # Producer log: stamp, publish time, call duration, lateness (ns), voluntary
 # context switches during the call.
@@ -194,7 +196,7 @@ def produce(args):
             if 'eof' in lines:      # the orchestrator is gone
                 break
             if 'go' in lines:
-                go = True
+                go = 'stop' not in lines    # both read at once: stop
                 break
             stamp = warm + k * 1000
             producer.fill(stamp, sample_at(stamp))
@@ -354,15 +356,57 @@ def record(args):
 
 
 # Orchestration ---------------------------------------------------------------
-class Child:
-    """A producer or recorder process, talking in lines on stdout."""
+def in_own_namespace():
+    """
+    Whether this process runs in a namespace of the tests' (netns.py).
 
-    def __init__(self, role, args, workdir, env):
+    Its interfaces are the loopback and the ends of the tests' veth pairs
+    (``og...v``) and nothing else: no packet can leave the machine.
+    """
+    try:
+        names = os.listdir('/sys/class/net')
+    except OSError:
+        return False
+    return all(n == 'lo' or (n.startswith('og') and n.endswith('v'))
+               for n in names)
+
+
+def profile_environment(profile=None, base=None):
+    """
+    Return an environment for processes with the Fast DDS ``profile``.
+
+    ``profile`` (a file): the range SYSTEM_DEFAULT, which rmw_fastrtps
+    needs to keep the profile's transports, and so only inside a network
+    namespace (a HarnessError elsewhere: no DDS packet leaves this host);
+    None: no profile, LOCALHOST. ``base``: the environment to start from
+    (default this process's).
+    """
+    env = dict(os.environ if base is None else base)
+    env.pop(PROFILE_VARIABLE, None)
+    env[RANGE_VARIABLE] = 'LOCALHOST'
+    if profile:
+        if not in_own_namespace():
+            raise HarnessError('a Fast DDS profile with the range '
+                               'SYSTEM_DEFAULT runs only inside a network '
+                               'namespace (test/netns.py)')
+        env[PROFILE_VARIABLE] = profile
+        env[RANGE_VARIABLE] = 'SYSTEM_DEFAULT'
+    return env
+
+
+class Child:
+    """
+    A producer or recorder process, talking in lines on stdout.
+
+    ``wrap``: a command prefix (``ip netns exec NAME``: another namespace).
+    """
+
+    def __init__(self, role, args, workdir, env, wrap=()):
         self.role = role
         self.err = tempfile.TemporaryFile(dir=workdir)
         self.started = time.monotonic_ns()
         self.proc = subprocess.Popen(
-            [sys.executable, os.path.abspath(__file__), role] + args,
+            [*wrap, sys.executable, os.path.abspath(__file__), role] + args,
             cwd=ROOT, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
             stderr=self.err)
         self.lines = []
@@ -436,18 +480,17 @@ class Run:
     """
     The processes of one run; :meth:`close` stops every one of them.
 
-    ``discovery``: a Fast DDS profile file given to every process started
-    (None: Fast DDS defaults). Records every node exit: ``exits`` is a list
+    ``discovery``: a Fast DDS profile file given to every process started,
+    with the range SYSTEM_DEFAULT (None: Fast DDS defaults, LOCALHOST);
+    refused outside a network namespace (:func:`profile_environment`).
+    Records every node exit: ``exits`` is a list
     of (how, exit code), how being ``sigint`` (a code other than 0 is a
     crash), ``sigkill`` (killed on purpose) or ``unexpected`` (exited by
     itself: a crash).
     """
 
     def __init__(self, discovery=None):
-        self.env = dict(os.environ)
-        self.env.pop(PROFILE_VARIABLE, None)
-        if discovery:
-            self.env[PROFILE_VARIABLE] = discovery
+        self.env = profile_environment(discovery)
         self.workdir = tempfile.mkdtemp(prefix='orthoglide-reliability-')
         self.node = None
         self.node_started = None
@@ -462,11 +505,11 @@ class Run:
         self._files += 1
         return os.path.join(self.workdir, f'{self._files}{suffix}')
 
-    def start_node(self, extra=()):
-        """Start the node's console script; return its Popen."""
+    def start_node(self, extra=(), env=None):
+        """Start the node's console script (``env``: else the run's)."""
         self.node_started = time.monotonic_ns()
         self.node = start_node_process(list(NODE_ARGS) + list(extra),
-                                       env=self.env, cwd=ROOT)
+                                       env=env or self.env, cwd=ROOT)
         return self.node
 
     def node_alive(self):
@@ -497,22 +540,29 @@ class Run:
             self.node_stderr.append(stderr)
             self.node = None
 
-    def start_recorder(self):
-        """Start a recorder; return it (its output file is ``out``)."""
+    def start_recorder(self, env=None, wrap=()):
+        """
+        Start a recorder; return it (its output file is ``out``).
+
+        ``env`` (default the run's) and ``wrap`` as for :class:`Child`.
+        """
         out = self.path('.npy')
-        child = Child('record', ['--out', out], self.workdir, self.env)
+        child = Child('record', ['--out', out], self.workdir,
+                      env or self.env, wrap)
         child.out = out
         self.children.append(child)
         return child
 
     def start_producer(self, kind='trajectory', qos='reliable', rate=0,
-                       epoch=100, warm_epoch=1, duration=3600.0):
+                       epoch=100, warm_epoch=1, duration=3600.0, env=None,
+                       wrap=()):
         """Start a producer; ``go`` it with :meth:`warm_up`."""
         log = self.path('.bin')
         child = Child('produce', [
             '--kind', kind, '--qos', qos, '--rate', str(rate), '--epoch',
             str(epoch), '--warm-epoch', str(warm_epoch), '--duration',
-            str(duration), '--log', log], self.workdir, self.env)
+            str(duration), '--log', log], self.workdir, env or self.env,
+            wrap)
         child.log = log
         child.warm_epoch = warm_epoch
         self.children.append(child)
@@ -1020,7 +1070,7 @@ def big_messages(rate=500, duration=6.0, attack_rate=4.0, say=None):
 
 
 def kill_restart(cycles, rate=500, running=1.0, outage=0.5,
-                 discovery=DISCOVERY_PROFILE, say=None):
+                 discovery=ONE_HOST_PROFILE, say=None):
     """
     SIGKILL the node ``cycles`` times mid-stream; restart it after ``outage``.
 
@@ -1368,10 +1418,73 @@ def _status_after(monitor, moment, timeout=5.0):
     return monitor.latest(moment) or {}
 
 
+def bystand(args):
+    """
+    Child process: ``--participants`` participants that read one topic.
+
+    Each (an rclpy context of its own, as a process of several nodes has
+    with several contexts) subscribes to ``--topic`` (reliable, keep-last
+    10; by default the node's ``feedforward/joint_states``: the node sends
+    it every output) ``--subscribe-after`` s after it saw the node
+    ``feedforward`` in the graph (said: ``joined``), as ``ros2 topic echo``
+    or a display added in RViz does. Says ``matched`` once every
+    subscription matched a publisher, spins until ``stop``, stdin closes
+    or SIGINT, and says ``done count``.
+    """
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
+    from sensor_msgs.msg import JointState
+
+    stop = _stop_on_sigint()
+    nodes, executors = [], []
+    for k in range(args.participants):
+        context = Context()
+        rclpy.init(context=context,
+                   signal_handler_options=SignalHandlerOptions.NO)
+        nodes.append(rclpy.create_node(f'bystander_{os.getpid()}_{k}',
+                                       context=context))
+        executors.append(SingleThreadedExecutor(context=context))
+        executors[-1].add_node(nodes[-1])
+    count = [0]
+
+    def on_joints(data):
+        count[0] += 1
+    buffer = bytearray()
+    subs, joined, matched = [], None, False
+    try:
+        while not stop[0] and not {'stop', 'eof'} & set(
+                _stdin_lines(buffer)):
+            for executor in executors:
+                executor.spin_once(timeout_sec=0.005)
+            if joined is None and 'feedforward' in nodes[0].get_node_names():
+                joined = time.monotonic()
+                _say('joined')
+            if not subs and joined is not None and \
+                    time.monotonic() - joined >= args.subscribe_after:
+                subs = [node.create_subscription(
+                    JointState, args.topic, on_joints,
+                    qos_profile('reliable', 10), raw=True) for node in nodes]
+            if subs and not matched and all(
+                    sub.get_publisher_count() for sub in subs):
+                matched = True
+                _say('matched')
+    finally:
+        for executor, node in zip(executors, nodes):
+            context = node.context
+            executor.shutdown()
+            node.destroy_node()
+            rclpy.try_shutdown(context=context)
+    _say('done', count[0])
+    return 0
+
+
 def main(argv=None):
-    """Entry point of the child processes: produce, record or attack."""
+    """Entry point of the child processes: produce, record, attack..."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
-    parser.add_argument('role', choices=('produce', 'record', 'attack'))
+    parser.add_argument('role', choices=('produce', 'record', 'attack',
+                                         'bystand'))
     parser.add_argument('--kind', default='trajectory',
                         choices=tuple(INPUT_TOPICS))
     parser.add_argument('--qos', default='reliable')
@@ -1381,9 +1494,12 @@ def main(argv=None):
     parser.add_argument('--duration', type=float, default=3600.0)
     parser.add_argument('--log')
     parser.add_argument('--out')
+    parser.add_argument('--topic', default='feedforward/joint_states')
+    parser.add_argument('--subscribe-after', type=float, default=0.0)
+    parser.add_argument('--participants', type=int, default=1)
     args = parser.parse_args(argv)
-    return {'produce': produce, 'record': record, 'attack': attack}[
-        args.role](args)
+    return {'produce': produce, 'record': record, 'attack': attack,
+            'bystand': bystand}[args.role](args)
 
 
 if __name__ == '__main__':

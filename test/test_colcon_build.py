@@ -76,7 +76,7 @@ def test_install_layout(install):
                      'lib/orthoglide_ros/mechanism_state_publisher'):
         path = install / relative
         assert path.is_file() and os.access(path, os.X_OK), relative
-    for name in ('orthoglide.yaml', 'fastdds_discovery.xml',
+    for name in ('orthoglide.yaml', 'fastdds_one_host.xml',
                  'orthoglide.rviz'):
         assert (install / 'share' / PACKAGE / 'config' / name
                 ).read_text() == (ROOT / 'config' / name).read_text()
