@@ -149,7 +149,7 @@ def discovery(node_profile, peers_profile):
 def two_hosts(settings, other, address, rate=500, duration=3.0,
               restarts=2):
     """
-    The node here, a producer and a recorder in namespace ``other``.
+    Run the node here, a producer and a recorder in namespace ``other``.
 
     ``settings``: the environment variables of the several-host recipe
     (doc/deployment.md) for every process; ``address``: this namespace's

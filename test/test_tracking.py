@@ -321,7 +321,7 @@ def test_no_measurement_skips():
     core = Tracking(settings())
     assert send_desired(core, (0.0, 0.0, 0.0), 1.0) is None
     assert core.skipped == {'no_measurement': 1, 'stale_measurement': 0,
-                            'trajectory_active': 0}
+                            'trajectory_active': 0, 'inactive': 0}
     assert core.commands == 0 and core.latest is None
     assert core.received == {'desired': 1, 'measured': 0, 'trajectory': 0}
 
@@ -334,7 +334,7 @@ def test_stale_measurement_skips_until_a_fresh_one():
     assert core.fresh(10.0625) and not core.fresh(10.0626)
     assert send_desired(core, (0.001, 0.0, 0.0), 10.0626) is None
     assert core.skipped == {'no_measurement': 0, 'stale_measurement': 1,
-                            'trajectory_active': 0}
+                            'trajectory_active': 0, 'inactive': 0}
     send_measured(core, (0.0, 0.0, 0.0), 11.0)
     command = send_desired(core, (0.001, 0.0, 0.0), 11.01)
     assert command.force[0] == pytest.approx(20.0)

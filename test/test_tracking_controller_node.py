@@ -309,7 +309,7 @@ def test_missing_then_stale_measurement_commands_nothing(graph):
         pytest.approx(20.0)
     assert g.node.core.skipped == {'no_measurement': 1,
                                    'stale_measurement': 1,
-                                   'trajectory_active': 0}
+                                   'trajectory_active': 0, 'inactive': 0}
 
 
 def test_bad_inputs_rejected_counted_and_node_goes_on(graph):

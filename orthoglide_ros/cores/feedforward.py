@@ -276,12 +276,22 @@ class Feedforward:
         self.trajectory_seconds = math.nan      # the last one's, s
         self.trajectory_seconds_max = 0.0       # the period's largest, s
         self.trajectory_rejected = dict.fromkeys(TRAJECTORY_REASONS, 0)
+        self.active = True      # a lifecycle node's state: outputs go out
+        self.withheld = 0       # outputs not published while inactive
         self._pending = {}
         self._period = Period(now)
 
     def configure(self, settings):
         """Use new settings from the next setpoint on (one assignment)."""
         self.settings = settings
+
+    def activate(self):
+        """Publish outputs (a lifecycle node's ``active`` state)."""
+        self.active = True
+
+    def deactivate(self):
+        """Publish nothing; inputs are still taken and counted."""
+        self.active = False
 
     def pose(self, stamp, frame, position, orientation, now):
         """Take a pose of G (m) and the platform orientation (quaternion)."""
@@ -358,16 +368,21 @@ class Feedforward:
 
     def count_trajectory(self, conversion, seconds):
         """
-        Count a converted Cartesian trajectory (a :class:`Conversion`).
+        Count a converted Cartesian trajectory; return whether to publish it.
 
-        ``seconds``: from its reception to its publication (the node's
-        side of a conversion: reading, the kernel, writing, publishing).
+        ``conversion``: a :class:`Conversion`; ``seconds``: from its
+        reception to its publication (the node's side of a conversion:
+        reading, the kernel, writing). Not published while inactive.
         """
+        if not self.active:
+            self.withheld += 1
+            return False
         self.trajectories += 1
         self.trajectory_points += len(conversion.time)
         self.trajectory_seconds = seconds
         self.trajectory_seconds_max = max(self.trajectory_seconds_max,
                                           seconds)
+        return True
 
     def reject(self, source, rejection):
         """
@@ -414,8 +429,7 @@ class Feedforward:
         """
         if output is None or self.settings.rate_hz != 0.0:
             return None
-        self.published += 1
-        return output
+        return self._published(output)
 
     def output_at_tick(self, now):
         """
@@ -425,8 +439,14 @@ class Feedforward:
         completes) or when stale (:meth:`tick`). Counts it as published.
         """
         output = self.tick(now) if self.settings.rate_hz != 0.0 else None
-        if output is not None:
-            self.published += 1
+        return None if output is None else self._published(output)
+
+    def _published(self, output):
+        """Count ``output`` as published and return it; withheld if inactive."""
+        if not self.active:
+            self.withheld += 1
+            return None
+        self.published += 1
         return output
 
     def tick_period(self):
@@ -458,6 +478,8 @@ class Feedforward:
         fresh = self.fresh(now)
         level, message = first(
             internal_errors,
+            (not self.active, OK, 'inactive: inputs taken, no output '
+             'published'),
             (new['rejected'], WARN,
              f'{new["rejected"]} setpoint(s) rejected in the last period'),
             (new['trajectories_rejected'], WARN,
@@ -477,6 +499,7 @@ class Feedforward:
             ('compute time max (us)', self.compute_ns_max / 1e3),
             ('setpoints computed', self.computed),
             ('outputs published', self.published),
+            ('outputs withheld (inactive)', self.withheld),
             ('stale', not fresh),
             ('time since last setpoint (s)',
              age if age is not None else math.nan),

@@ -91,7 +91,8 @@ REASONS = ('missing_joint', 'malformed', 'missing_position',
            'missing_velocity', 'missing_effort', 'non_finite',
            'position_limit', 'velocity_limit', 'effort_limit', 'overflow',
            'oversize', 'empty', 'time')
-SKIPS = ('no_measurement', 'stale_measurement', 'trajectory_active')
+SKIPS = ('no_measurement', 'stale_measurement', 'trajectory_active',
+         'inactive')
 FOLLOWING, HOLDING = 'following', 'holding'
 # Largest |lambdadot_d - lambdadot| (m/s) of a desired state that re-arms.
 REARM_SPEED = 0.01
@@ -214,6 +215,8 @@ class Tracking:
         self.superseded = 0
         self._incoming = None       # a trajectory waiting for the next tick
         self._accepted = None       # monotonic time of the last acceptance
+        self.active = True          # a lifecycle node's state: commands go
+        self._hold_is_fault = True  # holding after a trip or a stall
         self._period = Period(now)
 
     def configure(self, settings):
@@ -225,6 +228,28 @@ class Tracking:
         if settings.joint_names != self.settings.joint_names:
             self.measurement = self.measurement_arrival = None
         self.settings = settings
+
+    def deactivate(self):
+        """
+        Stop commanding at once: inputs are still read and counted.
+
+        The trajectory followed is dropped, and the controller holds its
+        last safe command: the position measured now with the bias of the
+        last command that clipped nothing (:meth:`_hold`). Activated again,
+        it commands that hold until a desired state starts where the robot
+        is (the re-arm rule): a stream that moved on meanwhile is not
+        chased.
+        """
+        self.active = False
+        self.plan = self._incoming = None
+        self.plan_finished = False
+        if self.measurement is not None:
+            self._hold(JointValues(self.measurement.position, _ZERO, _ZERO),
+                       'deactivated', fault=False)
+
+    def activate(self):
+        """Command again (holding first if :meth:`deactivate` held)."""
+        self.active = True
 
     def reject(self, source, rejection):
         """Count a message on ``source`` refused before it was read."""
@@ -290,6 +315,9 @@ class Tracking:
         except Rejected as rejection:
             self.rejected['trajectory', rejection.reason] += 1
             raise
+        if not self.active:
+            self.skipped['inactive'] += 1
+            return
         if self._incoming is not None:
             self.superseded += 1
         self._incoming = (start, times, positions, velocities, efforts)
@@ -368,6 +396,9 @@ class Tracking:
     def _command(self, source, values, now):
         """Apply the law to one desired state of ``source`` (None: skipped)."""
         settings = self.settings
+        if not self.active:
+            self.skipped['inactive'] += 1
+            return None
         if self.measurement is None:
             self.skipped['no_measurement'] += 1
             return None
@@ -438,10 +469,16 @@ class Tracking:
                        self.settings.path_tolerance, desired.velocity,
                        measured.velocity))
 
-    def _hold(self, desired, why):
-        """Hold the measured position, with the bias of :meth:`_held_force`."""
+    def _hold(self, desired, why, fault=True):
+        """
+        Hold the measured position, with the bias of :meth:`_held_force`.
+
+        ``fault``: a trip or a stall (ERROR in the status), else a
+        deactivation (WARN once active again).
+        """
         measured = self.measurement.position
         self.mode = HOLDING
+        self._hold_is_fault = fault
         self.hold = JointValues(measured, _ZERO,
                                 self._held_force(desired.effort))
         self.hold_message = (
@@ -479,7 +516,11 @@ class Tracking:
             else f'newest measurement {age:.3f} s old'
         level, message = first(
             internal_errors,
-            (self.mode == HOLDING, ERROR, self.hold_message),
+            (not self.active, OK, 'inactive: inputs taken, no command '
+             'published' + (f' ({self.hold_message})' if self.mode == HOLDING
+                            else '')),
+            (self.mode == HOLDING, ERROR if self._hold_is_fault else WARN,
+             self.hold_message),
             (new['skipped'], WARN,
              f'{new["skipped"]} desired state(s) without a fresh '
              f'measurement ({what}): nothing commanded'),

@@ -4,9 +4,11 @@ The ``feedforward`` ROS 2 node: setpoints in, joint states and forces out.
 A thin layer over :class:`orthoglide_ros.cores.feedforward.Feedforward`: it declares
 the parameters of :data:`orthoglide_ros.cores.feedforward.PARAMETERS`, converts
 messages to plain values and back, publishes, logs throttled warnings and
-publishes the core's status on ``/diagnostics``. Run it with ``ros2 run
-orthoglide_ros feedforward``; ``doc/feedforward.md`` has the topics,
-parameters and rules.
+publishes the core's status on ``/diagnostics``. A managed node
+(:mod:`orthoglide_ros.ros.lifecycle`): configured and activated at start
+unless ``autostart`` is false. Run it with ``ros2 run orthoglide_ros
+feedforward``; ``doc/feedforward.md`` has the topics, parameters and
+rules.
 """
 
 import array
@@ -25,27 +27,33 @@ from orthoglide_ros.cores.inputs import (CARTESIAN_TRAJECTORY_BYTES, Rejected,
                                          SMALL_MESSAGE_BYTES,
                                          TRAJECTORY_MESSAGE_BYTES)
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.ros.node_runtime import InputNode, run
+from orthoglide_ros.ros.lifecycle import ManagedNode
+from orthoglide_ros.ros.node_runtime import run
 
 # Longest message of another encoding than little-endian CDR that is read.
 FALLBACK_BYTES = SMALL_MESSAGE_BYTES
 
 
-class FeedforwardNode(InputNode):
+class FeedforwardNode(ManagedNode):
     """
     Node ``feedforward``: the Orthoglide's inverse dynamics every tick.
 
     The setpoint inputs are read on the input thread of :class:`InputNode`
     (raw, decoded by :mod:`cdr` outside the lock); the fixed-rate tick and
     the diagnostics run on periodic threads; the executor serves only the
-    parameter services. All hold ``self.lock`` on the core.
+    parameter and lifecycle services. All hold ``self.lock`` on the core.
     """
 
     def __init__(self, **kwargs):
         super().__init__('feedforward', **kwargs)
-        # Raises ValueError on an invalid start-up set (run() reports it).
-        self.core = Feedforward(self.declare_settings(PARAMETERS),
-                                time.monotonic())
+        self.declare_table(PARAMETERS, 'Orthoglide feedforward')
+        self.apply_changes_with(self._swap)
+        self.start()
+
+    def build(self, settings):
+        """Configure: the core, the inputs, the outputs, the tick."""
+        self.core = Feedforward(settings, time.monotonic())
+        self.core.active = False
         self._pub_joints = self.create_output(JointState,
                                               'feedforward/joint_states')
         self._pub_forces = self.create_output(Float64MultiArray,
@@ -86,9 +94,6 @@ class FeedforwardNode(InputNode):
         self._power = _vector_message()
         self._set_joint_names()
         self.create_periodic(self.core.tick_period, self._on_tick, 'tick')
-        self.publish_status('Orthoglide feedforward', self.core)
-        self.apply_changes_with(self._swap)
-        self.start_threads()
 
     # Parameters -----------------------------------------------------------
     def _swap(self, settings):
@@ -136,9 +141,9 @@ class FeedforwardNode(InputNode):
 
     def _on_cartesian_trajectory(self, converted):
         conversion, data = converted
-        self._pub_trajectory.publish(data)
-        self.core.count_trajectory(conversion,
-                                   time.monotonic() - self.arrival)
+        if self.core.count_trajectory(conversion,
+                                      time.monotonic() - self.arrival):
+            self._pub_trajectory.publish(data)
 
     # Fixed-rate tick (its own thread) -------------------------------------
     def _on_tick(self):

@@ -157,14 +157,16 @@ class InputThreads:
         return subscription
 
     def start_threads(self):
-        """Start the input groups' and the periodic threads (once, last)."""
+        """Start the input groups' and periodic threads not started yet."""
         for group in self._groups.values():
-            group.thread = threading.Thread(
-                target=self._read_inputs, args=(group,),
-                name=f'{self.get_name()} {group.name}', daemon=True)
-            group.thread.start()
+            if group.thread is None:
+                group.thread = threading.Thread(
+                    target=self._read_inputs, args=(group,),
+                    name=f'{self.get_name()} {group.name}', daemon=True)
+                group.thread.start()
         for thread in self._periodic:
-            thread.start()
+            if thread.ident is None:
+                thread.start()
 
     def deliver(self, source, data, arrival):
         """
@@ -227,6 +229,19 @@ class InputThreads:
         for thread in self._periodic:
             if thread.is_alive():
                 thread.join()
+
+    def release_threads(self):
+        """
+        Stop every thread and destroy the inputs; new ones can be made.
+
+        What a lifecycle cleanup does (:mod:`lifecycle`); the input
+        subscriptions go with their threads.
+        """
+        self.stop_threads()
+        for group in self._groups.values():
+            for item in group.inputs:
+                self.destroy_subscription(item.subscription)
+        self._init_threads()
 
     def _read_inputs(self, group):
         try:

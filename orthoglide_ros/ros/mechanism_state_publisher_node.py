@@ -44,7 +44,7 @@ class MechanismStatePublisherNode(InputNode):
                           'joint_states', decode=cdr.joint_state)
         self._message = JointState()
         self._names = None
-        self.publish_status('Orthoglide mechanism state', self.core)
+        self.publish_status('Orthoglide mechanism state')
         # The core swaps its settings at once (under the lock).
         self.apply_changes_with(self.core.configure)
         self.start_threads()

@@ -15,9 +15,9 @@ The ROS glue shared by the package's nodes: parameters, logs, diagnostics.
   back as plain values; :meth:`InputNode.declare_settings` and
   :meth:`InputNode.apply_changes_with`: run-time changes validated as a
   whole set and applied at once;
-- :meth:`InputNode.publish_status`: a core's
+- :meth:`InputNode.publish_status`: the core's
   :class:`orthoglide_ros.cores.status.Status` on ``/diagnostics`` once a
-  second;
+  second (a managed node's lifecycle: :mod:`lifecycle`);
 - :func:`run`: ``main()`` of a node: start-up errors, signals, spinning;
 - :func:`freeze_start_up_objects`: no garbage-collector stalls over the
   start-up objects (called by :func:`run`).
@@ -47,6 +47,7 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange,
 
 from orthoglide_ros.cores.inputs import clip, Rejected
 from orthoglide_ros.cores.parameters import ParameterError
+from orthoglide_ros.cores.status import OK, Status
 from orthoglide_ros.ros.console import install_signal_handlers
 from orthoglide_ros.ros.input_threads import InputThreads
 from orthoglide_ros.ros.reply_guard import ReplyGuard
@@ -137,6 +138,7 @@ class InputNode(InputThreads, ReplyGuard, Node):
         super().__init__(name, **kwargs)
         self.lock = threading.Lock()
         self.core = None
+        self._diagnostics = None
         self._internal_errors = 0
         self._last_warning = {}
         self._init_threads()
@@ -190,17 +192,22 @@ class InputNode(InputThreads, ReplyGuard, Node):
                             f'{rejection}')
 
     # Parameters -------------------------------------------------------------
-    def declare_settings(self, table):
+    def declare_settings(self, table, parse=True):
         """
         Declare the parameters of ``table``; return its parsed settings.
 
         ``table``: the node's :class:`orthoglide_ros.cores.parameters.Table`. An
         invalid start-up set raises ValueError naming the parameter
-        (:func:`run` exits 2).
+        (:func:`run` exits 2). ``parse`` false: declare only (a managed
+        node parses at configure, :meth:`parse_settings`).
         """
         declare_specs(self, table.specs)
         self._table = table
-        return table.parse(spec_values(self, table.specs))
+        return self.parse_settings() if parse else None
+
+    def parse_settings(self):
+        """Return the declared parameters parsed (ValueError if invalid)."""
+        return self._table.parse(spec_values(self, self._table.specs))
 
     def apply_changes_with(self, apply):
         """
@@ -231,9 +238,10 @@ class InputNode(InputThreads, ReplyGuard, Node):
         return SetParametersResult(successful=True)
 
     def _apply_parameters(self, parameters):
-        settings = self._table.parse(spec_values(self, self._table.specs))
+        settings = self.parse_settings()
         with self.lock:
-            self._apply_settings(settings)
+            if self.core is not None:   # a managed node's, once configured
+                self._apply_settings(settings)
 
     # Logging ----------------------------------------------------------------
     def log(self, level, text):
@@ -308,24 +316,37 @@ class InputNode(InputThreads, ReplyGuard, Node):
         (a timer could: its thread may run while this one is stalled).
         """
 
-    def publish_status(self, title, core):
+    def publish_status(self, title):
         """
         Publish ``core.status(now, internal errors)`` on ``/diagnostics``.
 
         Every DIAGNOSTICS_PERIOD, from a periodic thread, as one
         DiagnosticStatus named ``'<node name>: <title>'``
-        (:func:`diagnostic_array`); ``status`` runs with :attr:`lock` held.
-        The node adds one value of its own: ``replies dropped (client
-        gone)``, the service replies no client waited for.
+        (:func:`diagnostic_array`); ``status`` runs with :attr:`lock` held,
+        on :attr:`core` as it is then (a managed node has none while
+        unconfigured: OK, ``unconfigured``). The node adds values of its
+        own: ``replies dropped (client gone)``, the service replies no
+        client waited for, and a managed node its ``lifecycle state``.
         """
-        publisher = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._status_title = title
+        if self._diagnostics is None:
+            self._diagnostics = self.create_publisher(
+                DiagnosticArray, '/diagnostics', 10)
 
         def publish():
             with self.lock:
-                status = core.status(time.monotonic(), self.internal_errors)
+                core = self.core
+                status = core.status(time.monotonic(), self.internal_errors) \
+                    if core is not None else Status(
+                        OK, _NO_CORE.get(getattr(self, 'lifecycle_state',
+                                                 None), ''),
+                        [('internal errors', self.internal_errors)])
             status.values.append(('replies dropped (client gone)',
                                   self.replies_dropped))
-            publisher.publish(diagnostic_array(self, title, status))
+            state = getattr(self, 'lifecycle_state', None)
+            if state is not None:
+                status.values.append(('lifecycle state', state))
+            self._diagnostics.publish(diagnostic_array(self, title, status))
         self.create_periodic(lambda: DIAGNOSTICS_PERIOD, publish,
                              'diagnostics')
 
@@ -333,6 +354,11 @@ class InputNode(InputThreads, ReplyGuard, Node):
         """Stop the input and periodic threads, then destroy the node."""
         self.stop_threads()
         super().destroy_node()
+
+
+# The status of a managed node without a core, by lifecycle state.
+_NO_CORE = {'unconfigured': 'unconfigured: waiting for configure',
+            'finalized': 'finalized: shut down'}
 
 
 def diagnostic_array(node, title, status):

@@ -61,7 +61,7 @@ class SimulatorNode(InputNode):
         self._apply_names()
         self.create_periodic(lambda: 1.0 / self.core.settings.rate_hz,
                              self._on_steps, 'steps')
-        self.publish_status('Orthoglide simulator', self.core)
+        self.publish_status('Orthoglide simulator')
         # Last: the QoS override parameters declared above are no concern.
         self.apply_changes_with(self._configure)
         self.start_threads()

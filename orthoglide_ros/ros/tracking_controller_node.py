@@ -4,8 +4,11 @@ The ``tracking_controller`` ROS 2 node: desired and measured joints in, forces o
 A thin layer over :class:`orthoglide_ros.cores.tracking_controller.Tracking`: it declares the
 parameters of :data:`orthoglide_ros.cores.tracking_controller.PARAMETERS`, hands the
 joint states' arrays to the core, publishes the commands, logs throttled
-warnings and publishes the core's status on ``/diagnostics``. Run it
-with ``ros2 run orthoglide_ros tracking_controller``;
+warnings and publishes the core's status on ``/diagnostics``. A managed
+node (:mod:`orthoglide_ros.ros.lifecycle`): configured and activated at
+start unless ``autostart`` is false; deactivated, it holds (see
+:meth:`~orthoglide_ros.cores.tracking_controller.Tracking.deactivate`).
+Run it with ``ros2 run orthoglide_ros tracking_controller``;
 ``doc/tracking_controller.md`` has the topics, parameters and rules.
 """
 
@@ -17,13 +20,14 @@ from trajectory_msgs.msg import JointTrajectory
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.ros.node_runtime import InputNode, run
+from orthoglide_ros.ros.lifecycle import ManagedNode
+from orthoglide_ros.ros.node_runtime import run
 from orthoglide_ros.cores.inputs import JOINT_TRAJECTORY_BYTES
 from orthoglide_ros.cores.tracking_controller import (HOLDING, PARAMETERS,
                                                       Tracking)
 
 
-class TrackingControllerNode(InputNode):
+class TrackingControllerNode(ManagedNode):
     """
     Node ``tracking_controller``: PD plus feedforward on the three actuators.
 
@@ -31,15 +35,22 @@ class TrackingControllerNode(InputNode):
     :class:`InputNode` (raw, decoded by :mod:`cdr` outside the lock),
     joint trajectories on a thread of their own; a periodic thread samples
     the trajectory followed at ``rate_hz``; the diagnostics run on a
-    periodic thread and the parameter services on the executor; all hold
-    ``self.lock`` on the core.
+    periodic thread and the parameter and lifecycle services on the
+    executor; all hold ``self.lock`` on the core.
     """
 
     def __init__(self, **kwargs):
         super().__init__('tracking_controller', **kwargs)
-        # Raises ValueError on an invalid start-up set (run() reports it).
-        self.core = Tracking(self.declare_settings(PARAMETERS),
-                             time.monotonic())
+        self.declare_table(PARAMETERS, 'Orthoglide tracking controller')
+        # The core swaps its settings at once (under the lock).
+        self.apply_changes_with(lambda settings: self.core.configure(
+            settings))
+        self.start()
+
+    def build(self, settings):
+        """Configure: the core, the inputs, the command output, the loop."""
+        self.core = Tracking(settings, time.monotonic())
+        self.core.active = False
         self._pub_commands = self.create_output(Float64MultiArray, 'commands')
         # Measured first: when both inputs are ready in one wake-up of the
         # input thread, the measurements are taken before the desired
@@ -59,10 +70,6 @@ class TrackingControllerNode(InputNode):
         self._command = Float64MultiArray()
         self._command.layout.dim = [
             MultiArrayDimension(label='actuator', size=3, stride=3)]
-        self.publish_status('Orthoglide tracking controller', self.core)
-        # The core swaps its settings at once (under the lock).
-        self.apply_changes_with(self.core.configure)
-        self.start_threads()
 
     # Inputs (input thread, self.lock held) --------------------------------
     def _on_measured(self, fields):
