@@ -60,6 +60,7 @@ class ManagedNode(InputNode, LifecycleNode):
         declare_specs(self, (AUTOSTART,))
         self._outputs = []
         self.configure_error = None
+        self._announce = False      # log transitions, but not autostart's
         self._refuse_unavailable_transitions()
 
     def _refuse_unavailable_transitions(self):
@@ -117,6 +118,7 @@ class ManagedNode(InputNode, LifecycleNode):
         if not self.get_parameter('autostart').value:
             self.log('info', 'unconfigured: waiting for ~/change_state '
                      '(autostart is false)')
+            self._announce = True
             return
         refused = None
         if self.trigger_configure() != SUCCESS:
@@ -126,6 +128,7 @@ class ManagedNode(InputNode, LifecycleNode):
         if refused:
             self.stop_threads()     # the node is not made: nothing runs on
             raise ValueError(refused)
+        self._announce = True
 
     # Transitions ----------------------------------------------------------
     def on_configure(self, state):
@@ -174,7 +177,8 @@ class ManagedNode(InputNode, LifecycleNode):
         except Exception as error:  # to the error state, one clear line
             self.log('error', f'{name} failed: {_line(error)}')
             return ERROR
-        self.log('info', f'{name}: {self.lifecycle_state_after(name)}')
+        if self._announce:
+            self.log('info', f'{name}: {self.lifecycle_state_after(name)}')
         return SUCCESS
 
     @staticmethod
