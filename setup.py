@@ -32,6 +32,9 @@ setup(
         # The robot's URDF (urdf/orthoglide.urdf, written by `orthoglide
         # urdf` for the paper's robot).
         ('share/' + package_name + '/urdf', sorted(glob('urdf/*.urdf'))),
+        # The robot's MJCF (mjcf/orthoglide.xml, written by `orthoglide
+        # mjcf` for the paper's robot), for MuJoCo.
+        ('share/' + package_name + '/mjcf', sorted(glob('mjcf/*.xml'))),
     ],
     # ROS packages (rclpy, *_msgs) are deliberately absent: they come from
     # apt ROS or from the ros-jazzy-* wheels in requirements.txt. scipy and

@@ -15,6 +15,7 @@ Subcommands (``orthoglide SUBCOMMAND --help`` for details):
 - ``record``: joint states into a rosbag2 bag (MCAP or sqlite3); the one
   subcommand that needs ROS (rclpy).
 - ``urdf``: the robot's URDF (a cut tree, see :mod:`orthoglide_ros.model.urdf`).
+- ``mjcf``: the robot's MJCF for MuJoCo, loops closed (:mod:`orthoglide_ros.model.mjcf`).
 - ``draw``: a picture of the robot at one platform position (PNG).
 - ``animate``: the robot moving along a trajectory, with its actuator
   forces (GIF).
@@ -485,6 +486,20 @@ def run_urdf(robot, args):
     except ValueError as error:
         raise CliError(f'--joint-names: {error}') from None
     text = urdf.urdf(robot, names, args.singularity_margin)
+    _write_output(args.output, text.encode('utf-8'))
+    return 0
+
+
+# -- mjcf -------------------------------------------------------------------
+
+def run_mjcf(robot, args):
+    """Write the robot's MJCF (standard output or ``--output``)."""
+    from orthoglide_ros.model import mjcf
+    try:
+        names = joint_names(args.joint_names)
+    except ValueError as error:
+        raise CliError(f'--joint-names: {error}') from None
+    text = mjcf.mjcf(robot, names, args.force_limit)
     _write_output(args.output, text.encode('utf-8'))
     return 0
 
@@ -962,6 +977,22 @@ def _parser():
                       'singularity distance at least D, in [0, 0.99] '
                       f'(default {mechanics.DEFAULT_SINGULARITY_MARGIN:g})')
     urdf.set_defaults(run=run_urdf)
+    mjcf = sub.add_parser(
+        'mjcf', parents=[common], help='write the robot\'s MJCF (MuJoCo)',
+        description='Write the robot as a MuJoCo model (MJCF): the URDF\'s '
+        'bodies, masses and inertias, the loops closed by equality '
+        'constraints, three force actuators named as the sliders (N); '
+        'see doc/mujoco.md.')
+    mjcf.add_argument('--output', metavar='FILE', help='MJCF file '
+                      '(default: standard output)')
+    mjcf.add_argument('--joint-names', nargs=3, metavar=('A', 'B', 'C'),
+                      default=list(JOINT_NAMES), help='names of '
+                      'the slide joints and actuators A, B, C (default: '
+                      + ' '.join(JOINT_NAMES) + ')')
+    mjcf.add_argument('--force-limit', type=_positive_float, default=None,
+                      metavar='N', help='the actuators\' control range '
+                      '+-N (newton; default: none)')
+    mjcf.set_defaults(run=run_mjcf)
 
     draw = sub.add_parser(
         'draw', parents=[common], help='draw the robot at a position (PNG)',

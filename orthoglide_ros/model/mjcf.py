@@ -1,0 +1,272 @@
+"""
+The Orthoglide as MJCF: MuJoCo's model, with the loops closed, without ROS.
+
+The same bodies, frames, masses, centres and inertias as :mod:`urdf`
+(:func:`urdf.inertials`, frames from :func:`mechanics.elements` at home,
+full precision), nested as a tree that MuJoCo closes with ``connect``
+equality constraints where :mod:`mechanics` cuts the mechanism:
+
+- per leg, body 6 (``x_bar_a6a7``) on body 2 and body 4 (``x_rod_a4a7``)
+  on body 3; the parallelogram closes at A7 (``x_a7``);
+- the ``platform`` (origin G, axes parallel to frame 0 at home) is a child
+  of leg A's body 4 through the hinge ``a_phi54`` at A5; legs B and C end
+  at their body 4 and meet the platform in a hinge about their z5 axis:
+  two ``connect`` constraints on that axis, at A5 (``x_a5``) and one
+  ``l2`` along it (``x_a5_axis``), which leave exactly the rotation about
+  it free, as the joint ``phi54`` of doc/model.md does.
+
+Contract (doc/mujoco.md): world frame = frame 0, z up, gravity the
+model's; the slide joints named ``joint_names`` with qpos = lambda (0 at
+home); the hinges named as the URDF's revolute joints (``x_phi21``,
+``x_phi32``, ``x_phi62``, ``x_phi43`` and ``a_phi54``); three ``motor``
+actuators named as the slide joints, gear 1, force along +lambda (N),
+control-limited only by a robot's force limit; qpos0 is the home pose,
+closed. ``friction_viscous`` is the sliders' ``damping`` and
+``friction_coulomb`` their ``frictionloss`` (MuJoCo's dry friction, a
+constraint that holds a slider at rest up to that force: not the
+package's ``tanh`` law at low speed). MuJoCo refuses zero principal
+inertias (a slender rod about its axis, the translating slider): those
+are MIN_INERTIA. No collisions (``contype`` 0): the mechanism's limits are
+its workspace's, not contacts.
+
+Solver settings (``<option>``, ``<default>``): RK4 at 1 ms and stiff
+equality constraints (SOLREF, SOLIMP), for which the loops stay closed to
+about a micrometre and an open-loop run follows the rigid model; MuJoCo's
+defaults let them sag by millimetres (doc/mujoco.md has the figures).
+"""
+
+import xml.etree.ElementTree as ET
+
+import numpy as np
+
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.mechanics import ZERO
+from orthoglide_ros.model.robot import JOINT_NAMES
+from orthoglide_ros.model.urdf import (CHAIN, GREY, inertials, LEG_COLOURS,
+                                       LEGS, link_name, PLATFORM)
+
+MIN_INERTIA = 1e-9          # kg m^2: a principal inertia the model has 0
+TIMESTEP = 0.001            # s
+INTEGRATOR = 'RK4'
+SOLREF = (0.002, 1.0)       # the stiffest MuJoCo allows at TIMESTEP (2 dt)
+SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+
+
+def equality_names(leg):
+    """Return the names of ``leg``'s loop closures (A7; A5 for B, C)."""
+    prefix = leg.lower()
+    return (f'{prefix}_a7',) + (() if leg == 'A' else (
+        f'{prefix}_a5', f'{prefix}_a5_axis'))
+
+
+def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None):
+    """
+    Return the MJCF (XML text) of ``robot``; sliders named ``joint_names``.
+
+    ``force_limit`` (N, optional): the actuators' control range +-it.
+    Plain text, the same for the same arguments.
+    """
+    home = mechanics.elements(robot, ZERO)
+    masses = inertials(robot)
+    radius = robot.l2 / 8.0
+    root = ET.Element('mujoco', model='orthoglide')
+    root.append(ET.Comment(
+        ' The Orthoglide (Chablat, Wenger, Staicu), written by `orthoglide '
+        'mjcf` from the robot.* parameters: '
+        + ', '.join(f'{k} = {v if isinstance(v, list) else _number(v)}'
+                    for k, v in robot.as_parameters().items())
+        + '. Loops closed by connect constraints; see doc/mujoco.md. '))
+    ET.SubElement(root, 'compiler', angle='radian', autolimits='true')
+    ET.SubElement(root, 'option', timestep=_number(TIMESTEP),
+                  integrator=INTEGRATOR, gravity=_vector(robot.gravity))
+    default = ET.SubElement(root, 'default')
+    ET.SubElement(default, 'geom', contype='0', conaffinity='0')
+    ET.SubElement(default, 'equality', solref=_vector(SOLREF),
+                  solimp=_vector(SOLIMP))
+    asset = ET.SubElement(root, 'asset')
+    for name, rgba in [*((f'leg_{leg.lower()}', c)
+                         for leg, c in LEG_COLOURS.items()),
+                       *GREY.items()]:
+        ET.SubElement(asset, 'material', name=name, rgba=_vector(rgba))
+    ET.SubElement(asset, 'texture', name='grid', type='2d', builtin='checker',
+                  rgb1='0.9 0.9 0.9', rgb2='0.8 0.8 0.8', width='512',
+                  height='512')
+    ET.SubElement(asset, 'material', name='floor', texture='grid',
+                  texrepeat='8 8')
+
+    world = ET.SubElement(root, 'worldbody')
+    ET.SubElement(world, 'light', pos='1 1 2', dir='-0.5 -0.5 -1',
+                  directional='true')
+    ET.SubElement(world, 'geom', name='floor', type='plane',
+                  pos=f'0 0 {_number(-1.2 * robot.l3)}', size='1 1 0.01',
+                  material='floor')
+    for leg in LEGS:
+        axis = home[leg]['bodies'][1]['rotation'].T[:, 2]
+        a1 = home[leg]['joints']['A1']
+        ET.SubElement(world, 'geom', type='cylinder', material='rail',
+                      size=_number(radius), fromto=_vector(np.concatenate(
+                          (a1 - robot.l3 * axis, a1 + robot.l3 * axis))))
+    for leg, name in zip(LEGS, joint_names):
+        _leg(world, robot, leg, name, home, masses, radius)
+
+    equality = ET.SubElement(root, 'equality')
+    for leg in LEGS:
+        bodies, joints = home[leg]['bodies'], home[leg]['joints']
+        prefix = leg.lower()
+        ET.SubElement(equality, 'connect', name=f'{prefix}_a7',
+                      body1=link_name(leg, 6), body2=link_name(leg, 4),
+                      anchor=_vector(_local(bodies[6], joints['A7'])))
+        if leg != 'A':
+            z5 = bodies[5]['rotation'].T[:, 2]
+            for name, point in (('a5', joints['A5']),
+                                ('a5_axis', joints['A5'] + robot.l2 * z5)):
+                ET.SubElement(equality, 'connect', name=f'{prefix}_{name}',
+                              body1=link_name(leg, 4), body2=PLATFORM,
+                              anchor=_vector(_local(bodies[4], point)))
+
+    actuator = ET.SubElement(root, 'actuator')
+    for name in joint_names:
+        attributes = {'name': name, 'joint': name, 'gear': '1'}
+        if force_limit:
+            attributes['ctrlrange'] = _vector((-force_limit, force_limit))
+        ET.SubElement(actuator, 'motor', **attributes)
+    ET.indent(root, '  ')
+    return ET.tostring(root, encoding='unicode') + '\n'
+
+
+def _leg(world, robot, leg, slider_joint, home, masses, radius):
+    """Add one leg's bodies (1, 2, 3, 6, 4; the platform on leg A's 4)."""
+    bodies, joints = home[leg]['bodies'], home[leg]['joints']
+    prefix = leg.lower()
+    colour = f'leg_{prefix}'
+    parents = {0: world}
+    for body, _, parent, suffix, _ in CHAIN:
+        if body == 5:
+            continue
+        element = _body(parents[parent], link_name(leg, body), bodies[body],
+                        bodies.get(parent), masses[body])
+        parents[body] = element
+        if body == 1:
+            ET.SubElement(element, 'joint', name=slider_joint, type='slide',
+                          axis='0 0 1', damping=_number(
+                              robot.friction_viscous[LEGS.index(leg)]),
+                          frictionloss=_number(
+                              robot.friction_coulomb[LEGS.index(leg)]))
+        else:
+            ET.SubElement(element, 'joint', name=f'{prefix}_{suffix}',
+                          type='hinge', axis='0 0 1')
+        _shapes(element, body, bodies[body], joints, colour, radius)
+    if leg == 'A':
+        platform = ET.SubElement(
+            parents[4], 'body', name=PLATFORM,
+            pos=_vector(_local(bodies[4], joints['G'])),
+            xyaxes=_xyaxes(bodies[4]['rotation'].T))
+        z5 = bodies[5]['rotation'].T[:, 2]      # frame 0 = the platform's
+        ET.SubElement(platform, 'joint', name='a_phi54', type='hinge',
+                      pos=_vector(joints['A5'] - joints['G']),
+                      axis=_vector(z5))
+        _inertial(platform, masses[5])
+        ET.SubElement(platform, 'geom', type='box', material='platform',
+                      size=_vector((robot.l / 2.0,) * 3))
+        for other in LEGS:
+            mount = home[other]['joints']['A5'] - home[other]['joints']['G']
+            ET.SubElement(platform, 'geom', type='cylinder',
+                          material='platform', size=_number(radius),
+                          fromto=_vector(np.concatenate((ZERO, mount))))
+            ET.SubElement(platform, 'site', name=f'{other.lower()}_mount',
+                          pos=_vector(mount), size=_number(radius))
+
+
+def _body(parent, name, frame, parent_frame, inertial):
+    """Add a body at ``frame`` (of mechanics.elements), seen from its parent."""
+    if parent_frame is None:
+        pos, rotation = frame['origin'], frame['rotation'].T
+    else:
+        pos = _local(parent_frame, frame['origin'])
+        rotation = parent_frame['rotation'] @ frame['rotation'].T
+    body = ET.SubElement(parent, 'body', name=name, pos=_vector(pos),
+                         xyaxes=_xyaxes(rotation.T))
+    _inertial(body, inertial)
+    return body
+
+
+def _inertial(body, inertial):
+    mass, centre, inertia = inertial
+    inertia = np.array(inertia, dtype=float)
+    values, vectors = np.linalg.eigh(inertia)
+    inertia = vectors @ np.diag(np.maximum(values, MIN_INERTIA)) @ vectors.T
+    ET.SubElement(body, 'inertial', pos=_vector(centre), mass=_number(mass),
+                  fullinertia=_vector((
+                      inertia[0, 0], inertia[1, 1], inertia[2, 2],
+                      inertia[0, 1], inertia[0, 2], inertia[1, 2])))
+
+
+def _shapes(body, number, frame, joints, colour, radius):
+    """Add the visual geoms of one body (its own frame), as the URDF's."""
+    def local(joint):
+        return _local(frame, joints[joint])
+
+    def rod(material, start, end):
+        ET.SubElement(body, 'geom', type='capsule', material=material,
+                      size=_number(radius), fromto=_vector(
+                          np.concatenate((start, end))))
+
+    if number == 1:
+        size = 3.0 * radius
+        ET.SubElement(body, 'geom', type='box', material='steel',
+                      size=_vector((size, size, 2.0 * size)))
+        rod('steel', ZERO, local('A2'))
+    elif number == 2:
+        rod('steel', local('A3'), local('A6'))
+    elif number == 3:
+        rod(colour, ZERO, local('A4'))
+    elif number == 6:
+        rod(colour, ZERO, local('A7'))
+    elif number == 4:
+        rod('steel', ZERO, local('A5'))
+
+
+def _local(frame, point):
+    """Return a point of frame 0 in ``frame`` (of mechanics.elements)."""
+    return frame['rotation'] @ (np.asarray(point) - frame['origin'])
+
+
+def _xyaxes(rotation):
+    """Return MJCF ``xyaxes``: a frame's x and y axes in its parent's."""
+    rotation = np.asarray(rotation)     # rows: the axes, in the parent
+    return _vector(np.concatenate((rotation[0], rotation[1])))
+
+
+def _number(value):
+    """Format a number at full precision (repr), ``-0`` as 0."""
+    value = float(value)
+    return '0' if value == 0.0 else repr(value)
+
+
+def _vector(values):
+    return ' '.join(_number(v) for v in values)
+
+
+def joint_values(robot, position, velocity=ZERO, acceleration=ZERO,
+                 joint_names=JOINT_NAMES):
+    """
+    Return every MJCF joint's ``{name: (q, qdot, qddot)}`` at a platform state.
+
+    From :func:`mechanics.elements` (eqs. 9, 13 and their derivatives):
+    the sliders' lambda, the hinges' phi21 (``x_phi21``, ``a_phi54``) and
+    phi32 (``x_phi32``, ``x_phi62``, ``x_phi43``), by eq. (5); m, rad and
+    their rates.
+    """
+    legs = mechanics.elements(robot, position, velocity, acceleration)
+    values = {}
+    for leg, name in zip(LEGS, joint_names):
+        e, prefix = legs[leg], leg.lower()
+        values[name] = (e['lambda'], e['lambdadot'], e['lambdaddot'])
+        angle = {n: (e[f'phi{n}'], e[f'omega{n}'], e[f'epsilon{n}'])
+                 for n in ('21', '32')}
+        for suffix, n in (('phi21', '21'), ('phi32', '32'),
+                          ('phi62', '32'), ('phi43', '32')):
+            values[f'{prefix}_{suffix}'] = angle[n]
+        if leg == 'A':
+            values['a_phi54'] = angle['21']
+    return values

@@ -1,0 +1,187 @@
+"""
+The MJCF (orthoglide_ros.model.mjcf) against MuJoCo, an engine no one here wrote.
+
+- The committed ``mjcf/orthoglide.xml`` is what ``orthoglide mjcf`` writes
+  for the paper's robot; it loads; its names, actuators and total mass are
+  the contract's (doc/mujoco.md); qpos0 is home, closed.
+- Kinematics: with the joints of the closed form (eqs. 9, 5) the
+  constraints hold to 1e-12 m and the platform body is at G.
+- Dynamics, rigid: MuJoCo's mass matrix, bias and constraint Jacobian,
+  projected (``M qacc + c - passive = J^T mu + B f``, solved for the
+  actuator forces ``f`` with the qacc of the closed form), give the
+  package's forces (eq. 25, viscous friction included) to 1e-6 relative at
+  random states of several robots.
+- Dynamics, simulated: the package's forces applied open loop from home at
+  rest keep the platform on eq. (6) within 0.05 mm after 1 s, and the
+  loops stay closed to 1e-5 m over the whole motion (the robot is open-loop
+  unstable: errors grow about e-fold every 0.28 s, so this is strict).
+"""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.mjcf import joint_values, mjcf
+from orthoglide_ros.model.robot import JOINT_NAMES, Robot
+from orthoglide_ros.model.trajectory import PAPER_DURATION, paper_sample
+
+mujoco = pytest.importorskip('mujoco')
+
+ROOT = __import__('pathlib').Path(__file__).resolve().parents[1]
+COMMITTED = ROOT / 'mjcf' / 'orthoglide.xml'
+PAPER = Robot()
+OPEN_LOOP_BOUND = 5e-5      # m after 1 s (the issue's 0.05 mm)
+CLOSURE_BOUND = 1e-5        # m over the simulated motion
+
+
+def load(robot=PAPER, **kwargs):
+    model = mujoco.MjModel.from_xml_string(mjcf(robot, **kwargs))
+    return model, mujoco.MjData(model)
+
+
+def set_state(model, data, robot, position, velocity=(0.0,) * 3,
+              acceleration=(0.0,) * 3):
+    """Set qpos and qvel from the closed form; return qacc."""
+    qacc = np.zeros(model.nv)
+    for name, (q, qd, qdd) in joint_values(robot, position, velocity,
+                                           acceleration).items():
+        joint = model.joint(name)
+        data.qpos[joint.qposadr[0]] = q
+        data.qvel[joint.dofadr[0]] = qd
+        qacc[joint.dofadr[0]] = qdd
+    mujoco.mj_forward(model, data)
+    return qacc
+
+
+def closure(data):
+    return float(np.abs(data.efc_pos[data.efc_type == 0]).max())
+
+
+def test_committed_mjcf_is_what_the_generator_writes():
+    assert COMMITTED.read_text() == mjcf(PAPER), (
+        'mjcf/orthoglide.xml is stale: run orthoglide mjcf --output '
+        'mjcf/orthoglide.xml')
+
+
+def test_the_contract_names_and_mass():
+    model = mujoco.MjModel.from_xml_path(str(COMMITTED))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    assert [model.actuator(i).name for i in range(model.nu)] == \
+        list(JOINT_NAMES)
+    for i, name in enumerate(JOINT_NAMES):
+        assert model.actuator(i).trntype == mujoco.mjtTrn.mjTRN_JOINT
+        assert model.actuator_trnid[i, 0] == model.joint(name).id
+        assert model.actuator_gear[i, 0] == 1.0
+        assert model.jnt_type[model.joint(name).id] == \
+            mujoco.mjtJoint.mjJNT_SLIDE
+        assert not model.actuator_ctrllimited[i]
+    masses = PAPER
+    total = 3 * (masses.m1 + masses.m2 + masses.m3 + masses.m4
+                 + masses.m6) + masses.m5
+    assert model.body_mass.sum() == pytest.approx(total, rel=1e-12)
+    assert np.allclose(model.opt.gravity, PAPER.gravity)
+    assert closure(data) < 1e-12
+    assert np.abs(data.body('platform').xpos).max() < 1e-12
+    limited, _ = load(force_limit=500.0)
+    assert limited.actuator_ctrllimited.all()
+    assert np.allclose(limited.actuator_ctrlrange, [[-500.0, 500.0]] * 3)
+
+
+def test_closed_form_joints_close_the_loops_and_place_the_platform():
+    model, data = load()
+    for t in np.linspace(0.0, PAPER_DURATION, 21):
+        position = paper_sample(t)[0]
+        set_state(model, data, PAPER, position)
+        assert closure(data) < 1e-12
+        assert np.allclose(data.body('platform').xpos, position,
+                           rtol=0.0, atol=1e-12)
+
+
+def robots(rng, count):
+    for _ in range(count):
+        yield Robot(m1=rng.uniform(0.1, 1.0), m2=rng.uniform(0.05, 0.5),
+                    m3=rng.uniform(1.0, 4.0), m4=rng.uniform(0.05, 0.5),
+                    m5=rng.uniform(5.0, 30.0), m6=rng.uniform(1.0, 4.0),
+                    l=rng.uniform(0.1, 0.3), l3=rng.uniform(0.7, 1.0),
+                    friction_viscous=tuple(rng.uniform(0.0, 50.0, 3)))
+
+
+def test_mujoco_rigid_projection_gives_the_package_forces():
+    rng = np.random.default_rng(7)
+    worst = 0.0
+    for robot in robots(rng, 4):
+        model, data = load(robot)
+        actuated = np.zeros((model.nv, 3))
+        for column, name in enumerate(JOINT_NAMES):
+            actuated[model.joint(name).dofadr[0], column] = 1.0
+        mass = np.zeros((model.nv, model.nv))
+        for _ in range(6):
+            position = rng.uniform(-0.12, 0.12, 3)
+            velocity = rng.uniform(-0.5, 0.5, 3)
+            acceleration = rng.uniform(-5.0, 5.0, 3)
+            qacc = set_state(model, data, robot, position, velocity,
+                             acceleration)
+            mujoco.mj_fullM(model, data, mass)
+            rhs = mass @ qacc + data.qfrc_bias - data.qfrc_passive
+            jacobian = data.efc_J.reshape(-1, model.nv)[data.efc_type == 0]
+            solution = np.linalg.lstsq(np.hstack((jacobian.T, actuated)),
+                                       rhs, rcond=None)[0]
+            force = np.array(mechanics.solve(robot, position, velocity,
+                                             acceleration).force)
+            worst = max(worst, np.abs(solution[-3:] - force).max()
+                        / np.abs(force).max())
+    print(f'largest relative difference: {worst:.3g}')
+    assert worst < 1e-6
+
+
+def open_loop(robot=PAPER, plant=None, duration=PAPER_DURATION):
+    """Apply the package's forces (midpoint of each step); return errors."""
+    model, data = load(plant or robot)
+    mujoco.mj_forward(model, data)
+    step = model.opt.timestep
+    times, errors, closures = [], [], []
+    for k in range(round(duration / step)):
+        data.ctrl[:] = mechanics.solve(robot,
+                                       *paper_sample((k + 0.5) * step)).force
+        mujoco.mj_step(model, data)
+        times.append((k + 1) * step)
+        errors.append(np.linalg.norm(data.body('platform').xpos
+                                     - paper_sample(times[-1])[0]))
+        closures.append(closure(data))
+    return np.array(times), np.array(errors), max(closures)
+
+
+def test_the_package_forces_drive_mujoco_along_eq_6():
+    times, errors, worst_closure = open_loop()
+    at = {t: errors[np.argmin(np.abs(times - t))] for t in (0.5, 1.0, 2.0)}
+    figures = ', '.join(f'{e * 1e6:.2f} um at {t:g} s'
+                        for t, e in at.items())
+    print(f'open loop: {figures}; loops closed to {worst_closure:.2g} m')
+    assert errors[times <= 1.0].max() <= OPEN_LOOP_BOUND
+    assert worst_closure <= CLOSURE_BOUND
+
+
+def test_a_two_percent_heavier_platform_leaves_it():
+    """The open-loop bound is tight: MuJoCo's robot 2 % off the model."""
+    times, errors, _ = open_loop(plant=PAPER.replace(m5=PAPER.m5 * 1.02),
+                                 duration=1.0)
+    assert errors[times <= 1.0].max() > OPEN_LOOP_BOUND
+
+
+def test_cli_writes_a_model_mujoco_loads(tmp_path):
+    params = tmp_path / 'robot.yaml'
+    params.write_text('feedforward:\n  ros__parameters:\n'
+                      '    robot.m5: 20.0\n')
+    out = tmp_path / 'robot.xml'
+    done = subprocess.run(
+        [sys.executable, '-m', 'orthoglide_ros.tools.cli', 'mjcf',
+         '--params', str(params), '--joint-names', 'ja', 'jb', 'jc',
+         '--output', str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    model = mujoco.MjModel.from_xml_path(str(out))
+    assert model.actuator(0).name == 'ja'
+    assert model.body('platform').mass[0] == 20.0
