@@ -19,8 +19,10 @@ up to 15.6 mm in the first second).
 """
 
 import numpy as np
+import pytest
 
 from orthoglide_ros.cores import feedforward, simulator, tracking_controller
+from orthoglide_ros.model import mujoco_plant
 from orthoglide_ros.model.robot import JOINT_NAMES, Robot
 from orthoglide_ros.model.trajectory import paper_sample, PAPER_DURATION
 
@@ -29,11 +31,12 @@ LOOP_RATE, PLANT_RATE = 250.0, 500.0
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
 
 
-def open_loop(mass_factor, duration=PAPER_DURATION):
+def open_loop(mass_factor, duration=PAPER_DURATION, engine='builtin'):
     """
     Step the three cores along eq. (6); return (times, errors) of the plant.
 
-    The plant's platform mass is ``mass_factor`` times the model's.
+    The plant's platform mass is ``mass_factor`` times the model's;
+    ``engine``: the simulator's (``builtin`` or ``mujoco``).
     """
     model = Robot()
     ff = feedforward.Feedforward(feedforward.PARAMETERS.parse(
@@ -43,7 +46,8 @@ def open_loop(mass_factor, duration=PAPER_DURATION):
             'kp': [0.0] * 3, 'kd': [0.0] * 3, 'path_tolerance': [0.0] * 3,
             'stall_timeout': 0.0}))
     plant_settings = simulator.PARAMETERS.parse({
-        'rate_hz': PLANT_RATE, 'robot.m5': model.m5 * mass_factor})
+        'rate_hz': PLANT_RATE, 'robot.m5': model.m5 * mass_factor,
+        'engine': engine})
     plant = simulator.Simulator(plant_settings, now=0.0)
     times, errors = [], []
     pending = None          # the command on its way to the plant
@@ -72,22 +76,29 @@ def open_loop(mass_factor, duration=PAPER_DURATION):
     return np.array(times), np.linalg.norm(errors, axis=1)
 
 
-def largest_early_error(mass_factor):
-    times, errors = open_loop(mass_factor, duration=1.0)
+def largest_early_error(mass_factor, engine):
+    times, errors = open_loop(mass_factor, duration=1.0, engine=engine)
     return float(errors[times <= 1.0].max())
 
 
-def test_the_feedforward_alone_follows_the_trajectory():
+ENGINES = ['builtin', pytest.param('mujoco', marks=pytest.mark.skipif(
+    bool(mujoco_plant.available()), reason=mujoco_plant.available()))]
+
+
+@pytest.mark.parametrize('engine', ENGINES)
+def test_the_feedforward_alone_follows_the_trajectory(engine):
     """Gains zero, exact plant: within the bound for the first second."""
-    worst = largest_early_error(1.0)
-    print(f'largest error in the first second: {worst * 1e3:.3f} mm')
+    worst = largest_early_error(1.0, engine)
+    print(f'{engine}: largest error in the first second: '
+          f'{worst * 1e3:.3f} mm')
     assert worst <= OPEN_LOOP_BOUND
 
 
-def test_a_two_percent_heavier_platform_leaves_it():
+@pytest.mark.parametrize('engine', ENGINES)
+def test_a_two_percent_heavier_platform_leaves_it(engine):
     """The bound is tight: a plant 2 % off the model breaks it."""
-    worst = largest_early_error(1.02)
-    print(f'2 % heavier: {worst * 1e3:.3f} mm')
+    worst = largest_early_error(1.02, engine)
+    print(f'{engine}, 2 % heavier: {worst * 1e3:.3f} mm')
     assert worst > OPEN_LOOP_BOUND
 
 

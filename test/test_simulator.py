@@ -65,7 +65,7 @@ def test_spec_table_is_the_robot_table_plus_the_simulator_contract():
     assert own == ['rate_hz', 'publish_rate_hz', 'initial_position',
                    'command_timeout',
                    'force_limit', 'singularity_margin', 'joint_names',
-                   'base_frame']
+                   'base_frame', 'engine']
     for spec in SIMULATOR_SPECS:
         assert spec.description, spec.name
         if spec.type == 'double' and spec.default is not None:
@@ -84,6 +84,7 @@ def test_default_settings():
     assert s.singularity_margin == mechanics.DEFAULT_SINGULARITY_MARGIN
     assert s.joint_names == ('slider_a', 'slider_b', 'slider_c')
     assert s.base_frame == 'base_link'
+    assert s.engine == 'builtin'
 
 
 @pytest.mark.parametrize('name, value', [

@@ -27,6 +27,7 @@ from std_srvs.srv import Trigger
 
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model import mujoco_plant
 from orthoglide_ros.model.plant import Plant
 from orthoglide_ros.cores.simulator import MAX_CATCH_UP
 from orthoglide_ros.ros.simulator_node import SimulatorNode
@@ -118,9 +119,9 @@ def send_for(g, command, seconds, period=0.02):
         spin_for(g.executor, period)
 
 
-def plant_states(force, count, robot=None, start=ZERO):
-    """Return the Plant's (position, lambda, lambdadot) after 1..count."""
-    plant = Plant(robot or Robot(), start, force_limit=1000.0)
+def plant_states(force, count, robot=None, start=ZERO, engine=Plant):
+    """Return the plant's (position, lambda, lambdadot) after 1..count."""
+    plant = engine(robot or Robot(), start, force_limit=1000.0)
     states = []
     for _ in range(count):
         plant.step(force, DT)
@@ -241,6 +242,32 @@ def test_constant_command_follows_the_plant_step_for_step(graph):
     assert tuple(held.position) == states[-1][1]
     assert tuple(held.velocity) == ZERO and tuple(held.effort) == ZERO
     assert g.node.core.plant.position == states[-1][0]
+
+
+@pytest.mark.skipif(bool(mujoco_plant.available()),
+                    reason=mujoco_plant.available() or 'ok')
+def test_mujoco_engine_follows_its_plant_step_for_step(graph):
+    """
+    engine mujoco: the same rules, the states MuJoCo's, step for step.
+
+    A command held until the timeout: every published running state is
+    the MujocoPlant's after as many steps, in order, exactly; then held.
+    """
+    g = graph({'command_timeout': 0.2, 'engine': 'mujoco'})
+    force = (HOLD[0] + 20.0, HOLD[1] - 10.0, HOLD[2] + 5.0)
+    g.probe.send(force)
+    status = wait_diagnostics(g, lambda v: v['timeouts'] == '1')
+    assert values(status)['engine'] == 'mujoco'
+    steps = int(values(status)['steps'])
+    states = plant_states(force, steps, engine=mujoco_plant.MujocoPlant)
+    index = {state[1]: k for k, state in enumerate(states)}
+    running = [m for m in g.probe.joint_states if tuple(m.effort) == force]
+    assert len(running) >= steps / MAX_CATCH_UP, (len(running), steps)
+    order = [index[tuple(m.position)] for m in running]
+    assert order == sorted(order) and order[-1] >= steps - MAX_CATCH_UP
+    for m, k in zip(running, order):
+        assert tuple(m.velocity) == states[k][2]
+    assert tuple(g.probe.joint_states[-1].velocity) == ZERO
 
 
 def test_publish_rate_samples_the_steps(graph):

@@ -47,9 +47,16 @@ rest, ``held``, simulation time 0.
 Parameters apply as follows: ``force_limit``, ``command_timeout``,
 ``rate_hz``, ``publish_rate_hz``, ``joint_names`` and ``base_frame`` at
 once (the next tick);
-``robot.*``, ``initial_position`` and ``singularity_margin`` describe the
-plant and take effect at the next reset (``pending_reset`` says one is
-waiting), so a running simulation never changes model in mid-motion.
+``robot.*``, ``initial_position``, ``singularity_margin`` and ``engine``
+describe the plant and take effect at the next reset (``pending_reset``
+says one is waiting), so a running simulation never changes model in
+mid-motion.
+
+Two engines integrate the plant, with the same rules around them:
+``builtin`` (:class:`plant.Plant`: the package's forward dynamics, RK4)
+and ``mujoco`` (:class:`mujoco_plant.MujocoPlant`: the robot's MJCF
+stepped by MuJoCo, an engine no one here wrote; friction by MuJoCo's
+law).
 
 Units: m, m/s, N, s; vectors in the base frame 0.
 """
@@ -58,7 +65,7 @@ from collections import namedtuple
 import math
 import time
 
-from orthoglide_ros.model import mechanics
+from orthoglide_ros.model import mechanics, mujoco_plant
 from orthoglide_ros.cores.inputs import Rejected
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, \
     format_vector, ZERO
@@ -97,6 +104,18 @@ def _publish_rate_within_rate(settings):
             f'{settings.rate_hz} Hz)'))
 
 
+ENGINES = ('builtin', 'mujoco')
+
+
+def _engine(value):
+    if value not in ENGINES:
+        raise ValueError(f'must be one of {", ".join(ENGINES)}, got '
+                         f'{value!r}')
+    if value == 'mujoco' and mujoco_plant.available():
+        raise ValueError(mujoco_plant.available())
+    return value
+
+
 def _timeout_of_a_step_at_least(settings):
     if settings.command_timeout * settings.rate_hz < 1.0:
         raise ParameterError('command_timeout', (
@@ -132,6 +151,10 @@ PARAMETERS = Table('SimulatorSettings', (
                      'in joint_states'),
     Spec('base_frame', 'string', 'base_link',
          'frame_id of platform/pose (the paper\'s frame 0)'),
+    Spec('engine', 'string', 'builtin',
+         'what integrates the plant: builtin (the package\'s forward '
+         'dynamics, RK4) or mujoco (the robot\'s MJCF in MuJoCo); applies '
+         'at the next reset', check=_engine),
 ), rules=(_initial_position_in_workspace, _publish_rate_within_rate,
           _timeout_of_a_step_at_least), robot=True)
 
@@ -277,11 +300,9 @@ class Simulator:
                 if step.clipped[0] or step.clipped[1] or step.clipped[2]:
                     self.clipped += 1
                 effort = step.force
-                self._solution = mechanics.solve(
-                    plant.robot, plant.position, plant.velocity, ZERO,
-                    plant.margin)
-        s = self._solution
-        return Tick(self.state, self.plant.position, s.lambda_, s.lambdadot,
+                self._refresh()
+        lambda_, lambdadot = self._joints
+        return Tick(self.state, self.plant.position, lambda_, lambdadot,
                     effort, event)
 
     def step_due(self, now):
@@ -366,9 +387,11 @@ class Simulator:
         """
         settings = self.settings
         applied = self._model not in (None, _plant_model(settings))
-        self.plant = Plant(settings.robot, settings.initial_position, ZERO,
-                           0.0, settings.force_limit,
-                           settings.singularity_margin)
+        engine = mujoco_plant.MujocoPlant if settings.engine == 'mujoco' \
+            else Plant
+        self.plant = engine(settings.robot, settings.initial_position, ZERO,
+                            0.0, settings.force_limit,
+                            settings.singularity_margin)
         self._model = _plant_model(settings)
         self._command = None
         self.state = HELD
@@ -421,6 +444,8 @@ class Simulator:
         plant = self.plant
         values = [
             ('state', self.state),
+            ('engine', 'mujoco' if isinstance(
+                plant, mujoco_plant.MujocoPlant) else 'builtin'),
             ('sim time (s)', plant.time),
             ('steps', self.steps),
             ('step rate (Hz)', new['steps'] / seconds),
@@ -466,9 +491,18 @@ class Simulator:
         self._brake(STOPPED)
 
     def _refresh(self):
+        """
+        Solve the plant's state; read its sliders (the joint state).
+
+        The builtin plant's sliders are the closed form of its platform
+        state; MuJoCo's are its slide joints (the constraints hold the rest
+        to about 0.1 um).
+        """
         plant = self.plant
-        self._solution = mechanics.solve(plant.robot, plant.position,
-                                         plant.velocity, ZERO, plant.margin)
+        s = self._solution = mechanics.solve(
+            plant.robot, plant.position, plant.velocity, ZERO, plant.margin)
+        self._joints = (s.lambda_, s.lambdadot) if plant.closed_form \
+            else plant.joint_state()
 
     def reject(self, source, rejection):
         """Count a command refused before it was read (one input)."""
@@ -483,4 +517,4 @@ class Simulator:
 def _plant_model(settings):
     """Return the settings that describe the plant (applied at reset)."""
     return (settings.robot, settings.initial_position,
-            settings.singularity_margin)
+            settings.singularity_margin, settings.engine)

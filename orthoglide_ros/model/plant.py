@@ -127,6 +127,9 @@ class Plant:
     (False, False, True)
     """
 
+    # Its sliders are the closed form of the platform's state (eq. 9, 15).
+    closed_form = True
+
     def __init__(self, robot, position=ZERO, velocity=ZERO, time=0.0,
                  force_limit=math.inf, margin=DEFAULT_SINGULARITY_MARGIN):
         """Check and set the initial state (see the class docstring)."""

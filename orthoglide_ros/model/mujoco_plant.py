@@ -1,0 +1,151 @@
+"""
+MuJoCo as the plant: the Orthoglide of :mod:`mjcf`, stepped by MuJoCo.
+
+:class:`MujocoPlant` has the interface of :class:`plant.Plant` (the
+``simulator``'s ``engine`` ``mujoco``): the state is the platform centre's
+position and velocity in frame 0, a step applies actuator forces held over
+it (MuJoCo's ``ctrl``, clipped to the force limits) and refuses, leaving
+the state unchanged, what the builtin plant refuses (a non-finite force, an
+end state out of reach or nearer a singularity than the margin). The
+model is :func:`mjcf.mjcf` of the plant's robot: its own integrator (RK4)
+and constraint settings, at the largest sub-step of at most
+:data:`mjcf.TIMESTEP` that divides the step. Friction is MuJoCo's (slider
+``damping`` and ``frictionloss``, doc/mujoco.md), not the package's law.
+
+Units: m, m/s, N, s; vectors in the base frame 0.
+"""
+
+import math
+
+import numpy as np
+
+from orthoglide_ros.model import mechanics, mjcf
+from orthoglide_ros.model.mechanics import (DEFAULT_SINGULARITY_MARGIN,
+                                            WorkspaceError, ZERO)
+from orthoglide_ros.model.plant import PlantStep
+from orthoglide_ros.model.robot import JOINT_NAMES
+
+
+def available():
+    """Return why MuJoCo cannot be used here, '' if it can."""
+    try:
+        import mujoco  # noqa: F401
+    except ImportError as error:
+        return f'the mujoco package is not installed ({error})'
+    return ''
+
+
+class MujocoPlant:
+    """
+    The simulated robot in MuJoCo, with :class:`plant.Plant`'s interface.
+
+    ``position``, ``velocity`` (3-tuples) and ``time`` (s) are read from
+    MuJoCo; setting ``velocity`` (the simulator's brake sets it to zero)
+    puts every joint at the closed form's rates for it.
+    """
+
+    # Its sliders are MuJoCo's slide joints (:meth:`joint_state`).
+    closed_form = False
+
+    def __init__(self, robot, position=ZERO, velocity=ZERO, time=0.0,
+                 force_limit=math.inf, margin=DEFAULT_SINGULARITY_MARGIN):
+        """Build the model of ``robot``; check and set the initial state."""
+        import mujoco
+        self._mujoco = mujoco
+        limits = force_limit if hasattr(force_limit, '__len__') else (
+            force_limit,) * 3
+        limits = tuple(float(f) for f in limits)
+        if len(limits) != 3 or not all(f > 0.0 for f in limits):
+            raise ValueError('force_limit must be one or three positive '
+                             f'numbers (N, inf for none), got {force_limit}')
+        if not math.isfinite(time):
+            raise ValueError(f'time must be finite, got {time!r} s')
+        self.robot = robot
+        self.force_limit = limits
+        self.margin = margin
+        self.model = mujoco.MjModel.from_xml_string(mjcf.mjcf(robot))
+        self.data = mujoco.MjData(self.model)
+        self._platform = self.model.body('platform').id
+        self._dofs = {self.model.joint(i).name: (
+            self.model.jnt_qposadr[i], self.model.jnt_dofadr[i])
+            for i in range(self.model.njnt)}
+        self._set(position, velocity)
+        self.data.time = float(time)
+
+    def _set(self, position, velocity):
+        """Put every joint at the closed form's state (refused: raises)."""
+        mechanics.solve(self.robot, position, velocity, ZERO, self.margin)
+        values = mjcf.joint_values(self.robot, position, velocity)
+        for name, (q, qd, _) in values.items():
+            qpos, dof = self._dofs[name]
+            self.data.qpos[qpos] = q
+            self.data.qvel[dof] = qd
+        self._mujoco.mj_forward(self.model, self.data)
+
+    @property
+    def position(self):
+        """Return the platform centre G (m, frame 0)."""
+        return tuple(float(c) for c in self.data.xpos[self._platform])
+
+    @property
+    def velocity(self):
+        """Return the platform centre's velocity (m/s, frame 0)."""
+        twist = np.zeros(6)
+        self._mujoco.mj_objectVelocity(
+            self.model, self.data, self._mujoco.mjtObj.mjOBJ_BODY,
+            self._platform, twist, 0)
+        return tuple(float(c) for c in twist[3:])
+
+    @velocity.setter
+    def velocity(self, velocity):
+        self._set(self.position, velocity)
+
+    @property
+    def time(self):
+        """Return the simulated time (s)."""
+        return float(self.data.time)
+
+    def step(self, force, dt):
+        """
+        Apply ``force`` (N) held over ``dt`` (s) and advance the state.
+
+        As :meth:`plant.Plant.step`; the acceleration reported is the
+        platform's mean over the step.
+        """
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise ValueError(f'dt must be finite and positive, got {dt!r} s')
+        command = tuple(float(f) for f in force)
+        if not all(math.isfinite(f) for f in command):
+            raise WorkspaceError('non_finite', f'force {command} N is not '
+                                 'finite')
+        applied = tuple(min(max(f, -limit), limit)
+                        for f, limit in zip(command, self.force_limit))
+        mujoco, model, data = self._mujoco, self.model, self.data
+        saved = (data.qpos.copy(), data.qvel.copy(), data.time)
+        before = self.velocity
+        substeps = max(1, math.ceil(dt / mjcf.TIMESTEP - 1e-9))
+        model.opt.timestep = dt / substeps
+        data.ctrl[:] = applied      # the actuators, in JOINT_NAMES order
+        for _ in range(substeps):
+            mujoco.mj_step(model, data)
+        mujoco.mj_forward(model, data)  # positions and velocities at the end
+        position, velocity = self.position, self.velocity
+        try:
+            if not all(math.isfinite(c) for c in position + velocity):
+                raise WorkspaceError('overflow', 'the state is not finite')
+            mechanics.solve(self.robot, position, velocity, ZERO,
+                            self.margin)
+        except WorkspaceError:
+            data.qpos[:], data.qvel[:], data.time = saved
+            mujoco.mj_forward(model, data)
+            raise
+        return PlantStep(
+            tuple((v - w) / dt for v, w in zip(velocity, before)), applied,
+            tuple(a != c for a, c in zip(applied, command)))
+
+    def joint_state(self):
+        """Return ``(lambda, lambdadot)`` (m, m/s) of the slide joints."""
+        qpos, qvel = self.data.qpos, self.data.qvel
+        slots = [self._dofs[name] for name in JOINT_NAMES]
+        return (tuple(float(qpos[q]) for q, _ in slots),
+                tuple(float(qvel[d]) for _, d in slots))
