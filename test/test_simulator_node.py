@@ -378,6 +378,31 @@ def test_bad_commands_rejected_by_reason(graph):
     assert g.node.core.steps == 0
 
 
+def test_joint_commands_by_name_like_topic_based_ros2_control(graph):
+    """
+    A JointState on joint_commands: efforts picked by joint name.
+
+    The order of the names does not matter and other joints are ignored;
+    a command missing a slider or with efforts not matching its names is
+    refused by reason and never applied.
+    """
+    g = graph()
+    publisher = g.probe.create_publisher(JointState, 'joint_commands',
+                                         PROBE_QOS)
+    assert spin_until(g.executor, lambda: publisher.get_subscription_count(),
+                      WAIT)
+    names = ['slider_c', 'gripper', 'slider_a', 'slider_b']
+    publisher.publish(JointState(name=names[:3], effort=[1.0, 2.0, 3.0]))
+    publisher.publish(JointState(name=names, effort=[1.0, 2.0]))
+    status = wait_diagnostics(g, lambda v: v['rejected missing_joint'] ==
+                              '1' and v['rejected malformed'] == '1')
+    assert values(status)['commands received'] == '0'
+    command = (HOLD[2], 0.0, HOLD[0], HOLD[1])
+    publisher.publish(JointState(name=names, effort=list(command)))
+    assert spin_until(g.executor, lambda: any(
+        tuple(m.effort) == HOLD for m in g.probe.joint_states), WAIT)
+
+
 def test_parameter_changes_live_and_at_reset(graph):
     """force_limit applies at once, robot.* at ~/reset, bad ones refused."""
     g = graph()

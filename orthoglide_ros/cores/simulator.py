@@ -66,7 +66,7 @@ import math
 import time
 
 from orthoglide_ros.model import mechanics, mujoco_plant
-from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.inputs import joint_columns, Rejected
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, \
     format_vector, ZERO
 from orthoglide_ros.cores.parameters import joint_names_spec, ParameterError, \
@@ -76,7 +76,8 @@ from orthoglide_ros.cores.status import ERROR, first, OK, Period, Status, WARN
 
 HELD, RUNNING, STOPPED = 'held', 'running', 'stopped'
 # Why a command was rejected: the keys of Simulator.rejected.
-COMMAND_REASONS = ('length', 'non_finite', 'malformed', 'oversize')
+COMMAND_REASONS = ('length', 'non_finite', 'malformed', 'oversize',
+                   'missing_joint')
 # Steps of the grid made at once to catch up with it (10 ms at 1 kHz);
 # beyond, the missed time is dropped (an overrun: slower than real time).
 MAX_CATCH_UP = 10
@@ -264,6 +265,28 @@ class Simulator:
         self.state = RUNNING
         self.timed_out = False
         return self.state
+
+    def joint_command(self, names, effort, now):
+        """
+        Take an effort command as a JointState, by joint name.
+
+        The form topic-based ros2_control hardware interfaces publish:
+        ``names`` and ``effort`` (N) of the message; the forces of
+        ``joint_names`` are picked by name, other joints ignored. Refused
+        (counted) when one is absent (``missing_joint``), names repeat or
+        ``effort`` is not as long as ``names`` (``malformed``); then as
+        :meth:`command`.
+        """
+        try:
+            rows = joint_columns(self.settings.joint_names, names)
+            if len(effort) != len(names):
+                raise Rejected('malformed', (
+                    f'{len(effort)} effort(s) for {len(names)} joint '
+                    'name(s)'))
+        except Rejected as rejection:
+            self.reject('commands', rejection)
+            raise
+        return self.command([effort[i] for i in rows], now)
 
     def tick(self, now):
         """

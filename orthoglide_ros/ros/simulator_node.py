@@ -53,6 +53,10 @@ class SimulatorNode(InputNode):
         self._pub_pose = self.create_output(PoseStamped, 'platform/pose')
         self.create_input(Float64MultiArray, 'commands', self._on_command,
                           'commands', decode=cdr.float64_array)
+        # The same commands by joint name: topic-based ros2_control.
+        self.create_input(JointState, 'joint_commands',
+                          self._on_joint_command, 'joint_commands',
+                          decode=cdr.joint_state)
         self.create_service(Trigger, '~/reset', self._on_reset)
 
         self._joints = JointState()
@@ -84,8 +88,15 @@ class SimulatorNode(InputNode):
     # Inputs ---------------------------------------------------------------
     def _on_command(self, forces):
         """Take one command (input thread, lock held)."""
-        self.core.command(forces, self.arrival)
-        if self.core.state == STOPPED:
+        self._taken(self.core.command(forces, self.arrival))
+
+    def _on_joint_command(self, fields):
+        """Take one command by joint name (input thread, lock held)."""
+        _, _, names, _, _, effort = fields
+        self._taken(self.core.joint_command(names, effort, self.arrival))
+
+    def _taken(self, state):
+        if state == STOPPED:
             self.warn_throttled('ignored', 'command ignored: the simulation '
                                 'is stopped (call ~/reset)')
 
