@@ -185,3 +185,40 @@ def test_cli_writes_a_model_mujoco_loads(tmp_path):
     model = mujoco.MjModel.from_xml_path(str(out))
     assert model.actuator(0).name == 'ja'
     assert model.body('platform').mass[0] == 20.0
+
+
+def run_cli(*args, env=None):
+    import os
+    return subprocess.run([sys.executable, '-m', 'orthoglide_ros.tools.cli',
+                           *args], capture_output=True, text=True,
+                          env=dict(os.environ, **(env or {})))
+
+
+def test_render_writes_a_picture_of_the_robot(tmp_path):
+    """Through the offscreen renderer (EGL), or one line and exit 2."""
+    out = tmp_path / 'robot.png'
+    done = run_cli('render', '--position', '0.1', '0.05', '-0.1',
+                   '--size', '320', '240', '--output', str(out))
+    if done.returncode == 2 and 'no OpenGL backend' in done.stderr:
+        pytest.skip(done.stderr.strip())
+    assert done.returncode == 0, done.stderr
+    from PIL import Image
+    image = np.asarray(Image.open(out).convert('RGB'), dtype=float)
+    assert image.shape == (240, 320, 3)
+    # The robot, not an empty sky: many pixels far from the background's.
+    assert (np.abs(image - np.median(image, axis=(0, 1))).sum(-1)
+            > 60).mean() > 0.02
+
+
+def test_render_without_a_backend_is_one_line_and_exit_2(tmp_path):
+    done = run_cli('render', '--position', '0', '0', '0', '--output',
+                   str(tmp_path / 'x.png'), env={'MUJOCO_GL': 'no-such-gl'})
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.count('\n') == 1 and 'Traceback' not in done.stderr
+    assert not (tmp_path / 'x.png').exists()
+
+
+def test_render_refuses_an_unreachable_point(tmp_path):
+    done = run_cli('render', '--position', '5', '0', '0', '--output',
+                   str(tmp_path / 'x.png'))
+    assert done.returncode == 2 and 'Traceback' not in done.stderr

@@ -248,7 +248,7 @@ def test_constant_command_follows_the_plant_step_for_step(graph):
                     reason=mujoco_plant.available() or 'ok')
 def test_mujoco_engine_follows_its_plant_step_for_step(graph):
     """
-    engine mujoco: the same rules, the states MuJoCo's, step for step.
+    With engine mujoco: the same rules, MuJoCo's states, step for step.
 
     A command held until the timeout: every published running state is
     the MujocoPlant's after as many steps, in order, exactly; then held.

@@ -88,18 +88,13 @@ def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None):
                          for leg, c in LEG_COLOURS.items()),
                        *GREY.items()]:
         ET.SubElement(asset, 'material', name=name, rgba=_vector(rgba))
-    ET.SubElement(asset, 'texture', name='grid', type='2d', builtin='checker',
-                  rgb1='0.9 0.9 0.9', rgb2='0.8 0.8 0.8', width='512',
-                  height='512')
-    ET.SubElement(asset, 'material', name='floor', texture='grid',
-                  texrepeat='8 8')
+    ET.SubElement(asset, 'texture', name='sky', type='skybox',
+                  builtin='gradient', rgb1='0.95 0.97 1', rgb2='0.6 0.65 0.75',
+                  width='256', height='256')
 
     world = ET.SubElement(root, 'worldbody')
     ET.SubElement(world, 'light', pos='1 1 2', dir='-0.5 -0.5 -1',
                   directional='true')
-    ET.SubElement(world, 'geom', name='floor', type='plane',
-                  pos=f'0 0 {_number(-1.2 * robot.l3)}', size='1 1 0.01',
-                  material='floor')
     for leg in LEGS:
         axis = home[leg]['bodies'][1]['rotation'].T[:, 2]
         a1 = home[leg]['joints']['A1']

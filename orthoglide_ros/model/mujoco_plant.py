@@ -89,7 +89,7 @@ class MujocoPlant:
 
     @property
     def velocity(self):
-        """Return the platform centre's velocity (m/s, frame 0)."""
+        """Return the platform centre's speed vector (m/s, frame 0)."""
         twist = np.zeros(6)
         self._mujoco.mj_objectVelocity(
             self.model, self.data, self._mujoco.mjtObj.mjOBJ_BODY,
@@ -102,7 +102,7 @@ class MujocoPlant:
 
     @property
     def time(self):
-        """Return the simulated time (s)."""
+        """Return the simulated seconds since the start."""
         return float(self.data.time)
 
     def step(self, force, dt):

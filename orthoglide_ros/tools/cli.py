@@ -16,6 +16,7 @@ Subcommands (``orthoglide SUBCOMMAND --help`` for details):
   subcommand that needs ROS (rclpy).
 - ``urdf``: the robot's URDF (a cut tree, see :mod:`orthoglide_ros.model.urdf`).
 - ``mjcf``: the robot's MJCF for MuJoCo, loops closed (:mod:`orthoglide_ros.model.mjcf`).
+- ``render``: a picture of the robot from MuJoCo's offscreen renderer.
 - ``draw``: a picture of the robot at one platform position (PNG).
 - ``animate``: the robot moving along a trajectory, with its actuator
   forces (GIF).
@@ -518,6 +519,22 @@ def run_draw(robot, args):
     return 0
 
 
+def run_render(robot, args):
+    """Render the robot at one platform position with MuJoCo; write a PNG."""
+    _check_extension(args.output, '.png')
+    from orthoglide_ros.tools.rendering import Renderer, RenderError
+    try:
+        renderer = Renderer(robot, args.size)
+        try:
+            data = renderer.png(args.position)
+        finally:
+            renderer.close()
+    except (RenderError, mechanics.WorkspaceError) as error:
+        raise CliError(str(error)) from None
+    _write_output(args.output, data)
+    return 0
+
+
 def run_animate(robot, args):
     """Animate the robot along a trajectory; write a GIF."""
     _check_extension(args.output, '.gif')
@@ -1009,6 +1026,23 @@ def _parser():
                       metavar=('WIDTH', 'HEIGHT'), help='image size in '
                       'pixels (default 800 800)')
     draw.set_defaults(run=run_draw)
+
+    render = sub.add_parser(
+        'render', parents=[common], help='render the robot at a position '
+        'with MuJoCo (PNG)',
+        description='Render the robot\'s MuJoCo model (orthoglide mjcf) '
+        'with its platform centre at a position, through MuJoCo\'s '
+        'offscreen renderer (OpenGL: MUJOCO_GL=egl by default, or osmesa). '
+        'Needs mujoco; exits 2 where no OpenGL backend exists.')
+    render.add_argument('--position', type=float, nargs=3, required=True,
+                        metavar=('X', 'Y', 'Z'),
+                        help='platform centre in the base frame (m)')
+    render.add_argument('--output', required=True, metavar='FILE.png',
+                        help='PNG file to write')
+    render.add_argument('--size', type=_pixels, nargs=2, default=(800, 600),
+                        metavar=('WIDTH', 'HEIGHT'), help='image size in '
+                        'pixels (default 800 600)')
+    render.set_defaults(run=run_render)
 
     animate = sub.add_parser(
         'animate', parents=[common], help='animate the robot along a '
