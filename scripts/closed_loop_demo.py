@@ -5,7 +5,8 @@ Starts the ``simulator``, ``feedforward`` and ``tracking_controller`` nodes
 as processes, then for the paper's trajectory (eq. 6) and a faster one
 streams one pass per case from a ``setpoint_publisher`` process: PD alone
 and PD + feedforward, on the exact plant and on a plant whose platform is
-20 % heavier than the model. With ``--mode trajectory`` each pass is sent
+20 % heavier than the model; ``--engine mujoco`` runs the plant in
+MuJoCo (the simulator's second engine). With ``--mode trajectory`` each pass is sent
 once, whole, as a Cartesian trajectory that the feedforward converts into a
 JointTrajectory and the tracking controller follows as
 joint_trajectory_controller would. Prints the tracking error of every case
@@ -51,6 +52,10 @@ def main(argv=None):
     parser.add_argument('--trajectories', default='paper,fast',
                         help='comma-separated, of: '
                         + ', '.join(harness.TRAJECTORIES))
+    parser.add_argument('--engine', choices=('builtin', 'mujoco'),
+                        default='builtin', help='the simulator\'s engine: '
+                        'builtin (the package\'s forward dynamics, default) '
+                        'or mujoco (the robot\'s MJCF in MuJoCo)')
     parser.add_argument('--mode', choices=('stream', 'trajectory'),
                         default='stream', help='stream: setpoints from a '
                         'setpoint_publisher (default); trajectory: each '
@@ -71,8 +76,8 @@ def main(argv=None):
     rclpy.init(context=context)
     runs = {}
     try:
-        with harness.ClosedLoop(context, args.loop_rate,
-                                args.plant_rate) as loop:
+        with harness.ClosedLoop(context, args.loop_rate, args.plant_rate,
+                                args.engine) as loop:
             for name in names:
                 for feedforward, mass in CASES:
                     run = loop.run_unspoiled(
@@ -97,7 +102,8 @@ def main(argv=None):
 def print_table(runs, names, args):
     """Print the RMS and max errors and the PD / PD + FF ratios."""
     print(f'\nTracking error of the platform centre (mm), loop '
-          f'{args.loop_rate:g} Hz, plant {args.plant_rate:g} Hz, '
+          f'{args.loop_rate:g} Hz, plant {args.plant_rate:g} Hz '
+          f'({args.engine}), '
           + ('streamed setpoints:' if args.mode == 'stream' else
              'one joint trajectory per pass:'))
     print(f'{"trajectory":<10} {"plant":<16} {"PD rms":>8} {"PD max":>8} '

@@ -204,13 +204,16 @@ class ClosedLoop:
 
     Use it as a context manager: on exit every process gets SIGINT (SIGKILL
     after a timeout) and :attr:`exit_codes` and :attr:`stderr` keep what
-    they returned. ``loop_rate`` and ``plant_rate`` in Hz.
+    they returned. ``loop_rate`` and ``plant_rate`` in Hz; ``engine``: the
+    simulator's (``builtin`` or ``mujoco``).
     """
 
-    def __init__(self, context, loop_rate=LOOP_RATE, plant_rate=PLANT_RATE):
+    def __init__(self, context, loop_rate=LOOP_RATE, plant_rate=PLANT_RATE,
+                 engine='builtin'):
         self.context = context
         self.loop_rate = loop_rate
         self.plant_rate = plant_rate
+        self.engine = engine
         self.processes = {}
         self.exit_codes = {}
         self.stderr = {}
@@ -221,7 +224,8 @@ class ClosedLoop:
         """Start the nodes and wait until the recorder reaches them."""
         from rclpy.experimental import EventsExecutor
         commands = {
-            'simulator': ['-p', f'rate_hz:={self.plant_rate}'],
+            'simulator': ['-p', f'rate_hz:={self.plant_rate}',
+                          '-p', f'engine:={self.engine}'],
             'feedforward': [],
             'tracking_controller': [
                 '-r', 'joint_trajectory:=feedforward/joint_trajectory'],
