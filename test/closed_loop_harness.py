@@ -205,15 +205,17 @@ class ClosedLoop:
     Use it as a context manager: on exit every process gets SIGINT (SIGKILL
     after a timeout) and :attr:`exit_codes` and :attr:`stderr` keep what
     they returned. ``loop_rate`` and ``plant_rate`` in Hz; ``engine``: the
-    simulator's (``builtin`` or ``mujoco``).
+    simulator's (``builtin`` or ``mujoco``), ``mjcf_file`` its model file
+    (mujoco; '' builds it from the plant's robot).
     """
 
     def __init__(self, context, loop_rate=LOOP_RATE, plant_rate=PLANT_RATE,
-                 engine='builtin'):
+                 engine='builtin', mjcf_file=''):
         self.context = context
         self.loop_rate = loop_rate
         self.plant_rate = plant_rate
         self.engine = engine
+        self.mjcf_file = mjcf_file
         self.processes = {}
         self.exit_codes = {}
         self.stderr = {}
@@ -225,7 +227,8 @@ class ClosedLoop:
         from rclpy.experimental import EventsExecutor
         commands = {
             'simulator': ['-p', f'rate_hz:={self.plant_rate}',
-                          '-p', f'engine:={self.engine}'],
+                          '-p', f'engine:={self.engine}',
+                          '-p', f'mjcf_file:={self.mjcf_file}'],
             'feedforward': [],
             'tracking_controller': [
                 '-r', 'joint_trajectory:=feedforward/joint_trajectory'],

@@ -117,6 +117,40 @@ def _engine(value):
     return value
 
 
+# Longest MJCF file read (bytes), as a parameters file.
+MJCF_FILE_BYTES = 1 << 20
+
+
+def _mjcf_file(path):
+    """Read and check an MJCF file (an empty path: none); return its text."""
+    if not path:
+        return ''
+    if mujoco_plant.available():
+        raise ValueError(mujoco_plant.available())
+    try:
+        with open(path, 'rb') as f:
+            data = f.read(MJCF_FILE_BYTES + 1)
+    except OSError as error:
+        raise ValueError(f'cannot read {path!r}: {error.strerror}') \
+            from None
+    if len(data) > MJCF_FILE_BYTES:
+        raise ValueError(f'{path!r} is longer than {MJCF_FILE_BYTES} bytes')
+    try:
+        text = data.decode('utf-8')
+    except UnicodeDecodeError:
+        raise ValueError(f'{path!r} is not UTF-8 text') from None
+    try:
+        mujoco_plant.check_model(text)
+    except ValueError as error:
+        raise ValueError(f'{path!r}: {error}') from None
+    return text
+
+
+def _mjcf_file_needs_mujoco(settings):
+    if settings.mjcf_file and settings.engine != 'mujoco':
+        raise ParameterError('mjcf_file', 'needs engine mujoco')
+
+
 def _timeout_of_a_step_at_least(settings):
     if settings.command_timeout * settings.rate_hz < 1.0:
         raise ParameterError('command_timeout', (
@@ -156,8 +190,14 @@ PARAMETERS = Table('SimulatorSettings', (
          'what integrates the plant: builtin (the package\'s forward '
          'dynamics, RK4) or mujoco (the robot\'s MJCF in MuJoCo); applies '
          'at the next reset', check=_engine),
-), rules=(_initial_position_in_workspace, _publish_rate_within_rate,
-          _timeout_of_a_step_at_least), robot=True)
+    Spec('mjcf_file', 'string', '',
+         'with engine mujoco, an MJCF file to simulate instead of the model '
+         'built from robot.*: one of orthoglide mjcf (its names, the '
+         'robot.* lengths; its masses, friction and armature its own); '
+         'applies at the next reset', check=_mjcf_file),
+), rules=(_mjcf_file_needs_mujoco, _initial_position_in_workspace,
+          _publish_rate_within_rate, _timeout_of_a_step_at_least),
+    robot=True)
 
 Tick = namedtuple('Tick', (
     'state', 'position', 'lambda_', 'lambdadot', 'effort', 'event'))
@@ -412,9 +452,11 @@ class Simulator:
         applied = self._model not in (None, _plant_model(settings))
         engine = mujoco_plant.MujocoPlant if settings.engine == 'mujoco' \
             else Plant
+        extra = {'model_text': settings.mjcf_file} \
+            if settings.mjcf_file else {}
         self.plant = engine(settings.robot, settings.initial_position, ZERO,
                             0.0, settings.force_limit,
-                            settings.singularity_margin)
+                            settings.singularity_margin, **extra)
         self._model = _plant_model(settings)
         self._command = None
         self.state = HELD
@@ -540,4 +582,4 @@ class Simulator:
 def _plant_model(settings):
     """Return the settings that describe the plant (applied at reset)."""
     return (settings.robot, settings.initial_position,
-            settings.singularity_margin, settings.engine)
+            settings.singularity_margin, settings.engine, settings.mjcf_file)

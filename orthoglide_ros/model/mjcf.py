@@ -59,12 +59,16 @@ def equality_names(leg):
         f'{prefix}_a5', f'{prefix}_a5_axis'))
 
 
-def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None):
+def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None,
+         armature=(0.0, 0.0, 0.0)):
     """
     Return the MJCF (XML text) of ``robot``; sliders named ``joint_names``.
 
     ``force_limit`` (N, optional): the actuators' control range +-it.
-    Plain text, the same for the same arguments.
+    ``armature`` (kg, per slider A, B, C): MuJoCo's ``armature``, a drive's
+    rotor inertia reflected to the slider (none in the package's model: a
+    robot that is not the model). Plain text, the same for the same
+    arguments.
     """
     home = mechanics.elements(robot, ZERO)
     masses = inertials(robot)
@@ -101,8 +105,8 @@ def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None):
         ET.SubElement(world, 'geom', type='cylinder', material='rail',
                       size=_number(radius), fromto=_vector(np.concatenate(
                           (a1 - robot.l3 * axis, a1 + robot.l3 * axis))))
-    for leg, name in zip(LEGS, joint_names):
-        _leg(world, robot, leg, name, home, masses, radius)
+    for leg, name, rotor in zip(LEGS, joint_names, armature):
+        _leg(world, robot, leg, name, home, masses, radius, rotor)
 
     equality = ET.SubElement(root, 'equality')
     for leg in LEGS:
@@ -129,7 +133,7 @@ def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None):
     return ET.tostring(root, encoding='unicode') + '\n'
 
 
-def _leg(world, robot, leg, slider_joint, home, masses, radius):
+def _leg(world, robot, leg, slider_joint, home, masses, radius, armature):
     """Add one leg's bodies (1, 2, 3, 6, 4; the platform on leg A's 4)."""
     bodies, joints = home[leg]['bodies'], home[leg]['joints']
     prefix = leg.lower()
@@ -146,7 +150,8 @@ def _leg(world, robot, leg, slider_joint, home, masses, radius):
                           axis='0 0 1', damping=_number(
                               robot.friction_viscous[LEGS.index(leg)]),
                           frictionloss=_number(
-                              robot.friction_coulomb[LEGS.index(leg)]))
+                              robot.friction_coulomb[LEGS.index(leg)]),
+                          armature=_number(armature))
         else:
             ET.SubElement(element, 'joint', name=f'{prefix}_{suffix}',
                           type='hinge', axis='0 0 1')

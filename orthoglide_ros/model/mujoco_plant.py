@@ -23,7 +23,33 @@ from orthoglide_ros.model import mechanics, mjcf
 from orthoglide_ros.model.mechanics import (DEFAULT_SINGULARITY_MARGIN,
                                             WorkspaceError, ZERO)
 from orthoglide_ros.model.plant import PlantStep
-from orthoglide_ros.model.robot import JOINT_NAMES
+from orthoglide_ros.model.robot import JOINT_NAMES, Robot
+
+
+def check_model(text):
+    """
+    Refuse an MJCF that is not ``orthoglide mjcf``'s (ValueError, the reason).
+
+    It must load in MuJoCo and have the contract's names: the slide joints
+    and actuators JOINT_NAMES (in that order), every hinge of
+    :func:`mjcf.joint_values` and the body ``platform``.
+    """
+    import mujoco
+    try:
+        model = mujoco.MjModel.from_xml_string(text)
+    except ValueError as error:
+        raise ValueError(f'MuJoCo cannot load it: '
+                         f'{str(error).splitlines()[0]}') from None
+    joints = {model.joint(i).name for i in range(model.njnt)}
+    wanted = set(mjcf.joint_values(Robot(), ZERO))
+    actuators = [model.actuator(i).name for i in range(model.nu)]
+    bodies = {model.body(i).name for i in range(model.nbody)}
+    if not wanted <= joints or actuators != list(JOINT_NAMES) \
+            or 'platform' not in bodies:
+        raise ValueError(
+            'not a model of orthoglide mjcf (default joint names): joints '
+            f'{sorted(wanted - joints)} missing, actuators {actuators}, '
+            f'platform body {"present" if "platform" in bodies else "absent"}')
 
 
 def available():
@@ -48,8 +74,15 @@ class MujocoPlant:
     closed_form = False
 
     def __init__(self, robot, position=ZERO, velocity=ZERO, time=0.0,
-                 force_limit=math.inf, margin=DEFAULT_SINGULARITY_MARGIN):
-        """Build the model of ``robot``; check and set the initial state."""
+                 force_limit=math.inf, margin=DEFAULT_SINGULARITY_MARGIN,
+                 model_text=None):
+        """
+        Build the model of ``robot``; check and set the initial state.
+
+        ``model_text``: an MJCF to simulate instead (:func:`check_model`:
+        ``orthoglide mjcf``'s names and ``robot``'s lengths; its masses,
+        friction and armature its own).
+        """
         import mujoco
         self._mujoco = mujoco
         limits = force_limit if hasattr(force_limit, '__len__') else (
@@ -63,7 +96,8 @@ class MujocoPlant:
         self.robot = robot
         self.force_limit = limits
         self.margin = margin
-        self.model = mujoco.MjModel.from_xml_string(mjcf.mjcf(robot))
+        self.model = mujoco.MjModel.from_xml_string(
+            model_text or mjcf.mjcf(robot))
         self.data = mujoco.MjData(self.model)
         self._platform = self.model.body('platform').id
         self._dofs = {self.model.joint(i).name: (

@@ -500,7 +500,7 @@ def run_mjcf(robot, args):
         names = joint_names(args.joint_names)
     except ValueError as error:
         raise CliError(f'--joint-names: {error}') from None
-    text = mjcf.mjcf(robot, names, args.force_limit)
+    text = mjcf.mjcf(robot, names, args.force_limit, args.armature)
     _write_output(args.output, text.encode('utf-8'))
     return 0
 
@@ -759,6 +759,7 @@ _fps = _within(float, 0.5, 50.0, unit=' frames/s')
 _margin = _within(float, 0.0, 0.99)
 _samples = _within(int, 2)
 _positive_float = _within(float, 0.0, above=True)
+_non_negative_float = _within(float, 0.0)
 _count = _within(int, 0)
 _positive_count = _within(int, 1)
 
@@ -1009,6 +1010,10 @@ def _parser():
     mjcf.add_argument('--force-limit', type=_positive_float, default=None,
                       metavar='N', help='the actuators\' control range '
                       '+-N (newton; default: none)')
+    mjcf.add_argument('--armature', type=_non_negative_float, nargs=3,
+                      default=(0.0, 0.0, 0.0), metavar=('A', 'B', 'C'),
+                      help='rotor inertia reflected to each slider (kg; '
+                      'MuJoCo\'s armature; default 0: the model has none)')
     mjcf.set_defaults(run=run_mjcf)
 
     draw = sub.add_parser(
