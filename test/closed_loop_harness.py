@@ -118,9 +118,9 @@ SETTLE = 0.5
 START_TIMEOUT = 20.0    # s for the nodes to start and match
 PASS_MARGIN = 15.0      # s beyond a pass's duration before giving up
 CALL_TIMEOUT = 5.0      # s for one service call
-# A pass is spoiled when the plant skipped a stretch of simulated time
-# longer than this (s): the simulator's default command timeout, the stall
-# the loop's other processes are held to (``ClosedLoop.run_unspoiled``).
+# A pass is spoiled when the plant skipped more simulated time than this
+# (s): the simulator's default command timeout, the stall the loop's other
+# processes are held to (``ClosedLoop.run_unspoiled``).
 SKIP_LIMIT = 0.1
 ATTEMPTS = 3            # passes run_unspoiled runs before it gives up
 QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
@@ -140,8 +140,8 @@ positions (m) and the forces the plant applied (N): a log to identify
 from (:func:`log_of`); ``braked``: states published while the plant was
 held after it had started (zero effort: no command for the simulator's
 ``command_timeout``, a process stalled), which spoil a pass; ``skipped_s``:
-the longest stretch of simulated time the plant skipped (s: a stalled
-simulator drops what it cannot catch up with, ``cores/simulator.py``).
+the simulated time the plant skipped in the pass (s: a stalled simulator
+drops what it cannot catch up with, ``cores/simulator.py``).
 """
 
 
@@ -324,7 +324,7 @@ class ClosedLoop:
 
         Spoiled: the plant was braked in it, a joint error beyond the path
         tolerance (the controller held), or the plant skipped more than
-        SKIP_LIMIT of simulated time at once: a process of the loop stalled
+        SKIP_LIMIT of simulated time in all: a process of the loop stalled
         longer than the command timeout, which busy cores do now and then,
         and the pass measured the stall, not the loop. Returns the first
         unspoiled pass, else the last. ``report(text)`` (optional) hears
@@ -535,7 +535,7 @@ def _tracking(label, recorder, motion, duration, period):
                float(np.sqrt(np.mean(norm_mm ** 2))), float(norm_mm.max()),
                len(samples), start, lam, efforts,
                int(held[started:].sum()),
-               float(max(np.diff(times).max() - period, 0.0)))
+               float(np.clip(np.diff(times) - period, 0.0, None).sum()))
 
 
 def log_of(run):
