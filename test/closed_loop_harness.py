@@ -227,8 +227,9 @@ class ClosedLoop:
         from rclpy.experimental import EventsExecutor
         commands = {
             'simulator': ['-p', f'rate_hz:={self.plant_rate}',
-                          '-p', f'engine:={self.engine}',
-                          '-p', f'mjcf_file:={self.mjcf_file}'],
+                          '-p', f'engine:={self.engine}'] + (
+                              ['-p', f'mjcf_file:={self.mjcf_file}']
+                              if self.mjcf_file else []),
             'feedforward': [],
             'tracking_controller': [
                 '-r', 'joint_trajectory:=feedforward/joint_trajectory'],
