@@ -222,3 +222,18 @@ def test_render_refuses_an_unreachable_point(tmp_path):
     done = run_cli('render', '--position', '5', '0', '0', '--output',
                    str(tmp_path / 'x.png'))
     assert done.returncode == 2 and 'Traceback' not in done.stderr
+
+
+def test_render_animates_the_paper_trajectory(tmp_path):
+    """A .gif output: one frame per sample of eq. (6), the robot moving."""
+    out = tmp_path / 'robot.gif'
+    done = run_cli('render', '--frames', '5', '--size', '160', '120',
+                   '--output', str(out))
+    if done.returncode == 2 and 'no OpenGL backend' in done.stderr:
+        pytest.skip(done.stderr.strip())
+    assert done.returncode == 0, done.stderr
+    from PIL import Image, ImageSequence
+    frames = [np.asarray(f.convert('RGB'), dtype=float)
+              for f in ImageSequence.Iterator(Image.open(out))]
+    assert len(frames) == 5
+    assert np.abs(frames[0] - frames[2]).mean() > 0.1     # it moved

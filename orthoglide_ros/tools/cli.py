@@ -520,13 +520,27 @@ def run_draw(robot, args):
 
 
 def run_render(robot, args):
-    """Render the robot at one platform position with MuJoCo; write a PNG."""
-    _check_extension(args.output, '.png')
+    """
+    Render the robot with MuJoCo; write a PNG, or a GIF along eq. (6).
+
+    A ``.png`` at ``--position``; a ``.gif``: ``--frames`` along the
+    paper's trajectory (the demos' motion), ``--fps`` frames a second.
+    """
+    animated = args.output.lower().endswith('.gif')
+    if not animated:
+        _check_extension(args.output, '.png')
+        if args.position is None:
+            raise CliError('--position X Y Z is needed for a PNG')
     from orthoglide_ros.tools.rendering import Renderer, RenderError
     try:
         renderer = Renderer(robot, args.size)
         try:
-            data = renderer.png(args.position)
+            if animated:
+                positions = trajectory.paper_batch(
+                    trajectory.paper_times(max(args.frames, 2)))[0]
+                data = renderer.gif(positions, args.fps)
+            else:
+                data = renderer.png(args.position)
         finally:
             renderer.close()
     except (RenderError, mechanics.WorkspaceError) as error:
@@ -1038,12 +1052,20 @@ def _parser():
         description='Render the robot\'s MuJoCo model (orthoglide mjcf) '
         'with its platform centre at a position, through MuJoCo\'s '
         'offscreen renderer (OpenGL: MUJOCO_GL=egl by default, or osmesa). '
-        'Needs mujoco; exits 2 where no OpenGL backend exists.')
-    render.add_argument('--position', type=float, nargs=3, required=True,
+        'Needs mujoco; exits 2 where no OpenGL backend exists. A .gif '
+        'output animates the robot along the paper\'s trajectory.')
+    render.add_argument('--position', type=float, nargs=3,
                         metavar=('X', 'Y', 'Z'),
-                        help='platform centre in the base frame (m)')
-    render.add_argument('--output', required=True, metavar='FILE.png',
-                        help='PNG file to write')
+                        help='platform centre in the base frame (m; for a '
+                        'PNG)')
+    render.add_argument('--output', required=True, metavar='FILE.png|.gif',
+                        help='PNG file, or GIF (animation) to write')
+    render.add_argument('--frames', type=_frames, default=DEFAULT_FRAMES,
+                        help=f'GIF frames along eq. (6) (default '
+                        f'{DEFAULT_FRAMES})')
+    render.add_argument('--fps', type=_fps, default=DEFAULT_FPS,
+                        help=f'GIF frames per second (default '
+                        f'{DEFAULT_FPS:g})')
     render.add_argument('--size', type=_pixels, nargs=2, default=(800, 600),
                         metavar=('WIDTH', 'HEIGHT'), help='image size in '
                         'pixels (default 800 600)')

@@ -1,6 +1,8 @@
 """
 Pictures of the robot from MuJoCo's offscreen renderer (``orthoglide render``).
 
+A PNG at one platform position, or an animated GIF along a trajectory.
+
 The robot's MJCF (:mod:`orthoglide_ros.model.mjcf`) with every joint at the
 closed form's values for a platform position, seen by a fixed camera that
 frames the workspace, rendered by MuJoCo (OpenGL through EGL by default,
@@ -86,6 +88,16 @@ class Renderer:
         from PIL import Image
         buffer = io.BytesIO()
         Image.fromarray(self.image(position)).save(buffer, format='PNG')
+        return buffer.getvalue()
+
+    def gif(self, positions, fps):
+        """Return an animated GIF of the robot at ``positions`` (m, N x 3)."""
+        from PIL import Image
+        frames = [Image.fromarray(self.image(p)) for p in positions]
+        buffer = io.BytesIO()
+        frames[0].save(buffer, format='GIF', save_all=True,
+                       append_images=frames[1:], loop=0,
+                       duration=round(1000.0 / fps))
         return buffer.getvalue()
 
     def close(self):
