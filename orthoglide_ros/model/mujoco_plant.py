@@ -22,7 +22,7 @@ import numpy as np
 from orthoglide_ros.model import mechanics, mjcf
 from orthoglide_ros.model.mechanics import (DEFAULT_SINGULARITY_MARGIN,
                                             WorkspaceError, ZERO)
-from orthoglide_ros.model.plant import PlantStep
+from orthoglide_ros.model.plant import force_limits, PlantStep
 from orthoglide_ros.model.robot import JOINT_NAMES, Robot
 
 
@@ -85,16 +85,8 @@ class MujocoPlant:
         """
         import mujoco
         self._mujoco = mujoco
-        limits = force_limit if hasattr(force_limit, '__len__') else (
-            force_limit,) * 3
-        limits = tuple(float(f) for f in limits)
-        if len(limits) != 3 or not all(f > 0.0 for f in limits):
-            raise ValueError('force_limit must be one or three positive '
-                             f'numbers (N, inf for none), got {force_limit}')
-        if not math.isfinite(time):
-            raise ValueError(f'time must be finite, got {time!r} s')
         self.robot = robot
-        self.force_limit = limits
+        self.force_limit = force_limits(force_limit, time)
         self.margin = margin
         self.model = mujoco.MjModel.from_xml_string(
             model_text or mjcf.mjcf(robot))

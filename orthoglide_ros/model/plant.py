@@ -108,6 +108,24 @@ def rk4_step(robot, position, velocity, force, dt,
     return end[0], end[1], (a1x, a1y, a1z)
 
 
+def force_limits(force_limit, time=0.0):
+    """
+    Return a plant's force limits as three floats (N); check its time.
+
+    ``force_limit``: one bound or three, positive (``math.inf``: none);
+    ``time`` must be finite. ValueError otherwise.
+    """
+    limits = force_limit if hasattr(force_limit, '__len__') else (
+        force_limit,) * 3
+    limits = tuple(float(f) for f in limits)
+    if len(limits) != 3 or not all(f > 0.0 for f in limits):
+        raise ValueError('force_limit must be one or three positive '
+                         f'numbers (N, inf for none), got {force_limit}')
+    if not math.isfinite(time):
+        raise ValueError(f'time must be finite, got {time!r} s')
+    return limits
+
+
 class Plant:
     """
     The simulated robot: platform state, time and actuator force limits.
@@ -133,16 +151,8 @@ class Plant:
     def __init__(self, robot, position=ZERO, velocity=ZERO, time=0.0,
                  force_limit=math.inf, margin=DEFAULT_SINGULARITY_MARGIN):
         """Check and set the initial state (see the class docstring)."""
-        limits = force_limit if hasattr(force_limit, '__len__') else (
-            force_limit,) * 3
-        limits = tuple(float(f) for f in limits)
-        if len(limits) != 3 or not all(f > 0.0 for f in limits):
-            raise ValueError('force_limit must be one or three positive '
-                             f'numbers (N, inf for none), got {force_limit}')
-        if not math.isfinite(time):
-            raise ValueError(f'time must be finite, got {time!r} s')
         self.robot = robot
-        self.force_limit = limits
+        self.force_limit = force_limits(force_limit, time)
         self.margin = margin
         self.position = tuple(float(c) for c in position)
         self.velocity = tuple(float(c) for c in velocity)
