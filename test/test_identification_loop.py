@@ -3,7 +3,7 @@ Identification over DDS (issue 10): a better feedforward for an unknown plant.
 
 The loop of ``closed_loop_harness`` with a plant the feedforward does not
 know (``UNKNOWN_PLANT``: a 25 % heavier platform, heavier bars, friction
-on every slider): two periods of the excitation through PD + the nominal
+on every slider): three periods of the excitation through PD + the nominal
 feedforward, then ``identification.identify`` on the plant's measured
 joint states (the harness's recorder), the effort taken as applied half a
 plant step before its state (``force_lag``). Checked:
@@ -53,7 +53,7 @@ from rcl_interfaces.msg import ParameterType  # noqa: E402
 pytestmark = [pytest.mark.ros, needs_scripts(
     'simulator', 'feedforward', 'tracking_controller', 'setpoint_publisher')]
 
-SEED, PERIOD, PASSES = 0, 6.0, 2
+SEED, PERIOD, PASSES = 0, 6.0, 3
 CRITERION = 1.5     # issue 10's, against the exact feedforward (printed)
 REPEATS = 3         # passes of each compared case; the median counts
 EXCITATIONS = 3     # excitation runs recorded at most (see identified())
