@@ -10,8 +10,8 @@ namespaces cannot be made (not root). The runs are in
 - Joins: the feedforward streams at 500 Hz to a recorder, with plain
   bystanders, while plain participants join and subscribe to its output.
   On plain settings the run shows the shared-memory stall (a third of a
-  second, random: each join adds eight participants, so 8 joins show it
-  with near certainty); with ``config/fastdds_one_host.xml`` on the node,
+  second, random: each join adds eight participants, and up to three
+  rounds of 8 joins are run until one shows); with ``config/fastdds_one_host.xml`` on the node,
   its producer and its recorder no join makes one. The figure of the issue,
   no gap above 50 ms, is a property of an idle machine (measured 40 ms at
   most: doc/measurements.md); on a busy one the CPU a joining process takes
@@ -42,14 +42,22 @@ def show(result):
     return result
 
 
+PLAIN_ROUNDS = 3    # rounds of 8 joins on plain settings to see a stall
+
+
 def test_the_one_host_profile_does_not_stall_when_participants_join():
-    plain = show(live.in_namespace('joins', profile=None))
     profile = show(live.in_namespace('joins'))
-    for result in (plain, profile):
-        assert result['crashes'] == 0, result
-        assert len(result['join_gaps_ms']) == result['count'], result
-    assert profile['stalls'] == 0, profile
     # The stall it replaces shows on plain settings (the test can fail).
+    # It is random, and how often varies from run to run (0 to 4 of 8
+    # joins measured): another round of joins until one shows.
+    for _ in range(PLAIN_ROUNDS):
+        plain = show(live.in_namespace('joins', profile=None))
+        assert plain['crashes'] == 0, plain
+        if plain['stalls']:
+            break
+    assert profile['crashes'] == 0, profile
+    assert len(profile['join_gaps_ms']) == profile['count'], profile
+    assert profile['stalls'] == 0, profile
     assert plain['stalls'] >= 1, plain
     print(f'longest gap during a join: plain '
           f'{max(plain["join_gaps_ms"]):.0f} ms, profile '
