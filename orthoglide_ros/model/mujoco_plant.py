@@ -22,7 +22,7 @@ import numpy as np
 from orthoglide_ros.model import mechanics, mjcf
 from orthoglide_ros.model.mechanics import (DEFAULT_SINGULARITY_MARGIN,
                                             WorkspaceError, ZERO)
-from orthoglide_ros.model.plant import force_limits, PlantStep
+from orthoglide_ros.model.plant import clipped, force_limits, PlantStep
 from orthoglide_ros.model.robot import JOINT_NAMES, Robot
 
 
@@ -140,12 +140,7 @@ class MujocoPlant:
         """
         if not (math.isfinite(dt) and dt > 0.0):
             raise ValueError(f'dt must be finite and positive, got {dt!r} s')
-        command = tuple(float(f) for f in force)
-        if not all(math.isfinite(f) for f in command):
-            raise WorkspaceError('non_finite', f'force {command} N is not '
-                                 'finite')
-        applied = tuple(min(max(f, -limit), limit)
-                        for f, limit in zip(command, self.force_limit))
+        command, applied = clipped(force, self.force_limit)
         mujoco, model, data = self._mujoco, self.model, self.data
         saved = (data.qpos.copy(), data.qvel.copy(), data.time)
         before = self.velocity

@@ -126,6 +126,21 @@ def force_limits(force_limit, time=0.0):
     return limits
 
 
+def clipped(force, limits):
+    """
+    Return a force command as floats, and the same clipped to limits (N).
+
+    A non-finite command raises :class:`mechanics.WorkspaceError`
+    (``non_finite``) before any clipping.
+    """
+    command = tuple(float(f) for f in force)
+    if not all(math.isfinite(f) for f in command):
+        raise WorkspaceError('non_finite', f'force {command} N is not '
+                             'finite')
+    return command, tuple(min(max(f, -limit), limit)
+                          for f, limit in zip(command, limits))
+
+
 class Plant:
     """
     The simulated robot: platform state, time and actuator force limits.
@@ -168,12 +183,7 @@ class Plant:
         clipping; a step that :func:`rk4_step` refuses raises its error. On
         any refusal the state and the time stay unchanged.
         """
-        command = tuple(float(f) for f in force)
-        if not all(math.isfinite(f) for f in command):
-            raise WorkspaceError('non_finite', f'force {command} N is not '
-                                 'finite')
-        applied = tuple(min(max(f, -limit), limit)
-                        for f, limit in zip(command, self.force_limit))
+        command, applied = clipped(force, self.force_limit)
         position, velocity, acceleration = rk4_step(
             self.robot, self.position, self.velocity, applied, dt,
             self.margin)
