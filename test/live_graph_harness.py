@@ -189,15 +189,9 @@ def two_hosts(settings, other, address, rate=500, duration=3.0,
             time.sleep(duration)
             first_kill = None
             for _ in range(restarts):
-                killed = run.kill_node()
+                killed, first = run.restart_node(recorder, producer)
                 first_kill = first_kill or killed
-                time.sleep(0.5)
-                run.start_node()
-                started = run.node_started
-                fields = recorder.expect(
-                    'gap', START_TIMEOUT, (run.node, producer.proc),
-                    lambda f: int(f[1]) > started)
-                recoveries.append((int(fields[1]) - started) / 1e9)
+                recoveries.append((first - run.node_started) / 1e9)
             time.sleep(1.0)
             log = run.finish_producer(producer)
             outputs = load_outputs(recorder)

@@ -531,6 +531,23 @@ class Run:
         self.node = None
         return now
 
+    def restart_node(self, recorder, producer, outage=0.5):
+        """
+        SIGKILL the node, start it again ``outage`` s later.
+
+        Returns ``(killed, first)``: the monotonic times (ns) of the kill and
+        of the first output the recorder received from the new process, once
+        it did (the producer keeps streaming throughout).
+        """
+        killed = self.kill_node()
+        time.sleep(outage)
+        self.start_node()
+        started = self.node_started
+        fields = recorder.expect('gap', START_TIMEOUT,
+                                 (self.node, producer.proc),
+                                 lambda f: int(f[1]) > started)
+        return killed, int(fields[1])
+
     def stop_node(self):
         """Stop the node with SIGINT (as Ctrl-C); record its exit code."""
         if self.node is not None:
@@ -1096,15 +1113,9 @@ def kill_restart(cycles, rate=500, running=1.0, outage=0.5,
         for cycle in range(cycles):
             time.sleep(running)
             run.node_alive()
-            killed = run.kill_node()
-            time.sleep(outage)
-            run.start_node()
-            started = run.node_started
-            fields = recorder.expect(
-                'gap', START_TIMEOUT, (run.node, producer.proc),
-                lambda f: int(f[1]) > started)
-            recoveries.append((int(fields[1]) - started) / 1e9)
-            windows.append((killed, int(fields[1])))
+            killed, first = run.restart_node(recorder, producer, outage)
+            recoveries.append((first - run.node_started) / 1e9)
+            windows.append((killed, first))
             say(f'kill/restart {cycle + 1}/{cycles} ({result["discovery"]} '
                 f'discovery): first output {recoveries[-1]:.2f} s after '
                 'start')
