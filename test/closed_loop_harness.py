@@ -123,6 +123,10 @@ CALL_TIMEOUT = 5.0      # s for one service call
 # processes are held to (``ClosedLoop.run_unspoiled``).
 SKIP_LIMIT = 0.1
 ATTEMPTS = 3            # passes run_unspoiled runs before it gives up
+# A step between two recorded states longer than this many plant periods is
+# a skip (log_of); logs are joined JOIN_GAP s apart (joined).
+SKIP_FACTOR = 1.5
+JOIN_GAP = 1.0
 QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
                  reliability=ReliabilityPolicy.RELIABLE)
 
@@ -540,9 +544,39 @@ def _tracking(label, recorder, motion, duration, period):
 
 
 def log_of(run):
-    """Return a run's measurements as an ``identification.Log``."""
+    """
+    Return a run's measurements as an ``identification.Log``.
+
+    A segment per stretch the plant stepped without skipping time
+    (:func:`joined`): across a skip (a simulator woken later than it can
+    catch up with) the plant stood still while its stamps ran on, which no
+    robot does, and the identification would interpolate a motion over it
+    (doc/measurements.md, "Identification over DDS").
+    """
     from orthoglide_ros.tools.identification import Log
-    return Log(run.times, run.lambdas, run.efforts, run.label)
+    period = float(np.median(np.diff(run.times)))
+    breaks = np.flatnonzero(np.diff(run.times) > SKIP_FACTOR * period) + 1
+    return joined([Log(run.times[a:b], run.lambdas[a:b], run.efforts[a:b],
+                       run.label)
+                   for a, b in zip(np.r_[0, breaks],
+                                   np.r_[breaks, len(run.times)])])
+
+
+def joined(logs):
+    """
+    Return ``identification.Log`` s one after the other, a segment each.
+
+    Each starts JOIN_GAP s after the one before ends: a gap that
+    ``identification.prepare`` splits at.
+    """
+    from orthoglide_ros.tools.identification import Log
+    times, offset = [], 0.0
+    for log in logs:
+        times.append(log.times - log.times[0] + offset)
+        offset = times[-1][-1] + JOIN_GAP
+    return Log(np.concatenate(times),
+               np.concatenate([g.lambdas for g in logs]),
+               np.concatenate([g.forces for g in logs]), logs[0].source)
 
 
 def force_lag(plant_rate=PLANT_RATE):

@@ -5,8 +5,9 @@ The loop of ``closed_loop_harness`` with a plant the feedforward does not
 know (``UNKNOWN_PLANT``: a 25 % heavier platform, heavier bars, friction
 on every slider): three periods of the excitation through PD + the nominal
 feedforward, then ``identification.identify`` on the plant's measured
-joint states (the harness's recorder), the effort taken as applied half a
-plant step before its state (``force_lag``). Checked:
+joint states (the harness's recorder; a segment per stretch the plant
+stepped without skipping time, ``log_of``), the effort taken as applied
+half a plant step before its state (``force_lag``). Checked:
 
 - the identified base parameters lie within issue 10's tolerances of the
   plant's (3 %, the lightest group 10 %, friction 25 %; measured within
@@ -78,7 +79,7 @@ def identified(closed_loop):
                                         harness.SETTLE))
         try:
             result = identification.identify(
-                Robot(), joined(logs), force_lag=harness.force_lag())
+                Robot(), harness.joined(logs), force_lag=harness.force_lag())
             break
         except identification.IdentificationError as error:
             print(f'excitation {attempt}: {error}', file=sys.stderr)
@@ -87,18 +88,6 @@ def identified(closed_loop):
     print(f'excitation: {len(logs)} log(s), {run.samples} states in the '
           f'last, {len(result.samples.times)} used', file=sys.stderr)
     return result, run
-
-
-def joined(logs):
-    """Return logs one after the other, a gap between (a segment each)."""
-    import numpy as np
-    times, offset = [], 0.0
-    for log in logs:
-        times.append(log.times - log.times[0] + offset)
-        offset = times[-1][-1] + 1.0
-    return identification.Log(
-        np.concatenate(times), np.concatenate([g.lambdas for g in logs]),
-        np.concatenate([g.forces for g in logs]), logs[0].source)
 
 
 def test_identified_base_parameters_are_the_plants(identified):
