@@ -181,7 +181,9 @@ def two_hosts(settings, other, address, rate=500, duration=3.0,
     try:
         with Run(None) as run:
             run.env = env
-            run.start_node()
+            # Histories that a stalled process on a busy machine cannot
+            # overrun: what is lost, the link lost.
+            run.start_node(rh.lossless_args())
             recorder = run.start_recorder(wrap=wrap)
             producer = run.start_producer('trajectory', 'reliable',
                                           rate=rate, wrap=wrap)
@@ -189,7 +191,8 @@ def two_hosts(settings, other, address, rate=500, duration=3.0,
             time.sleep(duration)
             first_kill = None
             for _ in range(restarts):
-                killed, first = run.restart_node(recorder, producer)
+                killed, first = run.restart_node(recorder, producer,
+                                                 extra=rh.lossless_args())
                 first_kill = first_kill or killed
                 recoveries.append((first - run.node_started) / 1e9)
             time.sleep(1.0)

@@ -531,9 +531,9 @@ class Run:
         self.node = None
         return now
 
-    def restart_node(self, recorder, producer, outage=0.5):
+    def restart_node(self, recorder, producer, outage=0.5, extra=()):
         """
-        SIGKILL the node, start it again ``outage`` s later.
+        SIGKILL the node, start it again ``outage`` s later (``extra`` args).
 
         Returns ``(killed, first)``: the monotonic times (ns) of the kill and
         of the first output the recorder received from the new process, once
@@ -541,7 +541,7 @@ class Run:
         """
         killed = self.kill_node()
         time.sleep(outage)
-        self.start_node()
+        self.start_node(extra)
         started = self.node_started
         fields = recorder.expect('gap', START_TIMEOUT,
                                  (self.node, producer.proc),
@@ -899,6 +899,19 @@ def flood(duration, kind='trajectory', qos='best_effort', say=None):
     return result
 
 
+def lossless_args(kind='trajectory', depth=LOSSLESS_DEPTH):
+    """
+    Return the node's arguments for "nothing lost" under reliable QoS.
+
+    ``depth`` setpoints of history on each input of ``kind`` (doc/measurements.md's
+    ``qos_overrides./setpoint/<input>.subscription.depth``) and DEEP_OUTPUT.
+    """
+    return DEEP_OUTPUT + tuple(
+        arg for topic in INPUT_TOPICS[kind] for arg in (
+            '-p', f'qos_overrides./setpoint/{topic}.subscription.depth:='
+            f'{depth}'))
+
+
 def reliable_stream(rate, duration, kind='trajectory', depth=LOSSLESS_DEPTH,
                     say=None):
     """
@@ -911,12 +924,8 @@ def reliable_stream(rate, duration, kind='trajectory', depth=LOSSLESS_DEPTH,
     say = say or (lambda text: None)
     result = dict(case='reliable', kind=kind, rate=rate, duration=duration,
                   depth=depth)
-    deep_input = tuple(
-        arg for topic in INPUT_TOPICS[kind] for arg in (
-            '-p', f'qos_overrides./setpoint/{topic}.subscription.depth:='
-            f'{depth}'))
     with Run() as run:
-        node = run.start_node(DEEP_OUTPUT + deep_input)
+        node = run.start_node(lossless_args(kind, depth))
         recorder = run.start_recorder()
         producer = run.start_producer(kind, 'reliable', rate=rate, epoch=100,
                                       duration=duration)
