@@ -2,16 +2,21 @@
 Friction on the sliders: part of the actuator forces, a resistance in the plant.
 
 The paper neglects friction; the package adds, per actuator, the law of
-doc/model.md, written here again: ``f_j = c_j lambdadot_j + F_j
-tanh(lambdadot_j / v_s)`` (``robot.friction_viscous``, ``friction_coulomb``,
-``friction_velocity``). Checked:
+doc/model.md, written here again: ``f_j = c_j v + (F_j if v > 0 else
+F_j^-) tanh(v / v_s) + S_j exp(-(v / v_b)^2) tanh(v / v_s)``, ``v =
+lambdadot_j`` (``robot.friction_viscous``, ``friction_coulomb``,
+``friction_coulomb_negative``, ``friction_stribeck``,
+``friction_velocity``, ``friction_stribeck_velocity``). Checked, for a
+plain law (viscous + Coulomb the same both ways) and a general one:
 
 - ``solve``: the forces of a robot with friction are those of the same
   robot without it plus the law, and the power is ``lambdadot`` times the
   total force; ``solve_batch`` agrees sample by sample;
-- without friction (the default) nothing changes, bit for bit;
-- the friction dissipates (``sum f_j lambdadot_j >= 0``), vanishes at rest
-  and is odd in ``lambdadot``;
+- without friction (the default) nothing changes, bit for bit, and the
+  plain law is today's expression ``c v + F tanh(v / v_s)``, bit for bit;
+- the friction dissipates (``sum f_j lambdadot_j >= 0``), vanishes at rest;
+  the plain law is odd in ``lambdadot``, the general one takes each
+  direction's Coulomb level and adds the Stribeck excess at low speed;
 - ``forward_dynamics`` still inverts ``solve``, and the plant feels the
   friction as a resistance: under forces ``f`` it moves as the robot
   without friction under ``f - friction(lambdadot)``.
@@ -28,16 +33,25 @@ import pytest
 # Unequal per actuator, so that a mix-up of actuators shows.
 FRICTION = {'friction_viscous': (40.0, 25.0, 60.0),
             'friction_coulomb': (6.0, 9.0, 3.5), 'friction_velocity': 0.02}
+GENERAL = FRICTION | {'friction_coulomb_negative': (2.0, 9.5, 7.0),
+                      'friction_stribeck': (3.0, 0.0, 5.0),
+                      'friction_stribeck_velocity': 0.05}
+LAWS = {'plain': FRICTION, 'general': GENERAL}
 ROUNDING = 1e-14
 ROBOTS = {'paper': {}, 'other': OTHER_ROBOT_VALUES}
 
 
 def law(robot, lambdadot):
     """Return the friction law of the module docstring (N) per actuator."""
-    return np.array([
-        c * v + f * math.tanh(v / robot.friction_velocity)
-        for c, f, v in zip(robot.friction_viscous, robot.friction_coulomb,
-                           lambdadot)])
+    forces = []
+    for j, v in enumerate(lambdadot):
+        coulomb = (robot.friction_coulomb if v > 0
+                   else robot.friction_coulomb_negative)[j]
+        stribeck = robot.friction_stribeck[j] * math.exp(
+            -(v / robot.friction_stribeck_velocity) ** 2)
+        forces.append(robot.friction_viscous[j] * v + (coulomb + stribeck)
+                      * math.tanh(v / robot.friction_velocity))
+    return np.array(forces)
 
 
 def random_states(seed, n, speed=1.0):
@@ -47,10 +61,12 @@ def random_states(seed, n, speed=1.0):
             rng.uniform(-20.0, 20.0, (n, 3)))
 
 
+@pytest.mark.parametrize('law_name', sorted(LAWS))
 @pytest.mark.parametrize('robot_name', sorted(ROBOTS))
-def test_forces_are_the_rigid_ones_plus_the_friction_law(robot_name):
+def test_forces_are_the_rigid_ones_plus_the_friction_law(robot_name,
+                                                         law_name):
     rigid = Robot(**ROBOTS[robot_name])
-    robot = rigid.replace(**FRICTION)
+    robot = rigid.replace(**LAWS[law_name])
     # Slow rates too: the Coulomb term's smooth part (|lambdadot| ~ v_s).
     for speed in (1.0, 0.03):
         for p, v, a in zip(*random_states(1, 200, speed)):
@@ -66,8 +82,9 @@ def test_forces_are_the_rigid_ones_plus_the_friction_law(robot_name):
                                       with_friction.force))
 
 
-def test_batch_equals_single_samples_with_friction():
-    robot = Robot(**OTHER_ROBOT_VALUES, **FRICTION)
+@pytest.mark.parametrize('law_name', sorted(LAWS))
+def test_batch_equals_single_samples_with_friction(law_name):
+    robot = Robot(**OTHER_ROBOT_VALUES, **LAWS[law_name])
     n = mechanics.BATCH_CHUNK + 11
     p, v, a = random_states(2, n, 0.1)
     batch = mechanics.solve_batch(robot, p, v, a)
@@ -93,16 +110,63 @@ def test_no_friction_changes_nothing():
         assert np.array_equal(got, want)
 
 
-def test_friction_dissipates_vanishes_at_rest_and_is_odd():
+def test_the_plain_law_is_todays_expression_bit_for_bit():
+    """Without the new terms, the forces are those of the law before them."""
     robot = Robot(**FRICTION)
+    rigid = Robot()
+    r = 1.0 / robot.friction_velocity
+    p, v, a = random_states(8, 100, 0.05)
+    for state in zip(p, v, a):
+        got = mechanics.solve(robot, *state)
+        without = mechanics.solve(rigid, *state)
+        assert got.force == tuple(
+            f + (c * d + F * math.tanh(d * r)) for f, c, F, d in zip(
+                without.force, robot.friction_viscous,
+                robot.friction_coulomb, without.lambdadot))
+    batch = mechanics.solve_batch(robot, p, v, a)
+    without = mechanics.solve_batch(rigid, p, v, a)
+    d = without.lambdadot
+    assert np.array_equal(batch.force, without.force + (
+        np.array(robot.friction_viscous) * d
+        + np.array(robot.friction_coulomb) * np.tanh(d * r)))
+
+
+def test_each_direction_has_its_coulomb_level_and_stribeck_fades():
+    robot = Robot(**GENERAL)
+    fast = 1.0     # m/s: tanh = 1, the Stribeck excess exp(-400) = 0
+    assert mechanics.friction_force(robot, (fast, fast, fast)) == \
+        pytest.approx((40.0 + 6.0, 25.0 + 9.0, 60.0 + 3.5), rel=1e-15)
+    assert mechanics.friction_force(robot, (-fast, -fast, -fast)) == \
+        pytest.approx((-40.0 - 2.0, -25.0 - 9.5, -60.0 - 7.0), rel=1e-15)
+    # At the Stribeck velocity the excess is exp(-1) of itself.
+    v = robot.friction_stribeck_velocity
+    got = mechanics.friction_force(robot.replace(
+        friction_viscous=(0.0,) * 3), (v, v, v))
+    t = math.tanh(v / robot.friction_velocity)
+    assert got == pytest.approx(((6.0 + 3.0 / math.e) * t, 9.0 * t,
+                                 (3.5 + 5.0 / math.e) * t), rel=1e-14)
+
+
+@pytest.mark.parametrize('law_name', sorted(LAWS))
+def test_friction_dissipates_and_vanishes_at_rest(law_name):
+    robot = Robot(**LAWS[law_name])
     rng = np.random.default_rng(4)
     speeds = rng.uniform(-0.5, 0.5, (500, 3))
     friction = mechanics.friction_force(robot, speeds)
     assert friction.shape == (500, 3)
-    assert ((friction * speeds).sum(axis=1) >= 0.0).all()
+    assert (friction * speeds >= 0.0).all()
+    assert mechanics.friction_force(robot, (0.0, 0.0, 0.0)) == (0.0,) * 3
+    assert np.abs(friction - np.array([law(robot, s) for s in speeds])) \
+        .max() <= ROUNDING * np.abs(friction).max()
+
+
+def test_the_plain_law_is_odd():
+    robot = Robot(**FRICTION)
+    rng = np.random.default_rng(4)
+    speeds = rng.uniform(-0.5, 0.5, (500, 3))
+    friction = mechanics.friction_force(robot, speeds)
     assert np.array_equal(mechanics.friction_force(robot, -speeds),
                           -friction)
-    assert mechanics.friction_force(robot, (0.0, 0.0, 0.0)) == (0.0,) * 3
     single = mechanics.friction_force(robot, tuple(speeds[0]))
     assert isinstance(single, tuple)
     assert np.abs(np.subtract(single, law(robot, speeds[0]))).max() \
@@ -113,9 +177,10 @@ def test_friction_dissipates_vanishes_at_rest_and_is_odd():
                                  rel=1e-15)
 
 
+@pytest.mark.parametrize('law_name', sorted(LAWS))
 @pytest.mark.parametrize('robot_name', sorted(ROBOTS))
-def test_forward_dynamics_inverts_solve_with_friction(robot_name):
-    robot = Robot(**ROBOTS[robot_name], **FRICTION)
+def test_forward_dynamics_inverts_solve_with_friction(robot_name, law_name):
+    robot = Robot(**ROBOTS[robot_name], **LAWS[law_name])
     for p, v, a in zip(*random_states(5, 100)):
         force = mechanics.solve(robot, p, v, a).force
         got = mechanics.forward_dynamics(robot, p, v, force)
@@ -127,10 +192,11 @@ def test_forward_dynamics_inverts_solve_with_friction(robot_name):
     assert np.abs(got - a).max() <= 1e-10 * (1.0 + np.abs(a).max())
 
 
-def test_the_plant_feels_friction_as_a_resistance():
+@pytest.mark.parametrize('law_name', sorted(LAWS))
+def test_the_plant_feels_friction_as_a_resistance(law_name):
     """Under forces f it moves as the frictionless robot under f - friction."""
     rigid = Robot(**OTHER_ROBOT_VALUES)
-    robot = rigid.replace(**FRICTION)
+    robot = rigid.replace(**LAWS[law_name])
     p, v, f = random_states(7, 100)
     f *= 10.0
     for position, velocity, force in zip(p, v, f):

@@ -15,6 +15,11 @@ The MJCF (orthoglide_ros.model.mjcf) against MuJoCo, an engine no one here wrote
   rest keep the platform on eq. (6) within 0.05 mm after 1 s, and the
   loops stay closed to 1e-5 m over the whole motion (the robot is open-loop
   unstable: errors grow about e-fold every 0.28 s, so this is strict).
+- Friction MuJoCo's joints cannot hold (a Coulomb level per direction, a
+  Stribeck excess): the sliders' ``frictionloss`` is the mean Coulomb
+  level, and ``MujocoPlant`` applies the rest as forces, so that its
+  acceleration differs from that of the same MJCF without them by what
+  the package's forward dynamics says the rest does.
 """
 
 import subprocess
@@ -24,7 +29,7 @@ import numpy as np
 import pytest
 
 from orthoglide_ros.model import mechanics
-from orthoglide_ros.model.mjcf import joint_values, mjcf
+from orthoglide_ros.model.mjcf import coulomb_mean, joint_values, mjcf
 from orthoglide_ros.model.robot import JOINT_NAMES, Robot
 from orthoglide_ros.model.trajectory import PAPER_DURATION, paper_sample
 
@@ -237,3 +242,32 @@ def test_render_animates_the_paper_trajectory(tmp_path):
               for f in ImageSequence.Iterator(Image.open(out))]
     assert len(frames) == 5
     assert np.abs(frames[0] - frames[2]).mean() > 0.1     # it moved
+
+
+def test_friction_mujoco_cannot_hold_is_applied_by_the_plant():
+    from orthoglide_ros.model.mujoco_plant import MujocoPlant
+    robot = Robot(friction_viscous=(20.0, 30.0, 10.0),
+                  friction_coulomb=(6.0, 9.0, 3.5),
+                  friction_coulomb_negative=(2.0, 12.0, 7.0),
+                  friction_stribeck=(8.0, 5.0, 6.0),
+                  friction_stribeck_velocity=0.05)
+    model, _ = load(robot)
+    assert [float(model.joint(n).frictionloss[0]) for n in JOINT_NAMES] \
+        == pytest.approx([4.0, 10.5, 5.25], rel=1e-12)
+    mean = coulomb_mean(robot)
+    plain = robot.replace(friction_coulomb=mean,
+                          friction_coulomb_negative=mean,
+                          friction_stribeck=(0.0,) * 3)
+    rng = np.random.default_rng(1)
+    position = (0.05, -0.03, 0.02)
+    for _ in range(5):
+        velocity = tuple(rng.uniform(-0.1, 0.1, 3))
+        force = tuple(rng.uniform(-30.0, 30.0, 3))
+        with_rest = MujocoPlant(robot, position, velocity).step(force, 2e-4)
+        without = MujocoPlant(robot, position, velocity,
+                              model_text=mjcf(robot)).step(force, 2e-4)
+        got = np.subtract(with_rest.acceleration, without.acceleration)
+        expected = np.subtract(
+            mechanics.forward_dynamics(robot, position, velocity, force),
+            mechanics.forward_dynamics(plain, position, velocity, force))
+        assert np.abs(got - expected).max() <= 0.01 * np.abs(expected).max()

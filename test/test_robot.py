@@ -5,21 +5,24 @@ Lengths and masses must be finite positive numbers, ``alpha`` must lie in
 (0, pi/2) rad and ``gravity`` must be a finite 3-vector of numbers; each
 bad value raises ``RobotParameterError`` whose ``name`` and message name
 the parameter. ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the paper's
-``m4 = m2``, ``m6 = m3``). The friction coefficients are 3-vectors of
-finite values >= 0 and ``friction_velocity`` a positive speed. The
-defaults are the paper's robot (section 2), without friction.
+``m4 = m2``, ``m6 = m3``), ``friction_coulomb_negative`` to
+``friction_coulomb``, and keep following them through ``replace``. The
+friction coefficients are 3-vectors of finite values >= 0 and
+``friction_velocity`` and ``friction_stribeck_velocity`` positive speeds.
+The defaults are the paper's robot (section 2), without friction.
 """
 
 import dataclasses
 import math
 
 import numpy as np
-from orthoglide_ros.model.robot import Robot, RobotParameterError
+from orthoglide_ros.model.robot import FOLLOWS, Robot, RobotParameterError
 import pytest
 
 POSITIVE = ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm4', 'm5',
-            'm6', 'friction_velocity')
-FRICTION = ('friction_viscous', 'friction_coulomb')
+            'm6', 'friction_velocity', 'friction_stribeck_velocity')
+FRICTION = ('friction_viscous', 'friction_coulomb',
+            'friction_coulomb_negative', 'friction_stribeck')
 BAD_NUMBERS = (0.0, -0.1, -math.inf, math.inf, math.nan, '0.2', None,
                True, [0.2])
 
@@ -40,14 +43,16 @@ def test_defaults_are_the_paper_robot():
     for name, value in paper.items():
         assert getattr(robot, name) == value, name
     assert robot.gravity == (0.0, 0.0, -9.81)
-    assert robot.friction_viscous == robot.friction_coulomb == (0.0,) * 3
+    for name in FRICTION:
+        assert getattr(robot, name) == (0.0,) * 3, name
     assert not robot.has_friction
+    assert robot.plain_friction
 
 
 @pytest.mark.parametrize('name, value', [
     (name, value) for name in POSITIVE for value in BAD_NUMBERS
     # None means "the default" for m4 and m6.
-    if not (value is None and name in ('m4', 'm6'))], ids=repr)
+    if not (value is None and name in FOLLOWS)], ids=repr)
 def test_each_bad_value_is_refused_with_its_name(name, value):
     refused(name, **{name: value})
 
@@ -80,6 +85,8 @@ def test_gravity_accepts_finite_3_sequences_and_stores_floats():
     (0.0, '1', 0.0), (2e6, 0.0, 0.0)], ids=repr)
 def test_friction_coefficients_are_three_finite_values_at_least_zero(
         name, value):
+    if value is None and name in FOLLOWS:
+        return      # None: the default, the value it follows
     refused(name, **{name: value})
 
 
@@ -99,6 +106,39 @@ def test_m4_and_m6_default_to_m2_and_m3():
     assert robot.m6 == 3.5
     robot = Robot(m2=0.4, m3=3.5, m4=0.7, m6=1.1)
     assert (robot.m4, robot.m6) == (0.7, 1.1)
+
+
+def test_coulomb_friction_is_the_same_both_ways_unless_set_apart():
+    robot = Robot(friction_coulomb=(5.0, 3.0, 4.0))
+    assert robot.friction_coulomb_negative == (5.0, 3.0, 4.0)
+    assert robot.plain_friction
+    apart = robot.replace(friction_coulomb_negative=(6.0, 3.0, 2.0))
+    assert apart.friction_coulomb == (5.0, 3.0, 4.0)
+    assert not apart.plain_friction and apart.has_friction
+    assert not Robot(friction_stribeck=(0.0, 1.0, 0.0)).plain_friction
+    assert Robot(friction_stribeck=(0.0, 1.0, 0.0)).has_friction
+
+
+def test_replace_keeps_a_follower_following():
+    assert Robot().replace(m2=0.3).m4 == 0.3
+    assert Robot(m4=0.5).replace(m2=0.3).m4 == 0.5
+    assert Robot(m4=0.2).replace(m2=0.3).m4 == 0.2     # given: it stays
+    robot = Robot().replace(friction_coulomb=(1.0, 2.0, 3.0))
+    assert robot.friction_coulomb_negative == (1.0, 2.0, 3.0)
+    apart = Robot(friction_coulomb=(1.0, 1.0, 1.0),
+                  friction_coulomb_negative=(2.0, 2.0, 2.0))
+    assert apart.replace(friction_coulomb=(0.0, 0.0, 0.0)) \
+        .friction_coulomb_negative == (2.0, 2.0, 2.0)
+
+
+def test_frictionless_removes_every_friction_force():
+    robot = Robot(m5=18.0, friction_viscous=(1.0, 2.0, 3.0),
+                  friction_coulomb=(1.0, 1.0, 1.0),
+                  friction_coulomb_negative=(2.0, 2.0, 2.0),
+                  friction_stribeck=(3.0, 3.0, 3.0))
+    bare = robot.frictionless()
+    assert not bare.has_friction
+    assert bare.m5 == 18.0 and bare == Robot(m5=18.0)
 
 
 def test_robot_is_frozen_and_replace_validates():
@@ -121,7 +161,10 @@ def test_equal_values_make_equal_robots():
 def test_parameter_names_and_values_round_trip():
     robot = Robot(m4=0.3, gravity=(1.0, 2.0, 3.0),
                   friction_viscous=(1.0, 2.0, 3.0),
-                  friction_coulomb=(4.0, 5.0, 6.0), friction_velocity=0.02)
+                  friction_coulomb=(4.0, 5.0, 6.0), friction_velocity=0.02,
+                  friction_coulomb_negative=(7.0, 8.0, 9.0),
+                  friction_stribeck=(1.5, 2.5, 3.5),
+                  friction_stribeck_velocity=0.005)
     assert set(Robot.parameter_names()) == set(POSITIVE) | {'gravity'} \
         | set(FRICTION)
     assert Robot(**robot.as_parameters()) == robot

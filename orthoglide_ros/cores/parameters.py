@@ -32,8 +32,8 @@ rate_hz: must be a double, got 1
 from collections import namedtuple
 import math
 
-from orthoglide_ros.model.robot import DESCRIPTIONS, JOINT_NAMES, LIMITS, \
-    Robot, RobotParameterError, UNITS
+from orthoglide_ros.model.robot import DESCRIPTIONS, FOLLOWS, JOINT_NAMES, \
+    LIMITS, Robot, RobotParameterError, UNITS
 
 ROBOT_PREFIX = 'robot.'
 TYPES = ('double', 'double_array', 'integer', 'string', 'string_array',
@@ -122,7 +122,8 @@ class Table:
         Validate a complete ``{name: value}`` set into the settings tuple.
 
         An absent name takes its default (a ``robot.*`` name that is None
-        too: ``m4`` and ``m6`` then follow ``m2`` and ``m3``); names of
+        too: ``m4``, ``m6`` and ``friction_coulomb_negative`` then follow
+        ``m2``, ``m3`` and ``friction_coulomb``); names of
         other tables are ignored. Raises :class:`ParameterError` (or, for ``robot.*``,
         :class:`RobotParameterError`) naming the first bad parameter.
         """
@@ -235,7 +236,7 @@ def _in_range(bounds, value):
 ROBOT_SPECS = tuple(
     Spec(ROBOT_PREFIX + name,
          'double_array' if isinstance(default, (list, tuple)) else 'double',
-         None if name in ('m4', 'm6') else default,
+         None if name in FOLLOWS else default,
          f'{DESCRIPTIONS[name]} ({UNITS[name]})',
          None if isinstance(default, (list, tuple)) else LIMITS.get(name))
     for name, default in Robot().as_parameters().items())

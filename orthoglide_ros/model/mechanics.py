@@ -30,6 +30,7 @@ holds a NaN or an infinity.
 
 from collections import namedtuple
 import math
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -133,7 +134,7 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
             f'position {format_vector(position)} m is on a singularity')) from None
     lam, lamd, lamdd, force, power, alphas, conditioning = out
     if robot.has_friction:
-        fa, fb, fc = _friction(robot, lamd[0], lamd[1], lamd[2], math.tanh)
+        fa, fb, fc = _friction(robot, lamd[0], lamd[1], lamd[2], _FLOATS)
         force = (force[0] + fa, force[1] + fb, force[2] + fc)
         power = (lamd[0] * force[0], lamd[1] * force[1], lamd[2] * force[2])
     if conditioning < margin:
@@ -200,7 +201,7 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
     if robot.has_friction:
         with np.errstate(all='ignore'):     # checked below, row by row
             for leg, friction in enumerate(_friction(robot, *out[1],
-                                                     np.tanh)):
+                                                     _ARRAYS)):
                 out[3, leg] += friction
             np.multiply(out[1], out[3], out=out[4])
     out = out.transpose(0, 2, 1)
@@ -233,15 +234,22 @@ def friction_force(robot, lambdadot):
     """
     Friction the actuators overcome on their sliders (N), per actuator.
 
-    ``f_j = c_j lambdadot_j + F_j tanh(lambdadot_j / v_s)``: viscous
-    friction ``c_j`` (N s/m) and Coulomb friction ``F_j`` (N) smoothed
-    over the speed ``v_s`` (m/s) (``robot.friction_viscous``,
-    ``friction_coulomb``, ``friction_velocity``). The paper neglects
-    friction; :func:`solve` adds this to the rigid bodies' forces, so the
-    forward dynamics (built on it) sees it as a resistance. It vanishes at
-    rest (the smoothing has no sticking) and is odd in ``lambdadot``.
-    ``lambdadot`` (m/s): a 3-sequence (returns a 3-tuple) or an (N, 3)
-    array (returns one).
+    ``f_j = c_j v + (F_j if v > 0 else F_j^-) tanh(v / v_s) + S_j
+    exp(-(v / v_b)^2) tanh(v / v_s)`` at the slider speed ``v =
+    lambdadot_j``: viscous friction ``c_j`` (N s/m), Coulomb friction
+    ``F_j`` and ``F_j^-`` (N, moving +lambda and -lambda) smoothed over
+    the speed ``v_s`` (m/s), and a Stribeck excess ``S_j`` (N) that fades
+    over the speed ``v_b`` (m/s) (``robot.friction_viscous``,
+    ``friction_coulomb``, ``friction_coulomb_negative``,
+    ``friction_stribeck``, ``friction_velocity``,
+    ``friction_stribeck_velocity``). The paper neglects friction;
+    :func:`solve` adds this to the rigid bodies' forces, so the forward
+    dynamics (built on it) sees it as a resistance. It vanishes at rest
+    (the smoothing has no sticking); with ``F_j^- = F_j`` it is odd in
+    ``lambdadot``, and without a Stribeck term (the default) it is
+    computed as ``c_j v + F_j tanh(v / v_s)`` exactly. ``lambdadot``
+    (m/s): a 3-sequence (returns a 3-tuple) or an (N, 3) array (returns
+    one).
 
     >>> from orthoglide_ros.model.robot import Robot
     >>> robot = Robot(friction_viscous=(10.0, 0.0, 0.0),
@@ -250,17 +258,33 @@ def friction_force(robot, lambdadot):
     [1.0, -2.0, 0.0]
     """
     if isinstance(lambdadot, np.ndarray):
-        return np.column_stack(_friction(robot, *lambdadot.T, np.tanh))
-    return _friction(robot, *(float(v) for v in lambdadot), math.tanh)
+        return np.column_stack(_friction(robot, *lambdadot.T, _ARRAYS))
+    return _friction(robot, *(float(v) for v in lambdadot), _FLOATS)
 
 
-def _friction(robot, la, lb, lc, tanh):
+# The functions _friction needs, on floats and on arrays.
+_FLOATS = SimpleNamespace(tanh=math.tanh, exp=math.exp,
+                          where=lambda c, a, b: a if c else b)
+_ARRAYS = SimpleNamespace(tanh=np.tanh, exp=np.exp, where=np.where)
+
+
+def _friction(robot, la, lb, lc, ops):
     """Friction of :func:`friction_force` on floats or arrays (N)."""
     ca, cb, cc = robot.friction_viscous
     fa, fb, fc = robot.friction_coulomb
     r = 1.0 / robot.friction_velocity
-    return (ca * la + fa * tanh(la * r), cb * lb + fb * tanh(lb * r),
-            cc * lc + fc * tanh(lc * r))
+    tanh = ops.tanh
+    if robot.plain_friction:
+        return (ca * la + fa * tanh(la * r), cb * lb + fb * tanh(lb * r),
+                cc * lc + fc * tanh(lc * r))
+    rb = 1.0 / robot.friction_stribeck_velocity
+    return tuple(
+        c * v + (ops.where(v > 0.0, f, g) + s * ops.exp(-(v * rb) ** 2))
+        * tanh(v * r)
+        for v, c, f, g, s in zip((la, lb, lc), robot.friction_viscous,
+                                 robot.friction_coulomb,
+                                 robot.friction_coulomb_negative,
+                                 robot.friction_stribeck))
 
 
 def forward_dynamics(robot, position, velocity, force,
@@ -675,8 +699,7 @@ def _inertia(robot):
     if inertia is None:
         if len(_INERTIA) >= 16:
             _INERTIA.clear()
-        inertia = robot.replace(gravity=ZERO, friction_viscous=ZERO,
-                                friction_coulomb=ZERO)
+        inertia = robot.frictionless().replace(gravity=ZERO)
         _INERTIA[robot.constants] = inertia
     return inertia
 

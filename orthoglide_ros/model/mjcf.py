@@ -21,10 +21,13 @@ home); the hinges named as the URDF's revolute joints (``x_phi21``,
 ``x_phi32``, ``x_phi62``, ``x_phi43`` and ``a_phi54``); three ``motor``
 actuators named as the slide joints, gear 1, force along +lambda (N),
 control-limited only by a robot's force limit; qpos0 is the home pose,
-closed. ``friction_viscous`` is the sliders' ``damping`` and
-``friction_coulomb`` their ``frictionloss`` (MuJoCo's dry friction, a
-constraint that holds a slider at rest up to that force: not the
-package's ``tanh`` law at low speed). MuJoCo refuses zero principal
+closed. ``friction_viscous`` is the sliders' ``damping`` and the mean of
+``friction_coulomb`` and ``friction_coulomb_negative`` their
+``frictionloss`` (MuJoCo's dry friction, a constraint that holds a slider
+at rest up to that force: not the package's ``tanh`` law at low speed);
+MuJoCo's joints have no direction-dependent or Stribeck friction, which
+:class:`mujoco_plant.MujocoPlant` applies as forces
+(:func:`friction_beyond`). MuJoCo refuses zero principal
 inertias (a slender rod about its axis, the translating slider): those
 are MIN_INERTIA. No collisions (``contype`` 0): the mechanism's limits are
 its workspace's, not contacts.
@@ -50,6 +53,31 @@ TIMESTEP = 0.001            # s
 INTEGRATOR = 'RK4'
 SOLREF = (0.002, 1.0)       # the stiffest MuJoCo allows at TIMESTEP (2 dt)
 SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+
+
+def coulomb_mean(robot):
+    """Return the sliders' mean Coulomb friction of both directions (N)."""
+    return tuple(0.5 * (f + g) for f, g in zip(
+        robot.friction_coulomb, robot.friction_coulomb_negative))
+
+
+def friction_beyond(robot, lambdadot):
+    """
+    Return the friction MuJoCo's joints leave out (N, 3-tuple), at speeds.
+
+    The package's law (:func:`mechanics.friction_force`) less viscous +
+    the mean Coulomb friction: the direction-dependent part and the
+    Stribeck excess. Zero for a robot of the plain law.
+    """
+    if robot.plain_friction:
+        return ZERO
+    mean = coulomb_mean(robot)
+    plain = robot.replace(friction_coulomb=mean,
+                          friction_coulomb_negative=mean,
+                          friction_stribeck=ZERO)
+    return tuple(a - b for a, b in zip(
+        mechanics.friction_force(robot, lambdadot),
+        mechanics.friction_force(plain, lambdadot)))
 
 
 def equality_names(leg):
@@ -150,7 +178,7 @@ def _leg(world, robot, leg, slider_joint, home, masses, radius, armature):
                           axis='0 0 1', damping=_number(
                               robot.friction_viscous[LEGS.index(leg)]),
                           frictionloss=_number(
-                              robot.friction_coulomb[LEGS.index(leg)]),
+                              coulomb_mean(robot)[LEGS.index(leg)]),
                           armature=_number(armature))
         else:
             ET.SubElement(element, 'joint', name=f'{prefix}_{suffix}',

@@ -95,6 +95,10 @@ class MujocoPlant:
         self._dofs = {self.model.joint(i).name: (
             self.model.jnt_qposadr[i], self.model.jnt_dofadr[i])
             for i in range(self.model.njnt)}
+        # The friction MuJoCo's joints cannot hold, applied as forces (a
+        # model given as text has its own friction).
+        self._extra_friction = model_text is None \
+            and not robot.plain_friction
         self._set(position, velocity)
         self.data.time = float(time)
 
@@ -147,7 +151,11 @@ class MujocoPlant:
         substeps = max(1, math.ceil(dt / mjcf.TIMESTEP - 1e-9))
         model.opt.timestep = dt / substeps
         data.ctrl[:] = applied      # the actuators, in JOINT_NAMES order
+        slots = [self._dofs[name][1] for name in JOINT_NAMES]
         for _ in range(substeps):
+            if self._extra_friction:
+                data.qfrc_applied[slots] = np.negative(mjcf.friction_beyond(
+                    self.robot, tuple(data.qvel[slots])))
             mujoco.mj_step(model, data)
         mujoco.mj_forward(model, data)  # positions and velocities at the end
         position, velocity = self.position, self.velocity

@@ -26,16 +26,27 @@ DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 JOINT_NAMES = ('slider_a', 'slider_b', 'slider_c')
 # Friction on the sliders (not in the paper, which neglects it): none by
 # default, so that the paper's figures stand. The smoothing speed of the
-# Coulomb term: tanh(1) = 76 % of the Coulomb force at 1 mm/s.
+# Coulomb term: tanh(1) = 76 % of the Coulomb force at 1 mm/s. The Stribeck
+# excess falls to exp(-1) = 37 % of itself at its velocity.
 NO_FRICTION = (0.0, 0.0, 0.0)
 DEFAULT_FRICTION_VELOCITY = 0.001   # m/s
+DEFAULT_STRIBECK_VELOCITY = 0.01    # m/s
+# Parameters that take another's value when not given (the paper's m4 = m2,
+# m6 = m3; a Coulomb friction the same in both directions).
+FOLLOWS = {'m4': 'm2', 'm6': 'm3',
+           'friction_coulomb_negative': 'friction_coulomb'}
+# The friction parameters that are forces (zero: a frictionless robot).
+FRICTION_FORCES = ('friction_viscous', 'friction_coulomb',
+                   'friction_coulomb_negative', 'friction_stribeck')
 
 # Units of every parameter, for messages, descriptions and the docs.
 UNITS = {
     'l': 'm', 'l1': 'm', 'l2': 'm', 'l3': 'm', 'alpha': 'rad',
     'm1': 'kg', 'm2': 'kg', 'm3': 'kg', 'm4': 'kg', 'm5': 'kg', 'm6': 'kg',
     'gravity': 'm/s^2', 'friction_viscous': 'N s/m',
-    'friction_coulomb': 'N', 'friction_velocity': 'm/s',
+    'friction_coulomb': 'N', 'friction_coulomb_negative': 'N',
+    'friction_stribeck': 'N', 'friction_velocity': 'm/s',
+    'friction_stribeck_velocity': 'm/s',
 }
 
 # Bounds of every value (inclusive): far beyond any Orthoglide, they keep
@@ -53,7 +64,10 @@ LIMITS = {
     'gravity': GRAVITY_LIMITS,
     'friction_viscous': VISCOUS_LIMITS,
     'friction_coulomb': COULOMB_LIMITS,
+    'friction_coulomb_negative': COULOMB_LIMITS,
+    'friction_stribeck': COULOMB_LIMITS,
     'friction_velocity': FRICTION_VELOCITY_LIMITS,
+    'friction_stribeck_velocity': FRICTION_VELOCITY_LIMITS,
 }
 
 DESCRIPTIONS = {
@@ -73,9 +87,20 @@ DESCRIPTIONS = {
                         'c lambdadot against the motion',
     'friction_coulomb': 'Coulomb friction of the sliders A, B, C: a force '
                         'F tanh(lambdadot / friction_velocity) against the '
-                        'motion',
+                        'motion (moving +lambda, and both ways unless '
+                        'friction_coulomb_negative is set)',
+    'friction_coulomb_negative': 'Coulomb friction of the sliders A, B, C '
+                                 'moving -lambda; defaults to '
+                                 'friction_coulomb',
+    'friction_stribeck': 'Stribeck friction of the sliders A, B, C: the '
+                         'breakaway excess S, a force S exp(-(lambdadot / '
+                         'friction_stribeck_velocity)^2) tanh(lambdadot / '
+                         'friction_velocity) against the motion',
     'friction_velocity': 'slider speed that smooths the Coulomb friction '
                          '(tanh(1) = 76 % of it at this speed)',
+    'friction_stribeck_velocity': 'slider speed at which the Stribeck '
+                                  'excess has fallen to exp(-1) = 37 % of '
+                                  'itself',
 }
 
 
@@ -100,10 +125,12 @@ class Robot:
     :class:`RobotParameterError` names the parameter.
 
     Friction on each slider (actuators A, B, C), which the paper neglects:
-    ``friction_viscous`` ``c_j`` (N s/m) and ``friction_coulomb`` ``F_j``
-    (N), 3-vectors of values >= 0, and ``friction_velocity`` ``v_s`` (m/s,
-    > 0): the actuator must add ``c_j lambdadot_j + F_j tanh(lambdadot_j /
-    v_s)`` to its force (see :func:`mechanics.friction_force`). None by
+    ``friction_viscous`` ``c_j`` (N s/m), ``friction_coulomb`` ``F_j`` and
+    ``friction_coulomb_negative`` ``F_j^-`` (N, moving +lambda and -lambda;
+    the second defaults to the first), ``friction_stribeck`` ``S_j`` (N),
+    3-vectors of values >= 0, and the speeds ``friction_velocity`` ``v_s``
+    and ``friction_stribeck_velocity`` ``v_b`` (m/s, > 0): the actuator
+    must add the force of :func:`mechanics.friction_force`. None by
     default: the paper's robot.
 
     >>> Robot().l3
@@ -127,26 +154,37 @@ class Robot:
     friction_viscous: tuple = field(default=NO_FRICTION)
     friction_coulomb: tuple = field(default=NO_FRICTION)
     friction_velocity: float = DEFAULT_FRICTION_VELOCITY
+    friction_coulomb_negative: tuple = None
+    friction_stribeck: tuple = field(default=NO_FRICTION)
+    friction_stribeck_velocity: float = DEFAULT_STRIBECK_VELOCITY
 
     def __post_init__(self):
-        if self.m4 is None:
-            object.__setattr__(self, 'm4', self.m2)
-        if self.m6 is None:
-            object.__setattr__(self, 'm6', self.m3)
+        # (Not a field: no part of eq or repr.)
+        object.__setattr__(self, 'following', frozenset(
+            name for name in FOLLOWS if getattr(self, name) is None))
+        for name in self.following:
+            object.__setattr__(self, name, getattr(self, FOLLOWS[name]))
         for name in ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm4',
                      'm5', 'm6'):
             _check_positive(name, getattr(self, name))
         if not self.alpha < math.pi / 2:
             raise RobotParameterError('alpha', 'must lie in (0, pi/2) rad')
-        for name in ('gravity', 'friction_viscous', 'friction_coulomb'):
+        for name in ('gravity',) + FRICTION_FORCES:
             object.__setattr__(self, name, _check_vector(
                 name, getattr(self, name)))
         _check_positive('friction_velocity', self.friction_velocity)
+        _check_positive('friction_stribeck_velocity',
+                        self.friction_stribeck_velocity)
         # Derived once (not fields: no part of eq or repr): the kernel's
-        # constants, and whether the sliders have friction at all.
+        # constants, whether the sliders have friction at all, and whether
+        # it goes beyond viscous + symmetric Coulomb (mechanics' general
+        # law, else its plain one).
         object.__setattr__(self, 'constants', kernel_constants(self))
         object.__setattr__(self, 'has_friction', any(
-            self.friction_viscous + self.friction_coulomb))
+            sum((getattr(self, n) for n in FRICTION_FORCES), ())))
+        object.__setattr__(self, 'plain_friction', not any(
+            self.friction_stribeck) and (self.friction_coulomb_negative
+                                         == self.friction_coulomb))
 
     @classmethod
     def parameter_names(cls):
@@ -166,10 +204,23 @@ class Robot:
                                     for name in self.parameter_names())}
 
     def replace(self, **changes):
-        """Return a validated copy with some parameters changed."""
+        """
+        Return a validated copy with some parameters changed.
+
+        A parameter of :data:`FOLLOWS` that was not given (``following``)
+        keeps following: ``Robot().replace(friction_coulomb=(5.0, 3.0,
+        4.0))`` has the same Coulomb friction both ways,
+        ``Robot().replace(m2=0.3).m4`` is 0.3.
+        """
         values = self.as_parameters()
+        for name in self.following:
+            del values[name]
         values.update(changes)
         return Robot(**values)
+
+    def frictionless(self):
+        """Return a copy with no friction (every FRICTION_FORCES zero)."""
+        return self.replace(**dict.fromkeys(FRICTION_FORCES, NO_FRICTION))
 
 
 def _check_positive(name, value):

@@ -215,9 +215,7 @@ def regressor(robot, positions, velocities, accelerations,
     1 at the samples' ``lambdadot`` and ``robot.friction_velocity``.
     Raises :class:`mechanics.WorkspaceError` as ``solve_batch`` does.
     """
-    unit = robot.replace(**dict.fromkeys(MASSES, 1.0),
-                         friction_viscous=mechanics.ZERO,
-                         friction_coulomb=mechanics.ZERO)
+    unit = robot.frictionless().replace(**dict.fromkeys(MASSES, 1.0))
     reference = mechanics.solve_batch(unit, positions, velocities,
                                       accelerations, margin)
     out = np.empty(reference.force.shape + (len(STANDARD),))
@@ -231,7 +229,10 @@ def regressor(robot, positions, velocities, accelerations,
         for column, kind in ((6 + j, 'friction_viscous'),
                              (9 + j, 'friction_coulomb')):
             out[:, :, column] = mechanics.friction_force(
-                unit.replace(**{kind: one}), reference.lambdadot)
+                unit.replace(**{kind: one}, **(
+                    {'friction_coulomb_negative': one}
+                    if kind == 'friction_coulomb' else {})),
+                reference.lambdadot)
     return out
 
 
