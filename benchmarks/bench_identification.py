@@ -8,9 +8,12 @@ seed 0, period 6 s, of a robot unlike the paper's, lambda quantised to
 ``identification.identify`` with the paper's robot as the nominal one, in
 a fresh process each time (so the import of scipy counts, as it does for
 ``orthoglide identify``). Prints the wall times of the steps (``prepare``
-alone, then ``identify``, which prepares again) and the total (imports,
-base parameters, prepare and identify) against the target: 30,000 samples
-identified within 5 s. No ROS import.
+alone; ``identify`` with the friction law and the lag given, as before
+issue 20; ``identify`` choosing the law among four, the Stribeck speed
+among 12 and estimating the lag, as ``orthoglide identify`` does by
+default) and the total (imports and the default identify, its base
+parameters included) against the target: 30,000 samples identified within
+5 s. No ROS import.
 
 Usage: python benchmarks/bench_identification.py [--samples N] [--repeat R]
 """
@@ -57,15 +60,19 @@ def one_run(samples):
     log = make_log(samples)
     made = time.perf_counter()
     robot = Robot()
+    found = identification.identify(robot, log)
+    searched = time.perf_counter()
     base = identification.base_parameters(robot)
     based = time.perf_counter()
     prepared = identification.prepare(robot, log)
     ready = time.perf_counter()
-    identification.identify(robot, log, base=base)
+    identification.identify(robot, log, base=base, force_lag=0.0)
     done = time.perf_counter()
-    print(f'{imported - start:.3f} {based - made:.3f} {ready - based:.3f} '
-          f'{done - ready:.3f} {(imported - start) + (done - made):.3f} '
-          f'{len(prepared.times)}')
+    print(f'{imported - start:.3f} {based - searched:.3f} '
+          f'{ready - based:.3f} {done - ready:.3f} {searched - made:.3f} '
+          f'{(imported - start) + (searched - made):.3f} '
+          f'{len(prepared.times)} {found.force_lag * 1e3:.4f} '
+          f'{identification.law_name(found.law)}')
 
 
 def main(argv=None):
@@ -89,18 +96,21 @@ def main(argv=None):
         done = subprocess.run(
             [sys.executable, __file__, '--one', '--samples',
              str(args.samples)], capture_output=True, text=True, check=True)
-        rows.append([float(v) for v in done.stdout.split()])
-    best = min(rows, key=lambda row: row[4])
-    imports, base, prepare, identify, total, used = best
+        fields = done.stdout.split()
+        rows.append([float(v) for v in fields[:-1]] + [fields[-1]])
+    best = min(rows, key=lambda row: row[5])
+    imports, base, prepare, given, searched, total, used, lag, law = best
     print(f'best of {args.repeat} fresh processes (s):')
-    print(f'  imports (numpy, scipy.signal, the package)   {imports:8.3f}')
-    print(f'  base parameters (400 random states)          {base:8.3f}')
-    print(f'  prepare (filter, differentiate, W, filter)   {prepare:8.3f}')
-    print(f'  identify (prepare, regressor, least squares) {identify:8.3f}'
+    print(f'  imports (numpy, scipy.signal, the package)     {imports:8.3f}')
+    print(f'  base parameters, plain law (400 random states) {base:8.3f}')
+    print(f'  prepare (filter, differentiate, W, filter)     {prepare:8.3f}'
           f'   ({int(used)} samples after the decimation)')
-    print(f'  total: imports, base, prepare, identify      {total:8.3f}')
+    print(f'  identify, plain law and lag given              {given:8.3f}')
+    print(f'  identify, law, Stribeck speed and lag searched {searched:8.3f}'
+          f'   (found {law}, lag {lag:.4f} ms)')
+    print(f'  total: imports and the searching identify      {total:8.3f}')
     print('  all runs, total (s): '
-          + ', '.join(f'{row[4]:.3f}' for row in rows))
+          + ', '.join(f'{row[5]:.3f}' for row in rows))
     if args.samples == TARGET_SAMPLES:
         verdict = 'PASS' if total <= TARGET_S else 'MISS'
         print(f'Target: {TARGET_SAMPLES:,} samples within {TARGET_S:g} s: '

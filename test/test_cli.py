@@ -533,12 +533,12 @@ def test_identify_validates_on_another_log(capsys, tmp_path):
 
 @pytest.fixture(scope='module')
 def from_csv(tmp_path_factory):
-    """Return the robot identify finds from a 6 s CSV log."""
+    """Return the robot identify finds from a 6 s CSV log (no lag)."""
     from orthoglide_ros.formats import params_file
     tmp_path = tmp_path_factory.mktemp('from_csv')
     source, _ = identification_log(tmp_path, duration=6.0)
     assert cli.main(['identify', '--input', str(source), '--output',
-                     str(tmp_path / 'out.yaml')]) == 0
+                     str(tmp_path / 'out.yaml'), '--force-lag', '0']) == 0
     return params_file.load_robot(tmp_path / 'out.yaml')
 
 
@@ -558,9 +558,11 @@ def test_identify_reads_bags_of_both_storages(capsys, tmp_path, from_csv,
         tmp_path / 'bag')
     out = tmp_path / 'from_bag.yaml'
     code, _, err = run(capsys, 'identify', '--input', path, '--output', out,
+                       '--force-lag', 0,
                        *(['--topic', topic] if topic else []))
     assert (code, err) == (0, '')
-    # The bag's stamps are the CSV's times to the nanosecond.
+    # The bag's stamps are the CSV's times to the nanosecond (a lag
+    # estimated would move by their rounding).
     assert np.allclose(*(identification.standard_parameters(robot)
                          for robot in (params_file.load_robot(out),
                                        from_csv)), rtol=1e-9, atol=0.0)
@@ -777,3 +779,113 @@ def test_batch_joint_trajectory_needs_increasing_times(tmp_path, capsys,
     code, out, err = run(capsys, 'batch', '--input', source, '--format',
                          'joint_trajectory')
     assert_bad_input(code, out, err, *words)
+
+
+def rough_log(tmp_path, name, seed, duration, lag=0.0):
+    """Write a noise-free log of a robot with every friction term."""
+    from orthoglide_ros.tools.identification import Log
+    from test_identification import write_csv
+    robot = Robot(m5=18.75, friction_viscous=(30.0, 40.0, 50.0),
+                  friction_coulomb=(5.0, 3.0, 4.0),
+                  friction_coulomb_negative=(8.0, 1.5, 6.0),
+                  friction_stribeck=(6.0, 4.0, 5.0),
+                  friction_stribeck_velocity=0.02)
+    motion = trajectory.excitation(seed, 6.0)
+    times = np.arange(0.0, duration, 1e-3)
+    lambdas = mechanics.solve_batch(
+        robot, *trajectory.excitation_batch(motion, times)).lambda_
+    forces = mechanics.solve_batch(
+        robot, *trajectory.excitation_batch(motion, times - lag)).force
+    return write_csv(tmp_path / name, Log(times, lambdas, forces, name)), \
+        robot
+
+
+def values_of(out, label):
+    """Return the three numbers ending the line that starts with ``label``."""
+    (line,) = [x for x in out.splitlines() if x.startswith(label)]
+    return np.array([float(v) for v in line.split()[-3:]])
+
+
+def test_validate_reports_error_share_and_lag(capsys, tmp_path):
+    """The robot of the log predicts it; the paper's robot does not."""
+    from orthoglide_ros.formats import params_file
+    log, robot = rough_log(tmp_path, 'rough.csv', 2, 8.0, lag=0.002)
+    params = tmp_path / 'rough.yaml'
+    params.write_text(params_file.robot_file_text(robot))
+    report = tmp_path / 'validation.png'
+    code, out, err = run(capsys, 'validate', '--params', params, '--input',
+                         log, '--report', report)
+    assert (code, err) == (0, '')
+    assert values_of(out, 'force error RMS (N)').max() < 0.01
+    assert (values_of(out, 'share of the force explained (%)')
+            > 99.999).all()
+    assert 'force lag 2 ms (estimated' in out
+    assert report.read_bytes().startswith(PNG_MAGIC)
+    code, out, _ = run(capsys, 'validate', '--input', log, '--force-lag',
+                       0.002)
+    assert code == 0 and 'force lag 2 ms (given)' in out
+    assert values_of(out, 'force error RMS (N)').min() > 1.0
+
+
+def test_identify_chooses_the_friction_law_or_takes_it(capsys, tmp_path):
+    from orthoglide_ros.formats import params_file
+    log, robot = rough_log(tmp_path, 'rough.csv', 0, 20.0)
+    out_file = tmp_path / 'found.yaml'
+    code, out, _ = run(capsys, 'identify', '--input', log, '--output',
+                       out_file)
+    assert code == 0
+    assert 'friction law chosen: coulomb+direction+stribeck' in out
+    found = params_file.load_robot(out_file)
+    assert np.allclose(found.friction_coulomb_negative,
+                       robot.friction_coulomb_negative, rtol=0.05)
+    assert np.allclose(found.friction_stribeck, robot.friction_stribeck,
+                       rtol=0.25)
+    # Without its Stribeck term the robot is not explained: the estimate
+    # is refused unless asked for all the same.
+    code, _, err = run(capsys, 'identify', '--input', log, '--output',
+                       out_file, '--friction', 'coulomb+direction')
+    assert code == 2 and 'does not excite' in err
+    code, out, _ = run(capsys, 'identify', '--input', log, '--output',
+                       out_file, '--friction', 'coulomb+direction',
+                       '--force-lag', 0.0, '--max-relative-std', 1000)
+    assert code == 0
+    assert 'friction law chosen: coulomb+direction: as asked' in out
+    assert 'force lag 0 ms (given)' in out
+    forced = params_file.load_robot(out_file)
+    assert forced.friction_stribeck == (0.0, 0.0, 0.0)
+    assert forced.friction_coulomb_negative != forced.friction_coulomb
+
+
+def test_identify_validates_and_draws_in_one_step(capsys, tmp_path):
+    log, _ = rough_log(tmp_path, 'rough.csv', 0, 20.0)
+    other, _ = rough_log(tmp_path, 'other.csv', 3, 8.0)
+    picture = tmp_path / 'validation.png'
+    code, out, err = run(capsys, 'identify', '--input', log, '--output',
+                         tmp_path / 'out.yaml', '--validate', other,
+                         '--validate-report', picture)
+    assert (code, err) == (0, '')
+    assert (values_of(out, 'identified robot: force error RMS (N)') * 10.0
+            < values_of(out, 'nominal robot: force error RMS (N)')).all()
+    assert picture.read_bytes().startswith(PNG_MAGIC)
+
+
+@pytest.mark.parametrize('argv', [
+    ['--validate-report', 'v.png'], ['--friction', 'stiction'],
+    ['--stribeck-velocity', '0'], ['--force-lag', 'nan']])
+def test_identify_refuses_bad_options(capsys, tmp_path, argv):
+    log, _ = rough_log(tmp_path, 'rough.csv', 0, 4.0)
+    code, _, err = run(capsys, 'identify', '--input', log, '--output',
+                       tmp_path / 'out.yaml', *argv)
+    assert code == 2 and err.strip()
+    assert not (tmp_path / 'out.yaml').exists()
+
+
+def test_validate_refuses_a_bad_log_in_one_line(capsys, tmp_path):
+    bad = tmp_path / 'bad.csv'
+    bad.write_text('t,lambda_a,lambda_b,lambda_c,force_a,force_b,force_c\n'
+                   '0,0,0,0,1,1,nan\n')
+    code, out, err = run(capsys, 'validate', '--input', bad, '--report',
+                         tmp_path / 'v.png')
+    assert code == 2 and out == ''
+    assert len(err.strip().splitlines()) == 1 and 'force_c' in err
+    assert not (tmp_path / 'v.png').exists()

@@ -149,7 +149,8 @@ CSV = {
 HEADERS = {'batch': 't,x,y,z', 'animate': 't,x,y,z'}
 
 
-@pytest.mark.parametrize('command', ['batch', 'identify', 'animate'])
+@pytest.mark.parametrize('command', ['batch', 'identify', 'validate',
+                                     'animate'])
 @pytest.mark.parametrize('name', sorted(CSV))
 def test_a_hostile_csv_is_refused_in_one_line(capsys, tmp_path, name,
                                               command):
@@ -157,13 +158,14 @@ def test_a_hostile_csv_is_refused_in_one_line(capsys, tmp_path, name,
     path = tmp_path / 'in.csv'
     header = HEADERS.get(command, 't,lambda_a,lambda_b,lambda_c,force_a,'
                                   'force_b,force_c') + '\n'
-    if command == 'identify':   # three more columns before the spoiled one
+    if command in ('identify', 'validate'):  # three more columns first
         text = (b'0,0,0,' if isinstance(text, bytes) else '0,0,0,') + text
     path.write_bytes(header.encode() + (
         text if isinstance(text, bytes) else text.encode()))
     output = {'batch': 'out.csv', 'identify': 'out.yaml',
-              'animate': 'out.gif'}[command]
-    code, out, err = run(capsys, command, '--input', path, '--output',
+              'validate': 'out.png', 'animate': 'out.gif'}[command]
+    code, out, err = run(capsys, command, '--input', path,
+                         '--report' if command == 'validate' else '--output',
                          tmp_path / output)
     assert_bad_input(code, out, err, words)
     assert not (tmp_path / output).exists()

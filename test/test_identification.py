@@ -659,14 +659,21 @@ def test_force_lag_realigns_forces_reported_late(base):
         [np.interp(log.times - 0.002, log.times, log.forces[:, j])
          for j in range(3)]), 'late forces')
     truth = truth_of(base)
-    aligned = identification.identify(NOMINAL, log, base=base)
-    off = identification.identify(NOMINAL, moved, base=base)
+    aligned = identification.identify(NOMINAL, log, base=base,
+                                      force_lag=0.0)
+    off = identification.identify(NOMINAL, moved, base=base, force_lag=0.0)
     fixed = identification.identify(NOMINAL, moved, base=base,
                                     force_lag=0.002)
+    estimated = identification.identify(NOMINAL, moved, base=base)
     error = {name: np.abs(r.values - truth) / truth
              for name, r in (('aligned', aligned), ('off', off),
-                             ('fixed', fixed))}
+                             ('fixed', fixed), ('estimated', estimated))}
+    print({name: f'{e.max():.3g}' for name, e in error.items()},
+          f'estimated lag {estimated.force_lag * 1e3:.4f} ms')
     assert error['off'].max() > 5.0 * error['fixed'].max()
     assert error['fixed'].max() <= 2.0 * error['aligned'].max() + 1e-3
+    assert not fixed.lag_estimated and estimated.lag_estimated
+    assert estimated.force_lag == pytest.approx(0.002, abs=2e-4)
+    assert error['estimated'].max() <= 2.0 * error['fixed'].max() + 1e-4
     with pytest.raises(LogError, match='force lag'):
         identification.prepare(NOMINAL, log, force_lag=0.2)

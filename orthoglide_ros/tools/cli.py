@@ -12,6 +12,8 @@ Subcommands (``orthoglide SUBCOMMAND --help`` for details):
 - ``identify``: the robot's masses and friction from a log (a CSV file or
   a rosbag2 bag), written as a parameters file (``--output``), with a
   report on standard output (and ``--report``, a PNG).
+- ``validate``: a robot's forces against another log's: the error per
+  actuator, the share explained (and ``--report``, a PNG).
 - ``record``: joint states into a rosbag2 bag (MCAP or sqlite3); the one
   subcommand that needs ROS (rclpy).
 - ``urdf``: the robot's URDF (a cut tree, see :mod:`orthoglide_ros.model.urdf`).
@@ -42,6 +44,7 @@ import numpy as np
 from orthoglide_ros.formats import cdr, params_file
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools import identification
+from orthoglide_ros.tools import identification_report as report
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
 from orthoglide_ros.tools.identification import DEFAULT_CUTOFF
 from orthoglide_ros.cores.parameters import JOINT_NAMES, joint_names
@@ -62,7 +65,7 @@ INPUT_GROUPS = (('time', ('t',), False),
                 ('acceleration', ('ax', 'ay', 'az'), False))
 # The output options of every subcommand, checked before anything is
 # computed or written.
-OUTPUT_OPTIONS = ('output', 'report', 'csv', 'plot')
+OUTPUT_OPTIONS = ('output', 'report', 'csv', 'plot', 'validate_report')
 TOPIC_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
 UNITS = {'lambda': 'm', 'lambdadot': 'm/s', 'lambdaddot': 'm/s^2',
          'force': 'N', 'power': 'W'}
@@ -348,112 +351,85 @@ def _excitation(robot, seed, duration):
         raise CliError(f'seed {seed}: {error}') from None
 
 
-# -- identify ---------------------------------------------------------------
+# -- identify and validate -------------------------------------------------
 
 def run_identify(robot, args):
     """Identify the base parameters from a log; print, write the file(s)."""
+    if args.validate_report is not None and args.validate is None:
+        raise CliError('--validate-report needs --validate LOG')
     joints = tuple(args.joint_names)
     try:
         log = identification.read_log(args.input, args.topic, joints)
         window = identification.crop(log, args.start, args.end)
         result = identification.identify(
             robot, window, args.cutoff, force_lag=args.force_lag,
-            max_relative_std=args.max_relative_std)
+            max_relative_std=args.max_relative_std,
+            friction=None if args.friction == 'auto'
+            else identification.parse_law(args.friction),
+            stribeck_velocity=args.stribeck_velocity)
         validation = None
         if args.validate is not None:
-            other = identification.prepare(robot, identification.read_log(
-                args.validate, args.topic, joints), args.cutoff,
-                args.force_lag)
-            validation = [np.sqrt(np.mean((other.forces - identification
-                                           .predict(model, other)) ** 2,
-                                          axis=0))
+            other = identification.read_log(args.validate, args.topic, joints)
+            # The lag is the drive's: the one found, unless estimated anew.
+            lag = None if result.lag_estimated else args.force_lag
+            validation = [identification.validate(model, other, args.cutoff,
+                                                  lag)
                           for model in (robot, result.robot)]
     except (identification.LogError,
             identification.IdentificationError) as error:
         raise CliError(str(error)) from None
-    report = None if args.report is None else _identification_png(
-        args.input, result)
-    summary = _identify_summary(args, log, window, result)
+    images = []
+    if args.report is not None:
+        images.append((args.report, _drawn(
+            lambda f: report.draw_identification(f, args.input, result),
+            (13, 6.5), '--report')))
+    if args.validate_report is not None:
+        images.append((args.validate_report, _drawn(
+            lambda f: report.draw_validation(f, validation[1]), (13, 10),
+            '--validate-report')))
+    summary = report.identification_lines(args.input, log, window, result,
+                                          args.cutoff)
     print('\n'.join(summary))
     for note in result.notes:
         print(f'note: {note}')
     if validation is not None:
-        print(f'validation on {args.validate}: force error RMS (N)')
-        print(_row('', 'A', 'B', 'C'))
-        print(_row('  nominal robot', *validation[0]))
-        print(_row('  identified robot', *validation[1]))
+        print('\n'.join(report.validation_lines(validation[1],
+                                                validation[0])))
     comments = [f'Identified by `orthoglide identify` from {args.input}',
                 *summary[1:]] + [f'note: {n}' for n in result.notes]
     _write_output(args.output, params_file.robot_file_text(
         result.robot, comments).encode('utf-8'))
     print(f'written: {args.output}')
-    if report is not None:
-        _write_output(args.report, report)
+    for path, image in images:
+        _write_output(path, image)
+        print(f'written: {path}')
+    return 0
+
+
+def run_validate(robot, args):
+    """Compare the robot's forces with a log's; print, draw (--report)."""
+    try:
+        log = identification.crop(identification.read_log(
+            args.input, args.topic, tuple(args.joint_names)),
+            args.start, args.end)
+        validation = identification.validate(robot, log, args.cutoff,
+                                             args.force_lag)
+    except identification.LogError as error:
+        raise CliError(str(error)) from None
+    image = None if args.report is None else _drawn(
+        lambda f: report.draw_validation(f, validation), (13, 10),
+        '--report')
+    print('\n'.join(report.validation_lines(validation)))
+    if image is not None:
+        _write_output(args.report, image)
         print(f'written: {args.report}')
     return 0
 
 
-def _identify_summary(args, log, window, result):
-    """Return the report's lines: samples, spans, base parameters, fit."""
-    samples = result.samples
-    lines = [
-        f'Identification from {args.input}: {len(log.times)} samples over '
-        f'{_span(log.times)}; {len(window.times)} in the window '
-        f'{_span(window.times)}; {len(samples.times)} used over '
-        f'{_span(samples.times)} ({samples.segments} segment(s), low-pass '
-        f'{args.cutoff:g} Hz, decimated to {samples.rate:.4g} Hz, force lag '
-        f'{args.force_lag:g} s)',
-        f'{"base parameter":<22}{"identified":>12}{"nominal":>12}'
-        f'{"rel. std (%)":>14}  meaning']
-    for name, meaning, carrier, value, nominal, relative in zip(
-            result.base.names, result.base.meanings,
-            result.base.independent, result.values, result.nominal,
-            result.relative_std):
-        unit = identification.UNITS[identification.STANDARD[carrier]]
-        label = f'{name} ({unit})'
-        lines.append(f'{label:<22}{value:12.6g}{nominal:12.6g}'
-                     f'{relative:14.3g}  {meaning}')
-    lines.append(f'condition number of the base regressor: '
-                 f'{result.condition:.4g} (unit-norm columns)')
-    lines.append('RMS residual per actuator (N): ' + ', '.join(
-        f'{leg} {r:.4g}' for leg, r in zip('ABC', result.residual_rms))
-        + ' (RMS force: ' + ', '.join(
-            f'{leg} {r:.4g}' for leg, r in zip('ABC', result.force_rms))
-        + ')')
-    return lines
-
-
-def _span(times):
-    """Describe a span of times (s): ``[0, 29.999] s (29.999 s)``."""
-    return f'[{times[0]:.6g}, {times[-1]:.6g}] s ({times[-1] - times[0]:.6g} s)'
-
-
-def _identification_png(source, result):
-    """Draw measured vs predicted forces and the residuals as PNG bytes."""
-    figure = _figure((13, 6.5), '--report')
-    axes = figure.subplots(2, 3, sharex=True)
-    samples = result.samples
-    # Segments apart: no line across a gap.
-    gap = np.r_[np.diff(samples.times) > 1.5 / samples.rate, False]
-    times = np.insert(samples.times, np.flatnonzero(gap) + 1, np.nan)
-    for j, leg in enumerate('ABC'):
-        measured, predicted = (np.insert(f[:, j], np.flatnonzero(gap) + 1,
-                                         np.nan)
-                               for f in (samples.forces, result.predicted))
-        top, bottom = axes[0, j], axes[1, j]
-        top.plot(times, measured, label='measured (filtered)')
-        top.plot(times, predicted, '--', label='predicted (identified)')
-        top.set_title(f'actuator {leg}')
-        top.set_ylabel(f'$f_{leg}$ (N)')
-        top.legend(fontsize=8)
-        bottom.plot(times, measured - predicted, color='tab:red')
-        bottom.set_title(f'residual, RMS {result.residual_rms[j]:.3g} N')
-        bottom.set_ylabel(f'$f_{leg}$ measured - predicted (N)')
-        bottom.set_xlabel('t (s)')
-        for ax in (top, bottom):
-            ax.grid(True, alpha=0.4)
-    figure.suptitle(f'Identification from {source}: measured and predicted '
-                    'actuator forces')
+def _drawn(draw, size, option):
+    """Return the PNG bytes of ``draw(figure)`` on a new figure."""
+    figure = _figure(size, option)
+    draw(figure)
     return _png(figure)
 
 
@@ -774,6 +750,7 @@ _margin = _within(float, 0.0, 0.99)
 _samples = _within(int, 2)
 _positive_float = _within(float, 0.0, above=True)
 _non_negative_float = _within(float, 0.0)
+_finite_float = _within(float, -math.inf)
 _count = _within(int, 0)
 _positive_count = _within(int, 1)
 
@@ -950,11 +927,32 @@ def _parser():
                           'the motion\'s is '
                           f'{identification.STATE_CUTOFF_FACTOR:g} times it),'
                           ' below half the log\'s sampling rate')
-    identify.add_argument('--force-lag', type=float, default=0.0,
+    identify.add_argument('--force-lag', type=_finite_float, default=None,
                           metavar='S', help='the forces were applied S '
-                          'seconds before their stamps (default 0; a '
-                          'simulator or drive that reports the force held '
-                          'over its last step of dt: dt / 2)')
+                          'seconds before their stamps (default: estimated '
+                          'from the log, the lag of the least residual '
+                          f'within +-{identification.LAG_SEARCH * 1e3:g} '
+                          'ms; a simulator or drive that reports the force '
+                          'held over its last step of dt: dt / 2)')
+    identify.add_argument('--friction', default='auto',
+                          choices=('auto',) + tuple(
+                              identification.law_name(law)
+                              for law in identification.LAWS),
+                          help='the friction law: viscous + Coulomb '
+                          '(coulomb), with a Coulomb level per direction '
+                          '(+direction), with a Stribeck excess at low '
+                          'speed (+stribeck); auto (default): the simplest '
+                          'law within '
+                          f'{100 * identification.SELECTION_MARGIN:g} %% of '
+                          'the least RMS error on held-out parts of the '
+                          'log')
+    identify.add_argument('--stribeck-velocity', type=_positive_float,
+                          default=None, metavar='M/S',
+                          help='the Stribeck speed v_b of a law with '
+                          '+stribeck (default: the best of '
+                          f'{len(identification.STRIBECK_VELOCITIES)} from '
+                          f'{identification.STRIBECK_VELOCITIES[0]:g} to '
+                          f'{identification.STRIBECK_VELOCITIES[-1]:g} m/s)')
     identify.add_argument('--max-relative-std', type=_positive_float,
                           default=identification.MAX_RELATIVE_STD,
                           metavar='PCT', help='refuse the log when a base '
@@ -962,10 +960,55 @@ def _parser():
                           f'PCT %% (default {identification.MAX_RELATIVE_STD:g}'
                           '): the log does not excite it')
     identify.add_argument('--validate', metavar='LOG',
-                          help='another log (another motion): print the '
-                          'force error RMS (N) of the nominal and the '
-                          'identified robot on it')
+                          help='another log (another motion): validate the '
+                          'nominal and the identified robot on it, as '
+                          'orthoglide validate does')
+    identify.add_argument('--validate-report', metavar='FILE',
+                          help='draw the validation of the identified robot '
+                          '(as validate --report) as a PNG image')
     identify.set_defaults(run=run_identify)
+
+    validate = sub.add_parser(
+        'validate', parents=[common],
+        help='predict the forces of a log, report the error',
+        description='Predict the actuator forces of a log (another motion '
+        'than the one identified from) with the robot of --params (every '
+        'robot.* parameter, friction included: the full model) and compare '
+        'them with the measured ones, both through the same zero-phase '
+        'low-pass as identify\'s. Prints per actuator the RMS and the '
+        'largest error (N) and the share of the force explained (1 - '
+        'sum(error^2) / sum(force^2)), with the force lag and the part of '
+        'the log used. The log is read as by identify (CSV or rosbag2). A '
+        'log that cannot be used exits with code 2.')
+    validate.add_argument('--input', required=True, metavar='LOG',
+                          help='CSV file, or rosbag2 bag (directory, .mcap '
+                          'or .db3 file)')
+    validate.add_argument('--report', metavar='FILE',
+                          help='draw measured and predicted forces against '
+                          'time and the error against the slider\'s speed '
+                          'and position, per actuator, as a PNG image')
+    validate.add_argument('--topic', default=identification.DEFAULT_TOPIC,
+                          help='joint states topic in a bag (default '
+                          f'{identification.DEFAULT_TOPIC})')
+    validate.add_argument('--joint-names', nargs=3, metavar='NAME',
+                          default=list(JOINT_NAMES),
+                          help='joints of actuators A, B, C in the joint '
+                          'states (default ' + ' '.join(JOINT_NAMES) + ')')
+    validate.add_argument('--start', type=float, metavar='S',
+                          help='use the log from S seconds after its first '
+                          'sample (default: from the first)')
+    validate.add_argument('--end', type=float, metavar='S',
+                          help='use the log up to S seconds after its first '
+                          'sample (default: to the last)')
+    validate.add_argument('--cutoff', type=_positive_float,
+                          default=DEFAULT_CUTOFF, metavar='HZ',
+                          help='cutoff of the low-pass of both forces (Hz; '
+                          f'default {DEFAULT_CUTOFF:g})')
+    validate.add_argument('--force-lag', type=_finite_float, default=None,
+                          metavar='S', help='the forces were applied S '
+                          'seconds before their stamps (default: the lag '
+                          'that best matches the prediction)')
+    validate.set_defaults(run=run_validate)
 
     record = sub.add_parser(
         'record', help='record joint states into a rosbag2 bag (needs ROS 2)',

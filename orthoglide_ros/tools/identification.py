@@ -3,9 +3,12 @@ Identify the Orthoglide's masses and slider friction from a log, without ROS.
 
 The actuator forces are linear in the masses and the friction coefficients:
 ``f = W(r_G, rdot_G, rddot_G) theta`` with the standard parameters
-``theta = (m1 ... m6, c_A, c_B, c_C, F_A, F_B, F_C)`` (kg, N s/m, N:
-:data:`STANDARD`). The geometry, gravity and the Coulomb smoothing speed
-are known (the nominal robot's). The steps, each a function here:
+``theta = (m1 ... m6, c_A, c_B, c_C, F_A, F_B, F_C, ...)`` (kg, N s/m, N:
+:func:`standard_names`) of a friction :class:`Law`: viscous + Coulomb, and
+optionally a Coulomb level per direction (``F^-``) and a Stribeck excess
+(``S``, whose speed ``v_b`` enters nonlinearly and is searched). The
+geometry, gravity and the Coulomb smoothing speed are known (the nominal
+robot's). The steps, each a function here:
 
 - :func:`regressor`: ``W`` from the package's own inverse dynamics, not a
   second model: a mass's column is the difference of the forces of two
@@ -26,11 +29,16 @@ are known (the nominal robot's). The steps, each a function here:
   through the same low-pass), ``W`` at every sample, then the forces and
   every column of ``W`` through that same zero-phase low-pass (parallel
   filtering) and decimated alike;
-- :func:`identify`: least squares for ``beta``, with relative standard
-  deviations, the condition number and the RMS residual per actuator, a
-  refusal when a base parameter is not excited (its relative standard
-  deviation above MAX_RELATIVE_STD), and a complete :class:`Robot` by the
-  split rule of :func:`split`.
+- :func:`identify`: the drive's lag (the forces' delay on the states) by
+  the least residual, the friction law by the error on held-out parts of
+  the log, least squares for ``beta`` (bounded where the ordinary one
+  leaves what a robot can be), with relative standard deviations, the
+  condition number and the RMS residual per actuator, a refusal when a
+  base parameter is not excited (its relative standard deviation above
+  MAX_RELATIVE_STD), and a complete :class:`Robot` by the split rule of
+  :func:`split`;
+- :func:`validate`: a robot's forces (the full model, not the regressor)
+  against another log's.
 
 Logs come from a CSV file (:func:`read_csv`) or a rosbag2 bag, MCAP or
 sqlite3 (:func:`read_bag`, with the ``rosbags`` library, no ROS).
@@ -53,25 +61,70 @@ from orthoglide_ros.cores.parameters import JOINT_NAMES
 from orthoglide_ros.model.robot import DESCRIPTIONS, LIMITS
 
 MASSES = ('m1', 'm2', 'm3', 'm4', 'm5', 'm6')
-FRICTIONS = ('viscous', 'coulomb')
 LEGS = ('a', 'b', 'c')
-# The standard parameters: the masses, then per actuator the viscous (N
-# s/m) and the Coulomb (N) friction coefficients.
-STANDARD = MASSES + tuple(f'{kind}_{leg}' for kind in FRICTIONS
+# The friction coefficients by kind: the Robot field each sets, its unit,
+# its meaning.
+FRICTION_KINDS = {
+    'viscous': ('friction_viscous', 'N s/m', 'viscous friction'),
+    'coulomb': ('friction_coulomb', 'N', 'Coulomb friction'),
+    'coulomb_negative': ('friction_coulomb_negative', 'N',
+                         'Coulomb friction moving -lambda'),
+    'stribeck': ('friction_stribeck', 'N', 'Stribeck excess'),
+}
+
+Law = namedtuple('Law', ('direction', 'stribeck'))
+Law.__doc__ = """A friction law to identify: viscous + Coulomb friction,
+with a Coulomb level per direction (``direction``) and a Stribeck excess
+(``stribeck``) or not. Named by :func:`law_name`, read by
+:func:`parse_law`."""
+PLAIN = Law(False, False)
+# Every law identify chooses from, the simplest first.
+LAWS = (PLAIN, Law(True, False), Law(False, True), Law(True, True))
+
+
+def law_name(law):
+    """Name a :class:`Law`: ``coulomb``, ``coulomb+direction``, ..."""
+    return 'coulomb' + '+direction' * law.direction \
+        + '+stribeck' * law.stribeck
+
+
+def parse_law(text):
+    """Return the :class:`Law` named ``text`` (ValueError if none is)."""
+    for law in LAWS:
+        if law_name(law) == text:
+            return law
+    raise ValueError(f'unknown friction law {text!r}: one of '
+                     + ', '.join(law_name(law) for law in LAWS))
+
+
+def friction_kinds(law):
+    """Return the friction coefficients' kinds of ``law``, in order."""
+    return ('viscous', 'coulomb') + ('coulomb_negative',) * law.direction \
+        + ('stribeck',) * law.stribeck
+
+
+def standard_names(law=PLAIN):
+    """Return the standard parameters' names of ``law`` (``m1``, ``viscous_a``...)."""
+    return MASSES + tuple(f'{kind}_{leg}' for kind in friction_kinds(law)
                           for leg in LEGS)
+
+
+# The standard parameters of the plain law (the package's law before the
+# Coulomb level per direction and the Stribeck term).
+STANDARD = standard_names(PLAIN)
+_ALL = standard_names(LAWS[-1])
 UNITS = dict.fromkeys(MASSES, 'kg') | {
-    f'{kind}_{leg}': unit
-    for kind, unit in (('viscous', 'N s/m'), ('coulomb', 'N'))
+    f'{kind}_{leg}': unit for kind, (_, unit, _) in FRICTION_KINDS.items()
     for leg in LEGS}
 # What each standard parameter is, in words (the masses' from the robot's
 # parameter descriptions).
 MEANINGS = {m: DESCRIPTIONS[m].split(';')[0] for m in MASSES} | {
-    f'{kind}_{leg}': f'{label} friction of slider {leg.upper()}'
-    for kind, label in (('viscous', 'viscous'), ('coulomb', 'Coulomb'))
-    for leg in LEGS}
+    f'{kind}_{leg}': f'{words} of slider {leg.upper()}'
+    for kind, (_, _, words) in FRICTION_KINDS.items() for leg in LEGS}
 # Lowest value of each standard parameter (a Robot's bound).
-LOWER = np.array([LIMITS['m1'][0]] * 6 + [LIMITS['friction_viscous'][0]] * 3
-                 + [LIMITS['friction_coulomb'][0]] * 3)
+LOWER = dict.fromkeys(MASSES, LIMITS['m1'][0]) | {
+    f'{kind}_{leg}': LIMITS[field][0]
+    for kind, (field, _, _) in FRICTION_KINDS.items() for leg in LEGS}
 
 # States at which the base parameters are found: random, uniform in a
 # cube of half side BASE_BOX (m) inside the workspace, with speeds up to
@@ -109,6 +162,9 @@ STATE_CUTOFF_FACTOR = 5.0
 STATE_CUTOFF_SHARE = 0.4
 GAP_FACTOR = 3.0
 GAP_SHARE = 0.1
+# A step between two samples longer than this many median periods is a
+# missing sample (interpolated inside a segment; counted in the report).
+MISSING_FACTOR = 1.5
 # Fewest samples the least squares may use, per base parameter.
 MIN_SAMPLES_PER_PARAMETER = 10
 # A base parameter whose relative standard deviation (%) exceeds this is
@@ -122,6 +178,25 @@ MAX_RELATIVE_STD = 10.0
 # excitation's 0.4 m/s) or a mass below 10 g hardly matters to forces of
 # tens to hundreds of N.
 RESOLUTION = {'kg': 0.01, 'N s/m': 1.0, 'N': 1.0}
+
+# The drive's lag (the forces' delay on the states' stamps), when it is
+# not given: searched within +-LAG_SEARCH s, first on the log's period,
+# then on a quarter of it around the best, and refined by a parabola
+# through the three best (doc/identification.md).
+LAG_SEARCH = 0.01
+LAG_STEPS = 4
+# The Stribeck speeds v_b searched (m/s): log-spaced over the speeds at
+# which guideways show a Stribeck rise.
+STRIBECK_VELOCITIES = tuple(np.geomspace(0.002, 0.1, 12).tolist())
+# The friction law is chosen by the RMS error on held-out parts of the log
+# (FOLDS contiguous blocks, each predicted from the others): a law with
+# more terms is chosen only when it lowers that error by more than
+# SELECTION_MARGIN (a share) and by more than SELECTION_FLOOR of the RMS
+# force: terms that noise alone would pick are left out.
+FOLDS = 5
+SELECTION_MARGIN = 0.02
+SELECTION_FLOOR = 1e-3
+
 # The log's columns in a CSV file (those `orthoglide batch` writes); the
 # measured velocities are optional.
 LOG_GROUPS = (('time', ('t',), True),
@@ -141,28 +216,55 @@ are counted from ``origin`` (ns; a bag's first header stamp, else 0);
 ``lambdadots`` (N, 3) m/s: measured velocities, or None."""
 
 Samples = namedtuple('Samples', (
-    'times', 'regressor', 'forces', 'segments', 'rate'))
+    'times', 'regressor', 'forces', 'segments', 'rate', 'law', 'lambdas',
+    'lambdadots', 'coverage'), defaults=(PLAIN, None, None, None))
 Samples.__doc__ = """A log prepared for identification (:func:`prepare`).
 
-(N,) times (s), the regressor ``W`` (N, 3, 12) of the standard
-parameters and the forces (N, 3) (N), both through the same low-pass;
+(N,) times (s), the regressor ``W`` (N, 3, n) of the standard parameters
+of ``law`` and the forces (N, 3) (N), both through the same low-pass;
 ``segments``: how many pieces of the log they come from; ``rate``: their
-sampling rate after the decimation (Hz).
+sampling rate after the decimation (Hz); ``lambdas`` (m) and
+``lambdadots`` (m/s): (N, 3), the motion at those samples (through the
+motion's low-pass); ``coverage``: what of the log was used
+(:class:`Coverage`).
 """
 
-Base = namedtuple('Base', ('names', 'independent', 'matrix', 'meanings'))
-Base.__doc__ = """The base parameters (:func:`base_parameters`).
+Coverage = namedtuple('Coverage', (
+    'log_s', 'used_s', 'segments', 'gaps', 'longest_gap_s', 'short_pieces',
+    'missing'))
+Coverage.__doc__ = """What of a log :func:`prepare` used.
 
-``matrix`` ``P`` (n_base, 12): ``beta = P theta`` and ``W theta = W[:,
-independent] beta`` for every state; ``independent``: the standard
+``log_s``: the log's span (s); ``used_s``: the span of the samples used,
+segment by segment (s); ``segments``: how many; ``gaps``: the gaps that
+split the log, the longest ``longest_gap_s`` (s); ``short_pieces``: pieces
+between gaps too short to filter (dropped); ``missing``: samples missing
+inside the segments (steps longer than MISSING_FACTOR periods,
+interpolated).
+"""
+
+Base = namedtuple('Base', ('names', 'independent', 'matrix', 'meanings',
+                           'law'), defaults=(PLAIN,))
+Base.__doc__ = """The base parameters (:func:`base_parameters`) of a law.
+
+``matrix`` ``P`` (n_base, n): ``beta = P theta`` and ``W theta = W[:,
+independent] beta`` for every state, ``theta`` the standard parameters
+of ``law`` (:func:`standard_names`); ``independent``: the standard
 parameter carrying each base parameter (its column of ``P`` is a unit
 one); ``names``: each as a combination, e.g. ``'m5 + 3 m4'``;
 ``meanings``: the same in words (:data:`MEANINGS`).
 """
 
+Candidate = namedtuple('Candidate', ('law', 'stribeck_velocity',
+                                     'held_out_rms'))
+Candidate.__doc__ = """A friction law tried by :func:`identify`: its
+Stribeck speed (m/s, the best searched; None without the term) and its RMS
+error (N) on held-out parts of the log."""
+
 Identification = namedtuple('Identification', (
     'base', 'values', 'nominal', 'std', 'relative_std', 'condition',
-    'residual_rms', 'force_rms', 'samples', 'predicted', 'robot', 'notes'))
+    'residual_rms', 'force_rms', 'samples', 'predicted', 'robot', 'notes',
+    'law', 'stribeck_velocity', 'force_lag', 'lag_estimated', 'candidates',
+    'law_chosen', 'bounded'))
 Identification.__doc__ = """What :func:`identify` found.
 
 Per base parameter: ``values`` (identified), ``nominal`` (of the nominal
@@ -173,7 +275,25 @@ resolution)``, RESOLUTION);
 of the filtered forces; ``samples``: the :class:`Samples` used;
 ``predicted``: the forces (N, 3) the identified parameters give for them;
 ``robot``: the identified :class:`Robot` (:func:`split`); ``notes``: what
-the split rule had to do beyond the plain rule, as sentences.
+the split rule had to do beyond the plain rule, as sentences; ``law``: the
+friction :class:`Law` and ``stribeck_velocity`` its Stribeck speed (m/s,
+None without the term); ``force_lag`` (s) and ``lag_estimated`` (False:
+given); ``candidates``: every law tried (:class:`Candidate`);
+``law_chosen``: why ``law`` (a sentence); ``bounded``: the base parameters
+the bounded least squares held at a bound, as sentences.
+"""
+
+Validation = namedtuple('Validation', (
+    'source', 'samples', 'measured', 'predicted', 'rms', 'max', 'explained',
+    'force_lag', 'lag_estimated'))
+Validation.__doc__ = """A robot's forces against a log's (:func:`validate`).
+
+``samples``: the log's :class:`Samples` (their regressor unused: None);
+``measured`` and ``predicted``: (N, 3) forces (N) through the same
+low-pass; per actuator ``rms`` and ``max`` of the error (N) and
+``explained``: the share of the force explained, ``1 - sum(e^2) /
+sum(f^2)``; ``force_lag`` (s) and ``lag_estimated`` as in
+:class:`Identification`.
 """
 
 
@@ -185,25 +305,79 @@ class IdentificationError(ValueError):
     """An identification that cannot give a robot; the message says why."""
 
 
-def standard_parameters(robot):
-    """Return ``theta`` of ``robot``: its :data:`STANDARD` values (12,)."""
-    return np.array([getattr(robot, m) for m in MASSES]
-                    + list(robot.friction_viscous)
-                    + list(robot.friction_coulomb))
+def standard_parameters(robot, law=PLAIN):
+    """
+    Return ``theta`` of ``robot``: its values of :func:`standard_names`.
+
+    Without the ``direction`` term, the Coulomb coefficient is the mean of
+    the robot's two levels; without ``stribeck`` its Stribeck term is left
+    out.
+    """
+    coulomb = robot.friction_coulomb if law.direction else tuple(
+        0.5 * (f + g) for f, g in zip(robot.friction_coulomb,
+                                      robot.friction_coulomb_negative))
+    values = [getattr(robot, m) for m in MASSES] \
+        + list(robot.friction_viscous) + list(coulomb)
+    if law.direction:
+        values += robot.friction_coulomb_negative
+    if law.stribeck:
+        values += robot.friction_stribeck
+    return np.array(values, dtype=float)
 
 
-def with_parameters(robot, theta):
-    """Return ``robot`` with the standard parameters ``theta`` (validated)."""
-    theta = [float(v) for v in theta]
-    return robot.replace(**dict(zip(MASSES, theta[:6])),
-                         friction_viscous=tuple(theta[6:9]),
-                         friction_coulomb=tuple(theta[9:12]))
+def with_parameters(robot, theta, law=PLAIN, stribeck_velocity=None):
+    """
+    Return ``robot`` with the standard parameters ``theta`` of ``law``.
+
+    Validated. Without the ``direction`` term both Coulomb levels take the
+    Coulomb coefficient; without ``stribeck`` there is no Stribeck term;
+    ``stribeck_velocity`` (m/s), if given, sets its speed.
+    """
+    values = dict(zip(standard_names(law), (float(v) for v in theta)))
+    changes = {m: values[m] for m in MASSES}
+    for kind in ('viscous', 'coulomb', 'coulomb_negative', 'stribeck'):
+        source = kind if kind in friction_kinds(law) else (
+            'coulomb' if kind == 'coulomb_negative' else None)
+        changes[FRICTION_KINDS[kind][0]] = tuple(
+            values[f'{source}_{leg}'] if source else 0.0 for leg in LEGS)
+    if stribeck_velocity is not None:
+        changes['friction_stribeck_velocity'] = float(stribeck_velocity)
+    return robot.replace(**changes)
 
 
-def regressor(robot, positions, velocities, accelerations,
+def friction_columns(robot, lambdadot, law=PLAIN):
+    """
+    Return the friction part of ``W`` (N, 3, k) at slider speeds (m/s).
+
+    One column per friction coefficient of ``law``: the force of
+    :func:`mechanics.friction_force` for ``robot`` without friction but
+    that coefficient 1 (``friction_velocity`` and
+    ``friction_stribeck_velocity`` are ``robot``'s). Without the
+    ``direction`` term a Coulomb coefficient acts both ways.
+    """
+    return np.concatenate([_kind_columns(robot, lambdadot, kind,
+                                         law.direction)
+                           for kind in friction_kinds(law)], axis=2)
+
+
+def _kind_columns(robot, lambdadot, kind, direction):
+    """Return the columns (N, 3, 3) of ``kind``'s three coefficients."""
+    bare = robot.frictionless()
+    out = np.empty(lambdadot.shape + (3,))
+    for j in range(3):
+        one = tuple(float(j == i) for i in range(3))
+        unit = {FRICTION_KINDS[kind][0]: one}
+        if kind == 'coulomb' and not direction:
+            unit['friction_coulomb_negative'] = one
+        out[:, :, j] = mechanics.friction_force(bare.replace(**unit),
+                                                lambdadot)
+    return out
+
+
+def regressor(robot, positions, velocities, accelerations, law=PLAIN,
               margin=mechanics.DEFAULT_SINGULARITY_MARGIN):
     """
-    Return ``W`` (N, 3, 12): ``force = W @ theta`` per sample and actuator.
+    Return ``W`` (N, 3, n): ``force = W @ theta`` per sample and actuator.
 
     ``positions`` (m), ``velocities`` (m/s), ``accelerations`` (m/s^2):
     (N, 3) arrays of the platform centre in frame 0. Built from
@@ -211,46 +385,51 @@ def regressor(robot, positions, velocities, accelerations,
     masses and friction do not matter): column ``m_i`` is the force of a
     robot whose masses are all 2 kg less that of one whose masses are all
     1 kg but ``m_i`` (exact: the rigid forces are ``sum_i m_i W_i``), the
-    friction columns :func:`mechanics.friction_force` with one coefficient
-    1 at the samples' ``lambdadot`` and ``robot.friction_velocity``.
-    Raises :class:`mechanics.WorkspaceError` as ``solve_batch`` does.
+    friction columns :func:`friction_columns` of ``law`` at the samples'
+    ``lambdadot``. Raises :class:`mechanics.WorkspaceError` as
+    ``solve_batch`` does.
+    """
+    rigid, reference = _rigid_columns(robot, positions, velocities,
+                                      accelerations, margin)
+    return np.concatenate((rigid, friction_columns(
+        robot, reference.lambdadot, law)), axis=2)
+
+
+def _rigid_columns(robot, positions, velocities, accelerations,
+                   margin=mechanics.DEFAULT_SINGULARITY_MARGIN):
+    """
+    Return the masses' columns of ``W`` (N, 3, 6) and the kinematics.
+
+    The kinematics: a :class:`mechanics.Solution` along the motion.
     """
     unit = robot.frictionless().replace(**dict.fromkeys(MASSES, 1.0))
     reference = mechanics.solve_batch(unit, positions, velocities,
                                       accelerations, margin)
-    out = np.empty(reference.force.shape + (len(STANDARD),))
+    out = np.empty(reference.force.shape + (len(MASSES),))
     for i, name in enumerate(MASSES):
         heavier = mechanics.solve_batch(unit.replace(**{name: 2.0}),
                                         positions, velocities,
                                         accelerations, margin)
         out[:, :, i] = heavier.force - reference.force
-    for j in range(3):
-        one = tuple(float(j == k) for k in range(3))
-        for column, kind in ((6 + j, 'friction_viscous'),
-                             (9 + j, 'friction_coulomb')):
-            out[:, :, column] = mechanics.friction_force(
-                unit.replace(**{kind: one}, **(
-                    {'friction_coulomb_negative': one}
-                    if kind == 'friction_coulomb' else {})),
-                reference.lambdadot)
-    return out
+    return out, reference
 
 
-def base_parameters(robot, samples=BASE_SAMPLES, seed=0):
+def base_parameters(robot, law=PLAIN, samples=BASE_SAMPLES, seed=0):
     """
     Find the base parameters of ``robot``'s regressor (a :class:`Base`).
 
-    ``W`` at ``samples`` random states (see BASE_BOX and its neighbours;
-    ``seed`` for the generator), each column weighted by its parameter's
-    nominal value in ``robot`` (a parameter whose nominal value is zero,
-    such as friction on the paper's robot: its column scaled to unit RMS),
-    goes through a QR decomposition with column pivoting
-    (``scipy.linalg.qr``). The pivots above RANK_TOLERANCE of the first are
-    the independent parameters; each other column is a combination of
-    those, found by least squares, which gives ``P``. The weighting makes
-    the parameter with the largest nominal contribution carry each
-    combination (the platform's ``m5`` rather than the rods' ``m4``), so
-    that :func:`split` keeps the smaller ones at their nominal values.
+    ``W`` of ``law`` at ``samples`` random states (see BASE_BOX and its
+    neighbours; ``seed`` for the generator), each column weighted by its
+    parameter's nominal value in ``robot`` (a parameter whose nominal
+    value is zero, such as friction on the paper's robot: its column
+    scaled to unit RMS), goes through a QR decomposition with column
+    pivoting (``scipy.linalg.qr``). The pivots above RANK_TOLERANCE of the
+    first are the independent parameters; each other column is a
+    combination of those, found by least squares, which gives ``P``. The
+    weighting makes the parameter with the largest nominal contribution
+    carry each combination (the platform's ``m5`` rather than the rods'
+    ``m4``), so that :func:`split` keeps the smaller ones at their nominal
+    values.
     """
     import scipy.linalg
     rng = np.random.default_rng(seed)
@@ -259,9 +438,10 @@ def base_parameters(robot, samples=BASE_SAMPLES, seed=0):
     accelerations = rng.uniform(-BASE_ACCELERATION, BASE_ACCELERATION,
                                 (samples, 3))
     ok = mechanics.workspace_status(robot, positions).ok
-    w = regressor(robot, positions[ok], velocities[ok], accelerations[ok])
-    w = w.reshape(-1, len(STANDARD))
-    nominal = standard_parameters(robot)
+    names = standard_names(law)
+    w = regressor(robot, positions[ok], velocities[ok], accelerations[ok],
+                  law).reshape(-1, len(names))
+    nominal = standard_parameters(robot, law)
     rms = np.sqrt(np.mean(w * w, axis=0))
     weights = np.where(nominal > 0.0, nominal, 1.0 / rms)
     _, r, pivots = scipy.linalg.qr(w * weights, mode='economic',
@@ -270,22 +450,22 @@ def base_parameters(robot, samples=BASE_SAMPLES, seed=0):
     rank = int(np.sum(diagonal > RANK_TOLERANCE * diagonal[0]))
     independent = np.sort(pivots[:rank])
     dependent = np.sort(pivots[rank:])
-    matrix = np.zeros((rank, len(STANDARD)))
+    matrix = np.zeros((rank, len(names)))
     matrix[np.arange(rank), independent] = 1.0
     if len(dependent):
         combination = np.linalg.lstsq(w[:, independent], w[:, dependent],
                                       rcond=None)[0]
         combination[np.abs(combination) < COMBINATION_TOLERANCE] = 0.0
         matrix[:, dependent] = combination
-    names, meanings = ([_combination(row, j, words, times)
+    texts, meanings = ([_combination(row, j, names, words, times)
                         for row, j in zip(matrix, independent)]
-                       for words, times in ((dict(zip(STANDARD, STANDARD)),
-                                             ' '), (MEANINGS, ' x ')))
-    return Base(tuple(names), tuple(int(j) for j in independent), matrix,
-                tuple(meanings))
+                       for words, times in ((dict(zip(names, names)), ' '),
+                                            (MEANINGS, ' x ')))
+    return Base(tuple(texts), tuple(int(j) for j in independent), matrix,
+                tuple(meanings), law)
 
 
-def _combination(row, carrier, words, times):
+def _combination(row, carrier, names, words, times):
     """
     Write ``sum_k row_k theta_k``, the carrier first, in ``words``.
 
@@ -303,7 +483,7 @@ def _combination(row, carrier, words, times):
         factor = '' if size == 1 else f'{size:.6g}{times}'
         sign = '-' if c < 0 else '+'
         text += (f'{"-" if c < 0 else ""}' if not text else f' {sign} ') \
-            + factor + words[STANDARD[k]]
+            + factor + words[names[k]]
     return text
 
 
@@ -344,7 +524,166 @@ def check_log(log, where=None):
                        'identify anything')
 
 
-def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0):
+Piece = namedtuple('Piece', ('grid', 'stamps', 'forces', 'position',
+                             'velocity', 'acceleration', 'lambdas',
+                             'lambdadot', 'rigid'))
+
+
+class Motion:
+    """
+    A log on uniform grids, piece by piece between its gaps (:func:`prepare`).
+
+    Holds each piece's motion and the masses' columns of ``W`` at the log's
+    rate, and filters, trims and decimates whatever is computed from them
+    alike (:meth:`filtered`): the forces at any lag (:meth:`forces`), the
+    friction columns at any Stribeck speed (:meth:`friction`), a robot's
+    forces (:meth:`model_forces`).
+    """
+
+    def __init__(self, robot, log, cutoff=DEFAULT_CUTOFF):
+        """Check and cut ``log``; raises :class:`LogError` (see prepare)."""
+        import scipy.signal
+        self._signal = scipy.signal
+        check_log(log)
+        self.robot = robot
+        self.source = log.source
+        times = np.asarray(log.times, dtype=float)
+        lambdas = np.asarray(log.lambdas, dtype=float)
+        forces = np.asarray(log.forces, dtype=float)
+        measured = None if log.lambdadots is None else np.asarray(
+            log.lambdadots, dtype=float)
+        self.period = period = float(np.median(np.diff(times)))
+        rate = 1.0 / period
+        if not 0.0 < cutoff < 0.5 * rate:
+            raise LogError(f'{log.source}: the cutoff {cutoff:g} Hz must lie '
+                           f'in (0, {0.5 * rate:g}) Hz, half the sampling '
+                           f'rate {rate:g} Hz')
+        self.cutoff = cutoff
+        self.sos = scipy.signal.butter(FILTER_ORDER, cutoff, fs=rate,
+                                       output='sos')
+        state_sos = scipy.signal.butter(
+            FILTER_ORDER, min(STATE_CUTOFF_FACTOR * cutoff,
+                              STATE_CUTOFF_SHARE * rate), fs=rate,
+            output='sos')
+        # (1e-9: a median period rounded up must not change these counts.)
+        trim = int(math.ceil(2.0 * rate / cutoff * (1.0 - 1e-9)))
+        self.step = max(1, int(rate / (2.0 * cutoff) * (1.0 + 1e-9)))
+        self.rate = rate / self.step
+        steps = np.diff(times)
+        breaks = np.flatnonzero(steps > max(GAP_FACTOR * period,
+                                            GAP_SHARE / cutoff)) + 1
+        self.pieces, self.inner, short = [], [], 0
+        for start, end in zip(np.r_[0, breaks], np.r_[breaks, len(times)]):
+            t = times[start:end]
+            grid = t[0] + period * np.arange(
+                int(math.floor((t[-1] - t[0]) / period + 1e-9)) + 1)
+            if len(grid) < 2 * trim + 3 * (2 * len(self.sos) + 1):
+                short += 1
+                continue
+
+            def on_grid(values):
+                return np.column_stack([np.interp(grid, t, values[:, j])
+                                        for j in range(3)])
+            try:
+                position = scipy.signal.sosfiltfilt(
+                    state_sos, mechanics.forward_kinematics(
+                        robot, on_grid(lambdas[start:end])), axis=0)
+                if measured is None:
+                    velocity = np.gradient(position, period, axis=0)
+                else:
+                    j1, j2 = mechanics.jacobians(robot, position)
+                    velocity = np.linalg.solve(
+                        j2, j1 @ scipy.signal.sosfiltfilt(
+                            state_sos, on_grid(measured[start:end]),
+                            axis=0)[:, :, None])[:, :, 0]
+                acceleration = np.gradient(velocity, period, axis=0)
+                rigid, reference = _rigid_columns(robot, position, velocity,
+                                                  acceleration)
+            except mechanics.WorkspaceError as error:
+                raise LogError(f'{log.source}: the motion at t = '
+                               f'{grid[error.row]:.6g} s: {error}') from None
+            self.pieces.append(Piece(
+                grid, t, forces[start:end], position, velocity, acceleration,
+                reference.lambda_, reference.lambdadot, rigid))
+            self.inner.append(slice(trim, len(grid) - trim, self.step))
+        if not self.pieces:
+            raise LogError(f'{log.source}: no piece of the log lasts more '
+                           f'than {2 * trim * period:.3g} s (4 / cutoff) '
+                           'between gaps')
+        inside = np.ones(len(steps), dtype=bool)
+        inside[breaks - 1] = False
+        self.coverage = Coverage(
+            float(times[-1] - times[0]),
+            float(sum(p.grid[i][-1] - p.grid[i][0]
+                      for p, i in zip(self.pieces, self.inner))),
+            len(self.pieces), len(breaks),
+            float(steps[breaks - 1].max()) if len(breaks) else 0.0, short,
+            int(np.round(steps[inside & (steps > MISSING_FACTOR * period)]
+                         / period - 1.0).sum()))
+        self.times = self.kept([p.grid for p in self.pieces])
+        self.rigid = self.filtered([p.rigid for p in self.pieces])
+        self._kinds = {}
+
+    def kept(self, arrays):
+        """Return the samples kept of per-piece arrays, joined."""
+        return np.concatenate([a[i] for a, i in zip(arrays, self.inner)])
+
+    def filtered(self, arrays):
+        """Return per-piece arrays (n, ...) low-passed, trimmed, decimated."""
+        return self.kept([self._signal.sosfiltfilt(
+            self.sos, a.reshape(len(a), -1), axis=0).reshape(a.shape)
+            for a in arrays])
+
+    def forces(self, lag=0.0):
+        """Return the forces taken as applied ``lag`` s before their stamps."""
+        return self.filtered([np.column_stack([
+            np.interp(p.grid, p.stamps - lag, p.forces[:, j])
+            for j in range(3)]) for p in self.pieces])
+
+    def friction(self, law, stribeck_velocity=None):
+        """Return the friction columns of ``law`` (at that Stribeck speed)."""
+        return np.concatenate([self._kind(kind, law.direction,
+                                          stribeck_velocity)
+                               for kind in friction_kinds(law)], axis=2)
+
+    def _kind(self, kind, direction, stribeck_velocity):
+        """
+        Return the filtered columns (M, 3, 3) of one kind (kept).
+
+        A coefficient's column acts on its own actuator only: that one
+        series is filtered.
+        """
+        key = (kind, direction and kind == 'coulomb',
+               stribeck_velocity if kind == 'stribeck' else None)
+        if key not in self._kinds:
+            robot = self.robot if key[2] is None else self.robot.replace(
+                friction_stribeck_velocity=key[2])
+            own = self.filtered([
+                np.einsum('njj->nj', _kind_columns(robot, p.lambdadot, kind,
+                                                   direction))
+                for p in self.pieces])
+            columns = np.zeros(own.shape + (3,))
+            for j in range(3):
+                columns[:, j, j] = own[:, j]
+            self._kinds[key] = columns
+        return self._kinds[key]
+
+    def model_forces(self, robot):
+        """Return ``robot``'s forces along the motion (the full model)."""
+        return self.filtered([mechanics.solve_batch(
+            robot, p.position, p.velocity, p.acceleration).force
+            for p in self.pieces])
+
+    def samples(self, regressor, forces, law=PLAIN):
+        """Return the :class:`Samples` of a regressor and forces."""
+        return Samples(self.times, regressor, forces, len(self.pieces),
+                       self.rate, law,
+                       self.kept([p.lambdas for p in self.pieces]),
+                       self.kept([p.lambdadot for p in self.pieces]),
+                       self.coverage)
+
+
+def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0, law=PLAIN):
     """
     Turn a :class:`Log` into :class:`Samples` for the least squares.
 
@@ -370,7 +709,7 @@ def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0):
        at 1 Hz and 1 kHz). ``H_s`` passes what the forces answer to (the
        velocity's ripple at a reversal, which the Coulomb switch sees)
        and stops the encoder's noise;
-    2. the regressor ``W`` (:func:`regressor`) at every sample;
+    2. the regressor ``W`` of ``law`` (:func:`regressor`) at every sample;
     3. parallel filtering: the forces and every column of ``W`` through
        ``H``, so that ``H(f) = H(W) theta`` holds as ``f = W theta`` does:
        nothing out of phase, no bias from the filter (the sharp Coulomb
@@ -385,123 +724,240 @@ def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0):
 
     Raises :class:`LogError`.
     """
-    import scipy.signal
-    check_log(log)
-    times = np.asarray(log.times, dtype=float)
-    lambdas = np.asarray(log.lambdas, dtype=float)
-    forces = np.asarray(log.forces, dtype=float)
-    measured = None if log.lambdadots is None else np.asarray(
-        log.lambdadots, dtype=float)
-    period = float(np.median(np.diff(times)))
-    rate = 1.0 / period
-    if not 0.0 < cutoff < 0.5 * rate:
-        raise LogError(f'{log.source}: the cutoff {cutoff:g} Hz must lie in '
-                       f'(0, {0.5 * rate:g}) Hz, half the sampling rate '
-                       f'{rate:g} Hz')
-    sos = scipy.signal.butter(FILTER_ORDER, cutoff, fs=rate, output='sos')
-    state_sos = scipy.signal.butter(
-        FILTER_ORDER, min(STATE_CUTOFF_FACTOR * cutoff,
-                          STATE_CUTOFF_SHARE * rate), fs=rate, output='sos')
-    # (1e-9: a median period rounded up must not change these counts.)
-    trim = int(math.ceil(2.0 * rate / cutoff * (1.0 - 1e-9)))
-    step = max(1, int(rate / (2.0 * cutoff) * (1.0 + 1e-9)))
+    motion = Motion(robot, log, cutoff)
+    _check_lag(log.source, force_lag, cutoff)
+    return motion.samples(
+        np.concatenate((motion.rigid, motion.friction(law)), axis=2),
+        motion.forces(force_lag), law)
+
+
+def _check_lag(source, force_lag, cutoff):
     if not (math.isfinite(force_lag) and abs(force_lag) < 1.0 / cutoff):
-        raise LogError(f'{log.source}: the force lag {force_lag:g} s must be '
+        raise LogError(f'{source}: the force lag {force_lag:g} s must be '
                        f'shorter than 1 / cutoff = {1.0 / cutoff:g} s')
-    breaks = np.flatnonzero(np.diff(times) > max(
-        GAP_FACTOR * period, GAP_SHARE / cutoff)) + 1
-    pieces = []
-    for start, end in zip(np.r_[0, breaks], np.r_[breaks, len(times)]):
-        t = times[start:end]
-        grid = t[0] + period * np.arange(
-            int(math.floor((t[-1] - t[0]) / period + 1e-9)) + 1)
-        if len(grid) < 2 * trim + 3 * (2 * len(sos) + 1):
-            continue
-
-        def on_grid(values, lag=0.0):
-            return np.column_stack([np.interp(grid, t - lag,
-                                              values[start:end, j])
-                                    for j in range(3)])
-        try:
-            position = scipy.signal.sosfiltfilt(
-                state_sos, mechanics.forward_kinematics(robot,
-                                                        on_grid(lambdas)),
-                axis=0)
-            if measured is None:
-                velocity = np.gradient(position, period, axis=0)
-            else:
-                j1, j2 = mechanics.jacobians(robot, position)
-                velocity = np.linalg.solve(j2, j1 @ scipy.signal.sosfiltfilt(
-                    state_sos, on_grid(measured), axis=0)[:, :, None]
-                )[:, :, 0]
-            acceleration = np.gradient(velocity, period, axis=0)
-            w = regressor(robot, position, velocity, acceleration)
-        except mechanics.WorkspaceError as error:
-            raise LogError(f'{log.source}: the motion at t = '
-                           f'{grid[error.row]:.6g} s: {error}') from None
-        w = scipy.signal.sosfiltfilt(sos, w.reshape(len(grid), -1),
-                                     axis=0).reshape(w.shape)
-        force = scipy.signal.sosfiltfilt(sos, on_grid(forces, force_lag),
-                                         axis=0)
-        inner = slice(trim, len(grid) - trim, step)
-        pieces.append((grid[inner], w[inner], force[inner]))
-    if not pieces:
-        raise LogError(f'{log.source}: no piece of the log lasts more than '
-                       f'{2 * trim * period:.3g} s (4 / cutoff) '
-                       'between gaps')
-    columns = [np.concatenate(c) for c in zip(*pieces)]
-    return Samples(*columns, len(pieces), rate / step)
 
 
-def identify(robot, log, cutoff=DEFAULT_CUTOFF, base=None, force_lag=0.0,
-             max_relative_std=MAX_RELATIVE_STD):
+def estimate_lag(motion, residual):
+    """
+    Return the lag (s) of the forces that minimizes ``residual(forces)``.
+
+    ``motion``: a :class:`Motion`; ``residual``: the sum of squares left
+    by filtered forces (N, 3). Searched within +-LAG_SEARCH (less than 1 /
+    cutoff), on the log's period, then on a quarter of it around the best,
+    then the vertex of a parabola through the three best.
+    """
+    period = motion.period
+    reach = min(LAG_SEARCH, 0.5 / motion.cutoff)
+    cache = {}
+
+    def cost(lag):
+        key = round(lag / period * LAG_STEPS)
+        if key not in cache:
+            cache[key] = residual(motion.forces(key * period / LAG_STEPS))
+        return cache[key]
+    coarse = int(reach / period)
+    best = min(range(-coarse, coarse + 1), key=lambda k: cost(k * period))
+    fine = min(range(best * LAG_STEPS - LAG_STEPS + 1,
+                     best * LAG_STEPS + LAG_STEPS),
+               key=lambda k: cost(k * period / LAG_STEPS))
+    h = period / LAG_STEPS
+    left, middle, right = (cost((fine + d) * h) for d in (-1, 0, 1))
+    curvature = left - 2.0 * middle + right
+    shift = 0.5 * (left - right) / curvature if curvature > 0.0 else 0.0
+    return (fine + max(-1.0, min(1.0, shift))) * h
+
+
+def _scaled(a):
+    """Return ``a`` with unit-norm columns and the norms (zero: kept 0)."""
+    norms = np.linalg.norm(a, axis=0)
+    return a / np.where(norms > 0.0, norms, 1.0), norms
+
+
+# The searches (lag, law, Stribeck speed) solve many least squares on the
+# same columns: by the normal equations of the unit-norm columns, whose
+# Gram matrix is small (n_base^2), solved by lstsq (no failure on a column
+# a log does not excite). The final estimate is the SVD's (_least_squares).
+
+def _residual_of(a):
+    """Return ``forces -> |y - a x|^2`` for the least squares on ``a``."""
+    scaled, _ = _scaled(a)
+    gram = scaled.T @ scaled
+
+    def residual(forces):
+        y = forces.reshape(-1)
+        b = scaled.T @ y
+        return float(y @ y - b @ np.linalg.lstsq(gram, b, rcond=None)[0])
+    return residual
+
+
+def _held_out_rms(a, y, folds=FOLDS):
+    """RMS error (N) of each of ``folds`` blocks predicted from the others."""
+    rows = len(y) // 3
+    edges = np.linspace(0, rows, folds + 1).astype(int) * 3
+    scaled, _ = _scaled(a)
+    blocks = [(scaled[i:j], y[i:j]) for i, j in zip(edges[:-1], edges[1:])]
+    grams = [(m.T @ m, m.T @ v) for m, v in blocks]
+    gram, b = sum(g for g, _ in grams), sum(c for _, c in grams)
+    squares = 0.0
+    for (m, v), (g, c) in zip(blocks, grams):
+        x = np.linalg.lstsq(gram - g, b - c, rcond=None)[0]
+        squares += float(np.sum((v - m @ x) ** 2))
+    return math.sqrt(squares / len(y))
+
+
+def _laws_tried(motion, forces, laws, stribeck_velocity):
+    """Return a :class:`Candidate` per law: held-out RMS, best v_b."""
+    y = forces.reshape(-1)
+    candidates = []
+    for law in laws:
+        speeds = ((stribeck_velocity,) if stribeck_velocity is not None
+                  else STRIBECK_VELOCITIES) if law.stribeck else (None,)
+        scores = [(_held_out_rms(_base_columns(motion, law, v), y), v)
+                  for v in speeds]
+        rms, speed = min(scores)
+        candidates.append(Candidate(law, speed, rms))
+    return candidates
+
+
+def _base_columns(motion, law, stribeck_velocity, base=None):
+    """Return the base regressor (3N, n_base) of ``law`` along ``motion``."""
+    base = base or _base(motion.robot, law)
+    w = np.concatenate((motion.rigid, motion.friction(law,
+                                                      stribeck_velocity)),
+                       axis=2)
+    return w[:, :, list(base.independent)].reshape(-1, len(base.independent))
+
+
+_BASES = {}
+
+
+def _base(robot, law):
+    """Return :func:`base_parameters` of ``robot`` and ``law`` (kept)."""
+    key = (robot, law)
+    if key not in _BASES:
+        if len(_BASES) >= 16:
+            _BASES.clear()
+        _BASES[key] = base_parameters(robot, law)
+    return _BASES[key]
+
+
+def _refined_speed(motion, law, forces, speed):
+    """
+    Return the Stribeck speed of the least residual near ``speed`` (m/s).
+
+    Between the neighbours of ``speed`` in STRIBECK_VELOCITIES, by
+    Brent's bounded search on its logarithm (the grid is log-spaced).
+    """
+    from scipy.optimize import minimize_scalar
+    grid = np.log(STRIBECK_VELOCITIES)
+    k = int(np.argmin(np.abs(grid - math.log(speed))))
+    low, high = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
+
+    def residual(log_speed):
+        return _residual_of(_base_columns(motion, law, math.exp(
+            log_speed)))(forces)
+    found = minimize_scalar(residual, bounds=(low, high), method='bounded',
+                            options={'xatol': 1e-3})
+    return float(math.exp(found.x)) if found.fun < residual(
+        math.log(speed)) else speed
+
+
+def _chosen(candidates, force_rms):
+    """Return the simplest candidate within the selection margins, why."""
+    best = min(candidates, key=lambda c: c.held_out_rms)
+    floor = SELECTION_FLOOR * force_rms
+    for candidate in sorted(candidates, key=lambda c: (sum(c.law),
+                                                       c.held_out_rms)):
+        if candidate.held_out_rms <= best.held_out_rms * (
+                1.0 + SELECTION_MARGIN) + floor:
+            if candidate is best:
+                return candidate, (f'{law_name(candidate.law)}: the least '
+                                   'held-out error')
+            return candidate, (
+                f'{law_name(candidate.law)}: within '
+                f'{100 * SELECTION_MARGIN:g} % of the least held-out error '
+                f'({law_name(best.law)}, {best.held_out_rms:.4g} N) with '
+                'fewer terms')
+    return best, law_name(best.law)
+
+
+def identify(robot, log, cutoff=DEFAULT_CUTOFF, base=None, force_lag=None,
+             max_relative_std=MAX_RELATIVE_STD, friction=None,
+             stribeck_velocity=None):
     """
     Identify the base parameters from a :class:`Log` (an Identification).
 
     ``robot``: the nominal robot (its geometry, gravity and
     ``friction_velocity`` are taken as known, its masses and friction are
-    the nominal values of the split rule); ``cutoff`` (Hz) and
-    ``force_lag`` (s): of :func:`prepare`; ``base``: a :class:`Base`
-    (default :func:`base_parameters`).
-    Ordinary least squares on every sample and actuator (by the SVD of
-    the base regressor with unit-norm columns), the standard deviations
-    from the residual's variance ``|r|^2 / (3N - n_base)`` and ``(W^T
-    W)^-1``. Refused (:class:`IdentificationError`, naming them) when a
-    base parameter's relative standard deviation (against the larger of
-    its estimate and its RESOLUTION) exceeds ``max_relative_std`` (%) or
-    its column is zero: the log does not excite it. Raises
-    :class:`LogError` for a log it cannot use.
+    the nominal values of the split rule); ``cutoff`` (Hz): of
+    :func:`prepare`; ``force_lag`` (s): of :func:`prepare`, None to
+    estimate it (:func:`estimate_lag`, with the richest law tried, at
+    each Stribeck speed searched); ``friction``: the :class:`Law`, None to
+    choose it: each law of LAWS (its Stribeck speed the best of
+    STRIBECK_VELOCITIES, or ``stribeck_velocity`` m/s) is scored by its
+    RMS error on FOLDS held-out blocks, and the simplest within
+    SELECTION_MARGIN of the best is chosen; the Stribeck speed is then
+    refined between its neighbours on the grid (:func:`_refined_speed`)
+    unless given; ``base``: a :class:`Base`
+    (default :func:`base_parameters`; given, its law is the one used).
+
+    Least squares on every sample and actuator (by the SVD of the base
+    regressor with unit-norm columns), the standard deviations from the
+    residual's variance ``|r|^2 / (3N - n_base)`` and ``(W^T W)^-1``.
+    Where its solution leaves what a robot can be (a friction coefficient
+    below zero, a mass combination below its members' bounds), a bounded
+    least squares (``scipy.optimize.lsq_linear``) gives the values; the
+    deviations stay those of the unbounded problem. Refused
+    (:class:`IdentificationError`, naming them) when a base parameter's
+    relative standard deviation (against the larger of its estimate and
+    its RESOLUTION) exceeds ``max_relative_std`` (%) or its column is
+    zero: the log does not excite it. Raises :class:`LogError` for a log
+    it cannot use.
     """
-    base = base or base_parameters(robot)
-    samples = prepare(robot, log, cutoff, force_lag)
+    motion = Motion(robot, log, cutoff)
+    if base is not None:
+        friction = base.law
+    laws = LAWS if friction is None else (friction,)
+    richest = laws[-1]
+    if force_lag is None:
+        speeds = ((stribeck_velocity,) if stribeck_velocity is not None
+                  else STRIBECK_VELOCITIES) if richest.stribeck else (None,)
+        residuals = [_residual_of(_base_columns(motion, richest, v))
+                     for v in speeds]
+        force_lag = estimate_lag(motion, lambda f: min(r(f)
+                                                       for r in residuals))
+        lag_estimated = True
+    else:
+        _check_lag(log.source, force_lag, cutoff)
+        lag_estimated = False
+    forces = motion.forces(force_lag)
+    force_rms = np.sqrt(np.mean(forces ** 2, axis=0))
+    candidates = _laws_tried(motion, forces, LAWS if friction is None
+                             else (friction,), stribeck_velocity)
+    if friction is None:
+        chosen, why = _chosen(candidates, float(np.sqrt(np.mean(
+            force_rms ** 2))))
+    else:
+        chosen, why = candidates[0], f'{law_name(friction)}: as asked'
+    law, speed = chosen.law, chosen.stribeck_velocity
+    if law.stribeck and stribeck_velocity is None:
+        speed = _refined_speed(motion, law, forces, speed)
+    base = base or _base(robot, law)
     count = len(base.independent)
-    if len(samples.times) < MIN_SAMPLES_PER_PARAMETER * count:
-        raise LogError(f'{log.source}: {len(samples.times)} usable '
+    if len(motion.times) < MIN_SAMPLES_PER_PARAMETER * count:
+        raise LogError(f'{log.source}: {len(motion.times)} usable '
                        f'samples, at least {MIN_SAMPLES_PER_PARAMETER * count}'
                        f' needed ({MIN_SAMPLES_PER_PARAMETER} per base '
-                       f'parameter, at {samples.rate:.4g} Hz after the '
+                       f'parameter, at {motion.rate:.4g} Hz after the '
                        'decimation)')
-    a = samples.regressor[:, :, list(base.independent)].reshape(-1, count)
-    y = samples.forces.reshape(-1)
-    norms = np.linalg.norm(a, axis=0)
-    excited = norms > 0.0
-    scaled = a[:, excited] / norms[excited]
-    # Least squares by the SVD W = U S V^T: beta = V S^-1 U^T y, and
-    # (W^T W)^-1 = V S^-2 V^T. A direction the log does not excite (S
-    # below numpy's rank tolerance) adds nothing to beta and a huge
-    # deviation, rather than a division by zero.
-    u, singular, vt = np.linalg.svd(scaled, full_matrices=False)
-    floor = singular[0] * np.finfo(float).eps * max(scaled.shape)
-    values = np.zeros(count)
-    values[excited] = vt.T @ (np.divide(
-        u.T @ y, singular, out=np.zeros_like(singular),
-        where=singular > floor)) / norms[excited]
+    w = np.concatenate((motion.rigid, motion.friction(law, speed)), axis=2)
+    samples = motion.samples(w, forces, law)
+    a = w[:, :, list(base.independent)].reshape(-1, count)
+    y = forces.reshape(-1)
+    values, std, singular, bounded = _least_squares(a, y, base)
     residual = y - a @ values
-    variance = residual @ residual / max(len(y) - count, 1)
-    std = np.full(count, np.inf)
-    std[excited] = np.sqrt(variance * ((vt.T / np.maximum(singular, floor))
-                                       ** 2).sum(axis=1)) / norms[excited]
-    resolution = [RESOLUTION[UNITS[STANDARD[j]]] for j in base.independent]
+    names = standard_names(law)
+    resolution = [RESOLUTION[UNITS[names[j]]] for j in base.independent]
     relative = 100.0 * std / np.maximum(np.abs(values), resolution)
     unexcited = np.flatnonzero(~(relative <= max_relative_std))
     if len(unexcited):
@@ -512,16 +968,72 @@ def identify(robot, log, cutoff=DEFAULT_CUTOFF, base=None, force_lag=0.0,
             + f': relative standard deviation above {max_relative_std:g} %'
             ' (a motion of every axis, at varied speeds and accelerations, '
             'excites them: orthoglide excitation)')
-    robot_out, notes = split(robot, base, values)
+    robot_out, notes = split(robot, base, values, speed)
     return Identification(
-        base, values, base.matrix @ standard_parameters(robot), std,
+        base, values, base.matrix @ standard_parameters(robot, law), std,
         relative, float(singular[0] / singular[-1]),
-        np.sqrt(np.mean(residual.reshape(-1, 3) ** 2, axis=0)),
-        np.sqrt(np.mean(samples.forces ** 2, axis=0)), samples,
-        (a @ values).reshape(-1, 3), robot_out, notes)
+        np.sqrt(np.mean(residual.reshape(-1, 3) ** 2, axis=0)), force_rms,
+        samples, (a @ values).reshape(-1, 3), robot_out, notes, law, speed,
+        float(force_lag), lag_estimated, tuple(candidates), why, bounded)
 
 
-def split(robot, base, values):
+def _least_squares(a, y, base):
+    """
+    Solve ``a beta = y``: (values, std, singular values, bounded notes).
+
+    By the SVD of ``a`` with unit-norm columns; a direction the log does
+    not excite (a singular value below numpy's rank tolerance) adds
+    nothing to ``beta`` and a huge deviation, rather than a division by
+    zero. Where the solution breaks a bound of :func:`bounds`, the bounded
+    least squares' instead, and a note per base parameter held at a bound.
+    """
+    count = a.shape[1]
+    scaled, norms = _scaled(a)
+    excited = norms > 0.0
+    u, singular, vt = np.linalg.svd(scaled[:, excited], full_matrices=False)
+    floor = singular[0] * np.finfo(float).eps * max(scaled.shape)
+    values = np.zeros(count)
+    values[excited] = vt.T @ (np.divide(
+        u.T @ y, singular, out=np.zeros_like(singular),
+        where=singular > floor)) / norms[excited]
+    residual = y - a @ values
+    variance = residual @ residual / max(len(y) - count, 1)
+    std = np.full(count, np.inf)
+    std[excited] = np.sqrt(variance * ((vt.T / np.maximum(singular, floor))
+                                       ** 2).sum(axis=1)) / norms[excited]
+    lower = bounds(base)
+    bounded = []
+    if (values < lower).any():
+        from scipy.optimize import lsq_linear
+        found = values
+        solution = lsq_linear(scaled[:, excited], y, bounds=(
+            np.where(np.isfinite(lower), lower * norms, -np.inf)[excited],
+            np.inf), method='bvls')
+        values = np.zeros(count)
+        values[excited] = solution.x / norms[excited]
+        for i in np.flatnonzero(np.isclose(values, lower, rtol=1e-9,
+                                           atol=1e-12)):
+            unit = UNITS[standard_names(base.law)[base.independent[i]]]
+            bounded.append(
+                f'{base.names[i]} was found {found[i]:.4g} {unit} by '
+                f'ordinary least squares: held at its bound {lower[i]:.4g} '
+                f'{unit} (bounded least squares)')
+    return values, std, singular, bounded
+
+
+def bounds(base):
+    """
+    Return the lowest value (n_base,) each base parameter of a robot has.
+
+    ``row @ LOWER`` of a combination of members with coefficients >= 0
+    (each member at its bound), else -inf (no bound).
+    """
+    lower = np.array([LOWER[n] for n in standard_names(base.law)])
+    return np.array([row @ lower if (row >= 0.0).all() else -np.inf
+                     for row in base.matrix])
+
+
+def split(robot, base, values, stribeck_velocity=None):
     """
     Return ``(robot, notes)``: a complete robot with base parameters ``values``.
 
@@ -536,25 +1048,28 @@ def split(robot, base, values):
     found below zero is set to zero. A combination no robot within the
     bounds has (a mass combination found below zero: a parameter the log
     hardly excites) keeps its nominal values. Each departure from the
-    plain rule is a note. Raises :class:`IdentificationError` only when
-    the robot so made is refused (a value beyond a bound of
+    plain rule is a note. The friction law is ``base.law`` (with
+    ``stribeck_velocity``, m/s). Raises :class:`IdentificationError` only
+    when the robot so made is refused (a value beyond a bound of
     :data:`robot.LIMITS`).
     """
-    nominal = standard_parameters(robot)
+    names = standard_names(base.law)
+    nominal = standard_parameters(robot, base.law)
+    lower = np.array([LOWER[n] for n in names])
     theta = nominal.copy()
     notes = []
     for i, (name, carrier) in enumerate(zip(base.names, base.independent)):
         row = base.matrix[i]
         others = [k for k in np.flatnonzero(row) if k != carrier]
         value = values[i] - row[others] @ nominal[others]
-        if value >= LOWER[carrier]:
+        if value >= lower[carrier]:
             theta[carrier] = value
             continue
-        unit = UNITS[STANDARD[carrier]]
+        unit = UNITS[names[carrier]]
         if carrier >= len(MASSES) and not others:
-            theta[carrier] = LOWER[carrier]
+            theta[carrier] = lower[carrier]
             notes.append(f'{name} was found {values[i]:.4g} {unit}, below '
-                         f'its bound: set to {LOWER[carrier]:g} {unit}')
+                         f'its bound: set to {lower[carrier]:g} {unit}')
             continue
         nominal_value = row @ nominal
         shared = any(base.matrix[m, others].any()
@@ -562,7 +1077,7 @@ def split(robot, base, values):
         members = [carrier] + others
         ratio = values[i] / nominal_value if nominal_value > 0.0 else 0.0
         if ratio > 0.0 and (row >= 0.0).all() and not shared and (
-                nominal[members] * ratio >= LOWER[members]).all():
+                nominal[members] * ratio >= lower[members]).all():
             theta[members] = nominal[members] * ratio
             notes.append(f'{name} = {values[i]:.6g} {unit} is below its '
                          'other members\' nominal share: the combination '
@@ -574,7 +1089,8 @@ def split(robot, base, values):
                      f'{nominal_value:.4g} {unit} is kept (the log may not '
                      'excite it enough: see its standard deviation)')
     try:
-        return with_parameters(robot, theta), notes
+        return with_parameters(robot, theta, base.law,
+                               stribeck_velocity), notes
     except ValueError as error:
         raise IdentificationError(f'the identified robot is refused: '
                                   f'{error}') from None
@@ -586,9 +1102,39 @@ def predict(robot, samples):
 
     Through the same low-pass as the samples' forces: ``W theta`` with
     their filtered regressor, for a robot of the geometry, gravity and
-    ``friction_velocity`` they were prepared with.
+    friction speeds they were prepared with (:func:`validate` runs the
+    full model instead).
     """
-    return samples.regressor @ standard_parameters(robot)
+    return samples.regressor @ standard_parameters(robot, samples.law)
+
+
+def validate(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=None):
+    """
+    Compare ``robot``'s forces with a log's (a :class:`Validation`).
+
+    The log prepared as by :func:`prepare`; the prediction is the full
+    model's (:func:`mechanics.solve_batch` along the log's filtered
+    motion, every friction term of ``robot`` included), through the same
+    low-pass as the measured forces. ``force_lag`` (s): None to estimate
+    the one that best matches the prediction (:func:`estimate_lag`).
+    Raises :class:`LogError`.
+    """
+    motion = Motion(robot, log, cutoff)
+    predicted = motion.model_forces(robot)
+    if force_lag is None:
+        force_lag = estimate_lag(motion, lambda f: float(np.sum(
+            (f - predicted) ** 2)))
+        lag_estimated = True
+    else:
+        _check_lag(log.source, force_lag, cutoff)
+        lag_estimated = False
+    measured = motion.forces(force_lag)
+    error = measured - predicted
+    return Validation(
+        log.source, motion.samples(None, measured), measured, predicted,
+        np.sqrt(np.mean(error ** 2, axis=0)), np.abs(error).max(axis=0),
+        1.0 - np.sum(error ** 2, axis=0) / np.sum(measured ** 2, axis=0),
+        float(force_lag), lag_estimated)
 
 
 def condition_number(robot, positions, velocities, accelerations,
@@ -601,12 +1147,15 @@ def condition_number(robot, positions, velocities, accelerations,
     :func:`identify` solves them: 1 is ideal, and the larger it is the
     more the noise of the log is amplified into the parameters.
     """
-    base = base or base_parameters(robot)
-    w = regressor(robot, positions, velocities, accelerations)
+    base = base or _base(robot, PLAIN)
+    w = regressor(robot, positions, velocities, accelerations, base.law)
     a = w[:, :, list(base.independent)].reshape(-1, len(base.independent))
-    singular = np.linalg.svd(a / np.linalg.norm(a, axis=0),
-                             compute_uv=False)
-    return float(singular[0] / singular[-1])
+    # The singular values' ratio, from the eigenvalues of the small Gram
+    # matrix (exact to about 1e-16 times the condition number squared).
+    scaled = a / np.linalg.norm(a, axis=0)
+    eigenvalues = np.linalg.eigvalsh(scaled.T @ scaled)
+    return float(math.sqrt(eigenvalues[-1] / max(eigenvalues[0], 0.0))) \
+        if eigenvalues[0] > 0.0 else math.inf
 
 
 # Logs ---------------------------------------------------------------------

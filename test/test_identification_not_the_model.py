@@ -1,0 +1,174 @@
+"""
+Identification of a robot that is not the model (issue 20), without ROS.
+
+A synthetic robot with what real Orthoglides have (each common on
+ball-screw or belt guideways and current-controlled drives), its log made
+here from the package's rigid dynamics and friction laws written in this
+file:
+
+- a Coulomb level per direction and a Stribeck rise at low speed (laws
+  the package's model can hold);
+- a ripple periodic in each slider's position (a screw's pitch: no rigid
+  model holds it);
+- forces that lag the encoders by LAG;
+- noise on the forces, ``lambda`` quantised to 1 um, jittered stamps,
+  dropped samples and a logger stall.
+
+``identify`` then ``validate`` on another motion. Checked: the friction
+law chosen holds both terms; the lag found is within 0.2 ms of LAG; the
+validation's RMS error per actuator is within 10 % of the best the
+chosen law can reach (identified from the same motion without noise,
+lag, jitter or gaps) and at least 30 % below the package's former law
+(viscous + Coulomb) identified from the same log; what of the log was
+used is reported. A simulator's log (the force held over each step)
+comes out with a lag near half a step.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.tools import identification
+from orthoglide_ros.tools.identification import Law, Log, PLAIN
+
+NOMINAL = Robot()
+# The robot as the package's model can hold it ...
+TRUE = Robot(m5=18.75, m3=2.875, friction_viscous=(30.0, 40.0, 50.0),
+             friction_coulomb=(5.0, 3.0, 4.0),
+             friction_coulomb_negative=(8.0, 1.5, 6.0),
+             friction_stribeck=(6.0, 4.0, 5.0),
+             friction_stribeck_velocity=0.02)
+# ... and what it cannot: a force ripple of RIPPLE N, periodic in each
+# slider's position with the period PITCH (m), phases apart.
+RIPPLE = 0.5
+PITCH = 0.02
+PHASES = (0.0, 2.0, 4.0)
+LAG = 0.0013            # s: the forces lag the encoders
+RATE = 1000.0           # Hz
+PERIOD = 6.0            # s, of the excitations
+NOISE = 0.3             # N, standard deviation of the measured forces
+QUANTUM = 1e-6          # m, of the measured lambda
+JITTER = 5e-5           # s, standard deviation of the stamps
+DROPPED = 0.02          # share of the samples lost
+STALL = (14.0, 14.4)    # s: the logger stalled
+CLOSE = 0.10            # the validation error within 10 % of the best
+BETTER = 0.30           # and 30 % below the former law's
+
+
+def true_forces(robot, times, motion):
+    """Return the robot's forces along ``motion`` at ``times``, ripple too."""
+    solution = mechanics.solve_batch(
+        robot, *trajectory.excitation_batch(motion, times))
+    ripple = RIPPLE * np.sin(2.0 * math.pi * solution.lambda_ / PITCH
+                             + np.array(PHASES))
+    return solution.lambda_, solution.force + ripple
+
+
+def robot_log(seed, duration, noise_seed, defects=True):
+    """
+    Return a log of TRUE along excitation ``seed``: every defect, or none.
+
+    The encoders are read at the stamps' true instants; the forces are
+    those of LAG s before; the stamps carry JITTER; DROPPED of the samples
+    and the STALL are missing.
+    """
+    motion = trajectory.excitation(seed, PERIOD)
+    times = np.arange(0.0, duration, 1.0 / RATE)
+    lambdas, _ = true_forces(TRUE, times, motion)
+    if not defects:
+        return Log(times, lambdas, true_forces(TRUE, times, motion)[1],
+                   f'seed {seed}, clean')
+    _, forces = true_forces(TRUE, times - LAG, motion)
+    rng = np.random.default_rng(noise_seed)
+    stamps = times + rng.normal(0.0, JITTER, len(times))
+    keep = (rng.uniform(size=len(times)) > DROPPED) \
+        & ~((times >= STALL[0]) & (times < STALL[1]))
+    keep &= np.r_[True, np.diff(stamps) > 0.0]
+    return Log(stamps[keep],
+               np.round(lambdas[keep] / QUANTUM) * QUANTUM,
+               forces[keep] + rng.normal(0.0, NOISE, (keep.sum(), 3)),
+               f'seed {seed}')
+
+
+@pytest.fixture(scope='module')
+def logs():
+    return {'identify': robot_log(0, 30.0, 1),
+            'clean': robot_log(0, 30.0, 1, defects=False),
+            'validate': robot_log(1, 12.0, 2)}
+
+
+@pytest.fixture(scope='module')
+def found(logs):
+    """Identify with every choice left to the tool."""
+    return identification.identify(NOMINAL, logs['identify'])
+
+
+def test_the_law_chosen_holds_both_terms(found):
+    for candidate in found.candidates:
+        print(f'{identification.law_name(candidate.law)}: held-out RMS '
+              f'{candidate.held_out_rms:.4f} N, v_b '
+              f'{candidate.stribeck_velocity}')
+    print(found.law_chosen)
+    assert found.law == Law(True, True)
+    assert found.stribeck_velocity == pytest.approx(
+        TRUE.friction_stribeck_velocity, rel=0.5)
+
+
+def test_the_lag_is_found_within_0_2_ms(found, logs):
+    print(f'lag found {found.force_lag * 1e3:.4f} ms (true {LAG * 1e3} ms)')
+    assert found.lag_estimated
+    assert abs(found.force_lag - LAG) <= 2e-4
+
+
+def test_validation_is_near_the_best_and_beats_the_former_law(found, logs):
+    """
+    Validated with the drive's lag, the one identify found.
+
+    The former law leaves so much unexplained that the tool refuses its
+    estimate (m1 + m2's relative deviation near 1000 %): taken all the
+    same, for its forces.
+    """
+    former = identification.identify(NOMINAL, logs['identify'],
+                                     friction=PLAIN,
+                                     max_relative_std=math.inf)
+    best = identification.identify(NOMINAL, logs['clean'], friction=found.law,
+                                   force_lag=0.0,
+                                   stribeck_velocity=found.stribeck_velocity)
+    rms = {name: identification.validate(result.robot, logs['validate'],
+                                         force_lag=found.force_lag).rms
+           for name, result in (('found', found), ('former', former),
+                                ('best', best))}
+    for name, values in rms.items():
+        print(f'{name}: validation RMS error (N) '
+              + ', '.join(f'{v:.4f}' for v in values))
+    assert (rms['found'] <= (1.0 + CLOSE) * rms['best']).all(), rms
+    assert (rms['found'] <= (1.0 - BETTER) * rms['former']).all(), rms
+
+
+def test_the_report_says_what_was_used(found, logs):
+    coverage = found.samples.coverage
+    print(coverage)
+    span = logs['identify'].times[-1] - logs['identify'].times[0]
+    assert coverage.log_s == pytest.approx(span)
+    assert coverage.gaps == 1
+    assert coverage.longest_gap_s == pytest.approx(STALL[1] - STALL[0],
+                                                   abs=0.01)
+    assert coverage.segments == 2
+    # Dropped samples (about DROPPED of them) are interpolated.
+    expected = DROPPED * len(logs['identify'].times)
+    assert 0.5 * expected <= coverage.missing <= 1.5 * expected
+    assert 0.8 * span <= coverage.used_s < span - 0.4
+
+
+def test_a_simulator_log_lags_half_a_step():
+    """The force held over each step: applied half a step before its state."""
+    from test_identification import closed_loop, excitation_sample
+    log, _ = closed_loop(NOMINAL, excitation_sample, 12.0)
+    result = identification.identify(NOMINAL, log, friction=PLAIN)
+    step = 1.0 / 500.0
+    print(f'lag found {result.force_lag * 1e3:.4f} ms, half a step '
+          f'{0.5 * step * 1e3} ms')
+    assert abs(result.force_lag - 0.5 * step) <= 0.1 * step
