@@ -889,3 +889,37 @@ def test_validate_refuses_a_bad_log_in_one_line(capsys, tmp_path):
     assert code == 2 and out == ''
     assert len(err.strip().splitlines()) == 1 and 'force_c' in err
     assert not (tmp_path / 'v.png').exists()
+
+
+def test_excitation_optimize_lowers_the_condition_number(capsys, tmp_path):
+    """Checked on the written file, within the bounds and the force limit."""
+    from orthoglide_ros.tools import identification
+    path = tmp_path / 'optimized.csv'
+    code, out, _ = run(capsys, 'excitation', '--duration', 6, '--output',
+                       path, '--optimize', '--evaluations', 80,
+                       '--max-velocity', 0.3, '--max-force', 400, '--rate',
+                       100)
+    assert code == 0
+    _, rows = read_csv(path.read_text())
+    table = np.array([[float(row[c]) for c in (
+        'x', 'y', 'z', 'vx', 'vy', 'vz', 'ax', 'ay', 'az')] for row in rows])
+    p, v, a = table[:, :3], table[:, 3:6], table[:, 6:]
+    written = identification.condition_number(Robot(), p, v, a)
+    start = trajectory.excitation(0, 6.0, max_velocity=0.3)
+    seed = identification.condition_number(Robot(), *trajectory.
+                                           excitation_batch(start, np.arange(
+                                               0.0, 6.0, 0.01)))
+    print(f'condition number: seed {seed:.4g}, optimized {written:.4g}')
+    assert written < seed
+    assert f'{seed:.4g} (seed 0) -> {written:.4g} (optimized)' in out
+    assert np.abs(v).max() <= 0.3 and np.abs(p).max() <= 0.15
+    assert np.abs(a).max() <= 4.0
+    assert np.abs(mechanics.solve_batch(Robot(), p, v, a).force).max() \
+        <= 400.0
+
+
+def test_excitation_refuses_a_force_limit_no_seed_keeps(capsys, tmp_path):
+    code, _, err = run(capsys, 'excitation', '--duration', 6, '--output',
+                       tmp_path / 'e.csv', '--max-force', 10)
+    assert code == 2 and '--max-force 10 N' in err
+    assert not (tmp_path / 'e.csv').exists()

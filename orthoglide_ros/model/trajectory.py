@@ -151,16 +151,36 @@ def excitation(seed, period, harmonics=EXCITATION_HARMONICS,
             or harmonics < 1:
         raise ValueError(f'harmonics must be an integer >= 1, got '
                          f'{harmonics!r}')
+    rng = np.random.default_rng(seed)
+    k = np.arange(1, harmonics + 1, dtype=float)
+    return shaped_excitation(rng.standard_normal((3, harmonics)) / k,
+                             rng.standard_normal((3, harmonics)) / k, period,
+                             box, max_velocity, max_acceleration, robot,
+                             margin, seed)
+
+
+def shaped_excitation(sines, cosines, period, box=EXCITATION_BOX,
+                      max_velocity=EXCITATION_MAX_VELOCITY,
+                      max_acceleration=EXCITATION_MAX_ACCELERATION,
+                      robot=None, margin=mechanics.DEFAULT_SINGULARITY_MARGIN,
+                      seed=None):
+    """
+    Return the :class:`Excitation` of given coefficients, shaped.
+
+    ``sines`` and ``cosines`` (3, harmonics): the raw coefficients,
+    corrected to start at home at rest and scaled to the bounds as
+    :func:`excitation` says; ``seed``: what made them (None: a search).
+    """
     for name, value in (('period', period), ('box', box),
                         ('max_velocity', max_velocity),
                         ('max_acceleration', max_acceleration)):
         if not (math.isfinite(value) and value > 0.0):
             raise ValueError(f'{name} must be finite and positive, got '
                              f'{value!r}')
-    rng = np.random.default_rng(seed)
+    sines = np.array(sines, dtype=float)
+    cosines = np.array(cosines, dtype=float)
+    harmonics = sines.shape[1]
     k = np.arange(1, harmonics + 1, dtype=float)
-    sines = rng.standard_normal((3, harmonics)) / k
-    cosines = rng.standard_normal((3, harmonics)) / k
     if harmonics > 1:
         # At rest with zero acceleration at t = 0 (one harmonic cannot).
         sines -= np.outer(sines @ k, k) / (k @ k)

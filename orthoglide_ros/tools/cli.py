@@ -43,7 +43,7 @@ import numpy as np
 
 from orthoglide_ros.formats import cdr, params_file
 from orthoglide_ros.model import mechanics, trajectory
-from orthoglide_ros.tools import identification
+from orthoglide_ros.tools import excitation_design, identification
 from orthoglide_ros.tools import identification_report as report
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
 from orthoglide_ros.tools.identification import DEFAULT_CUTOFF
@@ -70,9 +70,6 @@ TOPIC_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
 UNITS = {'lambda': 'm', 'lambdadot': 'm/s', 'lambdaddot': 'm/s^2',
          'force': 'N', 'power': 'W'}
 DEFAULT_SAMPLES = 201
-# Samples per second of an excitation for its condition number (the
-# number changes by less than 1 % from 100 Hz to 1 kHz).
-CONDITION_RATE = 100.0
 # Pictures: size limits (pixels) and the animation's defaults.
 MIN_PIXELS, MAX_PIXELS = 100, 4000
 MAX_FRAMES = 1000
@@ -300,40 +297,61 @@ def _read_trajectory(path, name):
 def run_excitation(robot, args):
     """Write an excitation (the best of --seeds) as a trajectory; describe it."""
     base = identification.base_parameters(robot)
+    bounds = dict(box=args.box, max_velocity=args.max_velocity,
+                  max_acceleration=args.max_acceleration)
     rows = []
     for seed in range(args.seed, args.seed + args.seeds):
-        motion = _excitation(robot, seed, args.duration)
-        times = np.arange(0.0, args.duration, 1.0 / CONDITION_RATE)
-        p, v, a = trajectory.excitation_batch(motion, times)
-        rows.append((seed, motion, identification.condition_number(
-            robot, p, v, a, base), p, v, a))
+        motion = _excitation(robot, seed, args.duration, bounds)
+        condition, force = excitation_design.measure(robot, motion, base)
+        if force <= args.max_force:
+            rows.append((seed, motion, condition, force))
+    if not rows:
+        raise CliError(f'no seed from {args.seed} to '
+                       f'{args.seed + args.seeds - 1} keeps the actuator '
+                       f'forces within --max-force {args.max_force:g} N: '
+                       'choose smaller bounds')
     lines = []
+    best = min(rows, key=lambda row: row[2])
     if args.seeds > 1:
         lines.append(f'Condition number of the base regressor, period '
                      f'{args.duration:g} s:')
-        best = min(rows, key=lambda row: row[2])
         lines += [f'  seed {row[0]:<10d} {row[2]:12.4g}'
-                  + ('   (best: written)' if row is best else '')
+                  + (('   (best: the start)' if args.optimize
+                      else '   (best: written)') if row is best else '')
                   for row in rows]
-    else:
-        best = rows[0]
-    seed, motion, condition, p, v, a = best
+    seed, motion, condition, force = best
+    made = f'seed {seed}'
+    if args.optimize:
+        try:
+            design = excitation_design.optimize(
+                robot, args.duration, seed, args.max_force,
+                args.evaluations, **bounds)
+        except ValueError as error:
+            raise CliError(str(error)) from None
+        lines.append(f'Optimized from seed {seed} ({design.evaluations} '
+                     'evaluations): condition number '
+                     f'{design.start_condition:.4g} (seed {seed}) -> '
+                     f'{design.condition:.4g} (optimized)')
+        motion, condition, force = (design.motion, design.condition,
+                                    design.peak_force)
+        made = f'optimized from seed {seed}'
+    times = np.arange(0.0, args.duration, 1.0 / args.rate)
+    p, v, a = trajectory.excitation_batch(motion, times)
     harmonics = motion.sines.shape[1]
     distance = mechanics.workspace_status(robot, p).singularity_distance
     lines += [
-        f'Excitation: seed {seed}, period {args.duration:g} s, '
+        f'Excitation: {made}, period {args.duration:g} s, '
         f'{harmonics} harmonics ({1.0 / args.duration:g} to '
         f'{harmonics / args.duration:g} Hz) per axis',
         _row('', 'x', 'y', 'z'),
         _row('peak |position| (m)', *np.abs(p).max(0)),
         _row('peak |velocity| (m/s)', *np.abs(v).max(0)),
         _row('peak |acceleration| (m/s^2)', *np.abs(a).max(0)),
+        f'peak |actuator force| (N): {force:.4g}',
         f'smallest singularity distance: {distance.min():.4g}',
         f'base parameters: {", ".join(base.names)}',
         f'condition number of the base regressor: {condition:.4g} '
         '(unit-norm columns)']
-    times = np.arange(0.0, args.duration, 1.0 / args.rate)
-    p, v, a = trajectory.excitation_batch(motion, times)
     # With the trajectory on standard output, the description goes to
     # standard error.
     print('\n'.join(lines),
@@ -344,9 +362,9 @@ def run_excitation(robot, args):
     return 0
 
 
-def _excitation(robot, seed, duration):
+def _excitation(robot, seed, duration, bounds):
     try:
-        return trajectory.excitation(seed, duration, robot=robot)
+        return trajectory.excitation(seed, duration, robot=robot, **bounds)
     except ValueError as error:
         raise CliError(f'seed {seed}: {error}') from None
 
@@ -848,13 +866,15 @@ def _parser():
         'ay, az (m/s^2)): a finite Fourier series per axis of frame 0, '
         f'{trajectory.EXCITATION_HARMONICS} harmonics of 1 / duration with '
         'random coefficients from --seed, starting and ending at home at '
-        f'rest, within {trajectory.EXCITATION_BOX:g} m of home, '
-        f'{trajectory.EXCITATION_MAX_VELOCITY:g} m/s and '
-        f'{trajectory.EXCITATION_MAX_ACCELERATION:g} m/s^2 per axis, inside '
-        'the workspace. Prints its peaks, its smallest singularity distance '
+        'rest, within --box of home, --max-velocity and --max-acceleration '
+        'per axis, inside the workspace, its actuator forces within '
+        '--max-force. Prints its peaks, its smallest singularity distance '
         'and the condition number of its base regressor (the smaller the '
-        'better: noise in a log is amplified by it). The setpoint_publisher '
-        'streams the same motion (motion: excitation, seed, duration).')
+        'better: noise in a log is amplified by it); --optimize searches '
+        'the coefficients for a smaller one. The setpoint_publisher '
+        'streams the same motion (motion: excitation, seed, duration); an '
+        '--optimize motion is streamed from the file (orthoglide batch '
+        '--format joint_trajectory).')
     excitation.add_argument('--duration', type=_positive_float,
                             required=True, metavar='S',
                             help='period of the series and length of the '
@@ -875,6 +895,35 @@ def _parser():
     excitation.add_argument('--rate', type=_positive_float, default=1000.0,
                             metavar='HZ', help='samples per second of the '
                             'file (default 1000)')
+    excitation.add_argument('--box', type=_positive_float,
+                            default=trajectory.EXCITATION_BOX, metavar='M',
+                            help='largest |x|, |y|, |z| from home (m; '
+                            f'default {trajectory.EXCITATION_BOX:g})')
+    excitation.add_argument('--max-velocity', type=_positive_float,
+                            default=trajectory.EXCITATION_MAX_VELOCITY,
+                            metavar='M/S', help='largest speed per axis '
+                            '(m/s; default '
+                            f'{trajectory.EXCITATION_MAX_VELOCITY:g})')
+    excitation.add_argument('--max-acceleration', type=_positive_float,
+                            default=trajectory.EXCITATION_MAX_ACCELERATION,
+                            metavar='M/S2', help='largest acceleration per '
+                            'axis (m/s^2; default '
+                            f'{trajectory.EXCITATION_MAX_ACCELERATION:g})')
+    excitation.add_argument('--max-force', type=_positive_float,
+                            default=math.inf, metavar='N',
+                            help='largest actuator force of the --params '
+                            'robot along the motion (N; default: none)')
+    excitation.add_argument('--optimize', action='store_true',
+                            help='search the Fourier coefficients, from the '
+                            'seed\'s, for a smaller condition number within '
+                            'the same bounds (L-BFGS-B); prints the seed\'s '
+                            'and the optimized one\'s')
+    excitation.add_argument('--evaluations', type=_positive_count,
+                            default=excitation_design.DEFAULT_EVALUATIONS,
+                            metavar='N', help='condition numbers the '
+                            '--optimize search may compute (default '
+                            f'{excitation_design.DEFAULT_EVALUATIONS}: about '
+                            '10 s)')
     excitation.set_defaults(run=run_excitation)
 
     identify = sub.add_parser(

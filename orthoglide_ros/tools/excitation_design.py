@@ -1,0 +1,100 @@
+"""
+An excitation optimized for identification, without ROS.
+
+The log of an excitation identifies the base parameters the better, the
+smaller the condition number of its base regressor (noise is amplified by
+it: :func:`identification.condition_number`). :func:`optimize` searches
+the Fourier coefficients of :func:`trajectory.excitation`'s series, from a
+seed's, for a smaller one: each candidate is shaped as every excitation is
+(:func:`trajectory.shaped_excitation`: at home at rest at the start,
+within the box, the speed and the acceleration bounds, inside the
+workspace with the singularity margin), and a candidate whose actuator
+forces (the robot's, friction included) exceed ``max_force`` is refused.
+The search is scipy's L-BFGS-B on the logarithm of the condition number
+with finite differences; it keeps the best candidate met and never
+returns one worse than the seed's.
+"""
+
+from collections import namedtuple
+import math
+
+import numpy as np
+
+from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.tools import identification
+
+# Samples per second along the motion for its condition number (the
+# number changes by less than 1 % from 100 Hz to 1 kHz).
+CONDITION_RATE = 100.0
+# Evaluations of the condition number the search may make.
+DEFAULT_EVALUATIONS = 400
+# What a refused candidate costs (the log of a condition number).
+_REFUSED = 1e3
+
+Design = namedtuple('Design', ('motion', 'condition', 'peak_force',
+                               'start_condition', 'evaluations'))
+Design.__doc__ = """What :func:`optimize` found.
+
+``motion``: the :class:`trajectory.Excitation`; ``condition``: its
+condition number; ``peak_force``: its largest actuator force (N, of the
+robot); ``start_condition``: the seed's; ``evaluations``: condition
+numbers computed.
+"""
+
+
+def measure(robot, motion, base=None, rate=CONDITION_RATE):
+    """Return the condition number and the peak |force| (N) of a motion."""
+    times = np.arange(0.0, motion.period, 1.0 / rate)
+    p, v, a = trajectory.excitation_batch(motion, times)
+    force = mechanics.solve_batch(robot, p, v, a).force
+    return (identification.condition_number(robot, p, v, a, base),
+            float(np.abs(force).max()))
+
+
+def optimize(robot, period, seed=0, max_force=math.inf,
+             evaluations=DEFAULT_EVALUATIONS, **bounds):
+    """
+    Search an excitation of ``period`` s with a smaller condition number.
+
+    From the coefficients of :func:`trajectory.excitation` of ``seed``;
+    ``bounds``: ``box``, ``max_velocity``, ``max_acceleration``,
+    ``harmonics`` and ``margin`` as :func:`trajectory.excitation` takes
+    them; ``max_force`` (N): the largest actuator force allowed. Returns a
+    :class:`Design`. Raises ValueError when the seed's own motion breaks
+    a bound (as :func:`trajectory.excitation` does, or its force above
+    ``max_force``).
+    """
+    from scipy.optimize import minimize
+    harmonics = bounds.pop('harmonics', trajectory.EXCITATION_HARMONICS)
+    start = trajectory.excitation(seed, period, harmonics, robot=robot,
+                                  **bounds)
+    base = identification.base_parameters(robot)
+    start_condition, start_force = measure(robot, start, base)
+    if start_force > max_force:
+        raise ValueError(f'the excitation of seed {seed} needs '
+                         f'{start_force:.4g} N, above the force limit '
+                         f'{max_force:g} N: choose smaller bounds')
+    shape = start.sines.shape
+    best = [start_condition, start, start_force]
+    count = [0]
+
+    def cost(x):
+        count[0] += 1
+        try:
+            motion = trajectory.shaped_excitation(
+                x[:x.size // 2].reshape(shape), x[x.size // 2:].reshape(shape),
+                period, robot=robot, **bounds)
+            condition, force = measure(robot, motion, base)
+        except (ValueError, mechanics.WorkspaceError):
+            return _REFUSED
+        if not (math.isfinite(condition) and force <= max_force):
+            return _REFUSED
+        if condition < best[0]:
+            best[:] = condition, motion, force
+        return math.log(condition)
+
+    minimize(cost, np.concatenate((start.sines.ravel(),
+                                   start.cosines.ravel())),
+             method='L-BFGS-B', options={'maxfun': evaluations})
+    condition, motion, force = best
+    return Design(motion, condition, force, start_condition, count[0])
