@@ -2,18 +2,22 @@
 Identification demo: a simulated Orthoglide the feedforward does not know.
 
 The ``simulator`` runs a plant unlike the paper's robot (a 25 % heavier
-platform, 15 % heavier bars, friction on every slider:
-``closed_loop_harness.UNKNOWN_PLANT``); the ``feedforward`` knows only the
-paper's robot. The demo
+platform, 15 % heavier bars, friction on every slider with a Coulomb level
+per direction and a Stribeck rise: ``PLANT``); the ``feedforward`` knows
+only the paper's robot. The demo
 
 1. streams the excitation motion (``setpoint_publisher``, ``motion:
    excitation``) through PD + the nominal feedforward for a few periods
    while ``orthoglide record`` writes the plant's ``joint_states`` into an
-   MCAP bag;
-2. runs ``orthoglide identify`` on the bag (the passes' window, from the
-   bag's first header stamp, the one thing the demo reads from the bag
-   itself), which writes the identified robot as a parameters file and
-   its report (measured and predicted forces) as a PNG;
+   MCAP bag, then another excitation (the next seed, VALIDATION_PASSES
+   periods) into a second bag;
+2. runs ``orthoglide identify`` on the first bag (the passes' window, from
+   the bag's first header stamp, the one thing the demo reads from the bag
+   itself): the friction law, the Stribeck speed and the force lag are
+   left to it; it writes the identified robot as a parameters file and its
+   report (measured and predicted forces) as a PNG; then ``orthoglide
+   validate`` predicts the second bag with that file (its report: the
+   error against time, speed and position);
 3. tracks another motion (the paper's trajectory and a faster one) with PD
    alone, PD + the nominal feedforward, PD + the identified feedforward
    (the feedforward's ``robot.*`` set from the file) and PD + the exact
@@ -64,6 +68,12 @@ from orthoglide_ros.tools import identification  # noqa: E402
 from orthoglide_ros.model.robot import Robot  # noqa: E402
 
 RECORD_MARGIN = 60.0    # s the recording may last beyond the passes
+VALIDATION_PASSES = 2   # periods of the validation excitation
+# The builtin engine's plant: the loop's unknown robot with a Coulomb level
+# per direction and a Stribeck rise on every slider.
+PLANT = harness.UNKNOWN_PLANT.replace(
+    friction_coulomb_negative=(7.0, 2.0, 5.5),
+    friction_stribeck=(4.0, 3.0, 5.0), friction_stribeck_velocity=0.02)
 CASES = ('PD', 'PD + nominal FF', 'PD + identified FF', 'PD + exact FF')
 # Per engine: the cases tracked, the criterion (case, reference, factor:
 # the case's median RMS at most factor times the reference's) and the name
@@ -115,13 +125,15 @@ def main(argv=None):
                      'period <= 0')
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    bag = out / 'excitation'
+    bag, other = out / 'excitation', out / 'validation'
     identified_file = out / 'identified.yaml'
-    shutil.rmtree(bag, ignore_errors=True)     # record makes a new bag
+    for path in (bag, other):
+        shutil.rmtree(path, ignore_errors=True)     # record makes a new bag
     identified_file.unlink(missing_ok=True)
 
     setup = SETUPS[args.engine]
-    nominal, plant = Robot(), harness.UNKNOWN_PLANT
+    nominal = Robot()
+    plant = PLANT if args.engine == 'builtin' else harness.UNKNOWN_PLANT
     truth, model_file = plant, ''
     if args.engine == 'mujoco':
         model_file = out / 'unknown_robot.xml'
@@ -135,10 +147,16 @@ def main(argv=None):
     try:
         with harness.ClosedLoop(context, engine=args.engine,
                                 mjcf_file=str(model_file)) as loop:
-            excitation = excite(loop, args, bag, nominal, plant)
+            excitation = excite(loop, args.seed, args.period, args.passes,
+                                bag, nominal, plant)
+            validation = excite(loop, args.seed + 1, args.period,
+                                VALIDATION_PASSES, other, nominal, plant)
             identify_output = identify(bag, excitation, args,
                                        identified_file,
                                        out / 'identify_report.png')
+            identify_output += '\n\n' + validate_log(
+                other, validation, args, identified_file,
+                out / 'validation_report.png')
             identified = params_file.load_robot(identified_file)
             runs = validate(loop, names, nominal, identified, plant,
                             args.repeats, setup)
@@ -157,22 +175,22 @@ def main(argv=None):
     return 0 if ok else 1
 
 
-def excite(loop, args, bag, nominal, plant):
-    """Stream the excitation while ``orthoglide record`` writes the bag."""
-    print(f'Excitation: seed {args.seed}, {args.passes} x {args.period:g} s, '
+def excite(loop, seed, period, passes, bag, nominal, plant):
+    """Stream an excitation while ``orthoglide record`` writes the bag."""
+    print(f'Excitation: seed {seed}, {passes} x {period:g} s, '
           f'PD + nominal feedforward, recorded into {bag}', flush=True)
     # Stopped by SIGINT once the passes are over (a complete bag); the
     # duration only bounds it.
     record = start_node_process(
         ['record', '--output', str(bag), '--topic', '/joint_states',
-         '--duration', f'{args.passes * args.period + RECORD_MARGIN:g}'],
+         '--duration', f'{passes * period + RECORD_MARGIN:g}'],
         command=[node_executable('orthoglide')])
     try:
         # The controller, the harness's recorder and this one.
         loop.wait_for_subscribers('joint_states', 3)
-        run = loop.run(harness.excitation_motion(args.seed, args.period),
+        run = loop.run(harness.excitation_motion(seed, period),
                        feedforward=True, plant=plant, model=nominal,
-                       passes=args.passes)
+                       passes=passes)
     finally:
         code, err = stop_process(record)
     if code != 0:
@@ -182,26 +200,45 @@ def excite(loop, args, bag, nominal, plant):
     return run
 
 
-def identify(bag, run, args, output, report):
-    """Run ``orthoglide identify`` on the passes' window of the bag."""
+def window(bag, run, passes, period):
+    """Return ``--start`` and ``--end`` of the run's passes in the bag."""
     # The bag's first header stamp turns the run's start into --start.
     log = identification.read_bag(bag)
     start = (run.start_ns - log.origin) * 1e-9
-    end = start + args.passes * args.period
-    command = [node_executable('orthoglide'), 'identify', '--input', str(bag),
-               '--start', f'{start + harness.SETTLE:.6f}',
-               '--end', f'{end:.6f}', '--force-lag', f'{harness.force_lag():g}',
+    return ['--start', f'{start + harness.SETTLE:.6f}',
+            '--end', f'{start + passes * period:.6f}']
+
+
+def identify(bag, run, args, output, report):
+    """Run ``orthoglide identify`` on the passes' window of the bag."""
+    command = ['identify', '--input', str(bag),
+               *window(bag, run, args.passes, args.period),
                '--output', str(output), '--report', str(report)]
     if args.engine == 'mujoco':
         # Outside the model family the residual is the model's misfit, not
         # white noise: the deviations it gives are not statistics, and the
         # tracking below is the criterion (they are printed all the same).
         command += ['--max-relative-std', '100']
-    print('  ' + ' '.join(command[1:]), flush=True)
-    done = subprocess.run(command, capture_output=True, text=True,
-                          timeout=120)
+    print(f'  (the simulator holds each force over a step: a lag of '
+          f'{harness.force_lag() * 1e3:g} ms)', flush=True)
+    return orthoglide(command)
+
+
+def validate_log(bag, run, args, identified, report):
+    """Run ``orthoglide validate`` of the identified robot on the bag."""
+    return orthoglide(['validate', '--params', str(identified), '--input',
+                       str(bag), *window(bag, run, VALIDATION_PASSES,
+                                         args.period),
+                       '--report', str(report)])
+
+
+def orthoglide(arguments):
+    """Run the ``orthoglide`` tool; return its standard output."""
+    print('  orthoglide ' + ' '.join(arguments), flush=True)
+    done = subprocess.run([node_executable('orthoglide'), *arguments],
+                          capture_output=True, text=True, timeout=120)
     if done.returncode != 0:
-        raise harness.LoopError(f'orthoglide identify exited '
+        raise harness.LoopError(f'orthoglide {arguments[0]} exited '
                                 f'{done.returncode}: {done.stderr.strip()}')
     return done.stdout.rstrip()
 
@@ -236,9 +273,11 @@ def validate(loop, names, nominal, identified, plant, repeats, setup):
 
 
 def print_parameters(nominal, identified, plant, label='plant'):
-    """Print the base parameters: nominal, identified, the plant's."""
-    base = identification.base_parameters(nominal)
-    values = {name: base.matrix @ identification.standard_parameters(robot)
+    """Print the base parameters of the richest law: nominal, identified, the plant's."""
+    law = identification.LAWS[-1]
+    base = identification.base_parameters(nominal, law)
+    values = {name: base.matrix @ identification.standard_parameters(robot,
+                                                                     law)
               for name, robot in (('nominal', nominal),
                                   ('identified', identified),
                                   ('plant', plant))}
@@ -246,14 +285,15 @@ def print_parameters(nominal, identified, plant, label='plant'):
           'find' + (': m1 + m2 with the armature; its Coulomb friction is '
                     'MuJoCo\'s law, not tanh' if label == 'MJCF' else '')
           + '):')
-    print(f'{"base parameter":<16}{"nominal":>12}{"identified":>12}'
+    print(f'{"base parameter":<20}{"nominal":>12}{"identified":>12}'
           f'{label:>12}{"error":>10}')
     for i, name in enumerate(base.names):
         truth = values['plant'][i]
         error = values['identified'][i] - truth
-        print(f'{name:<16}{values["nominal"][i]:12.4f}'
+        print(f'{name:<20}{values["nominal"][i]:12.4f}'
               f'{values["identified"][i]:12.4f}{truth:12.4f}'
-              f'{100.0 * error / truth:9.2f}%')
+              + (f'{100.0 * error / truth:9.2f}%' if truth
+                 else f'{error:10.4f}'))
 
 
 def print_tracking(runs, names, setup):
@@ -298,17 +338,21 @@ def plot(runs, names, nominal, identified, plant, path, setup):
         axis.set_ylabel('|r_G - r*| (mm)')
         axis.grid(True, which='both', alpha=0.3)
         axis.legend(fontsize=8)
-    base = identification.base_parameters(nominal)
-    truth = base.matrix @ identification.standard_parameters(plant)
+    law = identification.LAWS[-1]
+    base = identification.base_parameters(nominal, law)
+    truth = base.matrix @ identification.standard_parameters(plant, law)
+    shown = truth != 0.0
+    names = [n for n, s in zip(base.names, shown) if s]
     axis = axes[0][-1]
-    x = np.arange(len(base.names))
+    x = np.arange(len(names))
     for offset, label, robot, color in (
             (-0.2, 'nominal', nominal, 'tab:orange'),
             (0.2, 'identified', identified, 'tab:green')):
-        values = base.matrix @ identification.standard_parameters(robot)
-        axis.bar(x + offset, values / truth, 0.4, label=label, color=color)
+        values = base.matrix @ identification.standard_parameters(robot, law)
+        axis.bar(x + offset, (values / np.where(shown, truth, 1.0))[shown],
+                 0.4, label=label, color=color)
     axis.axhline(1.0, color='k', linewidth=0.8)
-    axis.set_xticks(x, base.names, rotation=45, ha='right', fontsize=8)
+    axis.set_xticks(x, names, rotation=45, ha='right', fontsize=8)
     axis.set_ylabel('base parameter / plant\'s')
     axis.set_title('Base parameters against the plant\'s')
     axis.legend(fontsize=8)
