@@ -341,7 +341,9 @@ def test_friction_of_the_params_file_reaches_solve_batch_and_paper(
     params.write_text('feedforward:\n  ros__parameters:\n    robot:\n'
                       '      friction_viscous: [30.0, 40.0, 50.0]\n'
                       '      friction_coulomb: [5.0, 3.0, 4.0]\n'
-                      '      friction_velocity: 0.002\n')
+                      '      friction_velocity: 0.002\n'
+                      '      friction_coulomb_negative: [5.0, 3.0, 4.0]\n'
+                      '      friction_stribeck: [0.0, 0.0, 0.0]\n')
     robot = Robot(friction_viscous=(30.0, 40.0, 50.0),
                   friction_coulomb=(5.0, 3.0, 4.0), friction_velocity=0.002)
     p, v, a = eq6(0.7)

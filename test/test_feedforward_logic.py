@@ -534,6 +534,27 @@ def test_friction_parameters_reach_the_forces_and_powers():
     assert PARAMETERS.defaults()['robot.friction_velocity'] == 0.001
 
 
+def test_direction_and_stribeck_parameters_reach_the_forces():
+    """robot.friction_coulomb_negative and the Stribeck term: the law."""
+    friction = {'robot.friction_coulomb': [5.0, 3.0, 4.0],
+                'robot.friction_coulomb_negative': [8.0, 1.0, 6.0],
+                'robot.friction_stribeck': [2.0, 4.0, 0.0],
+                'robot.friction_stribeck_velocity': 0.05}
+    ff = core(**friction)
+    assert ff.settings.robot.friction_coulomb_negative == (8.0, 1.0, 6.0)
+    out = complete(ff, (7, 250), SAMPLES[1], 3.0)
+    rigid = mechanics.solve(Robot(), *SAMPLES[1])
+    for j, v in enumerate(rigid.lambdadot):
+        level = friction['robot.friction_coulomb' if v > 0
+                         else 'robot.friction_coulomb_negative'][j]
+        law = (level + friction['robot.friction_stribeck'][j]
+               * math.exp(-(v / 0.05) ** 2)) * math.tanh(v / 0.001)
+        assert out.solution.force[j] == pytest.approx(
+            rigid.force[j] + law, rel=1e-12, abs=1e-9)
+    assert 'robot.friction_coulomb_negative' not in PARAMETERS.defaults()
+    assert PARAMETERS.defaults()['robot.friction_stribeck'] == [0.0] * 3
+
+
 @pytest.mark.parametrize('changes', [
     {'rate_hz': 0.0}, {'rate_hz': 10000.0}, {'setpoint_timeout': 0.001,
                                              'pairing_timeout': 0.001},
