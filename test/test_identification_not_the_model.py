@@ -172,3 +172,19 @@ def test_a_simulator_log_lags_half_a_step():
     print(f'lag found {result.force_lag * 1e3:.4f} ms, half a step '
           f'{0.5 * step * 1e3} ms')
     assert abs(result.force_lag - 0.5 * step) <= 0.1 * step
+
+
+def test_validate_explains_nothing_where_there_is_no_force():
+    """A log without force on an actuator: NaN explained, no warning."""
+    import warnings
+    times = np.arange(0.0, 4.0, 1e-3)
+    lambdas = np.tile(mechanics.solve(NOMINAL, (0.0, 0.0, 0.0)).lambda_,
+                      (len(times), 1))
+    log = Log(times, lambdas, np.zeros((len(times), 3)), 'no force')
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        validation = identification.validate(NOMINAL, log, force_lag=0.0)
+    assert np.isnan(validation.explained).all()
+    # At home only C carries the weight the model predicts.
+    assert validation.rms[2] == pytest.approx(
+        mechanics.solve(NOMINAL, (0.0, 0.0, 0.0)).force[2], rel=1e-9)

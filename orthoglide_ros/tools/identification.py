@@ -1130,11 +1130,14 @@ def validate(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=None):
         lag_estimated = False
     measured = motion.forces(force_lag)
     error = measured - predicted
+    squares = np.sum(measured ** 2, axis=0)
+    # (No force at all on an actuator: nothing to explain, NaN.)
+    explained = 1.0 - np.divide(np.sum(error ** 2, axis=0), squares,
+                                out=np.full(3, np.nan), where=squares > 0.0)
     return Validation(
         log.source, motion.samples(None, measured), measured, predicted,
         np.sqrt(np.mean(error ** 2, axis=0)), np.abs(error).max(axis=0),
-        1.0 - np.sum(error ** 2, axis=0) / np.sum(measured ** 2, axis=0),
-        float(force_lag), lag_estimated)
+        explained, float(force_lag), lag_estimated)
 
 
 def condition_number(robot, positions, velocities, accelerations,
