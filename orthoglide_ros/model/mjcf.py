@@ -45,7 +45,8 @@ import numpy as np
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.mechanics import ZERO
 from orthoglide_ros.model.robot import JOINT_NAMES
-from orthoglide_ros.model.urdf import (CHAIN, GREY, inertials, LEG_COLOURS,
+from orthoglide_ros.model.urdf import (CHAIN, GREY, header_comment,
+                                       inertials, LEG_COLOURS,
                                        LEGS, link_name, PLATFORM)
 
 MIN_INERTIA = 1e-9          # kg m^2: a principal inertia the model has 0
@@ -102,12 +103,9 @@ def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None,
     masses = inertials(robot)
     radius = robot.l2 / 8.0
     root = ET.Element('mujoco', model='orthoglide')
-    root.append(ET.Comment(
-        ' The Orthoglide (Chablat, Wenger, Staicu), written by `orthoglide '
-        'mjcf` from the robot.* parameters: '
-        + ', '.join(f'{k} = {v if isinstance(v, list) else _number(v)}'
-                    for k, v in robot.as_parameters().items())
-        + '. Loops closed by connect constraints; see doc/mujoco.md. '))
+    root.append(header_comment(
+        robot, 'mjcf', _number, '. Loops closed by connect constraints; see '
+        'doc/mujoco.md. '))
     ET.SubElement(root, 'compiler', angle='radian', autolimits='true')
     ET.SubElement(root, 'option', timestep=_number(TIMESTEP),
                   integrator=INTEGRATOR, gravity=_vector(robot.gravity))

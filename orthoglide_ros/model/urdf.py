@@ -229,13 +229,10 @@ def urdf(robot, joint_names=JOINT_NAMES, margin=DEFAULT_SINGULARITY_MARGIN):
     masses = inertials(robot)
     radius = robot.l2 / 8.0
     root = ET.Element('robot', name='orthoglide')
-    root.append(ET.Comment(
-        ' The Orthoglide (Chablat, Wenger, Staicu), written by `orthoglide '
-        'urdf` from the robot.* parameters: '
-        + ', '.join(f'{k} = {v if isinstance(v, list) else _number(v)}'
-                    for k, v in robot.as_parameters().items())
-        + f'; joint limits within the singularity margin {margin:g}. A cut '
-        'tree: publish every moving joint (mechanism_state_publisher). '))
+    root.append(header_comment(
+        robot, 'urdf', _number, f'; joint limits within the singularity '
+        f'margin {margin:g}. A cut tree: publish every moving joint '
+        '(mechanism_state_publisher). '))
     for name, rgba in [*((f'leg_{leg.lower()}', c)
                          for leg, c in LEG_COLOURS.items()),
                        *GREY.items()]:
@@ -405,6 +402,20 @@ def rpy(rotation):
     if cos_pitch < 1e-9:
         return (math.atan2(-r[1, 2], r[1, 1]), pitch, 0.0)
     return (math.atan2(r[2, 1], r[2, 2]), pitch, math.atan2(r[1, 0], r[0, 0]))
+
+
+def header_comment(robot, command, number, tail):
+    """
+    Return the comment that opens a model file: its robot, how it was made.
+
+    ``command``: the ``orthoglide`` command that writes the file;
+    ``number``: its number format; ``tail``: what the file adds.
+    """
+    return ET.Comment(
+        ' The Orthoglide (Chablat, Wenger, Staicu), written by `orthoglide '
+        f'{command}` from the robot.* parameters: '
+        + ', '.join(f'{k} = {v if isinstance(v, list) else number(v)}'
+                    for k, v in robot.as_parameters().items()) + tail)
 
 
 def _number(value):

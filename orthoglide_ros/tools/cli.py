@@ -773,6 +773,35 @@ _count = _within(int, 0)
 _positive_count = _within(int, 1)
 
 
+def _log_options():
+    """Return the parent parser of the options that read a log."""
+    options = argparse.ArgumentParser(add_help=False)
+    options.add_argument('--input', required=True, metavar='LOG',
+                         help='CSV file, or rosbag2 bag (directory, .mcap or '
+                         '.db3 file)')
+    options.add_argument('--topic', default=identification.DEFAULT_TOPIC,
+                         help='joint states topic in a bag (default '
+                         f'{identification.DEFAULT_TOPIC})')
+    options.add_argument('--joint-names', nargs=3, metavar='NAME',
+                         default=list(JOINT_NAMES),
+                         help='joints of actuators A, B, C in the joint '
+                         'states (default ' + ' '.join(JOINT_NAMES) + ')')
+    options.add_argument('--start', type=float, metavar='S',
+                         help='use the log from S seconds after its first '
+                         'sample (default: from the first)')
+    options.add_argument('--end', type=float, metavar='S',
+                         help='use the log up to S seconds after its first '
+                         'sample (default: to the last)')
+    options.add_argument('--cutoff', type=_positive_float,
+                         default=DEFAULT_CUTOFF, metavar='HZ',
+                         help='cutoff of the zero-phase low-pass of the '
+                         'forces and the regressor (Hz; default '
+                         f'{DEFAULT_CUTOFF:g}; the motion\'s is '
+                         f'{identification.STATE_CUTOFF_FACTOR:g} times it), '
+                         'below half the log\'s sampling rate')
+    return options
+
+
 def _version():
     try:
         from importlib.metadata import version
@@ -927,7 +956,7 @@ def _parser():
     excitation.set_defaults(run=run_excitation)
 
     identify = sub.add_parser(
-        'identify', parents=[common],
+        'identify', parents=[common, _log_options()],
         help='identify masses and friction from a log',
         description='Identify the base parameters (the combinations of the '
         'masses (kg) and of the viscous (N s/m) and Coulomb (N) friction '
@@ -946,9 +975,6 @@ def _parser():
         'and their time span. A log that cannot be used or that does not '
         'excite every base parameter exits with code 2; nothing is then '
         'written.')
-    identify.add_argument('--input', required=True, metavar='LOG',
-                          help='CSV file, or rosbag2 bag (directory, .mcap '
-                          'or .db3 file)')
     identify.add_argument('--output', required=True, metavar='FILE',
                           help='the identified robot as a ROS 2 parameters '
                           'file (section feedforward, every robot.* '
@@ -956,26 +982,6 @@ def _parser():
     identify.add_argument('--report', metavar='FILE',
                           help='draw the measured and predicted forces (N) '
                           'per actuator and the residuals as a PNG image')
-    identify.add_argument('--topic', default=identification.DEFAULT_TOPIC,
-                          help='joint states topic in a bag (default '
-                          f'{identification.DEFAULT_TOPIC})')
-    identify.add_argument('--joint-names', nargs=3, metavar='NAME',
-                          default=list(JOINT_NAMES),
-                          help='joints of actuators A, B, C in the joint '
-                          'states (default ' + ' '.join(JOINT_NAMES) + ')')
-    identify.add_argument('--start', type=float, metavar='S',
-                          help='use the log from S seconds after its first '
-                          'sample (default: from the first)')
-    identify.add_argument('--end', type=float, metavar='S',
-                          help='use the log up to S seconds after its first '
-                          'sample (default: to the last)')
-    identify.add_argument('--cutoff', type=_positive_float,
-                          default=DEFAULT_CUTOFF, metavar='HZ',
-                          help='cutoff of the low-pass of the forces and '
-                          f'the regressor (Hz; default {DEFAULT_CUTOFF:g}; '
-                          'the motion\'s is '
-                          f'{identification.STATE_CUTOFF_FACTOR:g} times it),'
-                          ' below half the log\'s sampling rate')
     identify.add_argument('--force-lag', type=_finite_float, default=None,
                           metavar='S', help='the forces were applied S '
                           'seconds before their stamps (default: estimated '
@@ -1018,7 +1024,7 @@ def _parser():
     identify.set_defaults(run=run_identify)
 
     validate = sub.add_parser(
-        'validate', parents=[common],
+        'validate', parents=[common, _log_options()],
         help='predict the forces of a log, report the error',
         description='Predict the actuator forces of a log (another motion '
         'than the one identified from) with the robot of --params (every '
@@ -1029,30 +1035,10 @@ def _parser():
         'sum(error^2) / sum(force^2)), with the force lag and the part of '
         'the log used. The log is read as by identify (CSV or rosbag2). A '
         'log that cannot be used exits with code 2.')
-    validate.add_argument('--input', required=True, metavar='LOG',
-                          help='CSV file, or rosbag2 bag (directory, .mcap '
-                          'or .db3 file)')
     validate.add_argument('--report', metavar='FILE',
                           help='draw measured and predicted forces against '
                           'time and the error against the slider\'s speed '
                           'and position, per actuator, as a PNG image')
-    validate.add_argument('--topic', default=identification.DEFAULT_TOPIC,
-                          help='joint states topic in a bag (default '
-                          f'{identification.DEFAULT_TOPIC})')
-    validate.add_argument('--joint-names', nargs=3, metavar='NAME',
-                          default=list(JOINT_NAMES),
-                          help='joints of actuators A, B, C in the joint '
-                          'states (default ' + ' '.join(JOINT_NAMES) + ')')
-    validate.add_argument('--start', type=float, metavar='S',
-                          help='use the log from S seconds after its first '
-                          'sample (default: from the first)')
-    validate.add_argument('--end', type=float, metavar='S',
-                          help='use the log up to S seconds after its first '
-                          'sample (default: to the last)')
-    validate.add_argument('--cutoff', type=_positive_float,
-                          default=DEFAULT_CUTOFF, metavar='HZ',
-                          help='cutoff of the low-pass of both forces (Hz; '
-                          f'default {DEFAULT_CUTOFF:g})')
     validate.add_argument('--force-lag', type=_finite_float, default=None,
                           metavar='S', help='the forces were applied S '
                           'seconds before their stamps (default: the lag '
