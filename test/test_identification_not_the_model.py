@@ -21,7 +21,9 @@ chosen law can reach (identified from the same motion without noise,
 lag, jitter or gaps) and at least 30 % below the package's former law
 (viscous + Coulomb) identified from the same log; what of the log was
 used is reported. A simulator's log (the force held over each step)
-comes out with a lag near half a step.
+comes out with a lag near half a step. A friction no robot has (a drive
+pushing along the motion) is held at its bound by the bounded least
+squares, and said; an actuator without force is explained by NaN.
 """
 
 import math
@@ -188,3 +190,32 @@ def test_validate_explains_nothing_where_there_is_no_force():
     # At home only C carries the weight the model predicts.
     assert validation.rms[2] == pytest.approx(
         mechanics.solve(NOMINAL, (0.0, 0.0, 0.0)).force[2], rel=1e-9)
+
+
+def test_a_friction_no_robot_has_is_held_at_zero_and_said():
+    """A drive that pushes along C's motion: the bounded least squares."""
+    robot = Robot(m5=18.75, friction_viscous=(30.0, 40.0, 50.0),
+                  friction_coulomb=(5.0, 3.0, 0.0))
+    motion = trajectory.excitation(0, PERIOD)
+    times = np.arange(0.0, 20.0, 1.0 / RATE)
+    solution = mechanics.solve_batch(
+        robot, *trajectory.excitation_batch(motion, times))
+    forces = solution.force.copy()
+    forces[:, 2] -= 0.5 * np.tanh(solution.lambdadot[:, 2]
+                                  / robot.friction_velocity)
+    result = identification.identify(
+        NOMINAL, Log(times, solution.lambda_, forces, 'pushing drive'),
+        friction=PLAIN, force_lag=0.0)
+    i = result.base.names.index('coulomb_c')
+    base = result.samples.regressor[:, :, list(result.base.independent)]
+    ordinary = np.linalg.lstsq(base.reshape(-1, len(result.values)),
+                               result.samples.forces.reshape(-1),
+                               rcond=None)[0]
+    print(result.bounded, f'ordinary coulomb_c {ordinary[i]:.4f} N')
+    assert ordinary[i] == pytest.approx(-0.5, abs=0.02)
+    assert result.values[i] == 0.0
+    assert result.robot.friction_coulomb[2] == 0.0
+    (note,) = result.bounded
+    assert note.startswith('coulomb_c was found -0.5') and 'bound 0 N' in note
+    others = [k for k in range(len(ordinary)) if k != i]
+    assert np.allclose(result.values[others], ordinary[others], rtol=0.05)
