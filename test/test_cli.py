@@ -925,3 +925,17 @@ def test_excitation_refuses_a_force_limit_no_seed_keeps(capsys, tmp_path):
                        tmp_path / 'e.csv', '--max-force', 10)
     assert code == 2 and '--max-force 10 N' in err
     assert not (tmp_path / 'e.csv').exists()
+
+
+def test_identify_validates_with_the_lag_it_found(capsys, tmp_path):
+    """The lag is the drive's: the validation takes identify's."""
+    log, _ = rough_log(tmp_path, 'rough.csv', 0, 20.0, lag=0.0015)
+    other, _ = rough_log(tmp_path, 'other.csv', 3, 8.0, lag=0.0015)
+    code, out, _ = run(capsys, 'identify', '--input', log, '--output',
+                       tmp_path / 'out.yaml', '--validate', other)
+    assert code == 0
+    (found,) = [line for line in out.splitlines()
+                if line.startswith('force lag ') and 'estimated' in line]
+    lag = float(found.split()[2])
+    assert lag == pytest.approx(1.5, abs=0.2)
+    assert f'force lag {lag:.4g} ms (given)' in out

@@ -388,10 +388,9 @@ def run_identify(robot, args):
         validation = None
         if args.validate is not None:
             other = identification.read_log(args.validate, args.topic, joints)
-            # The lag is the drive's: the one found, unless estimated anew.
-            lag = None if result.lag_estimated else args.force_lag
+            # The lag is the drive's: the one given or found.
             validation = [identification.validate(model, other, args.cutoff,
-                                                  lag)
+                                                  result.force_lag)
                           for model in (robot, result.robot)]
     except (identification.LogError,
             identification.IdentificationError) as error:

@@ -112,7 +112,6 @@ def standard_names(law=PLAIN):
 # The standard parameters of the plain law (the package's law before the
 # Coulomb level per direction and the Stribeck term).
 STANDARD = standard_names(PLAIN)
-_ALL = standard_names(LAWS[-1])
 UNITS = dict.fromkeys(MASSES, 'kg') | {
     f'{kind}_{leg}': unit for kind, (_, unit, _) in FRICTION_KINDS.items()
     for leg in LEGS}
