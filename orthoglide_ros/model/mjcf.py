@@ -38,6 +38,7 @@ about a micrometre and an open-loop run follows the rigid model; MuJoCo's
 defaults let them sag by millimetres (doc/mujoco.md has the figures).
 """
 
+import functools
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -72,13 +73,18 @@ def friction_beyond(robot, lambdadot):
     """
     if robot.plain_friction:
         return ZERO
-    mean = coulomb_mean(robot)
-    plain = robot.replace(friction_coulomb=mean,
-                          friction_coulomb_negative=mean,
-                          friction_stribeck=ZERO)
     return tuple(a - b for a, b in zip(
         mechanics.friction_force(robot, lambdadot),
-        mechanics.friction_force(plain, lambdadot)))
+        mechanics.friction_force(_held_by_mujoco(robot), lambdadot)))
+
+
+@functools.lru_cache(maxsize=16)
+def _held_by_mujoco(robot):
+    """Return ``robot`` with the friction MuJoCo's joints hold (made once)."""
+    mean = coulomb_mean(robot)
+    return robot.replace(friction_coulomb=mean,
+                         friction_coulomb_negative=mean,
+                         friction_stribeck=ZERO)
 
 
 def equality_names(leg):
