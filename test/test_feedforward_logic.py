@@ -487,7 +487,7 @@ def test_default_settings():
     assert s == PARAMETERS.Settings(
         Robot(), ('slider_a', 'slider_b', 'slider_c'), 'base_link', 0.0, 0.1,
         0.05, mechanics.DEFAULT_SINGULARITY_MARGIN, False, (0.0, 0.0, 0.0),
-        (0.0, 0.0, 0.0), 5.0, 100.0, 10000.0)
+        (0.0, 0.0, 0.0), 5.0, 100.0, 10000.0, 0, (), False)
     assert PARAMETERS.parse({}) == s
     assert s.robot.m4 == s.robot.m2 and s.robot.m6 == s.robot.m3
 
@@ -499,8 +499,9 @@ def test_spec_table():
         'robot.' + n for n in Robot.parameter_names()]
     assert {s.name for s in PARAMETERS.own_specs} == set(PARAMETERS.Settings._fields) - {'robot'}
     for spec in PARAMETERS.specs:
-        assert spec.type in ('double', 'double_array', 'string',
-                             'string_array', 'bool')
+        assert spec.type in ('double', 'double_array', 'integer',
+                             'integer_array', 'string', 'string_array',
+                             'bool')
         assert spec.description
     assert 'robot.m4' not in PARAMETERS.defaults()
     assert 'robot.m6' not in PARAMETERS.defaults()

@@ -498,7 +498,8 @@ def test_declared_parameters_and_qos_override(graph):
         descriptor = node.describe_parameter(spec.name)
         assert descriptor.description == spec.description
         if spec.range is not None:
-            r = descriptor.floating_point_range[0]
+            r = (descriptor.integer_range if spec.type == 'integer'
+                 else descriptor.floating_point_range)[0]
             assert (r.from_value, r.to_value) == spec.range
     assert node.get_parameter('robot.m4').value == 0.25
     assert node.core.settings.robot == Robot(m4=0.25)

@@ -65,7 +65,8 @@ def test_spec_table_is_the_robot_table_plus_the_simulator_contract():
     assert own == ['rate_hz', 'publish_rate_hz', 'initial_position',
                    'command_timeout',
                    'force_limit', 'singularity_margin', 'joint_names',
-                   'base_frame', 'engine', 'mjcf_file']
+                   'base_frame', 'engine', 'mjcf_file', 'thread_priority',
+                   'cpu_affinity', 'lock_memory']
     for spec in SIMULATOR_SPECS:
         assert spec.description, spec.name
         if spec.type == 'double' and spec.default is not None:

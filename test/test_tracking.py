@@ -77,7 +77,8 @@ def test_specs_defaults_and_names():
     assert list(specs) == ['kp', 'kd', 'feedforward', 'force_limit',
                            'joint_names', 'measurement_timeout',
                            'rate_hz', 'path_tolerance', 'stall_timeout',
-                           'max_position', 'max_velocity']
+                           'max_position', 'max_velocity', 'thread_priority',
+                           'cpu_affinity', 'lock_memory']
     assert specs['kp'].type == specs['kd'].type == 'double_array'
     assert specs['kp'].default == [20000.0] * 3
     assert specs['kd'].default == [1200.0] * 3

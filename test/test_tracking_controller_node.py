@@ -454,7 +454,8 @@ def test_declared_parameters(graph):
         descriptor = node.describe_parameter(spec.name)
         assert descriptor.description == spec.description
         if spec.range is not None:
-            r = descriptor.floating_point_range[0]
+            r = (descriptor.integer_range if spec.type == 'integer'
+                 else descriptor.floating_point_range)[0]
             assert (r.from_value, r.to_value) == spec.range
 
 

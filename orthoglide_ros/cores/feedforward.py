@@ -44,6 +44,7 @@ import numpy as np
 
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.cores.inputs import check_stamp, NANOSECONDS, Rejected
+from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import joint_names_spec, \
     nonnegative_triple, ParameterError, Spec, Table
 from orthoglide_ros.cores.status import first, OK, Period, Status, WARN
@@ -249,6 +250,7 @@ PARAMETERS = Table('Settings', (
          'largest |f| (N) of any actuator force the node publishes: a '
          'setpoint or trajectory that needs more is refused (force_limit)',
          (0.001, 1.0e7)),
+    *realtime.SPECS,
 ), rules=(_pairing_within_setpoint_timeout,), robot=True)
 
 

@@ -38,6 +38,7 @@ import math
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.cores.inputs import read_joint_state, Rejected
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
+from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import joint_names_spec, Spec, Table
 from orthoglide_ros.cores.status import first, OK, Period, Status, WARN
 from orthoglide_ros.model.urdf import moving_joints, RATES
@@ -54,6 +55,7 @@ PARAMETERS = Table('MechanismStateSettings', (
          'smallest singularity distance min(alpha_i / l3, 1 / '
          'kappa_F(J_lambda)) of a published state; nearer a singularity '
          'the joint state is refused (singular)', (0.0, 0.99)),
+    *realtime.SPECS,
 ), robot=True)
 
 MechanismJoints = namedtuple('MechanismJoints', 'names position velocity')

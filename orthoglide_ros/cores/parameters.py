@@ -36,9 +36,10 @@ from orthoglide_ros.model.robot import DESCRIPTIONS, FOLLOWS, JOINT_NAMES, \
     LIMITS, Robot, RobotParameterError, UNITS
 
 ROBOT_PREFIX = 'robot.'
-TYPES = ('double', 'double_array', 'integer', 'string', 'string_array',
-         'bool')
+TYPES = ('double', 'double_array', 'integer', 'integer_array', 'string',
+         'string_array', 'bool')
 _SCALAR = {'double': float, 'integer': int, 'string': str, 'bool': bool}
+_ELEMENT = {'double_array': float, 'integer_array': int, 'string_array': str}
 
 
 class ParameterError(ValueError):
@@ -214,11 +215,12 @@ def _typed(kind, value):
             raise ValueError(f'must be a{"n" if kind == "integer" else ""} '
                              f'{kind}, got {shorten(value)}')
         return value
-    element = float if kind == 'double_array' else str
+    element = _ELEMENT[kind]
     if not (isinstance(value, (list, tuple))
             and all(type(v) is element for v in value)):
-        what = ('doubles such as [0.0, 0.0, -9.81] (rcl refuses integers '
-                'or mixed arrays)' if element is float else 'strings')
+        what = {float: 'doubles such as [0.0, 0.0, -9.81] (rcl refuses '
+                'integers or mixed arrays)', int: 'integers such as [1]',
+                str: 'strings'}[element]
         raise ValueError(f'must be an array of {what}, got '
                          f'{shorten(value)}')
     if element is float and not all(math.isfinite(v) for v in value):

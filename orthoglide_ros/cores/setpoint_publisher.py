@@ -33,6 +33,7 @@ True
 """
 
 from orthoglide_ros.model import trajectory
+from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import ParameterError, Spec, Table, triple
 
 INPUTS = ('trajectory', 'topics')
@@ -95,6 +96,7 @@ PARAMETERS = Table('SetpointSettings', (
          'early', (0, 1000), read_only=True),
     Spec('frame_id', 'string', 'base_link',
          'frame of the setpoints (header.frame_id)', read_only=True),
+    *realtime.SPECS,
 ), rules=(_excitation_has_a_period,))
 
 

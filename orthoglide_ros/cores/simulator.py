@@ -69,6 +69,7 @@ from orthoglide_ros.model import mechanics, mujoco_plant
 from orthoglide_ros.cores.inputs import joint_columns, Rejected
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, \
     format_vector, ZERO
+from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import joint_names_spec, ParameterError, \
     Spec, Table, triple
 from orthoglide_ros.model.plant import Plant
@@ -195,6 +196,7 @@ PARAMETERS = Table('SimulatorSettings', (
          'built from robot.*: one of orthoglide mjcf (its names, the '
          'robot.* lengths; its masses, friction and armature its own); '
          'applies at the next reset', check=_mjcf_file),
+    *realtime.SPECS,
 ), rules=(_mjcf_file_needs_mujoco, _initial_position_in_workspace,
           _publish_rate_within_rate, _timeout_of_a_step_at_least),
     robot=True)

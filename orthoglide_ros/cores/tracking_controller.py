@@ -81,6 +81,7 @@ import numpy as np
 from orthoglide_ros.cores.inputs import (JointValues, read_joint_state,
                                          read_joint_trajectory, Rejected)
 from orthoglide_ros.model.joint_plan import JointPlan
+from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import joint_names_spec, \
     nonnegative_triple, Spec, Table
 from orthoglide_ros.cores.status import ERROR, first, OK, Period, Status, WARN
@@ -143,6 +144,7 @@ PARAMETERS = Table('ControllerSettings', (
          'largest |lambdadot| (m/s) of a measured or desired slider '
          'velocity, a joint trajectory\'s planned motion included: beyond '
          'it the input is refused (velocity_limit)', (0.001, 1000.0)),
+    *realtime.SPECS,
 ))
 
 Command = namedtuple('Command', 'force error clipped')

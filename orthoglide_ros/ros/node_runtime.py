@@ -45,9 +45,10 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange,
                                 ParameterDescriptor, SetParametersResult)
 
+from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.inputs import clip, Rejected
 from orthoglide_ros.cores.parameters import ParameterError
-from orthoglide_ros.cores.status import OK, Status
+from orthoglide_ros.cores.status import OK, Status, WARN
 from orthoglide_ros.ros.console import install_signal_handlers
 from orthoglide_ros.ros.input_threads import InputThreads
 from orthoglide_ros.ros.reply_guard import ReplyGuard
@@ -62,6 +63,7 @@ WARNING_PERIOD = 1.0        # s between two warnings of the same reason
 _TYPES = {'double': Parameter.Type.DOUBLE,
           'double_array': Parameter.Type.DOUBLE_ARRAY,
           'integer': Parameter.Type.INTEGER,
+          'integer_array': Parameter.Type.INTEGER_ARRAY,
           'string': Parameter.Type.STRING,
           'string_array': Parameter.Type.STRING_ARRAY,
           'bool': Parameter.Type.BOOL}
@@ -83,6 +85,8 @@ def declare_specs(node, specs):
 
     A start-up value that rclpy refuses against its descriptor (out of
     range) raises :class:`ParameterError` naming it, as the table would.
+    An empty array default is declared by its type alone (rclpy takes
+    ``[]`` for a byte array): unset, it reads as the table's default.
     """
     for spec in specs:
         descriptor = ParameterDescriptor(
@@ -96,7 +100,7 @@ def declare_specs(node, specs):
                 from_value=spec.range[0], to_value=spec.range[1])]
         try:
             node.declare_parameter(
-                spec.name, _TYPES[spec.type] if spec.default is None
+                spec.name, _TYPES[spec.type] if spec.default in (None, [])
                 else spec.default, descriptor)
         except InvalidParameterValueException as error:
             raise ParameterError(spec.name, clip(error.args[0])) from None
@@ -107,14 +111,17 @@ def spec_values(node, specs, changes=()):
     Return ``{name: value}`` of the specs' parameters with ``changes`` applied.
 
     Plain types: rclpy gives double arrays as ``array.array``, this gives
-    lists; a parameter declared without a value gives None.
+    lists; a parameter declared without a value gives None, or is left
+    out when its spec has a default (an empty array: see
+    :func:`declare_specs`), so that the table's default applies.
     """
     values = {}
     for spec in specs:
         try:
             values[spec.name] = node.get_parameter(spec.name).value
         except ParameterUninitializedException:
-            values[spec.name] = None
+            if spec.default is None:
+                values[spec.name] = None
     values.update((p.name, p.value) for p in changes)
     return {name: list(value) if isinstance(value, array.array)
             else value for name, value in values.items()}
@@ -139,6 +146,7 @@ class InputNode(InputThreads, ReplyGuard, Node):
         self.lock = threading.Lock()
         self.core = None
         self._diagnostics = None
+        self._realtime = None
         self._internal_errors = 0
         self._last_warning = {}
         self._init_threads()
@@ -203,7 +211,31 @@ class InputNode(InputThreads, ReplyGuard, Node):
         """
         declare_specs(self, table.specs)
         self._table = table
+        self._apply_realtime()
         return self.parse_settings() if parse else None
+
+    def _apply_realtime(self):
+        """
+        Apply the table's real-time parameters to every thread, at start.
+
+        Before the node's own threads start and before its first input
+        (:mod:`orthoglide_ros.cores.realtime`); a bad value raises
+        :class:`ParameterError` (the process exits 2), a refusal of the OS
+        is one warning per setting and the node runs on.
+        """
+        if not set(realtime.NAMES) <= {s.name for s in self._table.specs}:
+            return
+        self._realtime = realtime.settings_of(
+            spec_values(self, realtime.SPECS))
+        for warning in realtime.apply(*self._realtime):
+            self.log('warning', warning)
+        if any(self._realtime):
+            effect = realtime.in_effect()
+            self.log('info', (
+                f'real time: {effect.policy} {effect.priority} on CPUs '
+                f'{realtime.format_cpus(effect.cpus)}, {effect.alike} of '
+                f'{effect.threads} threads, {effect.locked_kb // 1024} MiB '
+                'locked'))
 
     def parse_settings(self):
         """Return the declared parameters parsed (ValueError if invalid)."""
@@ -326,7 +358,10 @@ class InputNode(InputThreads, ReplyGuard, Node):
         on :attr:`core` as it is then (a managed node has none while
         unconfigured: OK, ``unconfigured``). The node adds values of its
         own: ``replies dropped (client gone)``, the service replies no
-        client waited for, and a managed node its ``lifecycle state``.
+        client waited for, a managed node its ``lifecycle state``, and a
+        node with real-time parameters the scheduling in effect
+        (:func:`orthoglide_ros.cores.realtime.status_values`; WARN when
+        what was asked does not hold).
         """
         self._status_title = title
         if self._diagnostics is None:
@@ -346,6 +381,8 @@ class InputNode(InputThreads, ReplyGuard, Node):
             state = getattr(self, 'lifecycle_state', None)
             if state is not None:
                 status.values.append(('lifecycle state', state))
+            if self._realtime is not None:
+                status = _with_realtime(status, self._realtime)
             self._diagnostics.publish(diagnostic_array(self, title, status))
         self.create_periodic(lambda: DIAGNOSTICS_PERIOD, publish,
                              'diagnostics')
@@ -354,6 +391,24 @@ class InputNode(InputThreads, ReplyGuard, Node):
         """Stop the input and periodic threads, then destroy the node."""
         self.stop_threads()
         super().destroy_node()
+
+
+def _with_realtime(status, asked):
+    """
+    Add the scheduling in effect to ``status``; WARN if short of ``asked``.
+
+    The shortfall leads the message of an OK or WARN status: it lasts, a
+    node's other warnings (stale, rejected input) come and go.
+    """
+    effect = realtime.in_effect()
+    level, message, values = status
+    values = values + realtime.status_values(effect)
+    missing = realtime.shortfall(*asked, effect)
+    if missing is not None and level == OK:
+        level, message = WARN, missing
+    elif missing is not None and level == WARN:
+        message = f'{missing}; {message}'
+    return Status(level, message, values)
 
 
 # The status of a managed node without a core, by lifecycle state.

@@ -1,0 +1,341 @@
+"""
+Real-time scheduling of a node's process, without ROS: priority, CPUs, memory.
+
+Every node that runs a loop or answers a stream declares the three
+read-only parameters of :data:`SPECS`, as ros2_control's
+``controller_manager`` does:
+
+- ``thread_priority``: 0 leaves the scheduling the process was started
+  with (the OS's normal one, unless it was started under ``chrt``); 1-99
+  runs every thread SCHED_FIFO at that priority;
+- ``cpu_affinity``: the CPUs every thread may run on; empty leaves the
+  affinity the process was started with (any CPU, unless ``taskset``);
+- ``lock_memory``: ``mlockall(MCL_CURRENT | MCL_FUTURE)``, so the loop
+  never waits for a page to be read back in.
+
+:func:`apply` makes them hold for every thread of the process (every task
+of ``/proc/self/task``, Fast DDS's receive and event threads included);
+threads made afterwards inherit the policy and the CPUs of the thread
+that makes them. The node calls it once, as it is made, before any
+thread of its own starts and before its first input. What the OS refuses
+(SCHED_FIFO without CAP_SYS_NICE and with an RLIMIT_RTPRIO below the
+priority, mlockall with an RLIMIT_MEMLOCK below the process's size, CPUs
+its cpuset excludes) comes back as one warning line each, naming the
+limit and its fix; that setting is then left as it was, and the node
+runs on. :func:`in_effect` reads back, from ``/proc``, what holds; the
+diagnostics report that (:func:`status_values`), not what was asked.
+
+The values a node cannot have are refused as every bad parameter is: a
+priority outside [0, 99], a CPU this machine does not have.
+
+>>> settings_of({s.name: s.default for s in SPECS})
+(0, (), False)
+>>> apply(*settings_of({s.name: s.default for s in SPECS}))
+[]
+"""
+
+from collections import namedtuple
+import ctypes
+import os
+import resource
+
+from orthoglide_ros.cores.parameters import Spec
+
+# SCHED_FIFO priorities (sched_get_priority_min/max on Linux).
+PRIORITY_RANGE = (0, 99)
+# mlockall(2) flags; the capability that lets a process take SCHED_FIFO.
+MCL_CURRENT, MCL_FUTURE = 1, 2
+CAP_SYS_NICE = 23
+POLICIES = {os.SCHED_OTHER: 'SCHED_OTHER', os.SCHED_FIFO: 'SCHED_FIFO',
+            os.SCHED_RR: 'SCHED_RR', os.SCHED_BATCH: 'SCHED_BATCH',
+            os.SCHED_IDLE: 'SCHED_IDLE'}
+# Rounds of "list the threads, set the new ones": a thread made meanwhile
+# by one not yet set is found by the next round.
+ROUNDS = 10
+_TASKS = '/proc/self/task'
+_ONLINE = '/sys/devices/system/cpu/online'
+
+
+def machine_cpus():
+    """Return the CPUs this machine has online, as a sorted tuple."""
+    try:
+        with open(_ONLINE) as f:
+            return _cpu_list(f.read())
+    except (OSError, ValueError):
+        return tuple(range(os.cpu_count() or 1))
+
+
+def _cpu_list(text):
+    """Read a kernel CPU list (``0-3,6``) as a sorted tuple."""
+    cpus = set()
+    for part in text.strip().split(','):
+        low, _, high = part.partition('-')
+        cpus.update(range(int(low), int(high or low) + 1))
+    return tuple(sorted(cpus))
+
+
+def _cpus(value):
+    """Return the CPUs of ``cpu_affinity`` as a sorted tuple (a Spec check)."""
+    have = machine_cpus()
+    missing = sorted({c for c in value if c not in have})
+    if missing:
+        raise ValueError(
+            f'CPU {", ".join(map(str, missing))} is not a CPU of this '
+            f'machine (it has {format_cpus(have)})')
+    return tuple(sorted(set(value)))
+
+
+SPECS = (
+    Spec('thread_priority', 'integer', 0,
+         'real-time priority of every thread of the node\'s process: 0 '
+         'leaves the scheduling it was started with (the OS\'s normal one); '
+         '1-99 runs every thread SCHED_FIFO at that priority '
+         '(ros2_control\'s default: 50)', PRIORITY_RANGE, read_only=True),
+    Spec('cpu_affinity', 'integer_array', [],
+         'CPUs every thread of the node\'s process may run on; empty: as '
+         'started (any CPU)', check=_cpus, read_only=True),
+    Spec('lock_memory', 'bool', False,
+         'lock every page of the process in memory (mlockall current and '
+         'future): the loop never waits for a page', read_only=True),
+)
+NAMES = tuple(s.name for s in SPECS)
+
+
+def settings_of(values):
+    """
+    Return ``(thread_priority, cpu_affinity, lock_memory)`` checked.
+
+    ``values``: ``{name: value}`` of a node's parameters, None or absent
+    taking the default; raises :class:`ParameterError` naming the first
+    bad one.
+    """
+    return tuple(spec.validate(spec.default if values.get(spec.name) is None
+                               else values[spec.name]) for spec in SPECS)
+
+
+def format_cpus(cpus):
+    """Return CPUs as the kernel writes a list: ``0-3,6``."""
+    cpus = sorted(cpus)
+    parts, start = [], None
+    for i, cpu in enumerate(cpus):
+        if start is None:
+            start = cpu
+        if i + 1 == len(cpus) or cpus[i + 1] != cpu + 1:
+            parts.append(str(start) if start == cpu else f'{start}-{cpu}')
+            start = None
+    return ','.join(parts) or 'none'
+
+
+def apply(thread_priority, cpu_affinity, lock_memory):
+    """
+    Make the settings hold for every thread of this process.
+
+    Memory first (a locked page is never faulted in later), then the CPUs,
+    then the priority. Returns the warnings, one line per setting the OS
+    refused (empty: all in effect); a refused setting is left as it was.
+    """
+    warnings = []
+    if lock_memory:
+        warnings += _lock_memory()
+    if cpu_affinity:
+        cpus = set(cpu_affinity)
+        warnings += _every_thread(
+            lambda tid: os.sched_setaffinity(tid, cpus), os.sched_getaffinity,
+            os.sched_setaffinity, lambda error: _affinity_refused(
+                cpu_affinity, error))
+    if thread_priority:
+        param = os.sched_param(thread_priority)
+        warnings += _every_thread(
+            lambda tid: os.sched_setscheduler(tid, os.SCHED_FIFO, param),
+            lambda tid: (os.sched_getscheduler(tid), os.sched_getparam(tid)),
+            lambda tid, old: os.sched_setscheduler(tid, *old),
+            lambda error: _priority_refused(thread_priority, error))
+    return warnings
+
+
+def client(priority):
+    """
+    Run every thread of this process SCHED_FIFO ``priority``, not its children.
+
+    For a process that feeds or records a real-time node and starts
+    processes itself (a demo, a test, a benchmark): with
+    SCHED_RESET_ON_FORK, the processes and threads it makes afterwards
+    start at normal scheduling, so a node it starts runs as its own
+    ``thread_priority`` says. Call it again after making threads (a DDS
+    participant's) to include them. Returns the warnings as :func:`apply`.
+    """
+    param = os.sched_param(priority)
+    return _every_thread(
+        lambda tid: os.sched_setscheduler(
+            tid, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK, param),
+        lambda tid: (os.sched_getscheduler(tid), os.sched_getparam(tid)),
+        lambda tid, old: os.sched_setscheduler(tid, *old),
+        lambda error: _priority_refused(priority, error))
+
+
+def normal():
+    """Put every thread of this process back at normal scheduling."""
+    for tid in _threads():
+        try:
+            os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+        except ProcessLookupError:  # the thread ended meanwhile
+            pass
+
+
+def granted(priority):
+    """Whether this process may take SCHED_FIFO ``priority`` (caps, limit)."""
+    if _limit(resource.RLIMIT_RTPRIO) == 'unlimited' or \
+            _limit(resource.RLIMIT_RTPRIO) >= priority:
+        return True
+    with open('/proc/self/status') as f:
+        effective = next(int(line.split()[1], 16) for line in f
+                         if line.startswith('CapEff:'))
+    return bool(effective >> CAP_SYS_NICE & 1)
+
+
+def _every_thread(change, read, restore, refused):
+    """
+    ``change(tid)`` for every thread, found anew until none is new.
+
+    The OS refusing one (an OSError other than a thread that has ended)
+    puts back what was changed (``restore(tid, read(tid))``) and returns
+    ``[refused(error)]``; else ``[]``.
+    """
+    done = {}
+    try:
+        for _ in range(ROUNDS):
+            new = [tid for tid in _threads() if tid not in done]
+            if not new:
+                break
+            for tid in new:
+                try:
+                    old = read(tid)
+                    change(tid)
+                except ProcessLookupError:  # the thread ended meanwhile
+                    continue
+                done[tid] = old
+    except OSError as error:
+        for tid, old in done.items():
+            try:
+                restore(tid, old)
+            except OSError:
+                pass
+        return [refused(error)]
+    return []
+
+
+def _threads():
+    """Return the thread ids of this process."""
+    return [int(name) for name in os.listdir(_TASKS)]
+
+
+def _limit(kind):
+    soft = resource.getrlimit(kind)[0]
+    return 'unlimited' if soft == resource.RLIM_INFINITY else soft
+
+
+def _priority_refused(priority, error):
+    return (
+        f'thread_priority {priority} refused by the OS ({error.strerror}): '
+        'SCHED_FIFO needs CAP_SYS_NICE or an RLIMIT_RTPRIO of at least '
+        f'{priority} (it is {_limit(resource.RLIMIT_RTPRIO)}); allow it with '
+        '"<user> - rtprio 99" in /etc/security/limits.conf, '
+        'LimitRTPRIO=99 in a systemd unit, or docker run '
+        '--cap-add=sys_nice --ulimit rtprio=99; running at normal '
+        'scheduling')
+
+
+def _affinity_refused(cpus, error):
+    return (
+        f'cpu_affinity {format_cpus(cpus)} refused by the OS '
+        f'({error.strerror}): this process may run on CPUs '
+        f'{format_cpus(os.sched_getaffinity(0))} only (its cpuset: docker '
+        'run --cpuset-cpus, systemd AllowedCPUs=); running on those')
+
+
+def _lock_memory():
+    libc = ctypes.CDLL(None, use_errno=True)
+    if libc.mlockall(MCL_CURRENT | MCL_FUTURE) == 0:
+        return []
+    error = ctypes.get_errno()
+    limit = _limit(resource.RLIMIT_MEMLOCK)
+    limit = limit if limit == 'unlimited' else f'{limit // 1024} kiB'
+    return [
+        f'lock_memory refused by the OS ({os.strerror(error)}): mlockall '
+        'needs CAP_IPC_LOCK or an RLIMIT_MEMLOCK above the process\'s '
+        f'{_status_kb("VmSize") // 1024} MiB (it is {limit}); allow it '
+        'with "<user> - memlock unlimited" in /etc/security/limits.conf, '
+        'LimitMEMLOCK=infinity in a systemd unit, or docker run --ulimit '
+        'memlock=-1; memory not locked']
+
+
+def _status_kb(key):
+    """Return a ``kB`` value of /proc/self/status (0 if absent)."""
+    with open('/proc/self/status') as f:
+        for line in f:
+            if line.startswith(key + ':'):
+                return int(line.split()[1])
+    return 0
+
+
+Effect = namedtuple('Effect', 'policy priority cpus threads alike '
+                    'locked_kb')
+Effect.__doc__ = """What holds for the process, read from ``/proc``.
+
+``policy`` (a name of :data:`POLICIES`), ``priority`` (its real-time
+priority, 0 for SCHED_OTHER) and ``cpus`` (a sorted tuple) of the main
+thread; ``threads``: how many the process has; ``alike``: how many of them
+run at that policy, priority and CPUs; ``locked_kb``: VmLck, the memory
+locked (kB)."""
+
+
+def in_effect():
+    """Return the :class:`Effect` that holds now."""
+    main = os.getpid()
+    rows = []
+    for tid in _threads():
+        try:
+            with open(f'{_TASKS}/{tid}/stat') as f:
+                fields = f.read().rsplit(')', 1)[1].split()
+            cpus = tuple(sorted(os.sched_getaffinity(tid)))
+        except (OSError, IndexError):   # the thread ended meanwhile
+            continue
+        # stat(5): field 40 rt_priority, 41 policy; fields[0] is field 3.
+        rows.append((tid, int(fields[38]), int(fields[37]), cpus))
+    mine = next((r for r in rows if r[0] == main), rows[0])
+    alike = sum(1 for r in rows if r[1:] == mine[1:])
+    return Effect(POLICIES.get(mine[1], str(mine[1])), mine[2], mine[3],
+                  len(rows), alike, _status_kb('VmLck'))
+
+
+def status_values(effect):
+    """Return the diagnostics' ``(key, value)`` pairs of an Effect."""
+    return [('scheduling policy', effect.policy),
+            ('thread priority', effect.priority),
+            ('cpu affinity', format_cpus(effect.cpus)),
+            ('threads at that policy', f'{effect.alike} of {effect.threads}'),
+            ('memory locked (kB)', effect.locked_kb)]
+
+
+def shortfall(thread_priority, cpu_affinity, lock_memory, effect):
+    """
+    Return what was asked and does not hold, as one line, or None.
+
+    The diagnostics turn WARN with it: a node asked to run in real time
+    that does not (the OS refused, or a thread escaped) is degraded.
+    """
+    missing = []
+    if thread_priority and (effect.policy, effect.priority) != (
+            'SCHED_FIFO', thread_priority):
+        missing.append(f'SCHED_FIFO {thread_priority} asked, '
+                       f'{effect.policy} {effect.priority} in effect')
+    if cpu_affinity and effect.cpus != tuple(cpu_affinity):
+        missing.append(f'CPUs {format_cpus(cpu_affinity)} asked, '
+                       f'{format_cpus(effect.cpus)} in effect')
+    if (thread_priority or cpu_affinity) and effect.alike < effect.threads:
+        missing.append(f'{effect.threads - effect.alike} of '
+                       f'{effect.threads} threads not at that policy')
+    if lock_memory and not effect.locked_kb:
+        missing.append('lock_memory asked, no memory locked')
+    return 'real time not in effect: ' + '; '.join(missing) if missing \
+        else None
