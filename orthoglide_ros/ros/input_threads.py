@@ -49,7 +49,8 @@ from orthoglide_ros.cores.inputs import clip, Rejected, SMALL_MESSAGE_BYTES
 # Longest wait of an input thread before it looks at its stop flag and the
 # context again (a stop also wakes it at once through a guard condition).
 INPUT_WAIT = 0.1    # s
-# Shortest wait of a periodic thread between two runs (s), however late.
+# Shortest wait of a periodic thread between two runs (s), however late,
+# and of an input thread after a wake-up that found a history full.
 MIN_IDLE = 0.0005
 
 
@@ -279,10 +280,14 @@ class InputThreads:
                     if event.is_ready(wait_set):
                         self._handle_event(event)
                 ready = wait_set.get_ready_entities('subscription')
-                if ready:
-                    self._dispatch([
+                if ready and self._dispatch([
                         (item, handle) for item, handle in zip(inputs, handles)
-                        if handle.pointer in ready])
+                        if handle.pointer in ready]):
+                    # A flood (or a stall): its CPU is bounded, and the
+                    # node's other threads of the same real-time priority
+                    # (services, ticks), which a SCHED_FIFO thread that
+                    # never blocks would keep off its CPU, get their turn.
+                    self._stopping.wait(MIN_IDLE)
                 elif group.name == 'inputs' and not self._stopping.is_set():
                     self._idle()
 
@@ -311,16 +316,22 @@ class InputThreads:
         pose, twist and accel published in that order are handled in that
         order even when they wait together. At most the history depth per
         subscription. Each message is checked against its input's byte
-        limit and decoded before the lock is taken.
+        limit and decoded before the lock is taken. Returns whether a
+        subscription held its whole history depth (it may have dropped
+        messages: a flood, or a stall of this thread).
         """
-        batch = []
+        batch, full = [], False
         for item, handle in ready:
+            taken_here = 0
             while True:
                 taken = handle.take_message(item.subscription.msg_type, True)
                 if taken is None:
                     break
+                taken_here += 1
                 batch.append((taken[1]['received_timestamp'], len(batch),
                               item, taken[0]))
+            depth = item.subscription.qos_profile.depth     # 0: keep-all
+            full |= 0 < depth <= taken_here
         batch.sort(key=lambda entry: entry[:2])
         # Reception (system clock, ns) to the monotonic clock; never later
         # than now, and now when the middleware gives no reception time.
@@ -328,10 +339,11 @@ class InputThreads:
         offset = monotonic_now - time.time_ns() * 1e-9
         for received, _, item, data in batch:
             if self._stopping.is_set():
-                return
+                return full
             self.deliver(item.source, data,
                          min(received * 1e-9 + offset, monotonic_now)
                          if received > 0 else monotonic_now)
+        return full
 
 
 def _decoded(item, data):
