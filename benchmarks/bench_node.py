@@ -28,15 +28,28 @@ process over the run (first publish to end of the drain) / setpoints sent.
 A rate scan then finds, per target and input, the highest rate of the scan
 list that is sustained: loss <= 0.1 % and p99 latency < 20 ms.
 
+Under load: ``--load N`` starts N busy loops (``while True: pass``, normal
+scheduling) for the whole benchmark and ends them; ``--thread-priority P``
+runs every target twice, as it is and real-time: the node with ``-p
+thread_priority:=P`` (every thread SCHED_FIFO P, checked in
+``/proc/PID/task`` during the run), the echo baselines under ``chrt -f
+P``. The producer (this process) and the recorder then run SCHED_FIFO
+``--client-priority`` (default 60, as a ros2_control loop's client; 0:
+normal), their children reset to normal scheduling. The real-time check:
+the node's p99 at most 2x the real-time echo's and at most 3 ms, at most
+0.2 % of the setpoints lost, every thread SCHED_FIFO.
+
 Usage: python benchmarks/bench_node.py [--rate 1000] [--duration 10]
        [--inputs trajectory,topics] [--qos reliable[,best_effort]]
        [--rates-scan 500,1000,1500,2000,3000] [--scan-duration S]
        [--targets node,echo-single,echo-events] [--json FILE]
+       [--load N] [--thread-priority P] [--client-priority C]
 """
 
 import argparse
 import array
 import json
+import math
 import os
 import platform
 import select
@@ -58,8 +71,9 @@ ROOT = os.path.dirname(HERE)
 # The DDS test helpers (setpoint producer, process stopping) are shared.
 sys.path.insert(0, os.path.join(ROOT, 'test'))
 
-from node_harness import (cpu_seconds, INPUT_TOPICS, interrupt,  # noqa: E402
-                          Producer, qos_profile)
+from node_harness import (busy_loops, cpu_seconds,  # noqa: E402
+                          INPUT_TOPICS, interrupt, Producer, qos_profile)
+from orthoglide_ros.cores import realtime  # noqa: E402
 from orthoglide_ros.model.trajectory import PAPER_DURATION  # noqa: E402
 from orthoglide_ros.model.trajectory import paper_sample  # noqa: E402
 
@@ -74,6 +88,9 @@ SEGMENT_S = 10000           # stamps of run k start at (k + 1) * SEGMENT_S s
 DRAIN_S = 0.5
 PREROLL_S = 0.5
 START_TIMEOUT_S = 20.0
+# The real-time check (--thread-priority): p99 at most this times the
+# real-time echo's and at most RT_P99_MS, loss at most RT_LOSS.
+RT_P99_FACTOR, RT_P99_MS, RT_LOSS = 2.0, 3.0, 0.002
 
 
 # Recorder process --------------------------------------------------------
@@ -119,13 +136,15 @@ def record(path, qos):
 
 
 # Target processes --------------------------------------------------------
-def target_command(target, kind, qos):
-    """Command line of a target process."""
+def target_command(target, kind, qos, priority=0):
+    """Command line of a target process (``priority``: real-time)."""
     if target in NODES:
         cmd = [os.path.join(os.path.dirname(sys.executable), 'feedforward')]
         cmd += ['--ros-args', '--params-file',
                 os.path.join(ROOT, 'config', 'orthoglide.yaml'),
                 '-p', 'setpoint_timeout:=1.0']
+        if priority:
+            cmd += ['-p', f'thread_priority:={priority}']
         if qos != 'reliable':
             for topic in INPUT_TOPICS[kind]:
                 cmd += ['-p', f'qos_overrides./setpoint/{topic}.subscription'
@@ -134,9 +153,26 @@ def target_command(target, kind, qos):
                 cmd += ['-p', f'qos_overrides./feedforward/{topic}.publisher'
                         f'.reliability:={qos}']
         return cmd
-    return [sys.executable, os.path.join(HERE, 'echo_node.py'),
-            '--input', kind, '--executor', EXECUTORS[target],
-            '--qos', qos]
+    return chrt(priority) + [
+        sys.executable, os.path.join(HERE, 'echo_node.py'), '--input', kind,
+        '--executor', EXECUTORS[target], '--qos', qos]
+
+
+def chrt(priority):
+    """Return the command prefix that starts a process SCHED_FIFO P."""
+    return ['chrt', '-f', str(priority)] if priority else []
+
+
+def fifo_threads(pid, priority):
+    """Return (threads at SCHED_FIFO ``priority``, threads) of ``pid``."""
+    held = []
+    for name in os.listdir(f'/proc/{pid}/task'):
+        try:
+            held.append((os.sched_getscheduler(int(name)),
+                         os.sched_getparam(int(name)).sched_priority))
+        except ProcessLookupError:
+            continue
+    return sum(1 for h in held if h == (os.SCHED_FIFO, priority)), len(held)
 
 
 def stop(proc):
@@ -178,8 +214,14 @@ def produce(producer, rate, count, base_ns, check):
 
 
 # One target process, several runs -----------------------------------------
-def run_group(target, kind, qos, runs, domain, say):
-    """Start a target and a recorder, do ``runs`` [(rate, s)], stop both."""
+def run_group(target, kind, qos, runs, domain, say, priority=0,
+              client=0):
+    """
+    Start a target and a recorder, do ``runs`` [(rate, s)], stop both.
+
+    ``priority``: the target's real-time priority (0: as it is);
+    ``client``: the producer's and the recorder's (0: normal).
+    """
     tmp = tempfile.mkdtemp(prefix='bench-node-')
     env = dict(os.environ, ROS_DOMAIN_ID=str(domain),
                ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
@@ -189,16 +231,17 @@ def run_group(target, kind, qos, runs, domain, say):
     procs = {}
     context = node = None
     results = [dict(target=target, input=kind, qos=qos, rate=rate,
-                    duration=duration, status='not run')
+                    duration=duration, priority=priority, status='not run')
                for rate, duration in runs]
     try:
         t0 = time.monotonic()
         procs['target'] = subprocess.Popen(
-            target_command(target, kind, qos), env=env, cwd=ROOT,
+            target_command(target, kind, qos, priority), env=env, cwd=ROOT,
             stdin=subprocess.DEVNULL, stdout=err, stderr=err)
         procs['recorder'] = subprocess.Popen(
-            [sys.executable, os.path.abspath(__file__), '--record',
-             log_path, '--qos', qos], env=env, cwd=ROOT,
+            chrt(client) + [sys.executable, os.path.abspath(__file__),
+                            '--record', log_path, '--qos', qos],
+            env=env, cwd=ROOT,
             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, text=True)
 
         def check():
@@ -210,6 +253,9 @@ def run_group(target, kind, qos, runs, domain, say):
         rclpy.init(context=context, domain_id=domain)
         node = rclpy.create_node('bench_producer', context=context)
         producer = Producer(node, kind, qos)
+        if client:      # this process's DDS threads exist now
+            for warning in realtime.client(client):
+                say(f'  {warning}')
         _start(producer, procs['recorder'], check, runs[0][0])
         for k, (rate, duration) in enumerate(runs):
             result = results[k]
@@ -228,12 +274,14 @@ def run_group(target, kind, qos, runs, domain, say):
                 raise
             end = (cpu_seconds(pid), cpu_seconds(procs['recorder'].pid),
                    time.process_time())
+            result['fifo_threads'] = fifo_threads(pid, priority) \
+                if priority else None
             result.update(status='ok', stamps=stamps, published=published,
                           late=late, sent=count,
                           cpu_us=_per_tick(cpu[0], end[0], count),
                           recorder_cpu_us=_per_tick(cpu[1], end[1], count),
                           producer_cpu_us=_per_tick(cpu[2], end[2], count))
-            say(f'  {target:11} {kind:10} {qos:11} {rate:5d} Hz done')
+            say(f'  {label(result):14} {kind:10} {qos:11} {rate:5d} Hz done')
     except Failed as error:
         pid = procs['target'].pid
         busy = cpu_seconds(pid)
@@ -244,6 +292,8 @@ def run_group(target, kind, qos, runs, domain, say):
             if result['status'] == 'not run':
                 result['status'] = f'failed: {error}'
     finally:
+        if client:
+            realtime.normal()
         ends = {name: stop(proc) for name, proc in procs.items()}
         if node is not None:
             node.destroy_node()
@@ -336,15 +386,21 @@ def _f(value, form='.2f'):
     return '-' if value is None else format(value, form)
 
 
+def label(result):
+    """Return a target's name in the tables: ``node``, ``node fifo 50``."""
+    priority = result.get('priority')
+    return result['target'] + (f' fifo {priority}' if priority else '')
+
+
 def table(results):
     """Lines of the main table."""
-    head = (f'{"target":11} {"input":10} {"qos":11} {"rate":>5} '
+    head = (f'{"target":14} {"input":10} {"qos":11} {"rate":>5} '
             f'{"sent":>6} {"recv":>6} {"lost":>5} {"p50":>6} {"p99":>6} '
             f'{"max":>7} {"cpu/tick":>8} {"rec/tk":>6} {"late99":>6}')
-    lines = [head, f'{"":50}{"(ms)":>20}{"(us)":>17}{"(us)":>7}'
+    lines = [head, f'{"":53}{"(ms)":>20}{"(us)":>17}{"(us)":>7}'
              f'{"(ms)":>7}', '-' * len(head)]
     for r in results:
-        row = (f'{r["target"]:11} {r["input"]:10} {r["qos"]:11} '
+        row = (f'{label(r):14} {r["input"]:10} {r["qos"]:11} '
                f'{r["rate"]:5d} ')
         if r['status'] != 'ok':
             lines.append(row + r['status'])
@@ -358,10 +414,11 @@ def table(results):
     return lines
 
 
-def _find(results, target, kind, qos, rate, duration, ok=True):
+def _find(results, target, kind, qos, rate, duration, ok=True, priority=0):
     for r in results:
-        if (r['target'], r['input'], r['qos'], r['rate'],
-                r['duration']) == (target, kind, qos, rate, duration) \
+        if (r['target'], r['input'], r['qos'], r['rate'], r['duration'],
+                r['priority']) == (target, kind, qos, rate, duration,
+                                   priority) \
                 and (r['status'] == 'ok' or not ok):
             return r
     return None
@@ -434,6 +491,54 @@ def checks(results, nodes, args):
     return lines, verdicts
 
 
+def realtime_checks(results, nodes, kinds, qoses, args):
+    """
+    Check each node run at ``--thread-priority`` for real time.
+
+    Against the echo-single baseline under ``chrt -f P`` in the same run:
+    p99 <= RT_P99_FACTOR x its p99 and <= RT_P99_MS, loss <= RT_LOSS,
+    every thread of the node SCHED_FIFO P. Returns (lines, verdicts).
+    """
+    priority = args.thread_priority
+    lines = [f'Real-time check, {args.load} busy loop(s), client SCHED_FIFO '
+             f'{args.client_priority or "off"}: node fifo {priority} p99 <= '
+             f'{RT_P99_FACTOR:g}x echo-single fifo {priority} and <= '
+             f'{RT_P99_MS:g} ms, loss <= {RT_LOSS:.1%}, every thread '
+             'SCHED_FIFO']
+    verdicts = {}
+    for node_target in nodes:
+        for kind in kinds:
+            for qos in qoses:
+                node = _find(results, node_target, kind, qos, args.rate,
+                             args.duration, ok=False, priority=priority)
+                echo = _find(results, 'echo-single', kind, qos, args.rate,
+                             args.duration, priority=priority)
+                row = f'  {node_target} {kind:10} {qos:11}: '
+                if node is None or echo is None:
+                    lines.append(row + 'no result')
+                    continue
+                if node['status'] != 'ok':
+                    verdict, why = 'MISS', node['status']
+                else:
+                    fifo, threads = node['fifo_threads']
+                    p99 = node.get('p99_ms', math.inf)
+                    parts = {
+                        f'p99 {p99:.2f} ms <= {RT_P99_FACTOR:g}x '
+                        f'{echo.get("p99_ms", math.nan):.2f}':
+                            p99 <= RT_P99_FACTOR * echo.get('p99_ms', 0.0),
+                        f'<= {RT_P99_MS:g} ms': p99 <= RT_P99_MS,
+                        f'loss {node["loss"]:.2%}': node['loss'] <= RT_LOSS,
+                        f'threads FIFO {fifo} of {threads}':
+                            fifo == threads}
+                    verdict = 'PASS' if all(parts.values()) else 'MISS'
+                    why = ', '.join(f'{k} {"ok" if v else "NO"}'
+                                    for k, v in parts.items())
+                verdicts[f'{node_target} {kind} {qos} fifo {priority}'] = \
+                    verdict
+                lines.append(row + f'{verdict}  ({why})')
+    return lines, verdicts
+
+
 def scan_lines(results, targets, kinds, qos, rates, duration):
     """Lines of the rate scan: highest sustained rate, mark per rate."""
     lines = [f'Rate scan ({qos}); sustained = loss <= '
@@ -483,6 +588,17 @@ def main():
                         help='first ROS_DOMAIN_ID, one per target process, '
                         'wrapping within 200-230')
     parser.add_argument('--json', metavar='FILE', help='save the results')
+    parser.add_argument('--load', type=int, default=0, metavar='N',
+                        help='busy loops to run during the benchmark '
+                        '(default 0)')
+    parser.add_argument('--thread-priority', type=int, default=0,
+                        metavar='P', help='also run every target at '
+                        'SCHED_FIFO P (the node by its thread_priority, '
+                        'the echo under chrt); 0: only as it is')
+    parser.add_argument('--client-priority', type=int, default=60,
+                        metavar='C', help='with --thread-priority: the '
+                        'producer and the recorder at SCHED_FIFO C '
+                        '(default 60; 0: normal)')
     parser.add_argument('--record', help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.record:
@@ -499,6 +615,17 @@ def main():
         bad = set(value) - set(allowed)
         if bad:
             parser.error(f'unknown {", ".join(sorted(bad))}')
+    for name, value in (('thread-priority', args.thread_priority),
+                        ('client-priority', args.client_priority)):
+        if not 0 <= value <= 99:
+            parser.error(f'--{name} must lie in [0, 99]')
+    priorities = [0] + ([args.thread_priority] if args.thread_priority
+                        else [])
+    client = args.client_priority if args.thread_priority else 0
+    if (args.thread_priority or client) and not realtime.granted(
+            max(args.thread_priority, client)):
+        parser.error('SCHED_FIFO is not granted here (CAP_SYS_NICE or an '
+                     'RLIMIT_RTPRIO): see doc/deployment.md#real-time')
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 
     def say(text):
@@ -506,32 +633,41 @@ def main():
 
     load = os.getloadavg()
     results, group = [], 0
-    for qos in qoses:
-        for kind in kinds:
-            for target in targets:
-                runs = [(args.rate, args.duration)]
-                if qos == qoses[0]:
-                    runs += [(r, scan_duration) for r in scan
-                             if (r, scan_duration) != runs[0]]
-                domain = 200 + (args.domain - 200 + group) % 31
-                group += 1
-                results += run_group(target, kind, qos, runs, domain, say)
+    with busy_loops(args.load):
+        for priority in priorities:
+            for qos in qoses:
+                for kind in kinds:
+                    for target in targets:
+                        runs = [(args.rate, args.duration)]
+                        if qos == qoses[0] and not priority:
+                            runs += [(r, scan_duration) for r in scan
+                                     if (r, scan_duration) != runs[0]]
+                        domain = 200 + (args.domain - 200 + group) % 31
+                        group += 1
+                        results += run_group(target, kind, qos, runs, domain,
+                                             say, priority, client)
     main_runs = [r for r in results if r['rate'] == args.rate
                  and r['duration'] == args.duration]
     out = [f'bench_node: {platform.node()}, {os.cpu_count()} CPUs, load '
-           f'{load[0]:.2f} -> {os.getloadavg()[0]:.2f}; recorder in its own '
-           'process (EventsExecutor); latency = recorder receive - '
-           'producer publish, CLOCK_MONOTONIC', '']
+           f'{load[0]:.2f} -> {os.getloadavg()[0]:.2f}, {args.load} busy '
+           f'loop(s) started; client SCHED_FIFO {client or "off"}; recorder '
+           'in its own process (EventsExecutor); latency = recorder receive '
+           '- producer publish, CLOCK_MONOTONIC', '']
     out += table(main_runs)
     out += ['', 'cpu/tick: target process utime+stime / setpoints sent; '
             'rec/tk: the recorder\'s; late99: producer p99 lateness', '']
-    stops = sorted({(r['target'], r['stop']['target']) for r in results
+    stops = sorted({(label(r), r['stop']['target']) for r in results
                     if 'stop' in r})
     out += [f'{t} process: {how}' for t, how in stops] + ['']
     nodes = [t for t in targets if t in NODES]
     out += ratios(results, nodes, kinds, qoses, args.rate, args.duration)
     check_lines, verdicts = checks(results, nodes, args)
     out += [''] + check_lines
+    if args.thread_priority:
+        rt_lines, rt_verdicts = realtime_checks(results, nodes, kinds,
+                                                qoses, args)
+        out += [''] + rt_lines
+        verdicts.update(rt_verdicts)
     summary = {}
     if scan:
         lines, summary = scan_lines(results, targets, kinds, qoses[0],
