@@ -34,6 +34,8 @@ sys.path.insert(0, str(ROOT / 'test'))
 import rclpy  # noqa: E402
 
 import closed_loop_harness as harness  # noqa: E402
+from node_harness import (add_load_options, busy_loops,  # noqa: E402
+                          check_load_options)
 
 CASES = ((False, 1.0), (True, 1.0), (False, harness.MISMATCH),
          (True, harness.MISMATCH))      # (feedforward, plant mass factor)
@@ -61,6 +63,7 @@ def main(argv=None):
                         'setpoint_publisher (default); trajectory: each '
                         'pass as one Cartesian trajectory, converted by the '
                         'feedforward, followed as a JointTrajectory')
+    add_load_options(parser)
     parser.add_argument('--plot', default=str(ROOT / 'out' /
                                               'closed_loop.png'),
                         metavar='FILE', help='PNG of the tracking errors '
@@ -71,13 +74,15 @@ def main(argv=None):
     if unknown or not (1.0 <= args.loop_rate <= args.plant_rate <= 10000.0):
         parser.error(f'unknown trajectories {unknown}' if unknown else
                      'rates: need 1 <= loop rate <= plant rate <= 10000 Hz')
+    check_load_options(parser, args)
 
     context = rclpy.context.Context()
     rclpy.init(context=context)
     runs = {}
     try:
-        with harness.ClosedLoop(context, args.loop_rate, args.plant_rate,
-                                args.engine) as loop:
+        with busy_loops(args.load), harness.ClosedLoop(
+                context, args.loop_rate, args.plant_rate, args.engine,
+                realtime=args.realtime) as loop:
             for name in names:
                 for feedforward, mass in CASES:
                     run = loop.run_unspoiled(
@@ -104,8 +109,10 @@ def print_table(runs, names, args):
     print(f'\nTracking error of the platform centre (mm), loop '
           f'{args.loop_rate:g} Hz, plant {args.plant_rate:g} Hz '
           f'({args.engine}), '
-          + ('streamed setpoints:' if args.mode == 'stream' else
-             'one joint trajectory per pass:'))
+          + ('streamed setpoints' if args.mode == 'stream' else
+             'one joint trajectory per pass')
+          + f', {args.load} busy loop(s), '
+          + ('real-time nodes:' if args.realtime else 'normal scheduling:'))
     print(f'{"trajectory":<10} {"plant":<16} {"PD rms":>8} {"PD max":>8} '
           f'{"PD+FF rms":>10} {"PD+FF max":>10} {"ratio rms":>10}')
     for name in names:

@@ -17,6 +17,7 @@ a check failed, 2 on a usage error.
 """
 
 import argparse
+from contextlib import ExitStack
 import os
 from pathlib import Path
 import re
@@ -53,7 +54,9 @@ from orthoglide_ros.model import mechanics  # noqa: E402
 from orthoglide_ros.tools import drawing  # noqa: E402
 from orthoglide_ros.tools.cli import CSV_COLUMNS  # noqa: E402
 from orthoglide_ros.formats.params_file import load_robot  # noqa: E402
-from node_harness import interrupt  # noqa: E402
+from node_harness import (add_load_options, busy_loops,  # noqa: E402
+                          check_load_options, interrupt, realtime_args,
+                          realtime_client)
 
 BIN = Path(sys.executable).parent
 PARAMS = ROOT / 'config' / 'orthoglide.yaml'
@@ -168,12 +171,15 @@ def _xyz(vector):
 
 def main(argv=None):
     """Run the demo; return the exit code."""
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args = parser.parse_args(argv)
+    check_load_options(parser, args)
     started = time.monotonic()
     timing = None
     try:
         robot = load_robot(str(PARAMS))
-        record, logs, failures, timing = _run(args)
+        with busy_loops(args.load):
+            record, logs, failures, timing = _run(args)
         try:
             _report(args, robot, record, logs)
         except DemoError as error:
@@ -218,6 +224,7 @@ def _parser():
     parser.add_argument('--animation', metavar='FILE', help=(
         'GIF of the robot along the run, with the forces the node '
         'published (default: the plot\'s name with .gif)'))
+    add_load_options(parser)
     parser.add_argument('--csv', metavar='FILE', help=(
         'write the recorded samples: ' + ','.join(CSV_COLUMNS) + ' (SI '
         'units; t in s since the first setpoint; lambdaddot is not '
@@ -251,11 +258,13 @@ def _run(args):
     """
     rclpy.init()
     processes, logs = {}, {}
+    elevated = ExitStack()
     try:
         recorder = Recorder(args.input)
         # Not the EventsExecutor: it cannot pass the message info.
         executor = rclpy.executors.SingleThreadedExecutor()
         executor.add_node(recorder)
+        elevated.enter_context(realtime_client(args.realtime))
 
         def spin(seconds, until=lambda: False):
             deadline = time.monotonic() + seconds
@@ -269,14 +278,15 @@ def _run(args):
         # subscribes once it has matched the node's outputs.
         processes['feedforward'] = _start(logs, 'feedforward', [
             str(BIN / 'feedforward'), '--ros-args',
-            '--params-file', str(PARAMS)])
+            '--params-file', str(PARAMS), *realtime_args(args.realtime)])
         publisher = processes['setpoint_publisher'] = _start(
             logs, 'setpoint_publisher', [
                 str(BIN / 'setpoint_publisher'), '--ros-args',
                 '-p', f'rate_hz:={args.rate!r}', '-p', f'input:={args.input}',
                 '-p', f'duration:={args.duration!r}',
                 '-p', 'min_subscribers:=2',
-                '-p', f'start_delay:={START_TIMEOUT!r}'])
+                '-p', f'start_delay:={START_TIMEOUT!r}',
+                *realtime_args(args.realtime)])
         # matplotlib takes seconds to import on a busy machine: meanwhile.
         threading.Thread(target=_import_matplotlib, daemon=True).start()
 
@@ -323,6 +333,7 @@ def _run(args):
         return recorder, {name: log.read_text(errors='replace')
                           for name, log in logs.items()}, failures, timing
     finally:
+        elevated.close()
         for process in processes.values():
             interrupt(process, STOP_TIMEOUT)
         rclpy.try_shutdown()

@@ -60,7 +60,8 @@ import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 
 import closed_loop_harness as harness  # noqa: E402
-from node_harness import node_executable, start_node_process, \
+from node_harness import add_load_options, busy_loops, \
+    check_load_options, client_prefix, node_executable, start_node_process, \
     stop_process  # noqa: E402
 from orthoglide_ros.formats import params_file  # noqa: E402
 from orthoglide_ros.model import mjcf  # noqa: E402
@@ -114,6 +115,7 @@ def main(argv=None):
                         'model family, default) or mujoco (an MJCF with '
                         f'slider armature {ARMATURE:g} kg and MuJoCo\'s '
                         'friction: a robot that is not the model)')
+    add_load_options(parser)
     parser.add_argument('--out', default=str(ROOT / 'out' / 'identification'),
                         metavar='DIR', help='bag, parameters file and PNG '
                         '(default out/identification in the repository)')
@@ -123,6 +125,7 @@ def main(argv=None):
             args.passes < 1 or args.repeats < 1 or not args.period > 0.0:
         parser.error('unknown trajectory, or passes or repeats < 1, or '
                      'period <= 0')
+    check_load_options(parser, args)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     bag, other = out / 'excitation', out / 'validation'
@@ -145,8 +148,9 @@ def main(argv=None):
     context = rclpy.context.Context()
     rclpy.init(context=context)
     try:
-        with harness.ClosedLoop(context, engine=args.engine,
-                                mjcf_file=str(model_file)) as loop:
+        with busy_loops(args.load), harness.ClosedLoop(
+                context, engine=args.engine, mjcf_file=str(model_file),
+                realtime=args.realtime) as loop:
             excitation = excite(loop, args.seed, args.period, args.passes,
                                 bag, nominal, plant)
             validation = excite(loop, args.seed + 1, args.period,
@@ -184,7 +188,7 @@ def excite(loop, seed, period, passes, bag, nominal, plant):
     record = start_node_process(
         ['record', '--output', str(bag), '--topic', '/joint_states',
          '--duration', f'{passes * period + RECORD_MARGIN:g}'],
-        command=[node_executable('orthoglide')])
+        command=[*client_prefix(loop.realtime), node_executable('orthoglide')])
     try:
         # The controller, the harness's recorder and this one.
         loop.wait_for_subscribers('joint_states', 3)

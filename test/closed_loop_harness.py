@@ -56,6 +56,7 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
 from node_harness import (cartesian_message, node_executable,
+                          realtime_args, realtime_client, REALTIME,
                           start_node_process, stop_process)
 
 from orthoglide_ros.model import mechanics, trajectory
@@ -210,12 +211,18 @@ class ClosedLoop:
     after a timeout) and :attr:`exit_codes` and :attr:`stderr` keep what
     they returned. ``loop_rate`` and ``plant_rate`` in Hz; ``engine``: the
     simulator's (``builtin`` or ``mujoco``), ``mjcf_file`` its model file
-    (mujoco; '' builds it from the plant's robot).
+    (mujoco; '' builds it from the plant's robot). ``realtime`` (default:
+    where the OS grants it): the loop's nodes (the setpoint publisher's
+    included) run every thread SCHED_FIFO NODE_PRIORITY (their
+    ``thread_priority``) and this process, the recorder, SCHED_FIFO
+    CLIENT_PRIORITY, its children reset (``node_harness.realtime_client``).
     """
 
     def __init__(self, context, loop_rate=LOOP_RATE, plant_rate=PLANT_RATE,
-                 engine='builtin', mjcf_file=''):
+                 engine='builtin', mjcf_file='', realtime=REALTIME):
         self.context = context
+        self.realtime = realtime
+        self.node_args = realtime_args(realtime)
         self.loop_rate = loop_rate
         self.plant_rate = plant_rate
         self.engine = engine
@@ -225,6 +232,7 @@ class ClosedLoop:
         self.stderr = {}
         self.recorder = None
         self.executor = None
+        self._realtime = None
 
     def __enter__(self):
         """Start the nodes and wait until the recorder reaches them."""
@@ -241,11 +249,14 @@ class ClosedLoop:
         try:
             for name, params in commands.items():
                 self.processes[name] = start_node_process(
-                    ['--ros-args', *params],
+                    ['--ros-args', *params, *self.node_args],
                     command=[node_executable(name)])
             self.recorder = Recorder(self.context)
             self.executor = EventsExecutor(context=self.context)
             self.executor.add_node(self.recorder)
+            # The recorder's DDS threads exist now.
+            self._realtime = realtime_client(self.realtime)
+            self._realtime.__enter__()
             self._wait(lambda: (
                 self.recorder.reset.service_is_ready()
                 and self.recorder.plant.services_are_ready()
@@ -261,6 +272,9 @@ class ClosedLoop:
 
     def __exit__(self, *exc):
         """Stop every process (SIGINT) and the recorder."""
+        if self._realtime is not None:
+            self._realtime.__exit__(None, None, None)
+            self._realtime = None
         for name, proc in self.processes.items():
             self.exit_codes[name], self.stderr[name] = stop_process(proc)
         self.processes = {}
@@ -353,7 +367,8 @@ class ClosedLoop:
             '-p', 'start_delay:=10.0',
             # The feedforward and the recorder.
             '-p', 'min_subscribers:=2',
-            '-p', f'loop:={"true" if passes > 1 else "false"}'],
+            '-p', f'loop:={"true" if passes > 1 else "false"}',
+            *self.node_args],
             command=[node_executable('setpoint_publisher')])
         try:
             end_ns = None

@@ -15,7 +15,8 @@ Helpers for the feedforward node's DDS tests: a probe node, spinning, processes.
   :func:`run_to_exit`: a process expected to end by itself;
 - :func:`call` and :func:`parameter_client`: services from a probe;
 - :class:`Producer`, :func:`qos_profile`, :func:`cpu_seconds`: a setpoint
-  producer with messages built once, for floods and benchmarks.
+  producer with messages built once, for floods and benchmarks;
+  :func:`busy_loops`: a loaded machine, for demos and benchmarks.
 
 pytest puts the test directory on ``sys.path`` (the tests import it by
 name); the scripts and benchmarks that reuse it insert that directory.
@@ -44,6 +45,8 @@ from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import (MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
+from orthoglide_ros.cores import realtime
+
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
 ZERO = (0.0, 0.0, 0.0)
 # Reliable like the node; deep, so that no output is lost while a test
@@ -55,6 +58,43 @@ STOP_TIMEOUT = 10.0     # s between SIGINT and SIGKILL
 INPUT_TOPICS = {'trajectory': ('trajectory',),
                 'topics': ('pose', 'twist', 'accel')}
 CLK_TCK = os.sysconf('SC_CLK_TCK')
+# The real-time set of the demos and the timing tests: the nodes at
+# ros2_control's default priority, the process that feeds and records
+# them above it (doc/deployment.md#real-time).
+NODE_PRIORITY = 50
+CLIENT_PRIORITY = 60
+# Whether the OS grants it here: the timing tests then run their nodes
+# and their recording processes at it, so that their verdicts do not
+# depend on what else the machine runs.
+REALTIME = realtime.granted(CLIENT_PRIORITY)
+
+
+def realtime_args(on=REALTIME):
+    """Return a node's arguments for NODE_PRIORITY (none if not ``on``)."""
+    return ['-p', f'thread_priority:={NODE_PRIORITY}'] if on else []
+
+
+def client_prefix(on=REALTIME):
+    """Return the command prefix of a client process at CLIENT_PRIORITY."""
+    return ['chrt', '-f', str(CLIENT_PRIORITY)] if on else []
+
+
+@contextmanager
+def realtime_client(on=REALTIME):
+    """
+    Run every thread of this process at CLIENT_PRIORITY meanwhile.
+
+    For a test or demo that records a real-time node in its own process;
+    its children start at normal scheduling (:func:`realtime.client`).
+    Call it once the process's DDS participant exists.
+    """
+    if on:
+        realtime.client(CLIENT_PRIORITY)
+    try:
+        yield
+    finally:
+        if on:
+            realtime.normal()
 
 
 def stamp_of(seconds, base=(1000, 0)):
@@ -451,6 +491,48 @@ def assert_clean_exit(code, stderr, seconds, prompt):
     assert code == 0, f'exit code {code} after SIGINT; stderr:\n{stderr}'
     assert seconds < prompt, f'took {seconds:.1f} s to exit after SIGINT'
     assert 'Traceback' not in stderr, stderr
+
+
+# A busy loop that puts itself at normal scheduling first: a real-time
+# parent's children inherit its policy unless it resets them.
+BUSY_LOOP = ('import os; os.sched_setscheduler(0, os.SCHED_OTHER, '
+             'os.sched_param(0))\nwhile True: pass')
+
+
+@contextmanager
+def busy_loops(count):
+    """Run ``count`` busy loops (processes, normal scheduling) meanwhile."""
+    procs = [subprocess.Popen([sys.executable, '-c', BUSY_LOOP],
+                              stdin=subprocess.DEVNULL)
+             for _ in range(count)]
+    try:
+        yield procs
+    finally:
+        for proc in procs:
+            proc.kill()
+            proc.wait()
+
+
+def add_load_options(parser):
+    """Add a demo's ``--realtime`` and ``--load N`` to its ``parser``."""
+    parser.add_argument('--realtime', action='store_true', help=(
+        'run every thread of the loop\'s nodes SCHED_FIFO '
+        f'{NODE_PRIORITY} (their thread_priority) and this '
+        f'recorder SCHED_FIFO {CLIENT_PRIORITY}: '
+        'doc/deployment.md#real-time'))
+    parser.add_argument('--load', type=int, default=0, metavar='N',
+                        help='run N busy loops meanwhile, a loaded machine '
+                        '(default 0)')
+
+
+def check_load_options(parser, args):
+    """Refuse a negative load, or --realtime where it is not granted."""
+    if args.load < 0:
+        parser.error('--load must be >= 0')
+    if args.realtime and not realtime.granted(CLIENT_PRIORITY):
+        parser.error('--realtime: SCHED_FIFO is not granted here '
+                     '(CAP_SYS_NICE or an RLIMIT_RTPRIO, '
+                     'doc/deployment.md#real-time)')
 
 
 def run_to_exit(args, command, timeout):
