@@ -62,7 +62,8 @@ from trajectory_msgs.msg import (JointTrajectory, JointTrajectoryPoint,
                                  MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
-from node_harness import (node_executable, qos_profile, start_node_process,
+from node_harness import (node_executable, qos_profile, realtime_args,
+                          realtime_client, REALTIME, start_node_process,
                           stop_process)
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
@@ -206,10 +207,11 @@ class Peer:
 
     ``record(topic, kind)`` keeps ``(monotonic s, message)`` of a topic;
     ``diagnostics[name]`` the newest ``{key: value}`` and level per node.
-    Use it as a context manager.
+    ``realtime``: this process at CLIENT_PRIORITY while it records (the
+    timing cases). Use it as a context manager.
     """
 
-    def __init__(self, name='hostile_peer'):
+    def __init__(self, name='hostile_peer', realtime=False):
         self.context = rclpy.context.Context()
         rclpy.init(context=self.context)
         self.node = Node(name, context=self.context)
@@ -224,6 +226,8 @@ class Peer:
         self._stop = False
         self._thread = threading.Thread(target=self._spin, daemon=True)
         self._thread.start()
+        self._realtime = realtime_client(realtime)
+        self._realtime.__enter__()
 
     def _spin(self):
         while not self._stop and self.context.ok():
@@ -314,6 +318,7 @@ class Peer:
 
     def close(self):
         """Stop spinning, destroy the node, shut the context down."""
+        self._realtime.__exit__(None, None, None)
         self._stop = True
         self._thread.join(5.0)
         self.executor.shutdown()
@@ -328,17 +333,23 @@ class Peer:
 
 
 class Nodes:
-    """Node processes started from their console scripts; all stopped."""
+    """
+    Node processes started from their console scripts; all stopped.
 
-    def __init__(self):
+    ``realtime``: every node at NODE_PRIORITY (the timing cases).
+    """
+
+    def __init__(self, realtime=False):
         self.processes = {}
         self.results = {}
+        self.realtime = realtime
 
     def start(self, name, *args, params=True):
         """Start ``name`` with ``args`` (after ``--ros-args``)."""
         extra = ['--params-file', PARAMS] if params else []
         self.processes[name] = start_node_process(
-            ['--ros-args', *extra, *args], command=[node_executable(name)])
+            ['--ros-args', *extra, *realtime_args(self.realtime), *args],
+            command=[node_executable(name)])
         return self.processes[name]
 
     def alive(self, name):
@@ -729,7 +740,7 @@ def departed_clients(requests=100):
     node dropped and whether the nodes are alive.
     """
     gaps_of, joining_of = {}, {}
-    with Nodes() as nodes, Peer() as peer:
+    with Nodes(REALTIME) as nodes, Peer(realtime=REALTIME) as peer:
         nodes.start('simulator')
         nodes.start('feedforward', '-p', 'rate_hz:=500.0')
         nodes.start('setpoint_publisher', '-p', 'loop:=true')
@@ -947,11 +958,11 @@ def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
     """
     peak = trajectory_peak_speed()
     result = Stalls(peak_speed=peak, force_limit=1000.0, stalls={}, alive={})
-    with Peer() as peer:
+    with Peer(realtime=REALTIME) as peer:
         commands = peer.record('commands', Float64MultiArray)
         states = peer.record('joint_states', JointState)
         for name in stalled:
-            with Nodes() as nodes:
+            with Nodes(REALTIME) as nodes:
                 nodes.start('simulator', '-p', f'rate_hz:={plant_rate}')
                 nodes.start('tracking_controller')
                 nodes.start('feedforward')

@@ -48,7 +48,9 @@ import time
 
 import numpy as np
 
-from node_harness import (cpu_seconds, INPUT_TOPICS, interrupt, Producer,
+from node_harness import (client_prefix, cpu_seconds, INPUT_TOPICS,
+                          interrupt, Producer, realtime_args,
+                          realtime_client, REALTIME,
                           qos_profile, start_node_process, stop_process)
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.formats.params_file import load_robot
@@ -483,14 +485,19 @@ class Run:
     ``discovery``: a Fast DDS profile file given to every process started,
     with the range SYSTEM_DEFAULT (None: Fast DDS defaults, LOCALHOST);
     refused outside a network namespace (:func:`profile_environment`).
+    ``realtime`` (default: where the OS grants it): the node runs
+    SCHED_FIFO NODE_PRIORITY, the recorders, a producer at a steady rate
+    and the monitor (this process) CLIENT_PRIORITY; a flood's producer
+    stays at normal scheduling, so that it cannot starve what checks it.
     Records every node exit: ``exits`` is a list
     of (how, exit code), how being ``sigint`` (a code other than 0 is a
     crash), ``sigkill`` (killed on purpose) or ``unexpected`` (exited by
     itself: a crash).
     """
 
-    def __init__(self, discovery=None):
+    def __init__(self, discovery=None, realtime=REALTIME):
         self.env = profile_environment(discovery)
+        self.realtime = realtime
         self.workdir = tempfile.mkdtemp(prefix='orthoglide-reliability-')
         self.node = None
         self.node_started = None
@@ -508,8 +515,9 @@ class Run:
     def start_node(self, extra=(), env=None):
         """Start the node's console script (``env``: else the run's)."""
         self.node_started = time.monotonic_ns()
-        self.node = start_node_process(list(NODE_ARGS) + list(extra),
-                                       env=env or self.env, cwd=ROOT)
+        self.node = start_node_process(
+            list(NODE_ARGS) + realtime_args(self.realtime) + list(extra),
+            env=env or self.env, cwd=ROOT)
         return self.node
 
     def node_alive(self):
@@ -565,7 +573,8 @@ class Run:
         """
         out = self.path('.npy')
         child = Child('record', ['--out', out], self.workdir,
-                      env or self.env, wrap)
+                      env or self.env,
+                      (*wrap, *client_prefix(self.realtime)))
         child.out = out
         self.children.append(child)
         return child
@@ -579,7 +588,7 @@ class Run:
             '--kind', kind, '--qos', qos, '--rate', str(rate), '--epoch',
             str(epoch), '--warm-epoch', str(warm_epoch), '--duration',
             str(duration), '--log', log], self.workdir, env or self.env,
-            wrap)
+            (*wrap, *client_prefix(self.realtime and rate > 0)))
         child.log = log
         child.warm_epoch = warm_epoch
         self.children.append(child)
@@ -670,7 +679,7 @@ class Monitor:
     ``diagnostics``: (monotonic s, {key: value}) of every status received.
     """
 
-    def __init__(self):
+    def __init__(self, realtime=REALTIME):
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.parameter_client import AsyncParameterClient
@@ -690,6 +699,10 @@ class Monitor:
         self._asked = -1e9
         self.answers = []           # latency (s) of each answered get
         self.unanswered = 0
+        # This process at CLIENT_PRIORITY while it watches (its DDS
+        # threads exist now).
+        self._realtime = realtime_client(realtime)
+        self._realtime.__enter__()
 
     def _on_diagnostics(self, msg):
         for status in msg.status:
@@ -748,6 +761,7 @@ class Monitor:
 
     def close(self):
         """Destroy the node and shut the context down."""
+        self._realtime.__exit__(None, None, None)
         self.executor.shutdown()
         self.node.destroy_node()
         self._rclpy.try_shutdown(context=self.context)
@@ -832,7 +846,7 @@ def flood(duration, kind='trajectory', qos='best_effort', say=None):
         recorder = run.start_recorder()
         producer = run.start_producer(kind, qos, rate=0, epoch=100,
                                       duration=duration)
-        run.monitor = monitor = Monitor()
+        run.monitor = monitor = Monitor(run.realtime)
         run.warm_up(producer, recorder, ready=lambda: (
             monitor.wait_for_service(START_TIMEOUT), monitor.spin(0.5)))
         start = time.monotonic()
@@ -1046,7 +1060,7 @@ def big_messages(rate=500, duration=6.0, attack_rate=4.0, say=None):
     deep_input = ('-p', 'qos_overrides./setpoint/trajectory.subscription.'
                   f'depth:={rate}')
     with Run() as run:
-        run.monitor = Monitor()
+        run.monitor = Monitor(run.realtime)
         node = run.start_node(DEEP_OUTPUT + deep_input)
         recorder = run.start_recorder()
         producer = run.start_producer('trajectory', 'reliable', rate=rate,
@@ -1192,7 +1206,9 @@ def stop_mid_stream(signals=('SIGINT', 'SIGTERM'), rate=1000, running=0.5,
         run.stop_node()
     return dict(case='stop_mid_stream', stops=stops, crashes=run.crashes(),
                 unclean=sum(1 for stop in stops if stop[3]),
-                stderr=[e for e in run.node_stderr if e])
+                stderr=[line for e in run.node_stderr
+                        for line in e.splitlines()
+                        if line.strip() and not line.startswith('[INFO]')])
 
 
 # (stream epoch, how the previous producer is stopped) per restart; the
@@ -1221,7 +1237,7 @@ def producer_restart(kind='trajectory', rate=500, running=1.0,
     with Run(discovery) as run:
         node = run.start_node(DEEP_OUTPUT)
         recorder = run.start_recorder()
-        run.monitor = monitor = Monitor()
+        run.monitor = monitor = Monitor(run.realtime)
         epochs = [100] + [epoch for epoch, _, _ in restarts]
         how = [None] + [stop for _, stop, _ in restarts]
         logs = []

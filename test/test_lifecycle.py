@@ -57,15 +57,24 @@ class Lifecycle:
         assert spin_until(self.executor, lambda: (
             self.change.service_is_ready() and self.get.service_is_ready()),
             WAIT), f'{name} lifecycle services'
+        # A node of the same name that left the graph moments ago (an
+        # earlier test's) may still be listed: its services made the
+        # clients ready, and a request sent now could miss this process.
+        # Its diagnostics (published in every state) prove it is there.
+        self.diagnostics()
 
-    def call(self, client, request):
-        future = client.call_async(request)
-        assert spin_until(self.executor, future.done, WAIT), 'no answer'
-        return future.result()
+    def call(self, client, request, attempts=1):
+        """Call a service; ``attempts`` > 1 only for idempotent requests."""
+        for _ in range(attempts):
+            future = client.call_async(request)
+            if spin_until(self.executor, future.done, WAIT / attempts):
+                return future.result()
+        raise AssertionError(f'no answer from {client.srv_name}')
 
     def state(self):
-        """Return the node's state label (``~/get_state``)."""
-        return self.call(self.get, GetState.Request()).current_state.label
+        """Return the node's state label (``~/get_state``, asked again)."""
+        return self.call(self.get, GetState.Request(),
+                         attempts=3).current_state.label
 
     def transition(self, transition_id):
         """Ask for a transition; return whether it succeeded."""
