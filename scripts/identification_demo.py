@@ -140,7 +140,8 @@ def main(argv=None):
     truth, model_file = plant, ''
     if args.engine == 'mujoco':
         model_file = out / 'unknown_robot.xml'
-        model_file.write_text(mjcf.mjcf(plant, armature=(ARMATURE,) * 3))
+        model_file.write_text(mjcf.mjcf(plant.replace(
+            armature=(ARMATURE,) * 3)))
         # What the model family can say of it: the armature adds to the
         # sliders' mass.
         truth = plant.replace(m1=plant.m1 + ARMATURE)

@@ -142,9 +142,13 @@ def leg_geometry(robot, leg, position):
 
 
 def masses(robot):
-    """Mass (kg) of each body of a leg, and of the platform (key 5)."""
+    """
+    Return the mass (kg) of each body of a leg and of the platform (key 5).
+
+    The platform carries the payload: one rigid body of ``m5 + payload``.
+    """
     return {1: robot.m1, 2: robot.m2, 3: robot.m3, 4: robot.m4,
-            5: robot.m5, 6: robot.m6}
+            5: robot.m5 + robot.payload, 6: robot.m6}
 
 
 def central_inertias(robot):
@@ -239,18 +243,28 @@ def _body_mass_inertia(robot, key, rotation):
 
 
 def mass_matrix(robot, position):
-    """``M(q) = sum m Jv^T Jv + Jw^T I Jw`` over every body (kg)."""
+    """
+    ``M(q) = sum m Jv^T Jv + Jw^T I Jw`` over every body (kg).
+
+    And the drives: a rotor geared to slider j stores ``armature_j
+    lambdadot_j^2 / 2``, ``J_lambda^T diag(armature) J_lambda`` in M.
+    """
     jac = body_jacobians(robot, position)
     mm = np.zeros((3, 3))
     for key in jac.centre:
         mass, inertia = _body_mass_inertia(robot, key, jac.rotation[key])
         jv, jw = jac.linear[key], jac.angular[key]
         mm += mass * jv.T @ jv + jw.T @ inertia @ jw
-    return mm
+    j_lambda = lambda_jacobian(robot, position)
+    return mm + j_lambda.T @ np.diag(robot.armature) @ j_lambda
 
 
 def kinetic_energy(robot, position, velocity):
-    """T (J): sum over every body of m |v_C|^2 / 2 + omega^T I omega / 2."""
+    """
+    T (J): sum over every body of m |v_C|^2 / 2 + omega^T I omega / 2.
+
+    And each drive's ``armature_j lambdadot_j^2 / 2``.
+    """
     jac = body_jacobians(robot, position)
     qd = np.asarray(velocity, dtype=float)
     total = 0.0
@@ -259,13 +273,14 @@ def kinetic_energy(robot, position, velocity):
         v = jac.linear[key] @ qd
         w = jac.angular[key] @ qd
         total += 0.5 * mass * v @ v + 0.5 * w @ inertia @ w
-    return total
+    rates = lambda_jacobian(robot, position) @ qd
+    return total + 0.5 * float(np.asarray(robot.armature) @ rates ** 2)
 
 
 def potential_energy(robot, position):
     """V (J) = -sum m g . r_C over every body (platform once)."""
     g = np.asarray(robot.gravity, dtype=float)
-    total = -robot.m5 * g @ np.asarray(position, dtype=float)
+    total = -masses(robot)[5] * g @ np.asarray(position, dtype=float)
     for leg in LEGS:
         geo = leg_geometry(robot, leg, position)
         for k in LEG_BODIES:
@@ -341,6 +356,10 @@ OTHER_ROBOT_VALUES = {
     'l': 0.13, 'l1': 0.21, 'l2': 0.11, 'l3': 0.93, 'alpha': 0.61,
     'm1': 0.47, 'm2': 0.31, 'm3': 1.9, 'm4': 0.53, 'm5': 11.0, 'm6': 3.1,
 }
+# A robot with ball-screw drives (a motor's rotor inertia reflected onto
+# each slider, unequal: J (2 pi / lead)^2 = 8e-5 kg m^2 on a 10 mm lead is
+# 3.2 kg) and a payload on its platform: keyword arguments of Robot.
+DRIVES_ROBOT_VALUES = {'armature': (3.2, 1.1, 0.45), 'payload': 5.0}
 
 # Fast trajectories of eq. (6)'s shape, r* (1 - cos(omega t)): targets
 # (m) whose whole path 0 .. 2 r* stays in the cube, and omega (rad/s).

@@ -4,7 +4,10 @@ Invariant 7: the recursive method agrees with Lagrange's equations.
 ``mechanics_reference.lagrange_forces`` is a second formulation sharing no
 code with the package: the geometry of every body from eqs. (1)-(9), body
 Jacobians by complex step, ``M(q) = sum m Jv^T Jv + Jw^T I Jw``, Christoffel
-terms from ``dM/dq`` and ``f = J_lambda^-T (M qdd + C + dV/dq)``.
+terms from ``dM/dq`` and ``f = J_lambda^-T (M qdd + C + dV/dq)``; the
+drives' armature as their kinetic energy ``armature_j lambdadot_j^2 / 2``
+(``J_lambda^T diag(armature) J_lambda`` in M), a payload as part of the
+platform's mass.
 
 Tolerance. Everything in the reference is exact to rounding except
 ``dM/dq``, a central difference with step h = 1e-5 m: its truncation error
@@ -19,8 +22,8 @@ most its norm, which the bound includes.
 
 from hypothesis import given, settings, strategies as st
 from mechanics_reference import (
-    cube_points, lagrange_forces, lambda_jacobian, mass_matrix,
-    OTHER_ROBOT_VALUES, potential_gradient, vectors)
+    cube_points, DRIVES_ROBOT_VALUES, lagrange_forces, lambda_jacobian,
+    mass_matrix, OTHER_ROBOT_VALUES, potential_gradient, vectors)
 import numpy as np
 from orthoglide_ros.model.mechanics import elements, solve, solve_batch
 from orthoglide_ros.model.robot import Robot
@@ -29,7 +32,8 @@ DM_RELATIVE = 1e-8
 ROUNDING = 1e-12
 GRAVITIES = {'default': (0.0, 0.0, -9.81), 'zero': (0.0, 0.0, 0.0),
              'oblique': (2.0, -5.0, -7.5)}
-ROBOTS = {'paper': {}, 'other': OTHER_ROBOT_VALUES}
+ROBOTS = {'paper': {}, 'other': OTHER_ROBOT_VALUES,
+          'drives': {**OTHER_ROBOT_VALUES, **DRIVES_ROBOT_VALUES}}
 
 
 def tolerance(ref, velocity, acceleration):
@@ -137,3 +141,49 @@ def test_forces_do_depend_on_l3_and_every_mass():
         f1 = solve_batch(paper.replace(**change), positions, velocities,
                          accelerations).force
         assert np.abs(f1 - f0).max() > 1e-3 * np.abs(f0).max(), change
+
+
+DRIVE_STATES = (((0.05, 0.1, -0.2), (0.4, -0.3, 0.5), (3.0, -8.0, 5.0)),
+                ((-0.2, 0.15, 0.1), (-1.0, 0.2, 0.7), (-12.0, 4.0, 9.0)),
+                ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))
+
+
+def test_drives_and_payload_match_the_lagrange_model_to_1e_8():
+    """The armature and the payload by the independent model, 1e-8 N."""
+    robot = Robot(**OTHER_ROBOT_VALUES, **DRIVES_ROBOT_VALUES)
+    bare = Robot(**OTHER_ROBOT_VALUES)
+    for position, velocity, acceleration in DRIVE_STATES:
+        force = np.array(solve(robot, position, velocity, acceleration).force)
+        ref = lagrange_forces(robot, position, velocity, acceleration)
+        assert np.abs(force - ref.force).max() <= 1e-8
+        # And they matter: tens of N at these accelerations, 5 kg of weight.
+        assert np.abs(force - np.array(solve(
+            bare, position, velocity, acceleration).force)).max() > 20.0
+
+
+def test_a_payload_is_exactly_a_heavier_platform():
+    """robot.payload P gives the forces of m5 + P, bit for bit."""
+    carried = Robot(payload=5.0)
+    heavier = Robot(m5=Robot().m5 + 5.0)
+    p, v, a = (np.array(x) for x in zip(*DRIVE_STATES))
+    for position, velocity, acceleration in DRIVE_STATES:
+        assert solve(carried, position, velocity, acceleration) == solve(
+            heavier, position, velocity, acceleration)
+    batch = [solve_batch(r, p, v, a) for r in (carried, heavier)]
+    for x, y in zip(*batch):
+        assert np.array_equal(x, y)
+
+
+def test_payload_force_is_what_the_payload_adds_at_a_joint_state():
+    """mechanics.payload_force from the joints: the heavier robot's excess."""
+    from orthoglide_ros.model.mechanics import payload_force
+    robot = Robot(**OTHER_ROBOT_VALUES, armature=(1.0, 2.0, 0.5))
+    for position, velocity, acceleration in DRIVE_STATES:
+        s = solve(robot, position, velocity, acceleration)
+        heavier = solve(robot.replace(payload=7.5), position, velocity,
+                        acceleration)
+        excess = np.array(heavier.force) - np.array(s.force)
+        found = payload_force(robot, 7.5, s.lambda_, s.lambdadot,
+                              s.lambdaddot)
+        assert np.abs(np.array(found) - excess).max() <= 1e-9 * max(
+            1.0, np.abs(excess).max())

@@ -112,7 +112,9 @@ def robots(rng, count):
                     m3=rng.uniform(1.0, 4.0), m4=rng.uniform(0.05, 0.5),
                     m5=rng.uniform(5.0, 30.0), m6=rng.uniform(1.0, 4.0),
                     l=rng.uniform(0.1, 0.3), l3=rng.uniform(0.7, 1.0),
-                    friction_viscous=tuple(rng.uniform(0.0, 50.0, 3)))
+                    friction_viscous=tuple(rng.uniform(0.0, 50.0, 3)),
+                    armature=tuple(rng.uniform(0.0, 4.0, 3)),
+                    payload=rng.uniform(0.0, 10.0))
 
 
 def test_mujoco_rigid_projection_gives_the_package_forces():
@@ -190,6 +192,30 @@ def test_cli_writes_a_model_mujoco_loads(tmp_path):
     model = mujoco.MjModel.from_xml_path(str(out))
     assert model.actuator(0).name == 'ja'
     assert model.body('platform').mass[0] == 20.0
+
+
+def test_the_armature_is_each_slide_joints_and_the_payload_the_platforms(
+        tmp_path):
+    """robot.armature into MuJoCo's slide joints; --armature sets it."""
+    params = tmp_path / 'drives.yaml'
+    params.write_text('feedforward:\n  ros__parameters:\n'
+                      '    robot.armature: [3.2, 1.1, 0.45]\n'
+                      '    robot.payload: 5.0\n')
+    out = tmp_path / 'drives.xml'
+    for extra, armature in (((), (3.2, 1.1, 0.45)),
+                            (('--armature', '0.5', '0', '2'),
+                             (0.5, 0.0, 2.0))):
+        done = run_cli('mjcf', '--params', str(params), '--output', str(out),
+                       *extra)
+        assert done.returncode == 0, done.stderr
+        model = mujoco.MjModel.from_xml_path(str(out))
+        assert [model.dof_armature[model.joint(name).dofadr[0]]
+                for name in JOINT_NAMES] == list(armature)
+        assert model.body('platform').mass[0] == PAPER.m5 + 5.0
+        hinges = [model.dof_armature[model.jnt_dofadr[i]]
+                  for i in range(model.njnt) if model.joint(i).name
+                  not in JOINT_NAMES]
+        assert not any(hinges)
 
 
 def run_cli(*args, env=None):

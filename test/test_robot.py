@@ -153,6 +153,21 @@ def test_robot_is_frozen_and_replace_validates():
     assert error.value.name == 'm5'
 
 
+@pytest.mark.parametrize('name,value', [
+    ('armature', (-0.1, 0.0, 0.0)), ('armature', (0.0, math.nan, 0.0)),
+    ('armature', (0.0, 0.0)), ('armature', (2e6, 0.0, 0.0)),
+    ('payload', -1.0), ('payload', math.inf), ('payload', 2e6),
+    ('payload', '5'), ('payload', True)])
+def test_a_drive_or_payload_no_robot_has_is_refused(name, value):
+    refused(name, **{name: value})
+
+
+def test_no_drives_and_no_payload_by_default_zero_allowed():
+    robot = Robot()
+    assert robot.armature == (0.0, 0.0, 0.0) and robot.payload == 0.0
+    assert Robot(payload=0, armature=(0, 1, 2)).armature == (0.0, 1.0, 2.0)
+
+
 def test_equal_values_make_equal_robots():
     assert Robot() == Robot(m4=0.2, m6=2.5)
     assert Robot() != Robot(m5=15.5)
@@ -164,9 +179,10 @@ def test_parameter_names_and_values_round_trip():
                   friction_coulomb=(4.0, 5.0, 6.0), friction_velocity=0.02,
                   friction_coulomb_negative=(7.0, 8.0, 9.0),
                   friction_stribeck=(1.5, 2.5, 3.5),
-                  friction_stribeck_velocity=0.005)
+                  friction_stribeck_velocity=0.005, armature=(3.2, 1.0, 0.0),
+                  payload=2.5)
     assert set(Robot.parameter_names()) == set(POSITIVE) | {'gravity'} \
-        | set(FRICTION)
+        | set(FRICTION) | {'armature', 'payload'}
     assert Robot(**robot.as_parameters()) == robot
     assert robot.replace() == robot
     assert robot.replace(m5=16.0).friction_coulomb == (4.0, 5.0, 6.0)

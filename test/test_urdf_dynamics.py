@@ -13,6 +13,9 @@ passive joints) with respect to the platform position, taken here by
 complex step of eq. (9) in the independent reference model. The forces so
 found equal ``mechanics.solve``'s to 1e-9 relative, on the paper's
 trajectory (gravity) and on a fast one without gravity (inertia alone).
+A robot with drives and a payload: its URDF's platform carries the
+payload, and Pinocchio's ``Model.armature`` on the slider joints (URDF has
+no place for it) gives the drives' forces.
 """
 
 from mechanics_reference import (
@@ -20,7 +23,7 @@ from mechanics_reference import (
 import numpy as np
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
-from orthoglide_ros.model.urdf import moving_joints
+from orthoglide_ros.model.urdf import moving_joints, urdf
 import pytest
 from urdf_harness import COMMITTED_URDF
 
@@ -111,3 +114,23 @@ def test_rnea_statics_at_home(model):
     robot = Robot()
     force = urdf_forces(model, robot, (0.0, 0.0, 0.0), (0.0,) * 3, (0.0,) * 3)
     assert np.allclose(force, (0.0, 0.0, 256.5315), atol=1e-3)
+
+
+def test_rnea_with_pinocchios_armature_gives_the_drives_forces():
+    robot = Robot(armature=(3.2, 1.1, 0.45), payload=5.0)
+    model = pin.buildModelFromXML(urdf(robot))
+    armature = np.zeros(model.nv)
+    for name, leg, variable in moving_joints():
+        if variable == 'lambda_':
+            armature[joint_index(model, name)] = robot.armature['ABC'.index(
+                leg)]
+    model.armature = armature
+    target, omega = FAST_TRAJECTORIES[0]
+    times = np.linspace(0.0, 2.0 * np.pi / omega, 13)
+    check(model, robot, zip(*trajectory.paper_batch(times, target, omega)))
+    # Without it the URDF alone is the robot without drives.
+    model.armature = np.zeros(model.nv)
+    p, v, a = (x[3] for x in trajectory.paper_batch(times, target, omega))
+    assert np.abs(urdf_forces(model, robot, p, v, a) - np.array(
+        mechanics.solve(robot.replace(armature=(0.0,) * 3), p, v, a).force)
+    ).max() <= RELATIVE * 1e3

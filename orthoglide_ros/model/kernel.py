@@ -30,7 +30,7 @@ from math import sin
 # Constants of the kernel derived once from a Robot (see kernel_constants).
 KernelConstants = namedtuple('KernelConstants', (
     'l3', 'minus_inv_l3', 'h3', 'i3', 'm1', 'm2', 'm3', 'm4', 'm5', 'm6',
-    'h4', 'p5', 'q5', 'gx', 'gy', 'gz'))
+    'h4', 'p5', 'q5', 'gx', 'gy', 'gz', 'ja', 'jb', 'jc'))
 
 
 def kernel_constants(robot):
@@ -41,14 +41,16 @@ def kernel_constants(robot):
     its -y3 axis and its inertia per unit mass about A3; ``h4 = l2 / 2`` is
     body 4's centre of mass on its x4 axis;
     ``(p5, q5, 0) = (l1 sin(alpha), -l / 2, 0)`` is ``r5G``, the platform's
-    centre G seen from A5 in frame 5 (eq. 8).
+    centre G seen from A5 in frame 5 (eq. 8). The platform's mass is
+    ``m5 + payload`` (a payload rides with it); ``ja, jb, jc`` the drives'
+    armature (kg).
     """
     gx, gy, gz = robot.gravity
     return KernelConstants(
         robot.l3, -1.0 / robot.l3, robot.l3 / 2.0, robot.l3 ** 2 / 3.0,
-        robot.m1, robot.m2, robot.m3, robot.m4, robot.m5,
+        robot.m1, robot.m2, robot.m3, robot.m4, robot.m5 + robot.payload,
         robot.m6, robot.l2 / 2.0, robot.l1 * sin(robot.alpha),
-        -robot.l / 2.0, gx, gy, gz)
+        -robot.l / 2.0, gx, gy, gz, *robot.armature)
 
 
 def solve(k, x, y, z, vx, vy, vz, ax, ay, az, sqrt, record=None):
@@ -68,7 +70,10 @@ def solve(k, x, y, z, vx, vy, vz, ax, ay, az, sqrt, record=None):
     the relative virtual rates, which are linear in the platform's virtual
     velocity ``delta r``. Summing a leg's joint terms into a generalised
     force ``Q_leg`` on ``delta r`` and using ``delta r = J_lambda^-1 e_j``
-    gives ``f = F1 + J_lambda^-T sum(Q_leg)``.
+    gives ``f = F1 + J_lambda^-T sum(Q_leg)``. Each drive's armature adds
+    ``armature_j lambdaddot_j`` to its actuator's force (the kinetic
+    energy ``armature_j lambdadot_j^2 / 2`` of a rotor geared to the
+    slider).
 
     ``record``, if a dict, receives the per-element quantities of every leg
     (``record['A']``, ``['B']``, ``['C']``; see ``_leg``).
@@ -93,9 +98,9 @@ def solve(k, x, y, z, vx, vy, vz, ax, ay, az, sqrt, record=None):
     (c11, c12, c13, c21, c22, c23, c31, c32, c33), det, inverse_condition = \
         jacobian_cofactors(x, y, z, al_a, al_b, al_c, sqrt)
     rd = 1.0 / det
-    f_a = f1_a + (c11 * qx + c12 * qy + c13 * qz) * rd
-    f_b = f1_b + (c21 * qx + c22 * qy + c23 * qz) * rd
-    f_c = f1_c + (c31 * qx + c32 * qy + c33 * qz) * rd
+    f_a = f1_a + (c11 * qx + c12 * qy + c13 * qz) * rd + k.ja * lamdd_a
+    f_b = f1_b + (c21 * qx + c22 * qy + c23 * qz) * rd + k.jb * lamdd_b
+    f_c = f1_c + (c31 * qx + c32 * qy + c33 * qz) * rd + k.jc * lamdd_c
 
     return ((lam_a, lam_b, lam_c), (lamd_a, lamd_b, lamd_c),
             (lamdd_a, lamdd_b, lamdd_c), (f_a, f_b, f_c),

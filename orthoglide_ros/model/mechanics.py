@@ -14,6 +14,7 @@ Plain numpy, no ROS. Every function takes a validated :class:`Robot` first.
 - :func:`forward_kinematics`: actuator displacements -> platform centre
   (:func:`forward_kinematics_rows` without refusals);
   :func:`platform_velocity`: actuator rates -> platform velocity.
+- :func:`payload_force`: what carrying a payload adds, at a joint state.
 - :func:`workspace_status`: reachability and distance to singularity.
 - :func:`jacobians`: J1 and J2 of eq. (16).
 
@@ -512,6 +513,38 @@ def platform_velocity(robot, position, lambdadot):
             f'position {format_vector(position)} m is on a singularity of '
             'J2: the platform velocity is undefined'))
     return tuple(velocity.tolist())
+
+
+def payload_force(robot, payload, lambda_, lambdadot, lambdaddot):
+    """
+    Return the forces (N, A, B, C) that carrying ``payload`` (kg) adds.
+
+    A mass on the platform, which only translates, needs ``payload (rddot_G
+    - g)`` at G: by virtual work (eq. 25) the actuators add ``J_lambda^-T
+    payload (rddot_G - g)``. The platform's state from the joints' (m, m/s,
+    m/s^2, 3-sequences): ``r_G`` by :func:`forward_kinematics`, ``rdot_G =
+    J_lambda^-1 lambdadot`` (eq. 15), ``rddot_G = J_lambda^-1 (lambdaddot -
+    lambdaddot_0)`` with ``lambdaddot_0`` the joints' acceleration of
+    :func:`solve` at ``rddot_G = 0`` (eq. 18). Exactly the forces of
+    ``robot.replace(payload=robot.payload + payload)`` less ``robot``'s at
+    that state. Raises :class:`WorkspaceError` where the joints have no
+    platform position (on the home branch) or J_lambda is singular.
+
+    >>> from orthoglide_ros.model.robot import Robot
+    >>> home = solve(Robot(), ZERO).lambda_
+    >>> [round(f, 6) for f in payload_force(Robot(), 5.0, home, ZERO, ZERO)]
+    [0.0, 0.0, 49.05]
+    """
+    position = tuple(forward_kinematics(robot, lambda_).tolist())
+    j1, j2 = jacobians(robot, position)
+    j_lambda = np.linalg.solve(j1, j2)
+    velocity = np.linalg.solve(j_lambda, np.asarray(lambdadot, dtype=float))
+    rest = solve(robot, position, tuple(velocity.tolist()), ZERO, 0.0)
+    acceleration = np.linalg.solve(
+        j_lambda, np.asarray(lambdaddot, dtype=float) - rest.lambdaddot)
+    force = payload * np.linalg.solve(j_lambda.T, acceleration
+                                      - np.asarray(robot.gravity))
+    return tuple(force.tolist())
 
 
 def leg_joints(robot, position, velocity=ZERO,

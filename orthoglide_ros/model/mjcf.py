@@ -94,16 +94,15 @@ def equality_names(leg):
         f'{prefix}_a5', f'{prefix}_a5_axis'))
 
 
-def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None,
-         armature=(0.0, 0.0, 0.0)):
+def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None):
     """
     Return the MJCF (XML text) of ``robot``; sliders named ``joint_names``.
 
     ``force_limit`` (N, optional): the actuators' control range +-it.
-    ``armature`` (kg, per slider A, B, C): MuJoCo's ``armature``, a drive's
-    rotor inertia reflected to the slider (none in the package's model: a
-    robot that is not the model). Plain text, the same for the same
-    arguments.
+    ``robot.armature`` (kg, per slider A, B, C) is each slide joint's
+    ``armature``, MuJoCo's name for a drive's rotor inertia reflected onto
+    it; ``robot.payload`` rides in the platform's mass. Plain text, the
+    same for the same arguments.
     """
     home = mechanics.elements(robot, ZERO)
     masses = inertials(robot)
@@ -137,7 +136,7 @@ def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None,
         ET.SubElement(world, 'geom', type='cylinder', material='rail',
                       size=_number(radius), fromto=_vector(np.concatenate(
                           (a1 - robot.l3 * axis, a1 + robot.l3 * axis))))
-    for leg, name, rotor in zip(LEGS, joint_names, armature):
+    for leg, name, rotor in zip(LEGS, joint_names, robot.armature):
         _leg(world, robot, leg, name, home, masses, radius, rotor)
 
     equality = ET.SubElement(root, 'equality')

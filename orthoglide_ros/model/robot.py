@@ -31,6 +31,10 @@ JOINT_NAMES = ('slider_a', 'slider_b', 'slider_c')
 NO_FRICTION = (0.0, 0.0, 0.0)
 DEFAULT_FRICTION_VELOCITY = 0.001   # m/s
 DEFAULT_STRIBECK_VELOCITY = 0.01    # m/s
+# No drive inertia reflected onto the sliders, nothing on the platform:
+# the paper's robot.
+NO_ARMATURE = (0.0, 0.0, 0.0)
+NO_PAYLOAD = 0.0
 # Parameters that take another's value when not given (the paper's m4 = m2,
 # m6 = m3; a Coulomb friction the same in both directions).
 FOLLOWS = {'m4': 'm2', 'm6': 'm3',
@@ -46,7 +50,7 @@ UNITS = {
     'gravity': 'm/s^2', 'friction_viscous': 'N s/m',
     'friction_coulomb': 'N', 'friction_coulomb_negative': 'N',
     'friction_stribeck': 'N', 'friction_velocity': 'm/s',
-    'friction_stribeck_velocity': 'm/s',
+    'friction_stribeck_velocity': 'm/s', 'armature': 'kg', 'payload': 'kg',
 }
 
 # Bounds of every value (inclusive): far beyond any Orthoglide, they keep
@@ -58,6 +62,8 @@ GRAVITY_LIMITS = (-100.0, 100.0)    # m/s^2, each component
 VISCOUS_LIMITS = (0.0, 1e6)         # N s/m, each actuator
 COULOMB_LIMITS = (0.0, 1e6)         # N, each actuator
 FRICTION_VELOCITY_LIMITS = (1e-6, 10.0)     # m/s
+ARMATURE_LIMITS = (0.0, 1e6)        # kg, each actuator
+PAYLOAD_LIMITS = (0.0, 1e6)         # kg
 LIMITS = {
     **dict.fromkeys(('l', 'l1', 'l2', 'l3'), LENGTH_LIMITS),
     **dict.fromkeys(('m1', 'm2', 'm3', 'm4', 'm5', 'm6'), MASS_LIMITS),
@@ -68,6 +74,8 @@ LIMITS = {
     'friction_stribeck': COULOMB_LIMITS,
     'friction_velocity': FRICTION_VELOCITY_LIMITS,
     'friction_stribeck_velocity': FRICTION_VELOCITY_LIMITS,
+    'armature': ARMATURE_LIMITS,
+    'payload': PAYLOAD_LIMITS,
 }
 
 DESCRIPTIONS = {
@@ -101,6 +109,11 @@ DESCRIPTIONS = {
     'friction_stribeck_velocity': 'slider speed at which the Stribeck '
                                   'excess has fallen to exp(-1) = 37 % of '
                                   'itself',
+    'armature': 'inertia of the drives of A, B, C reflected onto their '
+                'sliders, J (2 pi / lead)^2 for a ball screw: a force '
+                'armature lambdaddot on each actuator',
+    'payload': 'mass carried rigidly on the platform (a tool, a part): '
+               'exactly a heavier platform',
 }
 
 
@@ -133,6 +146,14 @@ class Robot:
     must add the force of :func:`mechanics.friction_force`. None by
     default: the paper's robot.
 
+    The drives and what the platform carries, which the paper does not
+    have either: ``armature`` (kg, a 3-vector of values >= 0), each drive's
+    inertia reflected onto its slider (a motor of rotor inertia ``J`` on a
+    ball screw of lead ``p``: ``J (2 pi / p)^2``), a force ``armature_j
+    lambdaddot_j`` on actuator j; ``payload`` (kg, >= 0), a mass rigidly on
+    the platform, which only translates: the dynamics of a platform of
+    mass ``m5 + payload``. Both 0 by default.
+
     >>> Robot().l3
     0.85
     >>> Robot(m5=18.0).m4 == Robot().m2
@@ -157,6 +178,8 @@ class Robot:
     friction_coulomb_negative: tuple = None
     friction_stribeck: tuple = field(default=NO_FRICTION)
     friction_stribeck_velocity: float = DEFAULT_STRIBECK_VELOCITY
+    armature: tuple = field(default=NO_ARMATURE)
+    payload: float = NO_PAYLOAD
 
     def __post_init__(self):
         # (Not a field: no part of eq or repr.)
@@ -169,9 +192,11 @@ class Robot:
             _check_positive(name, getattr(self, name))
         if not self.alpha < math.pi / 2:
             raise RobotParameterError('alpha', 'must lie in (0, pi/2) rad')
-        for name in ('gravity',) + FRICTION_FORCES:
+        for name in ('gravity', 'armature') + FRICTION_FORCES:
             object.__setattr__(self, name, _check_vector(
                 name, getattr(self, name)))
+        object.__setattr__(self, 'payload', _check_nonnegative(
+            'payload', self.payload))
         _check_positive('friction_velocity', self.friction_velocity)
         _check_positive('friction_stribeck_velocity',
                         self.friction_stribeck_velocity)
@@ -234,6 +259,17 @@ def _check_positive(name, value):
     if not low <= value <= high:
         raise RobotParameterError(name, (
             f'must lie in [{low:g}, {high:g}] {UNITS[name]}, got {value!r}'))
+
+
+def _check_nonnegative(name, value):
+    """Return a finite number within LIMITS[name] (>= 0) as a float."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise RobotParameterError(name, f'must be a number, got {value!r}')
+    low, high = LIMITS[name]
+    if not (math.isfinite(value) and low <= value <= high):
+        raise RobotParameterError(name, (
+            f'must lie in [{low:g}, {high:g}] {UNITS[name]}, got {value!r}'))
+    return float(value)
 
 
 def _check_vector(name, value):

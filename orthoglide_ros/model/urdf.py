@@ -198,7 +198,9 @@ def inertials(robot):
     Per leg, bodies 1, 2, 3, 4, 6 and the platform 5 (once): mass (kg),
     centre of mass (m, from the body's frame origin, in its frame) and
     inertia about the centre of mass (kg m^2, 3x3, in the body's frame).
-    Body 1 only translates and the model gives it no inertia: zero.
+    Body 1 only translates and the model gives it no inertia: zero. The
+    platform carries ``robot.payload``: its mass is ``m5 + payload`` (a
+    body that only translates, its inertia scaled alike).
     """
     l2, l3 = robot.l2, robot.l3
     sa, ca = math.sin(robot.alpha), math.cos(robot.alpha)
@@ -212,7 +214,8 @@ def inertials(robot):
             robot.m6 * l3 ** 2 / 12.0 * np.diag((1, 0, 1))),
         4: (robot.m4, (l2 / 2.0, 0.0, 0.0),
             robot.m4 * l2 ** 2 / 12.0 * np.diag((0, 1, 1))),
-        5: (robot.m5, ZERO, robot.m5 * robot.l ** 2 / 6.0 * np.eye(3)),
+        5: (robot.m5 + robot.payload, ZERO,
+            (robot.m5 + robot.payload) * robot.l ** 2 / 6.0 * np.eye(3)),
     }
 
 
@@ -232,7 +235,10 @@ def urdf(robot, joint_names=JOINT_NAMES, margin=DEFAULT_SINGULARITY_MARGIN):
     root.append(header_comment(
         robot, 'urdf', _number, f'; joint limits within the singularity '
         f'margin {margin:g}. A cut tree: publish every moving joint '
-        '(mechanism_state_publisher). '))
+        '(mechanism_state_publisher). URDF has no place for a drive\'s '
+        'reflected inertia: robot.armature above is for the tools that take '
+        'it (Pinocchio\'s Model.armature, MuJoCo\'s joint armature); the '
+        'platform link\'s mass holds robot.payload. '))
     for name, rgba in [*((f'leg_{leg.lower()}', c)
                          for leg, c in LEG_COLOURS.items()),
                        *GREY.items()]:

@@ -493,7 +493,9 @@ def run_mjcf(robot, args):
         names = joint_names(args.joint_names)
     except ValueError as error:
         raise CliError(f'--joint-names: {error}') from None
-    text = mjcf.mjcf(robot, names, args.force_limit, args.armature)
+    if args.armature is not None:
+        robot = robot.replace(armature=tuple(args.armature))
+    text = mjcf.mjcf(robot, names, args.force_limit)
     _write_output(args.output, text.encode('utf-8'))
     return 0
 
@@ -1102,9 +1104,11 @@ def _parser():
                       metavar='N', help='the actuators\' control range '
                       '+-N (newton; default: none)')
     mjcf.add_argument('--armature', type=_non_negative_float, nargs=3,
-                      default=(0.0, 0.0, 0.0), metavar=('A', 'B', 'C'),
-                      help='rotor inertia reflected to each slider (kg; '
-                      'MuJoCo\'s armature; default 0: the model has none)')
+                      default=None, metavar=('A', 'B', 'C'),
+                      help='the drives\' inertia reflected to each slider '
+                      '(kg; MuJoCo\'s armature): sets robot.armature '
+                      '(default: the parameters file\'s, 0 in the paper\'s '
+                      'robot)')
     mjcf.set_defaults(run=run_mjcf)
 
     draw = sub.add_parser(
