@@ -6,7 +6,10 @@ as processes, then for the paper's trajectory (eq. 6) and a faster one
 streams one pass per case from a ``setpoint_publisher`` process: PD alone
 and PD + feedforward, on the exact plant and on a plant whose platform is
 20 % heavier than the model; ``--engine mujoco`` runs the plant in
-MuJoCo (the simulator's second engine). With ``--mode trajectory`` each pass is sent
+MuJoCo (the simulator's second engine). Then, on the exact plant, a
+``--payload`` (5 kg) picked up halfway through each pass, PD + feedforward
+with the feedforward told (its ``robot.payload`` set at that instant) and
+not told. With ``--mode trajectory`` each pass is sent
 once, whole, as a Cartesian trajectory that the feedforward converts into a
 JointTrajectory and the tracking controller follows as
 joint_trajectory_controller would. Prints the tracking error of every case
@@ -63,6 +66,10 @@ def main(argv=None):
                         'setpoint_publisher (default); trajectory: each '
                         'pass as one Cartesian trajectory, converted by the '
                         'feedforward, followed as a JointTrajectory')
+    parser.add_argument('--payload', type=float, default=5.0, metavar='KG',
+                        help='payload picked up halfway through a pass, the '
+                        'feedforward told and not told (default 5; 0: no '
+                        'pick-up cases)')
     add_load_options(parser)
     parser.add_argument('--plot', default=str(ROOT / 'out' /
                                               'closed_loop.png'),
@@ -75,10 +82,12 @@ def main(argv=None):
         parser.error(f'unknown trajectories {unknown}' if unknown else
                      'rates: need 1 <= loop rate <= plant rate <= 10000 Hz')
     check_load_options(parser, args)
+    if not 0.0 <= args.payload <= 1000.0:
+        parser.error('--payload must lie in [0, 1000] kg')
 
     context = rclpy.context.Context()
     rclpy.init(context=context)
-    runs = {}
+    runs, pickups = {}, {}
     try:
         with busy_loops(args.load), harness.ClosedLoop(
                 context, args.loop_rate, args.plant_rate, args.engine,
@@ -92,6 +101,15 @@ def main(argv=None):
                           f'error RMS {run.rms_mm:.3f} mm, max '
                           f'{run.max_mm:.3f} mm', flush=True)
                     runs[name, feedforward, mass] = run
+                for told in (False, True) if args.payload else ():
+                    at = 0.5 * harness.TRAJECTORIES[name].duration
+                    run = loop.run_unspoiled(
+                        name, True, mode=args.mode,
+                        pickup=(at, args.payload, told),
+                        report=lambda text: print('  ' + text, flush=True))
+                    print(f'  {run.label}: position error RMS '
+                          f'{run.rms_mm:.3f} mm', flush=True)
+                    pickups[name, told] = (run, at)
         loop.check_exits()
     except harness.LoopError as error:
         print(f'closed_loop_demo: error: {error}', file=sys.stderr)
@@ -99,6 +117,8 @@ def main(argv=None):
     finally:
         rclpy.try_shutdown(context=context)
     print_table(runs, names, args)
+    if pickups:
+        print_pickups(pickups, names, args)
     plot(runs, names, args.plot)
     print(f'plot: {args.plot}')
     return 0
@@ -122,6 +142,20 @@ def print_table(runs, names, args):
             print(f'{name:<10} {plant:<16} {pd.rms_mm:8.3f} {pd.max_mm:8.3f} '
                   f'{ff.rms_mm:10.3f} {ff.max_mm:10.3f} '
                   f'{pd.rms_mm / ff.rms_mm:9.1f}x')
+
+
+def print_pickups(pickups, names, args):
+    """Print PD + FF's error before and after the payload came."""
+    print(f'\n{args.payload:g} kg picked up halfway through the pass, exact '
+          'plant, PD + feedforward: RMS position error (mm)')
+    print(f'{"trajectory":<10} {"feedforward":<12} {"before":>8} '
+          f'{"after":>8}')
+    for name in names:
+        for told in (False, True):
+            run, at = pickups[name, told]
+            print(f'{name:<10} {"told" if told else "not told":<12} '
+                  f'{harness.rms_mm(run, end=at):8.3f} '
+                  f'{harness.rms_mm(run, at):8.3f}')
 
 
 def plot(runs, names, path):

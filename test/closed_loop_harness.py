@@ -295,7 +295,7 @@ class ClosedLoop:
 
     def run(self, name='paper', feedforward=True, kp=None, kd=None,
             mass_factor=1.0, plant=None, model=None, passes=1,
-            mode='stream'):
+            mode='stream', pickup=None):
         """
         Run a motion and return its :class:`Run`.
 
@@ -308,7 +308,11 @@ class ClosedLoop:
         ``passes``: how many passes, looped (the publisher is stopped
         after the last); ``mode``: ``'stream'`` (setpoints from a
         setpoint_publisher) or ``'trajectory'`` (the whole motion as one
-        Cartesian trajectory, see the module docstring).
+        Cartesian trajectory, see the module docstring); ``pickup``:
+        ``(seconds, kg, told)``, a payload the plant picks up that many
+        seconds into the stream (the simulator's ``robot.payload``, set at
+        run time), the feedforward told at once (its ``robot.payload``) or
+        not.
         """
         motion = TRAJECTORIES[name] if isinstance(name, str) else name
         model = model or Robot()
@@ -329,11 +333,14 @@ class ClosedLoop:
         if mode == 'trajectory':
             self._send_trajectory(motion, duration)
         else:
-            self._stream(motion, duration, passes)
+            self._stream(motion, duration, passes, pickup)
         label = (f'{name if isinstance(name, str) else "motion"}, '
                  f'{"PD + feedforward" if feedforward else "PD"}, '
                  f'plant m5 x{plant.m5 / model.m5:g}'
-                 + (', joint trajectory' if mode == 'trajectory' else ''))
+                 + (', joint trajectory' if mode == 'trajectory' else '')
+                 + (f', {pickup[1]:g} kg picked up at {pickup[0]:g} s, '
+                    f'feedforward {"told" if pickup[2] else "not told"}'
+                    if pickup else ''))
         return _tracking(label, self.recorder, motion, duration,
                          1.0 / self.plant_rate)
 
@@ -360,7 +367,7 @@ class ClosedLoop:
                        f'{ATTEMPTS}')
         return run
 
-    def _stream(self, motion, duration, passes):
+    def _stream(self, motion, duration, passes, pickup=None):
         """Stream the motion from a setpoint_publisher process."""
         publisher = start_node_process([
             '--ros-args', '-p', f'rate_hz:={self.loop_rate}', *motion.args,
@@ -380,6 +387,11 @@ class ClosedLoop:
                 if end_ns is not None and recorder.last_setpoint is not \
                         None and recorder.last_setpoint >= end_ns:
                     break       # the last pass is over (looped passes)
+                if pickup and recorder.joints and end_ns is not None and \
+                        recorder.joints[-1][0] >= end_ns - round(
+                            (duration - pickup[0]) * 1e9):
+                    self._pick_up(*pickup[1:])
+                    pickup = None
                 if time.monotonic() > deadline:
                     raise LoopError('timed out waiting for the end of the '
                                     'pass')
@@ -389,6 +401,19 @@ class ClosedLoop:
             code, err = stop_process(publisher)
         if code != 0:
             raise LoopError(f'setpoint_publisher exited {code}:\n{err}')
+
+    def _pick_up(self, payload, told):
+        """Put ``payload`` (kg) on the plant; tell the model if ``told``."""
+        clients = [self.recorder.plant] + ([self.recorder.model] if told
+                                           else [])
+        futures = [c.set_parameters([Parameter('robot.payload',
+                                               value=float(payload))])
+                   for c in clients]
+        for future in futures:
+            refused = [r.reason for r in self._call(future).results
+                       if not r.successful]
+            if refused:
+                raise LoopError(f'payload refused: {refused}')
 
     def _send_trajectory(self, motion, duration, lead=2.0, hold=0.5):
         """
@@ -508,6 +533,13 @@ def within_factor(label, reference, factor):
     """
     return lambda medians: (medians[label].rms_mm
                             <= factor * medians[reference].rms_mm)
+
+
+def rms_mm(run, start=0.0, end=math.inf):
+    """Return the RMS position error (mm) of ``run`` from ``start`` to ``end`` s."""
+    norm = np.linalg.norm(run.position_error, axis=1) * 1e3
+    inside = (run.times >= start) & (run.times < end)
+    return float(np.sqrt(np.mean(norm[inside] ** 2)))
 
 
 def robot_parameters(robot):

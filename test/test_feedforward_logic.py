@@ -481,6 +481,18 @@ def test_configure_takes_effect_for_next_setpoint():
     assert out.solution.force != first.solution.force
 
 
+def test_a_payload_set_at_run_time_is_a_heavier_platform_next_setpoint():
+    ff = core()
+    first = complete(ff, (1, 0), SAMPLES[0], 0.0)
+    ff.configure(settings(**{'robot.payload': 5.0}))
+    out = complete(ff, (2, 0), SAMPLES[0], 0.0)
+    assert out.solution == mechanics.solve(Robot(m5=Robot().m5 + 5.0),
+                                           *SAMPLES[0])
+    assert first.solution == mechanics.solve(Robot(), *SAMPLES[0])
+    shown = dict(ff.status(1.0).values)
+    assert shown['payload (kg)'] == 5.0
+
+
 # Settings --------------------------------------------------------------------
 def test_default_settings():
     s = PARAMETERS.parse(PARAMETERS.defaults())

@@ -46,12 +46,17 @@ def plan_of_cubic(times, start=100.0):
 def test_hermite_reproduces_a_cubic_and_efforts_are_linear():
     times = [0.0, 0.3, 0.7, 1.5]
     plan = plan_of_cubic(times)
+    c = np.array([[0.2, 0.1, -0.3], [-0.4, 0.5, 0.2], [0.3, -0.2, 0.1]])
     for t in np.linspace(0.0, 1.5, 61)[:-1]:    # at 1.5: held, at rest
         p, v, e = plan.sample(100.0 + t)
         want_p, want_v = cubic(t)
         assert np.allclose(p, want_p, atol=1e-13)
         assert np.allclose(v, want_v, atol=1e-12)
         assert np.allclose(e, [10.0 * t, -t, 250.0 + t], atol=1e-12)
+        # The cubic's second derivative, 2 c2 + 6 c3 t.
+        assert np.allclose(plan.acceleration(100.0 + t),
+                           2 * c[1] + 6 * c[2] * t, atol=1e-10)
+    assert plan.acceleration(101.5) == ZERO
 
 
 @pytest.mark.parametrize('omega, bound', [(math.pi / 3, 1e-12),
@@ -154,6 +159,32 @@ def test_trajectory_followed_with_the_law_then_its_last_point_held():
     # After the end a desired state takes over.
     assert core.desired(NAMES, [0.01] * 3, ZERO, [1.0] * 3, 0.05)
     assert core.plan is None
+
+
+def test_a_payload_the_plan_does_not_hold_is_added_to_its_efforts():
+    """robot.payload on the controller: the planned efforts plus its force."""
+    from orthoglide_ros.model.mechanics import payload_force, solve
+    home = solve(Robot(), ZERO)
+    lifted = solve(Robot(), (0.0, 0.0, 0.02))
+    trajectory = points([0.0, 1.0], [home.lambda_, lifted.lambda_],
+                        [ZERO, ZERO], [home.force, lifted.force])
+    commands = {}
+    for payload in (0.0, 5.0):
+        core = controller(kp=[0.0] * 3, kd=[0.0] * 3,
+                          **{'robot.payload': payload})
+        core.measured(NAMES, home.lambda_, ZERO, [], 0.0)
+        core.trajectory(trajectory, 49.0, 0.0)
+        commands[payload] = core.tick(50.3, 0.0).force
+        plan = core.plan
+    p, v, e = plan.sample(50.3)
+    carried = payload_force(Robot(), 5.0, p, v, plan.acceleration(50.3))
+    assert commands[0.0] == pytest.approx(e, abs=1e-12)
+    assert commands[5.0] == pytest.approx(
+        tuple(a + b for a, b in zip(e, carried)), abs=1e-12)
+    # Slider C carries the payload's weight, 49 N, and its acceleration.
+    assert commands[5.0][2] - commands[0.0][2] == pytest.approx(49.05,
+                                                                rel=0.05)
+    assert dict(core.status(1.0).values)['payload (kg)'] == 5.0
 
 
 def test_zero_stamp_starts_at_reception_and_a_new_one_replaces_it():

@@ -273,6 +273,26 @@ def test_reset_starts_over_and_applies_the_pending_plant():
     assert not sim.pending_reset
 
 
+def test_a_payload_is_picked_up_at_the_next_step_not_at_reset():
+    """robot.payload changes the plant at once: a part picked up."""
+    sim = core()
+    sim.command(HOLD, 0.0)
+    sim.tick(0.001)
+    sim.configure(settings(**{'robot.payload': 5.0}))
+    assert not sim.pending_reset
+    assert sim.plant.robot == Robot(payload=5.0)
+    position, velocity = sim.plant.position, sim.plant.velocity
+    sim.tick(0.002)
+    # The step is the heavier platform's: HOLD no longer holds it.
+    expected = rk4_step(Robot(payload=5.0), position, velocity, HOLD, 0.001,
+                        mechanics.DEFAULT_SINGULARITY_MARGIN)
+    assert (sim.plant.position, sim.plant.velocity) == expected[:2]
+    assert sim.plant.velocity[2] < -0.001
+    assert dict(sim.status(1.0).values)['payload (kg)'] == 5.0
+    sim.reset()
+    assert sim.plant.robot == Robot(payload=5.0)
+
+
 def test_clipping_applied_and_counted():
     """A force beyond force_limit is clipped per actuator; steps counted."""
     sim = core(force_limit=200.0, initial_position=list(START))

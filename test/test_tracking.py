@@ -73,7 +73,7 @@ def assert_law(s, desired, measured, command):
 # Parameters ------------------------------------------------------------------
 def test_specs_defaults_and_names():
     """The table's names, types and defaults are the documented ones."""
-    specs = {s.name: s for s in CONTROLLER_SPECS}
+    specs = {s.name: s for s in PARAMETERS.own_specs}
     assert list(specs) == ['kp', 'kd', 'feedforward', 'force_limit',
                            'joint_names', 'measurement_timeout',
                            'rate_hz', 'path_tolerance', 'stall_timeout',

@@ -507,6 +507,7 @@ class Feedforward:
              age if age is not None else math.nan),
             ('singularity distance', distance),
             ('singularity margin', self.settings.singularity_margin),
+            ('payload (kg)', self.settings.robot.payload),
             ('pending partial setpoints', self.pending),
             ('rate_hz', self.settings.rate_hz),
             ('internal errors', internal_errors),

@@ -45,12 +45,12 @@ or after each instant of a coarser grid (a sampled encoder).
 rest, ``held``, simulation time 0.
 
 Parameters apply as follows: ``force_limit``, ``command_timeout``,
-``rate_hz``, ``publish_rate_hz``, ``joint_names`` and ``base_frame`` at
-once (the next tick);
-``robot.*``, ``initial_position``, ``singularity_margin`` and ``engine``
-describe the plant and take effect at the next reset (``pending_reset``
-says one is waiting), so a running simulation never changes model in
-mid-motion.
+``rate_hz``, ``publish_rate_hz``, ``joint_names``, ``base_frame`` and
+``robot.payload`` (a part picked up or put down) at once (the next tick);
+the rest of ``robot.*``, ``initial_position``, ``singularity_margin`` and
+``engine`` describe the plant and take effect at the next reset
+(``pending_reset`` says one is waiting), so a running simulation never
+changes model in mid-motion.
 
 Two engines integrate the plant, with the same rules around them:
 ``builtin`` (:class:`plant.Plant`: the package's forward dynamics, RK4)
@@ -263,12 +263,15 @@ class Simulator:
         """
         Use new settings: the live ones at once, the plant's at reset.
 
-        ``force_limit`` applies from the next step; ``robot``,
-        ``initial_position`` and ``singularity_margin`` wait for
+        ``force_limit`` and ``robot.payload`` (a part picked up or put
+        down: the plant carries it) apply from the next step; the rest of
+        ``robot``, ``initial_position`` and ``singularity_margin`` wait for
         :meth:`reset` (see :attr:`pending_reset`).
         """
         old, self.settings = self.settings, settings
         self.plant.force_limit = (settings.force_limit,) * 3
+        if settings.robot.payload != self.plant.robot.payload:
+            self.plant.carry(settings.robot.payload)
         if settings.rate_hz != old.rate_hz:
             self._grid = None
         if settings.rate_hz != old.rate_hz or \
@@ -531,6 +534,7 @@ class Simulator:
             ('singularity distance', self.singularity_distance),
             ('singularity margin', plant.margin),
             ('pending reset', self.pending_reset),
+            ('payload (kg)', self.plant.robot.payload),
             ('rate_hz', self.settings.rate_hz),
             ('publish_rate_hz', self.settings.publish_rate_hz),
             ('internal errors', internal_errors),
@@ -583,5 +587,5 @@ class Simulator:
 
 def _plant_model(settings):
     """Return the settings that describe the plant (applied at reset)."""
-    return (settings.robot, settings.initial_position,
+    return (settings.robot.replace(payload=0.0), settings.initial_position,
             settings.singularity_margin, settings.engine, settings.mjcf_file)

@@ -80,6 +80,7 @@ import numpy as np
 
 from orthoglide_ros.cores.inputs import (JointValues, read_joint_state,
                                          read_joint_trajectory, Rejected)
+from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.joint_plan import JointPlan
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import joint_names_spec, \
@@ -145,7 +146,7 @@ PARAMETERS = Table('ControllerSettings', (
          'velocity, a joint trajectory\'s planned motion included: beyond '
          'it the input is refused (velocity_limit)', (0.001, 1000.0)),
     *realtime.SPECS,
-))
+), robot=True)
 
 Command = namedtuple('Command', 'force error clipped')
 Command.__doc__ = """One command: ``force`` the 3 forces (N) after
@@ -381,8 +382,22 @@ class Tracking:
         if self.measurement_arrival is not None:
             clock -= now - self.measurement_arrival
         self.plan_finished = self.plan.finished(clock)
-        return self._command('trajectory', JointValues(*self.plan.sample(
-            clock)), now)
+        position, velocity, effort = self.plan.sample(clock)
+        payload = self.settings.robot.payload
+        if payload and self.settings.feedforward:
+            try:
+                carried = mechanics.payload_force(
+                    self.settings.robot, payload, position, velocity,
+                    self.plan.acceleration(clock))
+            except mechanics.WorkspaceError as error:
+                self.rejected['trajectory', 'position_limit'] += 1
+                raise Rejected('position_limit', (
+                    f'the payload\'s force is undefined at lambda '
+                    f'{mechanics.format_vector(position)} m: {error}')) \
+                    from None
+            effort = tuple(e + c for e, c in zip(effort, carried))
+        return self._command('trajectory', JointValues(
+            position, velocity, effort), now)
 
     def _held_force(self, effort):
         """
@@ -557,6 +572,7 @@ class Tracking:
             ('path tolerance trips', self.trips),
             ('stall holds', self.stalls),
             ('feedforward', settings.feedforward),
+            ('payload (kg)', settings.robot.payload),
             ('force_limit (N)', settings.force_limit),
             ('internal errors', internal_errors),
         ]

@@ -70,22 +70,11 @@ class JointPlan:
 
         On the node's clock, the one the plan's ``start`` is on.
         """
-        t = max(now - self.start, self.accepted)
-        times = self.times
-        if t >= times[-1]:
+        segment = self._segment(now)
+        if segment is None:
             return (_floats(self.positions[-1]), _ZERO,
                     _floats(self.efforts[-1]))
-        i = max(int(np.searchsorted(times, t, side='right')), self.first)
-        if i == self.first:     # from the accepted state to that point
-            (p0, v0, e0), t0 = self.state, self.accepted
-        else:
-            p0, v0, t0 = (self.positions[i - 1], self.velocities[i - 1],
-                          times[i - 1])
-            e0 = self.efforts[i - 1]
-        p1, v1, e1, t1 = (self.positions[i], self.velocities[i],
-                          self.efforts[i], times[i])
-        h = t1 - t0
-        s = (t - t0) / h
+        s, h, p0, v0, e0, p1, v1, e1 = segment
         s2, s3 = s * s, s * s * s
         position = ((2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * h * v0
                     + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * h * v1)
@@ -93,6 +82,37 @@ class JointPlan:
                     + (-6 * s2 + 6 * s) * p1 + (3 * s2 - 2 * s) * h * v1) / h
         effort = e0 + s * (e1 - e0)
         return _floats(position), _floats(velocity), _floats(effort)
+
+    def acceleration(self, now):
+        """Return the cubic's second derivative (m/s^2, a 3-tuple) at ``now``."""
+        segment = self._segment(now)
+        if segment is None:
+            return _ZERO
+        s, h, p0, v0, _, p1, v1, _ = segment
+        return _floats(((12 * s - 6) * (p0 - p1) + (6 * s - 4) * h * v0
+                        + (6 * s - 2) * h * v1) / (h * h))
+
+    def _segment(self, now):
+        """
+        Return the cubic sampled at ``now``: ``(s, h, p0, v0, e0, p1, v1, e1)``.
+
+        ``s`` in [0, 1) along a segment of ``h`` s from ``(p0, v0, e0)`` to
+        ``(p1, v1, e1)``; None after the last point.
+        """
+        t = max(now - self.start, self.accepted)
+        times = self.times
+        if t >= times[-1]:
+            return None
+        i = max(int(np.searchsorted(times, t, side='right')), self.first)
+        if i == self.first:     # from the accepted state to that point
+            (p0, v0, e0), t0 = self.state, self.accepted
+        else:
+            p0, v0, t0 = (self.positions[i - 1], self.velocities[i - 1],
+                          times[i - 1])
+            e0 = self.efforts[i - 1]
+        h = times[i] - t0
+        return ((t - t0) / h, h, p0, v0, e0, self.positions[i],
+                self.velocities[i], self.efforts[i])
 
     def peak_velocity(self):
         """

@@ -81,7 +81,8 @@ class MujocoPlant:
 
         ``model_text``: an MJCF to simulate instead (:func:`check_model`:
         ``orthoglide mjcf``'s names and ``robot``'s lengths; its masses,
-        friction and armature its own).
+        friction and armature its own). Either way the platform carries
+        ``robot.payload`` (:meth:`carry`).
         """
         import mujoco
         self._mujoco = mujoco
@@ -89,9 +90,13 @@ class MujocoPlant:
         self.force_limit = force_limits(force_limit, time)
         self.margin = margin
         self.model = mujoco.MjModel.from_xml_string(
-            model_text or mjcf.mjcf(robot))
+            model_text or mjcf.mjcf(robot.replace(payload=0.0)))
         self.data = mujoco.MjData(self.model)
         self._platform = self.model.body('platform').id
+        # The platform without a payload: its mass and inertia.
+        self._own = (float(self.model.body_mass[self._platform]),
+                     self.model.body_inertia[self._platform].copy())
+        self.carry(robot.payload)
         self._dofs = {self.model.joint(i).name: (
             self.model.jnt_qposadr[i], self.model.jnt_dofadr[i])
             for i in range(self.model.njnt)}
@@ -171,6 +176,19 @@ class MujocoPlant:
         return PlantStep(
             tuple((v - w) / dt for v, w in zip(velocity, before)), applied,
             tuple(a != c for a, c in zip(applied, command)))
+
+    def carry(self, payload):
+        """
+        Carry ``payload`` (kg) on the platform from the next step on.
+
+        The platform body's mass becomes its own plus ``payload``, its
+        inertia scaled alike (MuJoCo reads both at every step).
+        """
+        mass, inertia = self._own
+        self.model.body_mass[self._platform] = mass + payload
+        self.model.body_inertia[self._platform] = inertia * (
+            (mass + payload) / mass)
+        self.robot = self.robot.replace(payload=payload)
 
     def joint_state(self):
         """Return ``(lambda, lambdadot)`` (m, m/s) of the slide joints."""

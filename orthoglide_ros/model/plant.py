@@ -192,6 +192,10 @@ class Plant:
         return PlantStep(acceleration, applied,
                          tuple(a != c for a, c in zip(applied, command)))
 
+    def carry(self, payload):
+        """Carry ``payload`` (kg) on the platform from the next step on."""
+        self.robot = self.robot.replace(payload=payload)
+
     def joint_state(self):
         """Return ``(lambda, lambdadot)`` (m, m/s, 3-tuples), eq. (9), (15)."""
         s = mechanics.solve(self.robot, self.position, self.velocity,
