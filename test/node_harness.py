@@ -79,6 +79,18 @@ def client_prefix(on=REALTIME):
     return ['chrt', '-f', str(CLIENT_PRIORITY)] if on else []
 
 
+def elevate(proc, on=REALTIME):
+    """
+    Put a started client process at CLIENT_PRIORITY (every thread).
+
+    For a process whose start-up (imports, discovery: a second of CPU)
+    must not preempt a real-time loop already running, as
+    :func:`client_prefix` would make it.
+    """
+    if on:
+        realtime.client(CLIENT_PRIORITY, proc.pid)
+
+
 @contextmanager
 def realtime_client(on=REALTIME):
     """

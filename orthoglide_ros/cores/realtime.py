@@ -52,7 +52,6 @@ POLICIES = {os.SCHED_OTHER: 'SCHED_OTHER', os.SCHED_FIFO: 'SCHED_FIFO',
 # Rounds of "list the threads, set the new ones": a thread made meanwhile
 # by one not yet set is found by the next round.
 ROUNDS = 10
-_TASKS = '/proc/self/task'
 _ONLINE = '/sys/devices/system/cpu/online'
 
 
@@ -153,16 +152,19 @@ def apply(thread_priority, cpu_affinity, lock_memory):
     return warnings
 
 
-def client(priority):
+def client(priority, pid='self'):
     """
-    Run every thread of this process SCHED_FIFO ``priority``, not its children.
+    Run every thread of a process SCHED_FIFO ``priority``, not its children.
 
     For a process that feeds or records a real-time node and starts
     processes itself (a demo, a test, a benchmark): with
     SCHED_RESET_ON_FORK, the processes and threads it makes afterwards
     start at normal scheduling, so a node it starts runs as its own
     ``thread_priority`` says. Call it again after making threads (a DDS
-    participant's) to include them. Returns the warnings as :func:`apply`.
+    participant's) to include them. ``pid``: this process, or another one
+    once it has started (its start-up, imports and discovery, then does
+    not preempt the real-time loop). Returns the warnings as
+    :func:`apply`.
     """
     param = os.sched_param(priority)
     return _every_thread(
@@ -170,7 +172,7 @@ def client(priority):
             tid, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK, param),
         lambda tid: (os.sched_getscheduler(tid), os.sched_getparam(tid)),
         lambda tid, old: os.sched_setscheduler(tid, *old),
-        lambda error: _priority_refused(priority, error))
+        lambda error: _priority_refused(priority, error), pid)
 
 
 def normal():
@@ -193,9 +195,9 @@ def granted(priority):
     return bool(effective >> CAP_SYS_NICE & 1)
 
 
-def _every_thread(change, read, restore, refused):
+def _every_thread(change, read, restore, refused, pid='self'):
     """
-    ``change(tid)`` for every thread, found anew until none is new.
+    ``change(tid)`` for every thread of ``pid``, found anew until none is new.
 
     The OS refusing one (an OSError other than a thread that has ended)
     puts back what was changed (``restore(tid, read(tid))``) and returns
@@ -204,7 +206,7 @@ def _every_thread(change, read, restore, refused):
     done = {}
     try:
         for _ in range(ROUNDS):
-            new = [tid for tid in _threads() if tid not in done]
+            new = [tid for tid in _threads(pid) if tid not in done]
             if not new:
                 break
             for tid in new:
@@ -224,9 +226,9 @@ def _every_thread(change, read, restore, refused):
     return []
 
 
-def _threads():
-    """Return the thread ids of this process."""
-    return [int(name) for name in os.listdir(_TASKS)]
+def _threads(pid='self'):
+    """Return the thread ids of a process (this one by default)."""
+    return [int(name) for name in os.listdir(f'/proc/{pid}/task')]
 
 
 def _limit(kind):
@@ -295,7 +297,7 @@ def in_effect():
     rows = []
     for tid in _threads():
         try:
-            with open(f'{_TASKS}/{tid}/stat') as f:
+            with open(f'/proc/self/task/{tid}/stat') as f:
                 fields = f.read().rsplit(')', 1)[1].split()
             cpus = tuple(sorted(os.sched_getaffinity(tid)))
         except (OSError, IndexError):   # the thread ended meanwhile
