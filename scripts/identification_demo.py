@@ -3,8 +3,9 @@ Identification demo: a simulated Orthoglide the feedforward does not know.
 
 The ``simulator`` runs a plant unlike the paper's robot (a 25 % heavier
 platform, 15 % heavier bars, friction on every slider with a Coulomb level
-per direction and a Stribeck rise: ``PLANT``); the ``feedforward`` knows
-only the paper's robot. The demo
+per direction and a Stribeck rise, ball-screw drives of unequal reflected
+inertia: ``PLANT``); the ``feedforward`` knows only the paper's robot. The
+demo
 
 1. streams the excitation motion (``setpoint_publisher``, ``motion:
    excitation``) through PD + the nominal feedforward for a few periods
@@ -28,11 +29,12 @@ only the paper's robot. The demo
    PD + exact (RMS), and writes a PNG.
 
 With ``--engine mujoco`` the plant is MuJoCo's: the same unknown robot
-written as an MJCF (``orthoglide mjcf``) with a rotor inertia of ARMATURE kg
-on every slider, its friction MuJoCo's law (damping, dry friction), a robot
+written as an MJCF (``orthoglide mjcf``, the drives as its slide joints'
+armature), its friction MuJoCo's law (damping, dry friction), a robot
 outside the package's model family: there is no exact feedforward, the
-MJCF's values stand beside the identified ones (``m1 + m2`` holds the
-armature) and PD + identified must beat PD + nominal 5x (RMS).
+MJCF's values stand beside the identified ones and PD + identified must
+beat PD + nominal 5x (RMS).
+
 
 The loop and its error measure are in ``test/closed_loop_harness.py``.
 Run it through ``bash scripts/identification_demo.sh`` (sets up .venv,
@@ -61,7 +63,7 @@ import rclpy  # noqa: E402
 
 import closed_loop_harness as harness  # noqa: E402
 from node_harness import add_load_options, busy_loops, \
-    check_load_options, client_prefix, node_executable, start_node_process, \
+    check_load_options, elevate, node_executable, start_node_process, \
     stop_process  # noqa: E402
 from orthoglide_ros.formats import params_file  # noqa: E402
 from orthoglide_ros.model import mjcf  # noqa: E402
@@ -70,11 +72,13 @@ from orthoglide_ros.model.robot import Robot  # noqa: E402
 
 RECORD_MARGIN = 60.0    # s the recording may last beyond the passes
 VALIDATION_PASSES = 2   # periods of the validation excitation
-# The builtin engine's plant: the loop's unknown robot with a Coulomb level
-# per direction and a Stribeck rise on every slider.
+# The plant: the loop's unknown robot with a Coulomb level per direction
+# and a Stribeck rise on every slider, and ball-screw drives whose motors'
+# inertia, reflected onto the sliders, differs per axis (kg).
 PLANT = harness.UNKNOWN_PLANT.replace(
     friction_coulomb_negative=(7.0, 2.0, 5.5),
-    friction_stribeck=(4.0, 3.0, 5.0), friction_stribeck_velocity=0.02)
+    friction_stribeck=(4.0, 3.0, 5.0), friction_stribeck_velocity=0.02,
+    armature=(1.6, 0.8, 0.4))
 CASES = ('PD', 'PD + nominal FF', 'PD + identified FF', 'PD + exact FF')
 # Per engine: the cases tracked, the criterion (case, reference, factor:
 # the case's median RMS at most factor times the reference's) and the name
@@ -83,14 +87,12 @@ Setup = namedtuple('Setup', ('cases', 'criterion', 'truth'))
 SETUPS = {
     'builtin': Setup(CASES, ('PD + identified FF', 'PD + exact FF', 1.5),
                      'plant'),
-    # MuJoCo's robot is not the model (armature, MuJoCo's dry friction):
-    # there is no exact feedforward; the identified one must beat the
-    # nominal one 5x.
+    # MuJoCo's robot is not the model (MuJoCo's dry friction and its soft
+    # loop constraints): there is no exact feedforward; the identified one
+    # must beat the nominal one 5x.
     'mujoco': Setup(CASES[:3], ('PD + identified FF', 'PD + nominal FF',
                                 0.2), 'MJCF'),
 }
-# The MuJoCo plant's rotor inertia reflected to each slider (kg).
-ARMATURE = 0.2
 
 
 def main(argv=None):
@@ -112,9 +114,8 @@ def main(argv=None):
     parser.add_argument('--engine', choices=sorted(SETUPS),
                         default='builtin', help='the simulator\'s engine: '
                         'builtin (the unknown robot in the package\'s '
-                        'model family, default) or mujoco (an MJCF with '
-                        f'slider armature {ARMATURE:g} kg and MuJoCo\'s '
-                        'friction: a robot that is not the model)')
+                        'model family, default) or mujoco (its MJCF, with '
+                        'MuJoCo\'s friction: a robot that is not the model)')
     add_load_options(parser)
     parser.add_argument('--out', default=str(ROOT / 'out' / 'identification'),
                         metavar='DIR', help='bag, parameters file and PNG '
@@ -136,15 +137,12 @@ def main(argv=None):
 
     setup = SETUPS[args.engine]
     nominal = Robot()
-    plant = PLANT if args.engine == 'builtin' else harness.UNKNOWN_PLANT
+    plant = PLANT if args.engine == 'builtin' else harness.UNKNOWN_PLANT \
+        .replace(armature=PLANT.armature)
     truth, model_file = plant, ''
     if args.engine == 'mujoco':
         model_file = out / 'unknown_robot.xml'
-        model_file.write_text(mjcf.mjcf(plant.replace(
-            armature=(ARMATURE,) * 3)))
-        # What the model family can say of it: the armature adds to the
-        # sliders' mass.
-        truth = plant.replace(m1=plant.m1 + ARMATURE)
+        model_file.write_text(mjcf.mjcf(plant))
         print(f'MuJoCo plant: {model_file}')
     context = rclpy.context.Context()
     rclpy.init(context=context)
@@ -189,10 +187,11 @@ def excite(loop, seed, period, passes, bag, nominal, plant):
     record = start_node_process(
         ['record', '--output', str(bag), '--topic', '/joint_states',
          '--duration', f'{passes * period + RECORD_MARGIN:g}'],
-        command=[*client_prefix(loop.realtime), node_executable('orthoglide')])
+        command=[node_executable('orthoglide')])
     try:
         # The controller, the harness's recorder and this one.
         loop.wait_for_subscribers('joint_states', 3)
+        elevate(record, loop.realtime)
         run = loop.run(harness.excitation_motion(seed, period),
                        feedforward=True, plant=plant, model=nominal,
                        passes=passes)
@@ -219,11 +218,6 @@ def identify(bag, run, args, output, report):
     command = ['identify', '--input', str(bag),
                *window(bag, run, args.passes, args.period),
                '--output', str(output), '--report', str(report)]
-    if args.engine == 'mujoco':
-        # Outside the model family the residual is the model's misfit, not
-        # white noise: the deviations it gives are not statistics, and the
-        # tracking below is the criterion (they are printed all the same).
-        command += ['--max-relative-std', '100']
     print(f'  (the simulator holds each force over a step: a lag of '
           f'{harness.force_lag() * 1e3:g} ms)', flush=True)
     return orthoglide(command)
@@ -287,8 +281,9 @@ def print_parameters(nominal, identified, plant, label='plant'):
                                   ('identified', identified),
                                   ('plant', plant))}
     print(f'\nBase parameters (the {label}\'s are what identify should '
-          'find' + (': m1 + m2 with the armature; its Coulomb friction is '
-                    'MuJoCo\'s law, not tanh' if label == 'MJCF' else '')
+          'find' + ('; its Coulomb friction is MuJoCo\'s law, not tanh'
+                    if label == 'MJCF' else '')
+
           + '):')
     print(f'{"base parameter":<20}{"nominal":>12}{"identified":>12}'
           f'{label:>12}{"error":>10}')

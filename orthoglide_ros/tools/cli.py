@@ -44,7 +44,7 @@ import numpy as np
 from orthoglide_ros.formats import cdr, params_file
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools import excitation_design, identification
-from orthoglide_ros.tools import identification_report as report
+from orthoglide_ros.tools.identification import report
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
 from orthoglide_ros.tools.identification import DEFAULT_CUTOFF
 from orthoglide_ros.cores.parameters import JOINT_NAMES, joint_names
@@ -296,7 +296,8 @@ def _read_trajectory(path, name):
 
 def run_excitation(robot, args):
     """Write an excitation (the best of --seeds) as a trajectory; describe it."""
-    base = identification.base_parameters(robot)
+    base = identification.base_parameters(
+        robot, identification.design_law(robot))
     bounds = dict(box=args.box, max_velocity=args.max_velocity,
                   max_acceleration=args.max_acceleration)
     rows = []
@@ -384,7 +385,7 @@ def run_identify(robot, args):
             max_relative_std=args.max_relative_std,
             friction=None if args.friction == 'auto'
             else identification.parse_law(args.friction),
-            stribeck_velocity=args.stribeck_velocity)
+            stribeck_velocity=args.stribeck_velocity, payload=args.payload)
         validation = None
         if args.validate is not None:
             other = identification.read_log(args.validate, args.topic, joints)
@@ -407,13 +408,14 @@ def run_identify(robot, args):
     summary = report.identification_lines(args.input, log, window, result,
                                           args.cutoff)
     print('\n'.join(summary))
-    for note in result.notes:
+    notes = [*result.held, *result.notes]
+    for note in notes:
         print(f'note: {note}')
     if validation is not None:
         print('\n'.join(report.validation_lines(validation[1],
                                                 validation[0])))
     comments = [f'Identified by `orthoglide identify` from {args.input}',
-                *summary[1:]] + [f'note: {n}' for n in result.notes]
+                *summary[1:]] + [f'note: {n}' for n in notes]
     _write_output(args.output, params_file.robot_file_text(
         result.robot, comments).encode('utf-8'))
     print(f'written: {args.output}')
@@ -430,7 +432,7 @@ def run_validate(robot, args):
             args.input, args.topic, tuple(args.joint_names)),
             args.start, args.end)
         validation = identification.validate(robot, log, args.cutoff,
-                                             args.force_lag)
+                                             args.force_lag, args.payload)
     except identification.LogError as error:
         raise CliError(str(error)) from None
     image = None if args.report is None else _drawn(
@@ -800,6 +802,11 @@ def _log_options():
                          f'{DEFAULT_CUTOFF:g}; the motion\'s is '
                          f'{identification.STATE_CUTOFF_FACTOR:g} times it), '
                          'below half the log\'s sampling rate')
+    options.add_argument('--payload', type=_non_negative_float, default=None,
+                         metavar='KG', help='the payload the log was '
+                         'recorded with (kg on the platform; default: '
+                         'robot.payload of --params, 0 in the paper\'s '
+                         'robot): its forces are the model\'s')
     return options
 
 
@@ -958,10 +965,12 @@ def _parser():
 
     identify = sub.add_parser(
         'identify', parents=[common, _log_options()],
-        help='identify masses and friction from a log',
+        help='identify masses, drives and friction from a log',
         description='Identify the base parameters (the combinations of the '
-        'masses (kg) and of the viscous (N s/m) and Coulomb (N) friction '
-        'of the sliders that the forces depend on) from a log, and write '
+        'masses (kg), the drives\' armature (kg) and the viscous (N s/m) '
+        'and Coulomb (N) friction of the sliders that the forces depend '
+        'on) from a log, and write '
+
         'the identified robot as a ROS 2 parameters file. The log: a CSV '
         'file with the columns t (s), lambda_a, lambda_b, lambda_c (m), '
         'force_a, force_b, force_c (N) and, optional, lambdadot_a, '
@@ -973,9 +982,10 @@ def _parser():
         'and friction_velocity are kept). Prints each base parameter with '
         'its meaning, estimate and relative standard deviation, the '
         'condition number, the RMS residual per actuator, the samples used '
-        'and their time span. A log that cannot be used or that does not '
-        'excite every base parameter exits with code 2; nothing is then '
-        'written.')
+        'and their time span. A base parameter the log does not excite is '
+        'held at its nominal value (unless the held-out error needs it), '
+        'and said; a log that cannot be used at all (unreadable, too short, '
+        'no motion) exits with code 2; nothing is then written.')
     identify.add_argument('--output', required=True, metavar='FILE',
                           help='the identified robot as a ROS 2 parameters '
                           'file (section feedforward, every robot.* '
@@ -994,11 +1004,12 @@ def _parser():
                           choices=('auto',) + tuple(
                               identification.law_name(law)
                               for law in identification.LAWS),
-                          help='the friction law: viscous + Coulomb '
+                          help='the law: viscous + Coulomb friction '
                           '(coulomb), with a Coulomb level per direction '
                           '(+direction), with a Stribeck excess at low '
-                          'speed (+stribeck); auto (default): the simplest '
-                          'law within '
+                          'speed (+stribeck), with the drives\' armature '
+                          '(+armature); auto (default): the simplest law '
+                          'within '
                           f'{100 * identification.SELECTION_MARGIN:g} %% of '
                           'the least RMS error on held-out parts of the '
                           'log')
@@ -1011,10 +1022,12 @@ def _parser():
                           f'{identification.STRIBECK_VELOCITIES[-1]:g} m/s)')
     identify.add_argument('--max-relative-std', type=_positive_float,
                           default=identification.MAX_RELATIVE_STD,
-                          metavar='PCT', help='refuse the log when a base '
-                          'parameter\'s relative standard deviation exceeds '
-                          f'PCT %% (default {identification.MAX_RELATIVE_STD:g}'
-                          '): the log does not excite it')
+                          metavar='PCT', help='a base parameter whose '
+                          'relative standard deviation exceeds PCT %% '
+                          f'(default {identification.MAX_RELATIVE_STD:g}) '
+                          'is not excited by the log: held at its nominal '
+                          'value unless the held-out error needs it')
+
     identify.add_argument('--validate', metavar='LOG',
                           help='another log (another motion): validate the '
                           'nominal and the identified robot on it, as '

@@ -3,7 +3,9 @@ An excitation optimized for identification, without ROS.
 
 The log of an excitation identifies the base parameters the better, the
 smaller the condition number of its base regressor (noise is amplified by
-it: :func:`identification.condition_number`). :func:`optimize` searches
+it: :func:`identification.condition_number`), the drives' armature among
+them where the robot has drives
+(:func:`identification.design_law`). :func:`optimize` searches
 the Fourier coefficients of :func:`trajectory.excitation`'s series, from a
 seed's, for a smaller one: each candidate is shaped as every excitation is
 (:func:`trajectory.shaped_excitation`: at home at rest at the start,
@@ -68,7 +70,8 @@ def optimize(robot, period, seed=0, max_force=math.inf,
     harmonics = bounds.pop('harmonics', trajectory.EXCITATION_HARMONICS)
     start = trajectory.excitation(seed, period, harmonics, robot=robot,
                                   **bounds)
-    base = identification.base_parameters(robot)
+    base = identification.base_parameters(
+        robot, identification.design_law(robot))
     start_condition, start_force = measure(robot, start, base)
     if start_force > max_force:
         raise ValueError(f'the excitation of seed {seed} needs '

@@ -1,0 +1,332 @@
+"""
+A log on uniform grids, filtered as the least squares need it.
+
+:class:`Motion` cuts a :class:`formats.logs.Log` into pieces between its
+gaps, puts each on a uniform grid, takes the platform's motion from the
+measured ``lambda`` (:func:`mechanics.forward_kinematics`) through a
+zero-phase Butterworth low-pass (``scipy.signal.sosfiltfilt``), its
+velocity and acceleration by central differences, the rigid columns of
+``W`` at every sample, and filters, trims and decimates whatever is
+computed from them alike: the forces at any lag, the friction columns at
+any Stribeck speed, a robot's forces. :func:`prepare` gives the
+:class:`Samples` of one law; :func:`estimate_lag` the forces' delay on the
+states. ``doc/identification.md`` gives the reasons for each choice.
+"""
+
+from collections import namedtuple
+import math
+
+import numpy as np
+
+from orthoglide_ros.formats.logs import check_log, LogError
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.tools.identification.laws import (
+    friction_kinds, kind_columns, PLAIN)
+from orthoglide_ros.tools.identification.regressor import (
+    rigid_columns, rigid_of)
+
+# The log's processing (doc/identification.md): a 4th-order Butterworth
+# low-pass at DEFAULT_CUTOFF (Hz) run forwards and backwards (zero phase,
+# 8th-order roll-off) on the forces and the regressor's columns alike;
+# samples within 2 / cutoff of a segment's ends are dropped (the edges of
+# the two filters in series); a gap longer than GAP_FACTOR times the
+# median sampling period and longer than GAP_SHARE / cutoff splits the log
+# into segments; shorter gaps are interpolated linearly (for a component
+# at frequency f, an error below (pi f gap)^2 / 2 of it: 5 % at the
+# cutoff, 0.2 % at a fifth of it).
+DEFAULT_CUTOFF = 10.0
+FILTER_ORDER = 4
+# The motion (positions, measured velocities) goes through the same design
+# at STATE_CUTOFF_FACTOR times the cutoff, at most STATE_CUTOFF_SHARE of the
+# sampling rate: five times the band of the forces, as Gautier filters
+# positions, so that the velocity keeps the ripple a Coulomb switch sees
+# (at the cutoff itself, the closed-loop logs of the demo gave m1 + m2 5 %
+# too heavy) while the encoder's quantisation stays out.
+STATE_CUTOFF_FACTOR = 5.0
+STATE_CUTOFF_SHARE = 0.4
+GAP_FACTOR = 3.0
+GAP_SHARE = 0.1
+# A step between two samples longer than this many median periods is a
+# missing sample (interpolated inside a segment; counted in the report).
+MISSING_FACTOR = 1.5
+# The drive's lag (the forces' delay on the states' stamps), when it is
+# not given: searched within +-LAG_SEARCH s, first on the log's period,
+# then on a quarter of it around the best, and refined by a parabola
+# through the three best (doc/identification.md).
+LAG_SEARCH = 0.01
+LAG_STEPS = 4
+Samples = namedtuple('Samples', (
+    'times', 'regressor', 'forces', 'segments', 'rate', 'law', 'lambdas',
+    'lambdadots', 'coverage'), defaults=(PLAIN, None, None, None))
+Samples.__doc__ = """A log prepared for identification (:func:`prepare`).
+
+(N,) times (s), the regressor ``W`` (N, 3, n) of the standard parameters
+of ``law`` and the forces (N, 3) (N), both through the same low-pass;
+``segments``: how many pieces of the log they come from; ``rate``: their
+sampling rate after the decimation (Hz); ``lambdas`` (m) and
+``lambdadots`` (m/s): (N, 3), the motion at those samples (through the
+motion's low-pass); ``coverage``: what of the log was used
+(:class:`Coverage`).
+"""
+
+Coverage = namedtuple('Coverage', (
+    'log_s', 'used_s', 'segments', 'gaps', 'longest_gap_s', 'short_pieces',
+    'missing'))
+Coverage.__doc__ = """What of a log :func:`prepare` used.
+
+``log_s``: the log's span (s); ``used_s``: the span of the samples used,
+segment by segment (s); ``segments``: how many; ``gaps``: the gaps that
+split the log, the longest ``longest_gap_s`` (s); ``short_pieces``: pieces
+between gaps too short to filter (dropped); ``missing``: samples missing
+inside the segments (steps longer than MISSING_FACTOR periods,
+interpolated).
+"""
+
+Piece = namedtuple('Piece', ('grid', 'stamps', 'forces', 'position',
+                             'velocity', 'acceleration', 'lambdas',
+                             'lambdadot', 'rigid'))
+
+
+class Motion:
+    """
+    A log on uniform grids, piece by piece between its gaps (:func:`prepare`).
+
+    Holds each piece's motion and the rigid columns of ``W`` (the masses
+    and the drives: :data:`regressor.RIGID`) at the log's rate, and
+    filters, trims and decimates whatever is computed from them alike
+    (:meth:`filtered`): the forces at any lag (:meth:`forces`), the
+    friction columns at any Stribeck speed (:meth:`friction`), a law's
+    whole ``W`` (:meth:`columns`), a robot's forces
+    (:meth:`model_forces`).
+    """
+
+    def __init__(self, robot, log, cutoff=DEFAULT_CUTOFF):
+        """Check and cut ``log``; raises :class:`LogError` (see prepare)."""
+        import scipy.signal
+        self._signal = scipy.signal
+        check_log(log)
+        self.robot = robot
+        self.source = log.source
+        times = np.asarray(log.times, dtype=float)
+        lambdas = np.asarray(log.lambdas, dtype=float)
+        forces = np.asarray(log.forces, dtype=float)
+        measured = None if log.lambdadots is None else np.asarray(
+            log.lambdadots, dtype=float)
+        self.period = period = float(np.median(np.diff(times)))
+        rate = 1.0 / period
+        if not 0.0 < cutoff < 0.5 * rate:
+            raise LogError(f'{log.source}: the cutoff {cutoff:g} Hz must lie '
+                           f'in (0, {0.5 * rate:g}) Hz, half the sampling '
+                           f'rate {rate:g} Hz')
+        self.cutoff = cutoff
+        self.sos = scipy.signal.butter(FILTER_ORDER, cutoff, fs=rate,
+                                       output='sos')
+        state_sos = scipy.signal.butter(
+            FILTER_ORDER, min(STATE_CUTOFF_FACTOR * cutoff,
+                              STATE_CUTOFF_SHARE * rate), fs=rate,
+            output='sos')
+        # (1e-9: a median period rounded up must not change these counts.)
+        trim = int(math.ceil(2.0 * rate / cutoff * (1.0 - 1e-9)))
+        self.step = max(1, int(rate / (2.0 * cutoff) * (1.0 + 1e-9)))
+        self.rate = rate / self.step
+        steps = np.diff(times)
+        breaks = np.flatnonzero(steps > max(GAP_FACTOR * period,
+                                            GAP_SHARE / cutoff)) + 1
+        self.pieces, self.inner, short = [], [], 0
+        for start, end in zip(np.r_[0, breaks], np.r_[breaks, len(times)]):
+            t = times[start:end]
+            grid = t[0] + period * np.arange(
+                int(math.floor((t[-1] - t[0]) / period + 1e-9)) + 1)
+            if len(grid) < 2 * trim + 3 * (2 * len(self.sos) + 1):
+                short += 1
+                continue
+
+            def on_grid(values):
+                return np.column_stack([np.interp(grid, t, values[:, j])
+                                        for j in range(3)])
+            try:
+                position = scipy.signal.sosfiltfilt(
+                    state_sos, mechanics.forward_kinematics(
+                        robot, on_grid(lambdas[start:end])), axis=0)
+                if measured is None:
+                    velocity = np.gradient(position, period, axis=0)
+                else:
+                    j1, j2 = mechanics.jacobians(robot, position)
+                    velocity = np.linalg.solve(
+                        j2, j1 @ scipy.signal.sosfiltfilt(
+                            state_sos, on_grid(measured[start:end]),
+                            axis=0)[:, :, None])[:, :, 0]
+                acceleration = np.gradient(velocity, period, axis=0)
+                rigid, reference = rigid_columns(robot, position, velocity,
+                                                 acceleration)
+            except mechanics.WorkspaceError as error:
+                raise LogError(f'{log.source}: the motion at t = '
+                               f'{grid[error.row]:.6g} s: {error}') from None
+            self.pieces.append(Piece(
+                grid, t, forces[start:end], position, velocity, acceleration,
+                reference.lambda_, reference.lambdadot, rigid))
+            self.inner.append(slice(trim, len(grid) - trim, self.step))
+        if not self.pieces:
+            raise LogError(f'{log.source}: no piece of the log lasts more '
+                           f'than {2 * trim * period:.3g} s (4 / cutoff) '
+                           'between gaps')
+        inside = np.ones(len(steps), dtype=bool)
+        inside[breaks - 1] = False
+        self.coverage = Coverage(
+            float(times[-1] - times[0]),
+            float(sum(p.grid[i][-1] - p.grid[i][0]
+                      for p, i in zip(self.pieces, self.inner))),
+            len(self.pieces), len(breaks),
+            float(steps[breaks - 1].max()) if len(breaks) else 0.0, short,
+            int(np.round(steps[inside & (steps > MISSING_FACTOR * period)]
+                         / period - 1.0).sum()))
+        self.times = self.kept([p.grid for p in self.pieces])
+        self.rigid = self.filtered([p.rigid for p in self.pieces])
+        self._kinds = {}
+
+    def kept(self, arrays):
+        """Return the samples kept of per-piece arrays, joined."""
+        return np.concatenate([a[i] for a, i in zip(arrays, self.inner)])
+
+    def filtered(self, arrays):
+        """Return per-piece arrays (n, ...) low-passed, trimmed, decimated."""
+        return self.kept([self._signal.sosfiltfilt(
+            self.sos, a.reshape(len(a), -1), axis=0).reshape(a.shape)
+            for a in arrays])
+
+    def forces(self, lag=0.0):
+        """Return the forces taken as applied ``lag`` s before their stamps."""
+        return self.filtered([np.column_stack([
+            np.interp(p.grid, p.stamps - lag, p.forces[:, j])
+            for j in range(3)]) for p in self.pieces])
+
+    def columns(self, law, stribeck_velocity=None):
+        """Return ``W`` (M, 3, n) of ``law`` along the motion (kept)."""
+        return np.concatenate((rigid_of(self.rigid, law),
+                               self.friction(law, stribeck_velocity)),
+                              axis=2)
+
+    def friction(self, law, stribeck_velocity=None):
+        """Return the friction columns of ``law`` (at that Stribeck speed)."""
+        return np.concatenate([self._kind(kind, law.direction,
+                                          stribeck_velocity)
+                               for kind in friction_kinds(law)], axis=2)
+
+    def _kind(self, kind, direction, stribeck_velocity):
+        """
+        Return the filtered columns (M, 3, 3) of one kind (kept).
+
+        A coefficient's column acts on its own actuator only: that one
+        series is filtered.
+        """
+        key = (kind, direction and kind == 'coulomb',
+               stribeck_velocity if kind == 'stribeck' else None)
+        if key not in self._kinds:
+            robot = self.robot if key[2] is None else self.robot.replace(
+                friction_stribeck_velocity=key[2])
+            own = self.filtered([
+                np.einsum('njj->nj', kind_columns(robot, p.lambdadot, kind,
+                                                  direction))
+                for p in self.pieces])
+            columns = np.zeros(own.shape + (3,))
+            for j in range(3):
+                columns[:, j, j] = own[:, j]
+            self._kinds[key] = columns
+        return self._kinds[key]
+
+    def model_forces(self, robot):
+        """Return ``robot``'s forces along the motion (the full model)."""
+        return self.filtered([mechanics.solve_batch(
+            robot, p.position, p.velocity, p.acceleration).force
+            for p in self.pieces])
+
+    def samples(self, regressor, forces, law=PLAIN):
+        """Return the :class:`Samples` of a regressor and forces."""
+        return Samples(self.times, regressor, forces, len(self.pieces),
+                       self.rate, law,
+                       self.kept([p.lambdas for p in self.pieces]),
+                       self.kept([p.lambdadot for p in self.pieces]),
+                       self.coverage)
+
+
+def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0, law=PLAIN):
+    """
+    Turn a :class:`Log` into :class:`Samples` for the least squares.
+
+    The log is checked (:func:`check_log`); split into segments at gaps
+    longer than GAP_FACTOR median periods and GAP_SHARE / cutoff; each
+    segment interpolated linearly onto a uniform grid of the median period
+    (exact where the stamps are on it), the forces taken as applied
+    ``force_lag`` s before their stamps (a drive or a simulator that
+    reports with each state the force it held over the last period of
+    ``dt``: ``dt / 2``). Then, with ``H`` the zero-phase Butterworth
+    low-pass of ``cutoff`` Hz (order FILTER_ORDER, run forwards and
+    backwards: ``scipy.signal.sosfiltfilt``) and ``H_s`` the same at
+    STATE_CUTOFF_FACTOR times ``cutoff`` (at most STATE_CUTOFF_SHARE of
+    the sampling rate):
+
+    1. the motion: the platform positions from ``lambda``
+       (:func:`mechanics.forward_kinematics`, ``robot``'s geometry)
+       through ``H_s``, the velocity their central difference ``(r+ -
+       r-) / 2 dt`` (or, with measured ``lambdadots``, theirs through
+       ``H_s``: ``rdot = J2^-1 J1 lambdadot``, eq. 15), the acceleration
+       the velocity's central difference (at a frequency ``f``, relative
+       errors of ``(2 pi f dt)^2 / 6`` and twice that: 7e-6 and 1.3e-5
+       at 1 Hz and 1 kHz). ``H_s`` passes what the forces answer to (the
+       velocity's ripple at a reversal, which the Coulomb switch sees)
+       and stops the encoder's noise;
+    2. the regressor ``W`` of ``law`` (:func:`regressor`) at every sample;
+    3. parallel filtering: the forces and every column of ``W`` through
+       ``H``, so that ``H(f) = H(W) theta`` holds as ``f = W theta`` does:
+       nothing out of phase, no bias from the filter (the sharp Coulomb
+       switch included);
+    4. ``2 / cutoff`` s dropped at each end of a segment (the edges of
+       the two filters in series: positions, then ``W``), segments too
+       short for that dropped, and one sample in
+       ``floor(rate / (2 cutoff))`` kept (parallel decimation, as
+       Gautier's: the filtered signals hold nothing above the cutoff, and
+       the least squares' residuals become nearly uncorrelated, which the
+       standard deviations of :func:`identify` assume).
+
+    Raises :class:`LogError`.
+    """
+    motion = Motion(robot, log, cutoff)
+    check_lag(log.source, force_lag, cutoff)
+    return motion.samples(motion.columns(law), motion.forces(force_lag), law)
+
+
+def check_lag(source, force_lag, cutoff):
+    """Refuse a force lag (s) not shorter than 1 / cutoff (LogError)."""
+    if not (math.isfinite(force_lag) and abs(force_lag) < 1.0 / cutoff):
+        raise LogError(f'{source}: the force lag {force_lag:g} s must be '
+                       f'shorter than 1 / cutoff = {1.0 / cutoff:g} s')
+
+
+def estimate_lag(motion, residual):
+    """
+    Return the lag (s) of the forces that minimizes ``residual(forces)``.
+
+    ``motion``: a :class:`Motion`; ``residual``: the sum of squares left
+    by filtered forces (N, 3). Searched within +-LAG_SEARCH (less than 1 /
+    cutoff), on the log's period, then on a quarter of it around the best,
+    then the vertex of a parabola through the three best.
+    """
+    period = motion.period
+    reach = min(LAG_SEARCH, 0.5 / motion.cutoff)
+    cache = {}
+
+    def cost(lag):
+        key = round(lag / period * LAG_STEPS)
+        if key not in cache:
+            cache[key] = residual(motion.forces(key * period / LAG_STEPS))
+        return cache[key]
+    coarse = int(reach / period)
+    best = min(range(-coarse, coarse + 1), key=lambda k: cost(k * period))
+    fine = min(range(best * LAG_STEPS - LAG_STEPS + 1,
+                     best * LAG_STEPS + LAG_STEPS),
+               key=lambda k: cost(k * period / LAG_STEPS))
+    h = period / LAG_STEPS
+    left, middle, right = (cost((fine + d) * h) for d in (-1, 0, 1))
+    curvature = left - 2.0 * middle + right
+    shift = 0.5 * (left - right) / curvature if curvature > 0.0 else 0.0
+    return (fine + max(-1.0, min(1.0, shift))) * h

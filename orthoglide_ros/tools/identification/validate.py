@@ -1,0 +1,77 @@
+"""
+A robot's forces against a log's: what a model explains of a motion.
+
+:func:`validate` runs the full model (:func:`mechanics.solve_batch`, every
+friction term, the drives and a payload included) along a log's filtered
+motion and compares its forces with the log's, through the same
+low-pass; :func:`predict` gives a robot's forces from prepared samples'
+regressor.
+"""
+
+from collections import namedtuple
+
+import numpy as np
+
+from orthoglide_ros.tools.identification.laws import standard_parameters
+from orthoglide_ros.tools.identification.motion import (
+    check_lag, DEFAULT_CUTOFF, estimate_lag, Motion)
+
+Validation = namedtuple('Validation', (
+    'source', 'samples', 'measured', 'predicted', 'rms', 'max', 'explained',
+    'force_lag', 'lag_estimated'))
+Validation.__doc__ = """A robot's forces against a log's (:func:`validate`).
+
+``samples``: the log's :class:`Samples` (their regressor unused: None);
+``measured`` and ``predicted``: (N, 3) forces (N) through the same
+low-pass; per actuator ``rms`` and ``max`` of the error (N) and
+``explained``: the share of the force explained, ``1 - sum(e^2) /
+sum(f^2)``; ``force_lag`` (s) and ``lag_estimated`` as in
+:class:`estimate.Identification`.
+"""
+
+
+def predict(robot, samples):
+    """
+    Return the forces (N, 3) ``robot`` needs for the prepared samples.
+
+    Through the same low-pass as the samples' forces: ``W theta`` with
+    their filtered regressor, for a robot of the geometry, gravity and
+    friction speeds they were prepared with (:func:`validate` runs the
+    full model instead).
+    """
+    return samples.regressor @ standard_parameters(robot, samples.law)
+
+
+def validate(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=None,
+             payload=None):
+    """
+    Compare ``robot``'s forces with a log's (a :class:`Validation`).
+
+    The log prepared as for identification; the prediction is the full
+    model's along the log's filtered motion, through the same low-pass as
+    the measured forces. ``payload`` (kg): what the log was recorded with
+    (None: ``robot.payload``). ``force_lag`` (s): None to estimate the one
+    that best matches the prediction (:func:`motion.estimate_lag`).
+    Raises :class:`LogError`.
+    """
+    if payload is not None:
+        robot = robot.replace(payload=float(payload))
+    motion = Motion(robot, log, cutoff)
+    predicted = motion.model_forces(robot)
+    if force_lag is None:
+        force_lag = estimate_lag(motion, lambda f: float(np.sum(
+            (f - predicted) ** 2)))
+        lag_estimated = True
+    else:
+        check_lag(log.source, force_lag, cutoff)
+        lag_estimated = False
+    measured = motion.forces(force_lag)
+    error = measured - predicted
+    squares = np.sum(measured ** 2, axis=0)
+    # (No force at all on an actuator: nothing to explain, NaN.)
+    explained = 1.0 - np.divide(np.sum(error ** 2, axis=0), squares,
+                                out=np.full(3, np.nan), where=squares > 0.0)
+    return Validation(
+        log.source, motion.samples(None, measured), measured, predicted,
+        np.sqrt(np.mean(error ** 2, axis=0)), np.abs(error).max(axis=0),
+        explained, float(force_lag), lag_estimated)
