@@ -467,7 +467,27 @@ def test_valid_atomic_change_applies_to_next_setpoint(graph):
                      probe.joint_states[0].effort[2])
 
 
+def test_a_payload_set_over_dds_is_the_next_setpoints_and_shown(graph):
+    """robot.payload as ros2 param set sets it: m5 + payload from then on."""
+    g = graph()
+    probe = g.probe
+    client = parameter_client(g, 'feedforward')
+    p, v, a = paper_sample(0.7)
+    probe.send(stamp_of(0.7), p, v, a)
+    wait_outputs(g, 1)
+    result = call(g, client.set_parameters([
+        Parameter('robot.payload', value=5.0)])).results[0]
+    assert result.successful, result.reason
+    probe.send(stamp_of(0.8), p, v, a)
+    wait_outputs(g, 2)
+    assert_output(probe, 0, stamp_of(0.7), solve(p, v, a))
+    assert_output(probe, 1, stamp_of(0.8),
+                  solve(p, v, a, Robot(m5=Robot().m5 + 5.0)))
+    wait_diagnostics(g, lambda v: v.get('payload (kg)') == '5')
+
+
 def test_valid_changes_apply_to_next_setpoint(graph):
+
     """Mass, joint names and singularity margin, one by one."""
     g = graph()
     probe = g.probe
