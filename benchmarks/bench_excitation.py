@@ -16,7 +16,6 @@ import platform
 import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), '..'))
 
 from orthoglide_ros.model.robot import Robot  # noqa: E402
 from orthoglide_ros.tools import excitation_design  # noqa: E402

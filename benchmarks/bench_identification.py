@@ -25,7 +25,6 @@ import subprocess
 import sys
 import time
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), '..'))
 
 TARGET_S = 5.0
 TARGET_SAMPLES = 30_000

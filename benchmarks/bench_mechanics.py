@@ -32,7 +32,6 @@ import time
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), '..'))
 
 from orthoglide_ros.model import trajectory  # noqa: E402
 from orthoglide_ros.model import mechanics  # noqa: E402

@@ -68,11 +68,12 @@ from sensor_msgs.msg import JointState
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-# The DDS test helpers (setpoint producer, process stopping) are shared.
-sys.path.insert(0, os.path.join(ROOT, 'test'))
 
-from node_harness import (busy_loops, cpu_seconds,  # noqa: E402
-                          INPUT_TOPICS, interrupt, Producer, qos_profile)
+from orthoglide_ros.harness.load import busy_loops  # noqa: E402
+from orthoglide_ros.harness.messages import (INPUT_TOPICS,  # noqa: E402
+                                             Producer, qos_profile)
+from orthoglide_ros.harness.processes import (cpu_seconds,  # noqa: E402
+                                              interrupt)
 from orthoglide_ros.cores import realtime  # noqa: E402
 from orthoglide_ros.model.trajectory import PAPER_DURATION  # noqa: E402
 from orthoglide_ros.model.trajectory import paper_sample  # noqa: E402
@@ -176,7 +177,7 @@ def fifo_threads(pid, priority):
 
 
 def stop(proc):
-    """Stop a child (node_harness.interrupt); return how it ended."""
+    """Stop a child (processes.interrupt); return how it ended."""
     if proc.poll() is not None:
         return f'had exited ({proc.returncode})'
     if interrupt(proc, 3.0):

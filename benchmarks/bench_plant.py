@@ -27,7 +27,7 @@ def main():
     robot = Robot()
     hold = mechanics.solve(robot, (0.0,) * 3).force
     engines = {'builtin': Plant}
-    if not mujoco_plant.available():
+    if not mujoco_plant.unavailable():
         engines['mujoco'] = mujoco_plant.MujocoPlant
     print(f'{"engine":>8} {"rate (Hz)":>10} {"real-time factor":>17} '
           f'{"us per step":>12}')

@@ -28,8 +28,6 @@ import time
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-# The DDS test helpers (a peer node, node processes) are shared.
-sys.path.insert(0, os.path.join(ROOT, 'test'))
 
 import numpy as np  # noqa: E402
 from rclpy.serialization import (deserialize_message,  # noqa: E402
@@ -37,8 +35,8 @@ from rclpy.serialization import (deserialize_message,  # noqa: E402
 from trajectory_msgs.msg import (JointTrajectory,  # noqa: E402
                                  MultiDOFJointTrajectory)
 
-from hostile_harness import Nodes, Peer  # noqa: E402
-from node_harness import cartesian_message  # noqa: E402
+from orthoglide_ros.harness.hostile import Nodes, Peer  # noqa: E402
+from orthoglide_ros.harness.messages import cartesian_message  # noqa: E402
 from orthoglide_ros.model import trajectory  # noqa: E402
 from orthoglide_ros.formats import cdr  # noqa: E402
 from orthoglide_ros.model import mechanics  # noqa: E402

@@ -23,9 +23,8 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-sys.path.insert(0, os.path.join(ROOT, 'test'))
 
-import netns  # noqa: E402
+from orthoglide_ros.harness import netns  # noqa: E402
 
 SIZES = (200, 64 * 1024, 1024 * 1024, 4 * 1024 * 1024)
 PROFILE = os.path.join(ROOT, 'config', 'fastdds_one_host.xml')

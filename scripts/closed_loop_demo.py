@@ -14,7 +14,7 @@ once, whole, as a Cartesian trajectory that the feedforward converts into a
 JointTrajectory and the tracking controller follows as
 joint_trajectory_controller would. Prints the tracking error of every case
 and writes a PNG of the errors over time. The loop and its error measure are
-in ``test/closed_loop_harness.py`` (shared with ``test_closed_loop.py``).
+in ``orthoglide_ros/harness/closed_loop.py`` (shared with ``test_closed_loop.py``).
 
 Run it through ``bash scripts/closed_loop_demo.sh`` (sets up .venv, keeps
 DDS on this host, picks a ROS_DOMAIN_ID); ``--help`` for the options. Exit
@@ -32,13 +32,12 @@ os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / 'test'))
 
 import rclpy  # noqa: E402
 
-import closed_loop_harness as harness  # noqa: E402
-from node_harness import (add_load_options, busy_loops,  # noqa: E402
-                          check_load_options)
+from orthoglide_ros.harness import closed_loop as harness  # noqa: E402
+from orthoglide_ros.harness.load import (add_load_options,  # noqa: E402
+                                         busy_loops, check_load_options)
 
 CASES = ((False, 1.0), (True, 1.0), (False, harness.MISMATCH),
          (True, harness.MISMATCH))      # (feedforward, plant mass factor)

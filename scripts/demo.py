@@ -32,8 +32,6 @@ os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
 
 ROOT = Path(__file__).resolve().parents[1]
-# The test helpers' process handling is shared (one way to stop a node).
-sys.path.insert(0, str(ROOT / 'test'))
 
 import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
@@ -54,9 +52,10 @@ from orthoglide_ros.model import mechanics  # noqa: E402
 from orthoglide_ros.tools import drawing  # noqa: E402
 from orthoglide_ros.tools.cli import CSV_COLUMNS  # noqa: E402
 from orthoglide_ros.formats.params_file import load_robot  # noqa: E402
-from node_harness import (add_load_options, busy_loops,  # noqa: E402
-                          check_load_options, interrupt, realtime_args,
-                          realtime_client)
+from orthoglide_ros.harness.load import (add_load_options,  # noqa: E402
+                                         busy_loops, check_load_options,
+                                         realtime_args, realtime_client)
+from orthoglide_ros.harness.processes import interrupt  # noqa: E402
 
 BIN = Path(sys.executable).parent
 PARAMS = ROOT / 'config' / 'orthoglide.yaml'

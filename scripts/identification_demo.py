@@ -36,7 +36,7 @@ MJCF's values stand beside the identified ones and PD + identified must
 beat PD + nominal 5x (RMS).
 
 
-The loop and its error measure are in ``test/closed_loop_harness.py``.
+The loop and its error measure are in ``orthoglide_ros/harness/closed_loop.py``.
 Run it through ``bash scripts/identification_demo.sh`` (sets up .venv,
 keeps DDS on this host, picks a ROS_DOMAIN_ID); ``--help`` for the
 options. Exit code 0 when every criterion holds, 1 if one misses or a
@@ -56,15 +56,16 @@ os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
 os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / 'test'))
 
 import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 
-import closed_loop_harness as harness  # noqa: E402
-from node_harness import add_load_options, busy_loops, \
-    check_load_options, elevate, node_executable, start_node_process, \
-    stop_process  # noqa: E402
+from orthoglide_ros.harness import closed_loop as harness  # noqa: E402
+from orthoglide_ros.harness.load import (add_load_options,  # noqa: E402
+                                         busy_loops, check_load_options,
+                                         elevate)
+from orthoglide_ros.harness.processes import (node_executable,  # noqa: E402
+                                              start_node_process, stop_process)
 from orthoglide_ros.formats import params_file  # noqa: E402
 from orthoglide_ros.model import mjcf  # noqa: E402
 from orthoglide_ros.tools import identification  # noqa: E402
@@ -249,7 +250,7 @@ def validate(loop, names, nominal, identified, plant, repeats, setup):
     The cases outside the criterion once; the two it compares
     ``repeats`` times each, interleaved, their median pass kept, and
     ``repeats`` more each when the first medians miss the criterion
-    (:func:`closed_loop_harness.median_runs`), as the DDS test does.
+    (:func:`harness.closed_loop.median_runs`), as the DDS test does.
     """
     models = {'PD': (False, nominal), 'PD + nominal FF': (True, nominal),
               'PD + identified FF': (True, identified),

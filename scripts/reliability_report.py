@@ -4,7 +4,7 @@ Run the full reliability cases of the feedforward node and print a report.
 
 Issue 4's "how it is shown": the full versions of the flood, reliable,
 restart and fuzz tests, with the figures doc/measurements.md quotes. The runs are
-those of ``test/reliability_harness.py`` (the tests run them shorter):
+those of ``orthoglide_ros/harness/reliability`` (the tests run them shorter):
 
 - best-effort floods for ``--duration`` s (trajectory and topics inputs);
 - a reliable stream at 1 kHz for ``--duration`` s, every setpoint matched
@@ -20,7 +20,7 @@ those of ``test/reliability_harness.py`` (the tests run them shorter):
 - ``test/test_fuzz_node.py`` and ``test/test_fuzz_mechanics.py`` (when
   present) through pytest, with ``--hypothesis-seed`` and
   ``ORTHOGLIDE_FUZZ_EXAMPLES`` when the files read it;
-- the hostile peers and stalls of issue 13 (``test/hostile_harness.py``
+- the hostile peers and stalls of issue 13 (``orthoglide_ros/harness/hostile``
   and ``harness.big_messages``), every node, one line each with its
   figures against the target (``--hostile-only`` runs just these).
 
@@ -49,14 +49,13 @@ os.environ.setdefault('ROS_DOMAIN_ID', os.environ.get(
     'ORTHOGLIDE_TEST_DOMAIN_ID', str(1 + os.getpid() % 232)))
 os.environ.setdefault('ROS_LOG_DIR',
                       tempfile.mkdtemp(prefix='orthoglide-ros-log-'))
-sys.path.insert(0, os.path.join(ROOT, 'test'))
 
 import numpy as np  # noqa: E402
 
-import hostile_harness as hostile  # noqa: E402
-import live_graph_harness as live_graph  # noqa: E402
-import netns  # noqa: E402
-import reliability_harness as harness  # noqa: E402
+from orthoglide_ros.harness import hostile  # noqa: E402
+from orthoglide_ros.harness import live_graph  # noqa: E402
+from orthoglide_ros.harness import netns  # noqa: E402
+from orthoglide_ros.harness import reliability as harness  # noqa: E402
 
 
 def say(text):
@@ -84,7 +83,7 @@ def runs(args):
 
 
 def in_namespace(case, say, **kwargs):
-    """Run a ``live_graph_harness`` case in a network namespace of its own."""
+    """Run a ``harness.live_graph`` case in a network namespace of its own."""
     reason = netns.unavailable()
     if reason:
         raise harness.HarnessError(reason)

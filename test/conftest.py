@@ -53,10 +53,10 @@ def closed_loop():
     """
     Start the closed loop's nodes once for a module; stop them after.
 
-    ``closed_loop_harness.ClosedLoop`` in a context of its own; every node
+    :class:`harness.closed_loop.ClosedLoop` in a context of its own; every node
     must have exited 0.
     """
-    harness = pytest.importorskip('closed_loop_harness')
+    harness = pytest.importorskip('orthoglide_ros.harness.closed_loop')
     with _fresh_context() as context:
         with harness.ClosedLoop(context) as running:
             yield running

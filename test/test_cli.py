@@ -15,6 +15,7 @@ import pytest
 
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools import cli
+from cli_runs import assert_bad_input, identification_log, run, write_trajectory
 from orthoglide_ros.model.robot import Robot
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,13 +24,6 @@ HEADER = ('t,x,y,z,lambda_a,lambda_b,lambda_c,lambdadot_a,lambdadot_b,'
           'force_b,force_c,power_a,power_b,power_c')
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
 QUANTITIES = ('lambda', 'lambdadot', 'lambdaddot', 'force', 'power')
-
-
-def run(capsys, *argv):
-    """Run the tool in-process; return (exit code, stdout, stderr)."""
-    code = cli.main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def read_csv(text):
@@ -65,24 +59,6 @@ def paper_csv(capsys, tmp_path, samples=11):
     path = tmp_path / 'paper.csv'
     assert run(capsys, 'paper', '--samples', samples, '--csv', path)[0] == 0
     return read_csv(path.read_text())
-
-
-def write_trajectory(path, columns, rows):
-    """Write a trajectory CSV with the given header and rows of numbers."""
-    lines = [','.join(columns)] + [','.join(map(repr, r)) for r in rows]
-    path.write_text('\n'.join(lines) + '\n')
-    return path
-
-
-def assert_bad_input(code, out, err, *words):
-    """Exit code 2, one error line naming ``words``, nothing on stdout."""
-    assert code == 2
-    assert out == ''
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith('orthoglide: error: ')
-    for word in words:
-        assert word in lines[0]
 
 
 # -- paper --------------------------------------------------------------------
@@ -451,13 +427,6 @@ def test_excitation_writes_the_best_of_several_seeds(capsys, tmp_path):
     assert float(rows[123]['x']) == pytest.approx(p[0], rel=1e-12)
 
 
-def identification_log(tmp_path, name='log.csv', seed=0, duration=20.0):
-    """Write a synthetic log of a robot unlike the paper's (test_identification)."""
-    from test_identification import synthetic_log, TRUE, write_csv
-    log = synthetic_log(TRUE, seed, 5.0, 11, duration=duration)
-    return write_csv(tmp_path / name, log), log
-
-
 def test_identify_writes_a_parameters_file_the_tools_read(capsys, tmp_path):
     from orthoglide_ros.formats import params_file
     from orthoglide_ros.tools import identification
@@ -552,8 +521,7 @@ def test_identify_reads_bags_of_both_storages(capsys, tmp_path, from_csv,
     """A bag directory or its storage file: the robot of the same CSV log."""
     from orthoglide_ros.formats import params_file
     from orthoglide_ros.tools import identification
-    from test_identification import (storage_file, synthetic_log, TRUE,
-                                     write_bag)
+    from synthetic_logs import storage_file, synthetic_log, TRUE, write_bag
     write_bag(tmp_path / 'bag', synthetic_log(TRUE, 0, 5.0, 11,
                                               duration=6.0), storage)
     path = tmp_path / 'bag' if form == 'directory' else storage_file(
@@ -572,8 +540,8 @@ def test_identify_reads_bags_of_both_storages(capsys, tmp_path, from_csv,
 
 def bad_logs(tmp_path):
     """Write every kind of log identify must refuse; return name -> path."""
-    from test_identification import (one_actuator_log, spoiled, synthetic_log,
-                                     TRUE, write_bag, write_csv)
+    from synthetic_logs import (one_actuator_log, spoiled, synthetic_log,
+                                TRUE, write_bag, write_csv)
     log = synthetic_log(TRUE, 0, 5.0, 12, duration=8.0)
     header = 't,lambda_a,lambda_b,lambda_c,force_a,force_b,force_c'
     rest = mechanics.solve(TRUE, (0.0, 0.0, 0.0))
@@ -802,7 +770,7 @@ def test_batch_joint_trajectory_needs_increasing_times(tmp_path, capsys,
 def rough_log(tmp_path, name, seed, duration, lag=0.0):
     """Write a noise-free log of a robot with every friction term."""
     from orthoglide_ros.tools.identification import Log
-    from test_identification import write_csv
+    from synthetic_logs import write_csv
     robot = Robot(m5=18.75, friction_viscous=(30.0, 40.0, 50.0),
                   friction_coulomb=(5.0, 3.0, 4.0),
                   friction_coulomb_negative=(8.0, 1.5, 6.0),

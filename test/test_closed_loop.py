@@ -3,7 +3,7 @@ The closed loop over DDS (issue 5): the feedforward does its job.
 
 ``setpoint_publisher`` -> ``feedforward`` -> ``tracking_controller`` ->
 ``simulator`` -> back, all processes on real Fast DDS (loopback, the
-session's domain), run by ``closed_loop_harness`` at its default rates
+session's domain), run by ``harness.closed_loop`` at its default rates
 (loop 250 Hz, plant 500 Hz) on the paper's trajectory, eq. (6). The error is
 the platform centre's, measured minus the trajectory at the measurement's
 stamp (see the harness).
@@ -28,10 +28,10 @@ import sys
 
 import pytest
 
-from node_harness import needs_scripts
+from node_checks import needs_scripts
 
 pytest.importorskip('rclpy')
-harness = pytest.importorskip('closed_loop_harness')
+harness = pytest.importorskip('orthoglide_ros.harness.closed_loop')
 
 pytestmark = [pytest.mark.ros, needs_scripts(
     'simulator', 'feedforward', 'tracking_controller', 'setpoint_publisher')]

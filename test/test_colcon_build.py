@@ -20,9 +20,11 @@ from orthoglide_ros.model import mechanics
 from orthoglide_ros.formats.params_file import load_robot
 from orthoglide_ros.model.trajectory import paper_sample
 
-from node_harness import (close, header_stamp, node_executable,  # noqa: E402
-                          Probe, spin_until, start_node_process,
-                          stop_process)
+from node_checks import close  # noqa: E402
+from orthoglide_ros.harness.messages import header_stamp  # noqa: E402
+from orthoglide_ros.harness.probe import Probe, spin_until  # noqa: E402
+from orthoglide_ros.harness.processes import (node_executable,  # noqa: E402
+                                              start_node_process, stop_process)
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = 'orthoglide_ros'

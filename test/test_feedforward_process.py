@@ -17,9 +17,11 @@ from orthoglide_ros.model import mechanics
 from orthoglide_ros.formats.params_file import load_robot
 from orthoglide_ros.model.trajectory import paper_sample, paper_times
 
-from node_harness import (assert_vector, header_stamp,  # noqa: E402
-                          needs_scripts, Probe, spin_until,
-                          start_node_process, stop_process, wait_exit)
+from node_checks import assert_vector, needs_scripts  # noqa: E402
+from orthoglide_ros.harness.messages import header_stamp  # noqa: E402
+from orthoglide_ros.harness.probe import Probe, spin_until  # noqa: E402
+from orthoglide_ros.harness.processes import (start_node_process,  # noqa: E402
+                                              stop_process, wait_exit)
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config' / 'orthoglide.yaml'

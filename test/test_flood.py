@@ -10,7 +10,7 @@ an input history that covers the stalls of a busy machine
 (``harness.LOSSLESS_DEPTH``, 100 ms at 1 kHz: doc/deployment.md's recipe for
 "nothing lost") every setpoint must give exactly one output. The runs and
 the bounds
-are in ``reliability_harness`` (shared with
+are in ``harness.reliability`` (shared with
 ``scripts/reliability_report.py``); the soak versions last 10 s.
 """
 
@@ -18,8 +18,8 @@ import sys
 
 import pytest
 
-from node_harness import needs_scripts  # noqa: E402
-import reliability_harness as harness  # noqa: E402
+from node_checks import needs_scripts  # noqa: E402
+from orthoglide_ros.harness import reliability as harness  # noqa: E402
 
 SHORT = 2.5         # s of flood / stream in the default run
 FULL = 10.0         # s in the soak run (the issue's)

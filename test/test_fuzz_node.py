@@ -1,7 +1,7 @@
 """
 Fuzzed messages into the feedforward node's raw callbacks, in-process.
 
-The node (``FeedforwardNode``) and a :class:`node_harness.Probe` share one
+The node (``FeedforwardNode``) and a :class:`harness.probe.Probe` share one
 rclpy context and executor. Hypothesis builds PoseStamped, TwistStamped,
 AccelStamped and MultiDOFJointTrajectory messages (stamps zero, negative,
 repeated, near the int32 limit; frames base_link, empty or other;
@@ -46,7 +46,8 @@ from orthoglide_ros.cores.feedforward import INPUTS, ORIENTATION_TOLERANCE
 from orthoglide_ros.ros.feedforward_node import FeedforwardNode, raw_decoder
 
 from fuzz_strategies import any_float, inside, states
-from node_harness import header_stamp, Probe, spin_until
+from orthoglide_ros.harness.messages import header_stamp
+from orthoglide_ros.harness.probe import Probe, spin_until
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 

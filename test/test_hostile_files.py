@@ -16,7 +16,7 @@ import threading
 import pytest
 
 from orthoglide_ros.formats import csvfile
-from test_cli import assert_bad_input, run, write_trajectory
+from cli_runs import assert_bad_input, run, write_trajectory
 
 TRAJECTORY = [(0.0, 0.0, 0.0, 0.0), (0.1, 0.01, 0.0, 0.0)]
 
@@ -86,7 +86,7 @@ def test_a_symbolic_link_is_followed_to_its_target(capsys, tmp_path,
 
 def test_every_output_is_checked_before_any_is_written(capsys, tmp_path):
     """An `identify --report DIR` once wrote the parameters file, then failed."""
-    from test_cli import identification_log
+    from cli_runs import identification_log
     source, _ = identification_log(tmp_path, duration=2.0)
     out, directory = tmp_path / 'out.yaml', tmp_path / 'report.png'
     directory.mkdir()

@@ -5,7 +5,7 @@ Issue 13, over real DDS with the installed executables.
 
 One test per defect the issue lists, each played by a client of this test
 (or a child process of its own), never by the node's code; the cases
-themselves are ``hostile_harness`` and ``reliability_harness`` functions
+themselves are ``harness.hostile`` and ``harness.reliability`` functions
 that ``scripts/reliability_report.sh`` runs too:
 
 1. a set-parameters request with a value type that does not exist;
@@ -23,12 +23,12 @@ that ``scripts/reliability_report.sh`` runs too:
 
 import pytest
 
-from node_harness import needs_scripts
+from node_checks import needs_scripts
 
 pytestmark = [pytest.mark.ros, needs_scripts()]
 
-harness = pytest.importorskip('hostile_harness')
-import reliability_harness  # noqa: E402
+harness = pytest.importorskip('orthoglide_ros.harness.hostile')
+from orthoglide_ros.harness import reliability  # noqa: E402
 
 
 def test_malformed_parameter_request_is_refused_and_the_node_stays_up():
@@ -58,12 +58,12 @@ def late(result):
 
 
 def test_big_messages_do_not_starve_a_stream_on_the_same_input():
-    result = reliability_harness.big_messages()
+    result = reliability.big_messages()
     print(result)
     if late(result):
         # A second pass when only the timing missed: on two busy cores a
         # spike of the machine (not of the node) can pass 100 ms once.
-        result = reliability_harness.big_messages()
+        result = reliability.big_messages()
         print(result)
     assert result['crashes'] == 0 and result['internal_errors'] == 0
     assert result['attacks'] >= 4

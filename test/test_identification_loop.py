@@ -1,7 +1,7 @@
 """
 Identification over DDS (issue 10): a better feedforward for an unknown plant.
 
-The loop of ``closed_loop_harness`` with a plant the feedforward does not
+The loop of ``harness.closed_loop`` with a plant the feedforward does not
 know (``UNKNOWN_PLANT``: a 25 % heavier platform, heavier bars, friction
 on every slider): three periods of the excitation through PD + the nominal
 feedforward, then ``identification.identify`` on the plant's measured
@@ -18,7 +18,7 @@ Checked:
   errors of 0.07-0.16 % at 4.3-4.5 of the computed deviations);
 - on the paper's trajectory, PD + the identified feedforward tracks
   better (RMS) than PD + the nominal one, in medians of interleaved
-  passes (``closed_loop_harness.median_runs``; a pass a stall spoiled is
+  passes (``harness.closed_loop.median_runs``; a pass a stall spoiled is
   run again once). Issue 10's criterion, within 1.5 times the error of
   PD + the exact feedforward, is checked where a pass is deterministic
   (``test_identification.py``) and printed here: over DDS a pass's error
@@ -41,14 +41,15 @@ import time
 import pytest
 
 from identification_checks import assert_within_issue_tolerances
-from node_harness import needs_scripts, start_node_process, stop_process
+from node_checks import needs_scripts
+from orthoglide_ros.harness.processes import start_node_process, stop_process
 
 from orthoglide_ros.formats import params_file
 from orthoglide_ros.tools import identification
 from orthoglide_ros.model.robot import Robot
 
 rclpy = pytest.importorskip('rclpy')
-harness = pytest.importorskip('closed_loop_harness')
+harness = pytest.importorskip('orthoglide_ros.harness.closed_loop')
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter_client import AsyncParameterClient  # noqa: E402
 from rcl_interfaces.msg import ParameterType  # noqa: E402

@@ -173,7 +173,7 @@ def test_the_report_says_what_was_used(found, logs):
 
 def test_a_simulator_log_lags_half_a_step():
     """The force held over each step: applied half a step before its state."""
-    from test_identification import closed_loop, excitation_sample
+    from synthetic_logs import closed_loop, excitation_sample
     log, _ = closed_loop(NOMINAL, excitation_sample, 12.0)
     result = identification.identify(NOMINAL, log, friction=PLAIN)
     step = 1.0 / 500.0

@@ -13,8 +13,9 @@ the limits publishes nothing and is counted by reason.
 import numpy as np
 import pytest
 
-from hostile_harness import Nodes, Peer
-from node_harness import cartesian_message, needs_scripts
+from orthoglide_ros.harness.hostile import Nodes, Peer
+from node_checks import needs_scripts
+from orthoglide_ros.harness.messages import cartesian_message
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
 

@@ -1,13 +1,22 @@
 """
-The layers: the model, the formats, the cores and the tool without rclpy.
+The layers: their order, and the model, formats, cores and tool without ROS.
+
+The package's folders are its layers, in this order: ``model`` (the
+math), ``formats`` (files and messages), ``cores`` (the nodes' rules),
+``ros`` (the glue), ``tools`` (the ``orthoglide`` tool), ``harness`` (what
+the demos, benchmarks and tests share). A module imports from its own
+layer and those before it, never after: every ``import`` of every module,
+those inside functions included, is read here.
 
 A fresh interpreter whose import system refuses rclpy (and every ROS
 message package) imports every module of ``model``, ``formats``,
 ``cores`` and ``tools``, and runs ``orthoglide solve``, ``batch``,
 ``urdf``, ``draw`` and ``identify`` on a CSV log: where ROS is not
-installed they work the same. Only ``ros`` may import rclpy.
+installed they work the same. Only ``ros`` and ``harness`` may import
+rclpy.
 """
 
+import ast
 import os
 import pkgutil
 import subprocess
@@ -18,6 +27,7 @@ import pytest
 import orthoglide_ros
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+LAYERS = ('model', 'formats', 'cores', 'ros', 'tools', 'harness')
 ROS_FREE = ('model', 'formats', 'cores', 'tools')
 # An import hook refusing rclpy and the message packages, then the code.
 REFUSE_ROS = '''
@@ -39,10 +49,34 @@ def run_without_ros(code, *args, cwd=None):
 
 
 def ros_free_modules():
+    return [name for name, layer in modules_by_layer()
+            if layer in ROS_FREE]
+
+
+def modules_by_layer():
+    """Yield ``(module name, layer)`` of every module of the package."""
     root = os.path.dirname(orthoglide_ros.__file__)
-    return [f'orthoglide_ros.{package}.{module.name}'
-            for package in ROS_FREE
-            for module in pkgutil.iter_modules([os.path.join(root, package)])]
+    for module in pkgutil.walk_packages([root], 'orthoglide_ros.'):
+        parts = module.name.split('.')
+        if len(parts) > 2 or module.ispkg:
+            yield module.name, parts[1]
+
+
+def imported_layers(name):
+    """Return the package's layers a module imports, with the line of each."""
+    spec = __import__('importlib.util').util.find_spec(name)
+    with open(spec.origin) as f:
+        tree = ast.parse(f.read())
+    found = []
+    for node in ast.walk(tree):
+        names = [a.name for a in node.names] if isinstance(
+            node, ast.Import) else [node.module or ''] if isinstance(
+            node, ast.ImportFrom) and node.level == 0 else []
+        for imported in names:
+            parts = imported.split('.')
+            if parts[0] == 'orthoglide_ros' and len(parts) > 1:
+                found.append((parts[1], node.lineno))
+    return found
 
 
 def test_the_layers_are_the_folders():
@@ -50,9 +84,18 @@ def test_the_layers_are_the_folders():
     folders = sorted(entry for entry in os.listdir(root)
                      if os.path.isdir(os.path.join(root, entry))
                      and not entry.startswith('__'))
-    assert folders == sorted(ROS_FREE + ('ros',))
+    assert folders == sorted(LAYERS)
     modules = [m.name for m in pkgutil.iter_modules([root]) if not m.ispkg]
     assert modules == [], f'modules outside a layer: {modules}'
+
+
+def test_a_layer_imports_only_itself_and_those_before_it():
+    wrong = []
+    for name, layer in modules_by_layer():
+        for imported, line in imported_layers(name):
+            if LAYERS.index(imported) > LAYERS.index(layer):
+                wrong.append(f'{name} (line {line}) imports {imported}')
+    assert not wrong, wrong
 
 
 def test_model_formats_cores_and_tools_import_without_rclpy():
@@ -73,7 +116,7 @@ def test_the_hook_refuses_rclpy():
 
 
 def test_the_tool_works_without_rclpy(tmp_path):
-    from test_cli import identification_log
+    from cli_runs import identification_log
     source, _ = identification_log(tmp_path, duration=20.0)
     trajectory = tmp_path / 'in.csv'
     trajectory.write_text('t,x,y,z\n0,0,0,0\n0.1,0.01,0,0\n')

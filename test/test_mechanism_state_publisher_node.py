@@ -30,9 +30,10 @@ from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
 from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 
-from node_harness import (
-    needs_scripts, node_executable, node_graphs, PROBE_QOS, run_to_exit,
-    spin_until, wait_diagnostics as harness_wait_diagnostics)
+from node_checks import needs_scripts
+from orthoglide_ros.harness.probe import (node_graphs, PROBE_QOS, spin_until,
+                                          wait_diagnostics as harness_wait_diagnostics)
+from orthoglide_ros.harness.processes import node_executable, run_to_exit
 from urdf_harness import COMMITTED_URDF, cut_errors, load, TOLERANCE
 
 pytestmark = pytest.mark.ros  # DDS and node processes

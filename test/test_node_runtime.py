@@ -16,7 +16,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from std_msgs.msg import Float64
 
-from node_harness import spin_until
+from orthoglide_ros.harness.probe import spin_until
 from orthoglide_ros.ros.node_runtime import default_qos, InputNode
 
 pytestmark = pytest.mark.ros  # DDS and node processes

@@ -82,7 +82,7 @@ def largest_early_error(mass_factor, engine):
 
 
 ENGINES = ['builtin', pytest.param('mujoco', marks=pytest.mark.skipif(
-    bool(mujoco_plant.available()), reason=mujoco_plant.available()))]
+    bool(mujoco_plant.unavailable()), reason=mujoco_plant.unavailable()))]
 
 
 @pytest.mark.parametrize('engine', ENGINES)

@@ -60,8 +60,10 @@ from orthoglide_ros.model import mechanics
 from orthoglide_ros.formats.params_file import load_robot
 from orthoglide_ros.model.trajectory import paper_sample
 
-from node_harness import (close, needs_scripts, PROBE_QOS,  # noqa: E402
-                          start_node_process, stop_process)
+from node_checks import close, needs_scripts  # noqa: E402
+from orthoglide_ros.harness.probe import PROBE_QOS  # noqa: E402
+from orthoglide_ros.harness.processes import (start_node_process,  # noqa: E402
+                                              stop_process)
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config' / 'orthoglide.yaml'

@@ -13,10 +13,10 @@ import math
 import os
 import textwrap
 
-from orthoglide_ros.cores.parameters import robot_from_parameters
+from orthoglide_ros.formats.params_file import robot_from_parameters
 from orthoglide_ros.formats.params_file import (
     load_parameters, load_robot, ParametersFileError)
-from orthoglide_ros.model.robot import Robot, RobotParameterError
+from orthoglide_ros.model.robot import ParameterError, Robot
 import pytest
 
 CONFIG = os.path.join(os.path.dirname(__file__), os.pardir, 'config',
@@ -30,9 +30,9 @@ def write(tmp_path, text):
 
 
 def refused(tmp_path, text, name):
-    with pytest.raises(RobotParameterError) as error:
+    with pytest.raises(ParameterError) as error:
         load_robot(write(tmp_path, text))
-    assert error.value.name == name
+    assert error.value.name == f'robot.{name}'
     assert f'robot.{name}' in str(error.value)
 
 
@@ -161,7 +161,7 @@ def test_robot_from_parameters_on_a_flat_dict():
     robot = robot_from_parameters({'robot.l3': 0.9, 'other': 1,
                                    'robot.gravity': [0.0, 0.0, -1.62]})
     assert robot.l3 == 0.9 and robot.gravity == (0.0, 0.0, -1.62)
-    with pytest.raises(RobotParameterError):
+    with pytest.raises(ParameterError):
         robot_from_parameters({'robot.m2': 1})
 
 

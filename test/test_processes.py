@@ -15,8 +15,10 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter_client import AsyncParameterClient
 
-from node_harness import (assert_clean_exit, node_executable, spin_until,
-                          start_node_process, timed_stop)
+from node_checks import assert_clean_exit
+from orthoglide_ros.harness.probe import spin_until
+from orthoglide_ros.harness.processes import (node_executable,
+                                              start_node_process, timed_stop)
 
 pytestmark = pytest.mark.ros
 

@@ -24,9 +24,10 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 
-from node_harness import (needs_scripts, node_executable, Probe, run_to_exit,
-                          spin_until, start_node_process, stop_process,
-                          wait_diagnostics)
+from node_checks import needs_scripts
+from orthoglide_ros.harness.probe import Probe, spin_until, wait_diagnostics
+from orthoglide_ros.harness.processes import (node_executable, run_to_exit,
+                                              start_node_process, stop_process)
 from orthoglide_ros.cores import realtime
 
 pytestmark = [pytest.mark.ros, needs_scripts(

@@ -16,7 +16,9 @@ import time
 import numpy as np
 import pytest
 
-from node_harness import needs_scripts, node_executable, start_node_process, stop_process
+from node_checks import needs_scripts
+from orthoglide_ros.harness.processes import (node_executable,
+                                              start_node_process, stop_process)
 
 from orthoglide_ros.tools import identification
 

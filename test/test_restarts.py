@@ -16,7 +16,7 @@ Restart tests of the feedforward node as a process (issue 4, item 4).
 - SIGINT and SIGTERM while setpoints stream in: exit code 0, promptly, with
   nothing on standard error.
 
-The runs and the bounds are in ``reliability_harness`` (shared with
+The runs and the bounds are in ``harness.reliability`` (shared with
 ``scripts/reliability_report.py``).
 """
 
@@ -24,10 +24,10 @@ import sys
 
 import pytest
 
-from node_harness import needs_scripts  # noqa: E402
-import live_graph_harness  # noqa: E402
-import netns  # noqa: E402
-import reliability_harness as harness  # noqa: E402
+from node_checks import needs_scripts  # noqa: E402
+from orthoglide_ros.harness import live_graph  # noqa: E402
+from orthoglide_ros.harness import netns  # noqa: E402
+from orthoglide_ros.harness import reliability as harness  # noqa: E402
 
 pytestmark = [pytest.mark.ros, needs_scripts()]
 in_a_namespace = pytest.mark.skipif(bool(netns.unavailable()),
@@ -43,14 +43,14 @@ def check(result):
 @in_a_namespace
 def test_node_killed_mid_stream_resumes():
     """SIGKILL mid-stream, restart, three times: each within 2 s, right."""
-    check(live_graph_harness.in_namespace('kill_restart', cycles=3))
+    check(live_graph.in_namespace('kill_restart', cycles=3))
 
 
 @pytest.mark.soak
 @in_a_namespace
 def test_node_killed_mid_stream_resumes_soak():
     """Five kill/restart cycles."""
-    check(live_graph_harness.in_namespace('kill_restart', cycles=5))
+    check(live_graph.in_namespace('kill_restart', cycles=5))
 
 
 def test_producer_restarts_later_and_earlier_stamps():

@@ -3,8 +3,8 @@
 
 Lengths and masses must be finite positive numbers, ``alpha`` must lie in
 (0, pi/2) rad and ``gravity`` must be a finite 3-vector of numbers; each
-bad value raises ``RobotParameterError`` whose ``name`` and message name
-the parameter. ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the paper's
+bad value raises ``ParameterError`` whose ``name`` and message name the
+parameter (``robot.l3``). ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the paper's
 ``m4 = m2``, ``m6 = m3``), ``friction_coulomb_negative`` to
 ``friction_coulomb``, and keep following them through ``replace``. The
 friction coefficients are 3-vectors of finite values >= 0 and
@@ -16,7 +16,7 @@ import dataclasses
 import math
 
 import numpy as np
-from orthoglide_ros.model.robot import FOLLOWS, Robot, RobotParameterError
+from orthoglide_ros.model.robot import ParameterError, Robot, ROW, ROWS
 import pytest
 
 POSITIVE = ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm4', 'm5',
@@ -28,9 +28,9 @@ BAD_NUMBERS = (0.0, -0.1, -math.inf, math.inf, math.nan, '0.2', None,
 
 
 def refused(name, **values):
-    with pytest.raises(RobotParameterError) as error:
+    with pytest.raises(ParameterError) as error:
         Robot(**values)
-    assert error.value.name == name
+    assert error.value.name == f'robot.{name}'
     assert f'robot.{name}' in str(error.value)
     return error.value
 
@@ -52,7 +52,7 @@ def test_defaults_are_the_paper_robot():
 @pytest.mark.parametrize('name, value', [
     (name, value) for name in POSITIVE for value in BAD_NUMBERS
     # None means "the default" for m4 and m6.
-    if not (value is None and name in FOLLOWS)], ids=repr)
+    if not (value is None and ROW[name].follows)], ids=repr)
 def test_each_bad_value_is_refused_with_its_name(name, value):
     refused(name, **{name: value})
 
@@ -85,7 +85,7 @@ def test_gravity_accepts_finite_3_sequences_and_stores_floats():
     (0.0, '1', 0.0), (2e6, 0.0, 0.0)], ids=repr)
 def test_friction_coefficients_are_three_finite_values_at_least_zero(
         name, value):
-    if value is None and name in FOLLOWS:
+    if value is None and ROW[name].follows:
         return      # None: the default, the value it follows
     refused(name, **{name: value})
 
@@ -148,9 +148,9 @@ def test_robot_is_frozen_and_replace_validates():
     changed = robot.replace(l3=0.9, gravity=(0.0, -9.81, 0.0))
     assert changed.l3 == 0.9 and changed.gravity == (0.0, -9.81, 0.0)
     assert robot.l3 == 0.85
-    with pytest.raises(RobotParameterError) as error:
+    with pytest.raises(ParameterError) as error:
         robot.replace(m5=-1.0)
-    assert error.value.name == 'm5'
+    assert error.value.name == 'robot.m5'
 
 
 @pytest.mark.parametrize('name,value', [
@@ -189,3 +189,10 @@ def test_parameter_names_and_values_round_trip():
     values = robot.as_parameters()
     assert values['friction_viscous'] == [1.0, 2.0, 3.0]
     assert type(values['friction_velocity']) is float
+
+
+def test_the_fields_are_the_rows_in_their_order_with_their_defaults():
+    """One home: every field of Robot is a row of ROWS, default and all."""
+    assert Robot.parameter_names() == tuple(row.name for row in ROWS)
+    for field in dataclasses.fields(Robot):
+        assert field.default == ROW[field.name].default, field.name

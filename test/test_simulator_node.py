@@ -32,10 +32,12 @@ from orthoglide_ros.model.plant import Plant
 from orthoglide_ros.cores.simulator import MAX_CATCH_UP
 from orthoglide_ros.ros.simulator_node import SimulatorNode
 
-from node_harness import (
-    header_stamp, needs_scripts, node_executable, node_graphs, PROBE_QOS,
-    run_to_exit, spin_for, spin_until, wait_diagnostics as
-    harness_wait_diagnostics)
+from node_checks import needs_scripts
+from orthoglide_ros.harness.messages import header_stamp
+from orthoglide_ros.harness.probe import (node_graphs, PROBE_QOS, spin_for,
+                                          spin_until,
+                                          wait_diagnostics as harness_wait_diagnostics)
+from orthoglide_ros.harness.processes import node_executable, run_to_exit
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 
@@ -244,8 +246,8 @@ def test_constant_command_follows_the_plant_step_for_step(graph):
     assert g.node.core.plant.position == states[-1][0]
 
 
-@pytest.mark.skipif(bool(mujoco_plant.available()),
-                    reason=mujoco_plant.available() or 'ok')
+@pytest.mark.skipif(bool(mujoco_plant.unavailable()),
+                    reason=mujoco_plant.unavailable() or 'ok')
 def test_mujoco_engine_follows_its_plant_step_for_step(graph):
     """
     With engine mujoco: the same rules, MuJoCo's states, step for step.

@@ -1,7 +1,7 @@
 """
 Stale and missing input, over real DDS: doc/feedforward.md's rules hold.
 
-The node (``FeedforwardNode``) and a :class:`node_harness.Probe` share one
+The node (``FeedforwardNode``) and a :class:`harness.probe.Probe` share one
 rclpy context and one EventsExecutor; the probe is also the producer. A
 producer streams at about 250 Hz and stops: with ``rate_hz > 0`` the
 outputs stop within ``setpoint_timeout`` (plus one tick and the delivery
@@ -29,8 +29,9 @@ from orthoglide_ros.ros.feedforward_node import FeedforwardNode
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.trajectory import paper_sample
 
-from node_harness import (diagnostic_values, header_stamp,
-                          Probe, spin_for, spin_until, stamp_of)
+from orthoglide_ros.harness.messages import (diagnostic_values, header_stamp,
+                                             stamp_of)
+from orthoglide_ros.harness.probe import Probe, spin_for, spin_until
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 

@@ -25,10 +25,12 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from orthoglide_ros.cores.tracking_controller import INPUTS, PARAMETERS, REASONS
 from orthoglide_ros.ros.tracking_controller_node import TrackingControllerNode
 
-from node_harness import (
-    call, diagnostic_values, needs_scripts, node_executable, node_graphs,
-    parameter_client, PROBE_QOS, run_to_exit, spin_for, spin_until,
-    wait_diagnostics as harness_wait_diagnostics)
+from node_checks import needs_scripts
+from orthoglide_ros.harness.messages import diagnostic_values
+from orthoglide_ros.harness.probe import (call, node_graphs, parameter_client,
+                                          PROBE_QOS, spin_for, spin_until,
+                                          wait_diagnostics as harness_wait_diagnostics)
+from orthoglide_ros.harness.processes import node_executable, run_to_exit
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 

@@ -10,8 +10,6 @@ Rules every node applies to what it receives, without ROS.
   a ``sensor_msgs/JointState``, by name, in any order, and
   :func:`read_joint_trajectory` the same for every point of a
   ``trajectory_msgs/JointTrajectory``;
-- :func:`clip`: the one place that shortens text taken from messages
-  before it reaches a log line or a reply;
 - the byte limits of the inputs: a message longer than its input's limit
   is refused (``oversize``) before any decoding, so its length cannot
   cost the node more than taking it from the middleware.
@@ -22,11 +20,10 @@ import math
 
 import numpy as np
 
+
 # Largest stamp seconds an output can carry (builtin_interfaces/Time: int32).
 STAMP_SEC_MAX = 2**31 - 1
 NANOSECONDS = 10**9
-# Longest log line or reply reason made from a message's text (characters).
-TEXT_LIMIT = 2000
 # Byte limit of an input whose messages are small (a pose, a joint state of
 # a few hundred joints, a command): 64 KiB, about 100 times the size of
 # the largest well-formed one the package expects.
@@ -43,26 +40,6 @@ CARTESIAN_TRAJECTORY_BYTES = 8 * 1024 * 1024
 JOINT_TRAJECTORY_BYTES = 8 * 1024 * 1024
 # a message recorded by `orthoglide record`: 4 MiB.
 RECORD_MESSAGE_BYTES = 4 * 1024 * 1024
-
-
-def clip(text, limit=TEXT_LIMIT):
-    """
-    Return ``text`` cut to about ``limit`` characters (its middle dropped).
-
-    The one place where text that a message or a request carries (a frame
-    id, joint names, a parameter value) is shortened before it is logged or
-    sent back, so no input can make a log line longer than ``limit`` plus
-    a few dozen characters.
-
-    >>> clip('a' * 10 + 'b' * 10, 4)
-    'aa ... [16 characters cut] ... bb'
-    """
-    text = str(text)
-    if len(text) <= limit:
-        return text
-    half = limit // 2
-    return (f'{text[:half]} ... [{len(text) - 2 * half} characters cut] ... '
-            f'{text[-half:]}')
 
 
 class Rejected(ValueError):

@@ -32,23 +32,14 @@ rate_hz: must be a double, got 1
 from collections import namedtuple
 import math
 
-from orthoglide_ros.model.robot import DESCRIPTIONS, FOLLOWS, JOINT_NAMES, \
-    LIMITS, Robot, RobotParameterError, UNITS
+from orthoglide_ros.formats.params_file import (rcl_typed, ROBOT_PREFIX,
+                                                robot_from_parameters)
+from orthoglide_ros.formats.text import clip
+from orthoglide_ros.model.robot import (is_vector, JOINT_NAMES,
+                                        ParameterError, ROWS)
 
-ROBOT_PREFIX = 'robot.'
 TYPES = ('double', 'double_array', 'integer', 'integer_array', 'string',
          'string_array', 'bool')
-_SCALAR = {'double': float, 'integer': int, 'string': str, 'bool': bool}
-_ELEMENT = {'double_array': float, 'integer_array': int, 'string_array': str}
-
-
-class ParameterError(ValueError):
-    """A parameter value breaks a rule; the message names both."""
-
-    def __init__(self, name, rule):
-        super().__init__(f'{name}: {rule}')
-        self.name = name
-        self.rule = rule
 
 
 class Spec(namedtuple('Spec', 'name type default description range check '
@@ -80,7 +71,7 @@ class Spec(namedtuple('Spec', 'name type default description range check '
     def validate(self, value):
         """Return the settings value of ``value``; ParameterError if bad."""
         try:
-            value = _typed(self.type, value)
+            value = rcl_typed(self.type, value)
             if self.range is not None:
                 _in_range(self.range, value)
             return value if self.check is None else self.check(value)
@@ -126,7 +117,8 @@ class Table:
         too: ``m4``, ``m6`` and ``friction_coulomb_negative`` then follow
         ``m2``, ``m3`` and ``friction_coulomb``); names of
         other tables are ignored. Raises :class:`ParameterError` (or, for ``robot.*``,
-        :class:`RobotParameterError`) naming the first bad parameter.
+        :class:`ParameterError`, ``robot.<name>``) naming the first bad
+        parameter.
         """
         fields = {}
         if self.robot:
@@ -140,31 +132,6 @@ class Table:
         for rule in self.rules:
             rule(settings)
         return settings
-
-
-def robot_from_parameters(params):
-    """
-    Build a :class:`Robot` from the ``robot.*`` entries of ``params``.
-
-    Other entries are ignored. An unknown ``robot.*`` name, a value of the
-    wrong type (by rcl's rules) or a value the :class:`Robot` refuses raises
-    :class:`RobotParameterError` naming the parameter.
-    """
-    values = {}
-    for key, value in params.items():
-        if not key.startswith(ROBOT_PREFIX):
-            continue
-        name = key[len(ROBOT_PREFIX):]
-        spec = _ROBOT_BY_NAME.get(name)
-        if spec is None:
-            raise RobotParameterError(
-                name, 'unknown parameter; known: '
-                + ', '.join(Robot.parameter_names()))
-        try:
-            values[name] = _typed(spec.type, value)
-        except ValueError as error:
-            raise RobotParameterError(name, str(error)) from None
-    return Robot(**values)
 
 
 # Checks used by several tables ------------------------------------------------
@@ -181,7 +148,7 @@ def triple(value):
     """Return a double array of exactly three values as a tuple."""
     if len(value) != 3:
         raise ValueError(f'must be an array of three doubles, such as '
-                         f'[0.0, 0.0, 0.0], got {shorten(list(value))}')
+                         f'[0.0, 0.0, 0.0], got {_short(list(value))}')
     return tuple(value)
 
 
@@ -200,46 +167,22 @@ def joint_names_spec(description):
                 check=joint_names)
 
 
-def shorten(value, limit=80):
-    """Return ``repr(value)``, cut to ``limit`` characters for a message."""
-    text = repr(value)
-    return text if len(text) <= limit else text[:limit - 5] + '...' + \
-        text[-2:]
-
-
-def _typed(kind, value):
-    """Check ``value`` against rcl's typing of ``kind``; return it."""
-    scalar = _SCALAR.get(kind)
-    if scalar is not None:
-        if type(value) is not scalar:
-            raise ValueError(f'must be a{"n" if kind == "integer" else ""} '
-                             f'{kind}, got {shorten(value)}')
-        return value
-    element = _ELEMENT[kind]
-    if not (isinstance(value, (list, tuple))
-            and all(type(v) is element for v in value)):
-        what = {float: 'doubles such as [0.0, 0.0, -9.81] (rcl refuses '
-                'integers or mixed arrays)', int: 'integers such as [1]',
-                str: 'strings'}[element]
-        raise ValueError(f'must be an array of {what}, got '
-                         f'{shorten(value)}')
-    if element is float and not all(math.isfinite(v) for v in value):
-        raise ValueError(f'must be finite, got {shorten(list(value))}')
-    return tuple(value)
+def _short(value):
+    """Return ``repr(value)`` shortened for a message (:func:`clip`)."""
+    return clip(repr(value), 80)
 
 
 def _in_range(bounds, value):
     low, high = bounds
     if not (math.isfinite(value) and low <= value <= high):
         raise ValueError(f'must lie in [{low:g}, {high:g}], got '
-                         f'{shorten(value)}')
+                         f'{_short(value)}')
 
 
 ROBOT_SPECS = tuple(
-    Spec(ROBOT_PREFIX + name,
-         'double_array' if isinstance(default, (list, tuple)) else 'double',
-         None if name in FOLLOWS else default,
-         f'{DESCRIPTIONS[name]} ({UNITS[name]})',
-         None if isinstance(default, (list, tuple)) else LIMITS.get(name))
-    for name, default in Robot().as_parameters().items())
-_ROBOT_BY_NAME = {s.name[len(ROBOT_PREFIX):]: s for s in ROBOT_SPECS}
+    Spec(ROBOT_PREFIX + row.name,
+         'double_array' if is_vector(row) else 'double',
+         list(row.default) if is_vector(row) and row.default else
+         row.default, f'{row.description} ({row.unit})',
+         None if is_vector(row) or row.open else row.limits)
+    for row in ROWS)

@@ -113,8 +113,8 @@ def _engine(value):
     if value not in ENGINES:
         raise ValueError(f'must be one of {", ".join(ENGINES)}, got '
                          f'{value!r}')
-    if value == 'mujoco' and mujoco_plant.available():
-        raise ValueError(mujoco_plant.available())
+    if value == 'mujoco' and mujoco_plant.unavailable():
+        raise ValueError(mujoco_plant.unavailable())
     return value
 
 
@@ -126,8 +126,8 @@ def _mjcf_file(path):
     """Read and check an MJCF file (an empty path: none); return its text."""
     if not path:
         return ''
-    if mujoco_plant.available():
-        raise ValueError(mujoco_plant.available())
+    if mujoco_plant.unavailable():
+        raise ValueError(mujoco_plant.unavailable())
     try:
         with open(path, 'rb') as f:
             data = f.read(MJCF_FILE_BYTES + 1)

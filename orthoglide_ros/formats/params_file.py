@@ -22,13 +22,19 @@ apply the same rules here:
 identify`` does), with the same typing.
 """
 
+import math
 import re
 
 import yaml
 
-from orthoglide_ros.cores.parameters import robot_from_parameters
+from orthoglide_ros.formats.text import clip
+from orthoglide_ros.model.robot import (is_vector, ParameterError, Robot,
+                                        ROW, ROWS)
 
 NODE_NAME = 'feedforward'     # the node whose robot the tools read
+ROBOT_PREFIX = 'robot.'
+_SCALAR = {'double': float, 'integer': int, 'string': str, 'bool': bool}
+_ELEMENT = {'double_array': float, 'integer_array': int, 'string_array': str}
 # A parameters file is small: config/orthoglide.yaml takes 4 kB.
 MAX_FILE_BYTES = 1024 * 1024
 # Deepest nesting of mappings and sequences (robot: {gravity: [...]} is 3).
@@ -117,12 +123,66 @@ def load_parameters(path, node=NODE_NAME):
     return params
 
 
+def rcl_typed(kind, value):
+    """
+    Check ``value`` against rcl's typing of ``kind``; return it.
+
+    ``kind``: ``double``, ``integer``, ``string``, ``bool`` or an array of
+    the first three (``double_array``...). A double must be a float
+    (``0.0``, not ``0``), an array must not mix integers and floats, a
+    bool is not a number, a double array's values must be finite. Raises
+    ValueError with the rule.
+    """
+    scalar = _SCALAR.get(kind)
+    if scalar is not None:
+        if type(value) is not scalar:
+            raise ValueError(f'must be a{"n" if kind == "integer" else ""} '
+                             f'{kind}, got {clip(repr(value), 80)}')
+        return value
+    element = _ELEMENT[kind]
+    if not (isinstance(value, (list, tuple))
+            and all(type(v) is element for v in value)):
+        what = {float: 'doubles such as [0.0, 0.0, -9.81] (rcl refuses '
+                'integers or mixed arrays)', int: 'integers such as [1]',
+                str: 'strings'}[element]
+        raise ValueError(f'must be an array of {what}, got '
+                         f'{clip(repr(value), 80)}')
+    if element is float and not all(math.isfinite(v) for v in value):
+        raise ValueError(f'must be finite, got {clip(repr(list(value)), 80)}')
+    return tuple(value)
+
+
+def robot_from_parameters(params):
+    """
+    Build a :class:`Robot` from the ``robot.*`` entries of ``params``.
+
+    Other entries are ignored. An unknown ``robot.*`` name, a value of the
+    wrong type (by rcl's rules) or a value the :class:`Robot` refuses raises
+    :class:`ParameterError` naming the parameter (``robot.l3``).
+    """
+    values = {}
+    for key, value in params.items():
+        if not key.startswith(ROBOT_PREFIX):
+            continue
+        name = key[len(ROBOT_PREFIX):]
+        row = ROW.get(name)
+        if row is None:
+            raise ParameterError(key, 'unknown parameter; known: ' + ', '.join(
+                r.name for r in ROWS))
+        try:
+            values[name] = rcl_typed(
+                'double_array' if is_vector(row) else 'double', value)
+        except ValueError as error:
+            raise ParameterError(key, str(error)) from None
+    return Robot(**values)
+
+
 def load_robot(path):
     """
     Return the :class:`Robot` of the ``robot.*`` keys in the file ``path``.
 
-    Read with :func:`load_parameters` and validated by the one parameter
-    mechanism (:func:`orthoglide_ros.cores.parameters.robot_from_parameters`).
+    Read with :func:`load_parameters` and validated by
+    :func:`robot_from_parameters`.
     """
     return robot_from_parameters(load_parameters(path))
 

@@ -52,7 +52,7 @@ def check_model(text):
             f'platform body {"present" if "platform" in bodies else "absent"}')
 
 
-def available():
+def unavailable():
     """Return why MuJoCo cannot be used here, '' if it can."""
     try:
         import mujoco  # noqa: F401

@@ -10,118 +10,122 @@ The parameter names are the paper's (section 2) and those of the
 for the bodies they describe.
 """
 
-from dataclasses import dataclass, field, fields
+from collections import namedtuple
+from dataclasses import dataclass, fields
 import math
+from typing import Optional, Tuple
 
 from orthoglide_ros.model.kernel import kernel_constants
 
-# The paper's example robot (section 2): lengths in m, masses in kg.
-PAPER_VALUES = {
-    'l': 0.20, 'l1': 0.15, 'l2': 0.08, 'l3': 0.85, 'alpha': math.pi / 4,
-    'm1': 0.35, 'm2': 0.2, 'm3': 2.5, 'm5': 15.0,
-}
-DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 # The prismatic joints of actuators A, B, C: the default joint_names of
 # every node, of the URDF and of the logs.
 JOINT_NAMES = ('slider_a', 'slider_b', 'slider_c')
 # Friction on the sliders (not in the paper, which neglects it): none by
 # default, so that the paper's figures stand. The smoothing speed of the
 # Coulomb term: tanh(1) = 76 % of the Coulomb force at 1 mm/s. The Stribeck
-# excess falls to exp(-1) = 37 % of itself at its velocity.
+# excess falls to exp(-1) = 37 % of itself at its velocity. No drive
+# inertia reflected onto the sliders, nothing on the platform.
 NO_FRICTION = (0.0, 0.0, 0.0)
-DEFAULT_FRICTION_VELOCITY = 0.001   # m/s
-DEFAULT_STRIBECK_VELOCITY = 0.01    # m/s
-# No drive inertia reflected onto the sliders, nothing on the platform:
-# the paper's robot.
-NO_ARMATURE = (0.0, 0.0, 0.0)
-NO_PAYLOAD = 0.0
-# Parameters that take another's value when not given (the paper's m4 = m2,
-# m6 = m3; a Coulomb friction the same in both directions).
-FOLLOWS = {'m4': 'm2', 'm6': 'm3',
-           'friction_coulomb_negative': 'friction_coulomb'}
+DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+
+Vector = Tuple[float, float, float]
+
+# Bounds of every value (inclusive unless said): far beyond any
+# Orthoglide, they keep every derived quantity of the kernel finite (a
+# length of 1e200 m would overflow its l3^2).
+LENGTH_LIMITS = (1e-4, 100.0)       # m
+MASS_LIMITS = (1e-6, 1e6)           # kg
+FORCE_LIMITS = (0.0, 1e6)           # N, N s/m: friction, each actuator
+SPEED_LIMITS = (1e-6, 10.0)         # m/s
+
+Row = namedtuple('Row', ('name', 'default', 'unit', 'limits', 'description',
+                         'follows', 'open'), defaults=(None, False))
+Row.__doc__ = """One robot parameter: the one home of its rules.
+
+``name`` (the ``robot.*`` parameter less ``robot.``, the paper's);
+``default`` (a float, or a 3-tuple for a vector; None when it
+``follows`` another parameter until given); ``unit``; ``limits``
+``(low, high)`` of the value or of each component, inclusive unless
+``open``; ``description``, in words. The :class:`Robot`'s fields and
+checks, the nodes' ``robot.*`` parameters
+(:data:`orthoglide_ros.cores.parameters.ROBOT_SPECS`) and the docs' tables
+(``test/test_docs.py``) all come from :data:`ROWS`."""
+
+ROWS = (
+    Row('l', 0.20, 'm', LENGTH_LIMITS, 'side of the cubic platform (body 5)'),
+    Row('l1', 0.15, 'm', LENGTH_LIMITS,
+        'length of the slider rod A1A2 (body 1)'),
+    Row('l2', 0.08, 'm', LENGTH_LIMITS,
+        'length of the rods A3A6 (body 2) and A4A7 (body 4)'),
+    Row('l3', 0.85, 'm', LENGTH_LIMITS,
+        'length of the parallelogram bars A3A4 (body 3) and A6A7 (body 6)'),
+    Row('alpha', math.pi / 4, 'rad', (0.0, math.pi / 2),
+        'orientation angle of the slider rod about its guide-way',
+        open=True),
+    Row('m1', 0.35, 'kg', MASS_LIMITS, 'mass of each slider (body 1)'),
+    Row('m2', 0.2, 'kg', MASS_LIMITS, 'mass of each rod A3A6 (body 2)'),
+    Row('m3', 2.5, 'kg', MASS_LIMITS, 'mass of each bar A3A4 (body 3)'),
+    Row('m4', None, 'kg', MASS_LIMITS,
+        'mass of each rod A4A7 (body 4); defaults to m2', 'm2'),
+    Row('m5', 15.0, 'kg', MASS_LIMITS,
+        'mass of the platform (body 5, counted once)'),
+    Row('m6', None, 'kg', MASS_LIMITS,
+        'mass of each bar A6A7 (body 6); defaults to m3', 'm3'),
+    Row('gravity', DEFAULT_GRAVITY, 'm/s^2', (-100.0, 100.0),
+        'gravity vector in the base frame 0'),
+    Row('friction_viscous', NO_FRICTION, 'N s/m', FORCE_LIMITS,
+        'viscous friction of the sliders A, B, C: a force c lambdadot '
+        'against the motion'),
+    Row('friction_coulomb', NO_FRICTION, 'N', FORCE_LIMITS,
+        'Coulomb friction of the sliders A, B, C: a force F tanh(lambdadot / '
+        'friction_velocity) against the motion (moving +lambda, and both '
+        'ways unless friction_coulomb_negative is set)'),
+    Row('friction_velocity', 0.001, 'm/s', SPEED_LIMITS,
+        'slider speed that smooths the Coulomb friction (tanh(1) = 76 % of '
+        'it at this speed)'),
+    Row('friction_coulomb_negative', None, 'N', FORCE_LIMITS,
+        'Coulomb friction of the sliders A, B, C moving -lambda; defaults to '
+        'friction_coulomb', 'friction_coulomb'),
+    Row('friction_stribeck', NO_FRICTION, 'N', FORCE_LIMITS,
+        'Stribeck friction of the sliders A, B, C: the breakaway excess S, a '
+        'force S exp(-(lambdadot / friction_stribeck_velocity)^2) '
+        'tanh(lambdadot / friction_velocity) against the motion'),
+    Row('friction_stribeck_velocity', 0.01, 'm/s', SPEED_LIMITS,
+        'slider speed at which the Stribeck excess has fallen to exp(-1) = '
+        '37 % of itself'),
+    Row('armature', (0.0, 0.0, 0.0), 'kg', (0.0, 1e6),
+        'inertia of the drives of A, B, C reflected onto their sliders, J (2 '
+        'pi / lead)^2 for a ball screw: a force armature lambdaddot on each '
+        'actuator'),
+    Row('payload', 0.0, 'kg', (0.0, 1e6),
+        'mass carried rigidly on the platform (a tool, a part): exactly a '
+        'heavier platform'),
+)
+ROW = {row.name: row for row in ROWS}
+
+
+def is_vector(row):
+    """Whether ``row``'s value is a 3-vector (its own or its leader's)."""
+    return isinstance(ROW[row.follows].default if row.follows
+                      else row.default, tuple)
+
+
 # The friction parameters that are forces (zero: a frictionless robot).
 FRICTION_FORCES = ('friction_viscous', 'friction_coulomb',
                    'friction_coulomb_negative', 'friction_stribeck')
 
-# Units of every parameter, for messages, descriptions and the docs.
-UNITS = {
-    'l': 'm', 'l1': 'm', 'l2': 'm', 'l3': 'm', 'alpha': 'rad',
-    'm1': 'kg', 'm2': 'kg', 'm3': 'kg', 'm4': 'kg', 'm5': 'kg', 'm6': 'kg',
-    'gravity': 'm/s^2', 'friction_viscous': 'N s/m',
-    'friction_coulomb': 'N', 'friction_coulomb_negative': 'N',
-    'friction_stribeck': 'N', 'friction_velocity': 'm/s',
-    'friction_stribeck_velocity': 'm/s', 'armature': 'kg', 'payload': 'kg',
-}
 
-# Bounds of every value (inclusive): far beyond any Orthoglide, they keep
-# every derived quantity of the kernel finite (a length of 1e200 m would
-# overflow its l3^2). alpha lies in (0, pi/2) rad, checked apart.
-LENGTH_LIMITS = (1e-4, 100.0)       # m
-MASS_LIMITS = (1e-6, 1e6)           # kg
-GRAVITY_LIMITS = (-100.0, 100.0)    # m/s^2, each component
-VISCOUS_LIMITS = (0.0, 1e6)         # N s/m, each actuator
-COULOMB_LIMITS = (0.0, 1e6)         # N, each actuator
-FRICTION_VELOCITY_LIMITS = (1e-6, 10.0)     # m/s
-ARMATURE_LIMITS = (0.0, 1e6)        # kg, each actuator
-PAYLOAD_LIMITS = (0.0, 1e6)         # kg
-LIMITS = {
-    **dict.fromkeys(('l', 'l1', 'l2', 'l3'), LENGTH_LIMITS),
-    **dict.fromkeys(('m1', 'm2', 'm3', 'm4', 'm5', 'm6'), MASS_LIMITS),
-    'gravity': GRAVITY_LIMITS,
-    'friction_viscous': VISCOUS_LIMITS,
-    'friction_coulomb': COULOMB_LIMITS,
-    'friction_coulomb_negative': COULOMB_LIMITS,
-    'friction_stribeck': COULOMB_LIMITS,
-    'friction_velocity': FRICTION_VELOCITY_LIMITS,
-    'friction_stribeck_velocity': FRICTION_VELOCITY_LIMITS,
-    'armature': ARMATURE_LIMITS,
-    'payload': PAYLOAD_LIMITS,
-}
+class ParameterError(ValueError):
+    """
+    A parameter value breaks a rule; the message names both.
 
-DESCRIPTIONS = {
-    'l': 'side of the cubic platform (body 5)',
-    'l1': 'length of the slider rod A1A2 (body 1)',
-    'l2': 'length of the rods A3A6 (body 2) and A4A7 (body 4)',
-    'l3': 'length of the parallelogram bars A3A4 (body 3) and A6A7 (body 6)',
-    'alpha': 'orientation angle of the slider rod about its guide-way',
-    'm1': 'mass of each slider (body 1)',
-    'm2': 'mass of each rod A3A6 (body 2)',
-    'm3': 'mass of each bar A3A4 (body 3)',
-    'm4': 'mass of each rod A4A7 (body 4); defaults to m2',
-    'm5': 'mass of the platform (body 5, counted once)',
-    'm6': 'mass of each bar A6A7 (body 6); defaults to m3',
-    'gravity': 'gravity vector in the base frame 0',
-    'friction_viscous': 'viscous friction of the sliders A, B, C: a force '
-                        'c lambdadot against the motion',
-    'friction_coulomb': 'Coulomb friction of the sliders A, B, C: a force '
-                        'F tanh(lambdadot / friction_velocity) against the '
-                        'motion (moving +lambda, and both ways unless '
-                        'friction_coulomb_negative is set)',
-    'friction_coulomb_negative': 'Coulomb friction of the sliders A, B, C '
-                                 'moving -lambda; defaults to '
-                                 'friction_coulomb',
-    'friction_stribeck': 'Stribeck friction of the sliders A, B, C: the '
-                         'breakaway excess S, a force S exp(-(lambdadot / '
-                         'friction_stribeck_velocity)^2) tanh(lambdadot / '
-                         'friction_velocity) against the motion',
-    'friction_velocity': 'slider speed that smooths the Coulomb friction '
-                         '(tanh(1) = 76 % of it at this speed)',
-    'friction_stribeck_velocity': 'slider speed at which the Stribeck '
-                                  'excess has fallen to exp(-1) = 37 % of '
-                                  'itself',
-    'armature': 'inertia of the drives of A, B, C reflected onto their '
-                'sliders, J (2 pi / lead)^2 for a ball screw: a force '
-                'armature lambdaddot on each actuator',
-    'payload': 'mass carried rigidly on the platform (a tool, a part): '
-               'exactly a heavier platform',
-}
-
-
-class RobotParameterError(ValueError):
-    """A robot parameter breaks a rule; the message names both."""
+    The one error of a bad value, of a robot (``name`` ``robot.l3``) as of
+    a node's parameter (``rate_hz``).
+    """
 
     def __init__(self, name, rule):
-        super().__init__(f'robot.{name}: {rule}')
+        """Keep ``name`` and ``rule``; the message is ``name: rule``."""
+        super().__init__(f'{name}: {rule}')
         self.name = name
         self.rule = rule
 
@@ -131,11 +135,11 @@ class Robot:
     """
     Geometry (m, rad), masses (kg), gravity (m/s^2, frame 0), friction.
 
-    ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the paper's
-    ``m4 = m2``, ``m6 = m3``). Every value must be finite, lengths and
-    masses positive and within :data:`LIMITS`, ``alpha`` in (0, pi/2) and
-    ``gravity`` a 3-vector within :data:`GRAVITY_LIMITS`; otherwise
-    :class:`RobotParameterError` names the parameter.
+    Each field is a row of :data:`ROWS`, its default, unit, limits and
+    meaning there. ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the
+    paper's ``m4 = m2``, ``m6 = m3``). Every value must be finite and
+    within its row's limits, a vector a 3-vector; otherwise
+    :class:`ParameterError` names the parameter (``robot.l3``).
 
     Friction on each slider (actuators A, B, C), which the paper neglects:
     ``friction_viscous`` ``c_j`` (N s/m), ``friction_coulomb`` ``F_j`` and
@@ -160,46 +164,39 @@ class Robot:
     True
     """
 
-    l: float = PAPER_VALUES['l']
-    l1: float = PAPER_VALUES['l1']
-    l2: float = PAPER_VALUES['l2']
-    l3: float = PAPER_VALUES['l3']
-    alpha: float = PAPER_VALUES['alpha']
-    m1: float = PAPER_VALUES['m1']
-    m2: float = PAPER_VALUES['m2']
-    m3: float = PAPER_VALUES['m3']
-    m4: float = None
-    m5: float = PAPER_VALUES['m5']
-    m6: float = None
-    gravity: tuple = field(default=DEFAULT_GRAVITY)
-    friction_viscous: tuple = field(default=NO_FRICTION)
-    friction_coulomb: tuple = field(default=NO_FRICTION)
-    friction_velocity: float = DEFAULT_FRICTION_VELOCITY
-    friction_coulomb_negative: tuple = None
-    friction_stribeck: tuple = field(default=NO_FRICTION)
-    friction_stribeck_velocity: float = DEFAULT_STRIBECK_VELOCITY
-    armature: tuple = field(default=NO_ARMATURE)
-    payload: float = NO_PAYLOAD
+    l: float = ROW['l'].default
+    l1: float = ROW['l1'].default
+    l2: float = ROW['l2'].default
+    l3: float = ROW['l3'].default
+    alpha: float = ROW['alpha'].default
+    m1: float = ROW['m1'].default
+    m2: float = ROW['m2'].default
+    m3: float = ROW['m3'].default
+    m4: Optional[float] = ROW['m4'].default
+    m5: float = ROW['m5'].default
+    m6: Optional[float] = ROW['m6'].default
+    gravity: Vector = ROW['gravity'].default
+    friction_viscous: Vector = ROW['friction_viscous'].default
+    friction_coulomb: Vector = ROW['friction_coulomb'].default
+    friction_velocity: float = ROW['friction_velocity'].default
+    friction_coulomb_negative: Optional[Vector] = \
+        ROW['friction_coulomb_negative'].default
+    friction_stribeck: Vector = ROW['friction_stribeck'].default
+    friction_stribeck_velocity: float = \
+        ROW['friction_stribeck_velocity'].default
+    armature: Vector = ROW['armature'].default
+    payload: float = ROW['payload'].default
 
     def __post_init__(self):
         # (Not a field: no part of eq or repr.)
         object.__setattr__(self, 'following', frozenset(
-            name for name in FOLLOWS if getattr(self, name) is None))
+            row.name for row in ROWS
+            if row.follows and getattr(self, row.name) is None))
         for name in self.following:
-            object.__setattr__(self, name, getattr(self, FOLLOWS[name]))
-        for name in ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm4',
-                     'm5', 'm6'):
-            _check_positive(name, getattr(self, name))
-        if not self.alpha < math.pi / 2:
-            raise RobotParameterError('alpha', 'must lie in (0, pi/2) rad')
-        for name in ('gravity', 'armature') + FRICTION_FORCES:
-            object.__setattr__(self, name, _check_vector(
-                name, getattr(self, name)))
-        object.__setattr__(self, 'payload', _check_nonnegative(
-            'payload', self.payload))
-        _check_positive('friction_velocity', self.friction_velocity)
-        _check_positive('friction_stribeck_velocity',
-                        self.friction_stribeck_velocity)
+            object.__setattr__(self, name, getattr(self, ROW[name].follows))
+        for row in ROWS:
+            object.__setattr__(self, row.name, _checked(
+                row, getattr(self, row.name)))
         # Derived once (not fields: no part of eq or repr): the kernel's
         # constants, whether the sliders have friction at all, and whether
         # it goes beyond viscous + symmetric Coulomb (mechanics' general
@@ -232,7 +229,7 @@ class Robot:
         """
         Return a validated copy with some parameters changed.
 
-        A parameter of :data:`FOLLOWS` that was not given (``following``)
+        A parameter that follows another (its row's ``follows``) not given (``following``)
         keeps following: ``Robot().replace(friction_coulomb=(5.0, 3.0,
         4.0))`` has the same Coulomb friction both ways,
         ``Robot().replace(m2=0.3).m4`` is 0.3.
@@ -248,47 +245,44 @@ class Robot:
         return self.replace(**dict.fromkeys(FRICTION_FORCES, NO_FRICTION))
 
 
-def _check_positive(name, value):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise RobotParameterError(name, f'must be a number, got {value!r}')
+def _checked(row, value):
+    """
+    Return ``value`` checked against ``row``: a float or a 3-tuple of them.
+
+    Raises :class:`ParameterError` (``robot.<name>``) for a value of the
+    wrong kind, not finite, or beyond the row's limits.
+    """
+    low, high = row.limits
+    within = (lambda v: low < v < high) if row.open \
+        else (lambda v: low <= v <= high)
+    ends = ', '.join('pi/2' if v == math.pi / 2 else f'{v:g}'
+                     for v in (low, high))
+    bounds = f'({ends})' if row.open else f'[{ends}]'
+    if is_vector(row):
+        try:
+            values = tuple(value)
+        except TypeError:
+            raise _bad(row, f'must be a 3-vector, got {value!r}') from None
+        if len(values) != 3 or not all(_number(v) for v in values):
+            raise _bad(row, f'must be a 3-vector of numbers, got {value!r}')
+        if not all(math.isfinite(v) for v in values):
+            raise _bad(row, f'must be finite, got {value!r}')
+        if not all(within(v) for v in values):
+            raise _bad(row, f'each component must lie in {bounds} '
+                       f'{row.unit}, got {value!r}')
+        return tuple(float(v) for v in values)
+    if not _number(value):
+        raise _bad(row, f'must be a number, got {value!r}')
     if not math.isfinite(value):
-        raise RobotParameterError(name, f'must be finite, got {value!r}')
-    if not value > 0.0:
-        raise RobotParameterError(name, f'must be positive, got {value!r}')
-    low, high = LIMITS.get(name, (0.0, math.inf))
-    if not low <= value <= high:
-        raise RobotParameterError(name, (
-            f'must lie in [{low:g}, {high:g}] {UNITS[name]}, got {value!r}'))
-
-
-def _check_nonnegative(name, value):
-    """Return a finite number within LIMITS[name] (>= 0) as a float."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise RobotParameterError(name, f'must be a number, got {value!r}')
-    low, high = LIMITS[name]
-    if not (math.isfinite(value) and low <= value <= high):
-        raise RobotParameterError(name, (
-            f'must lie in [{low:g}, {high:g}] {UNITS[name]}, got {value!r}'))
+        raise _bad(row, f'must be finite, got {value!r}')
+    if not within(value):
+        raise _bad(row, f'must lie in {bounds} {row.unit}, got {value!r}')
     return float(value)
 
 
-def _check_vector(name, value):
-    """Return a finite 3-vector within LIMITS[name] as floats."""
-    try:
-        vector = tuple(value)
-    except TypeError:
-        raise RobotParameterError(
-            name, f'must be a 3-vector, got {value!r}') from None
-    if len(vector) != 3 or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool)
-            for v in vector):
-        raise RobotParameterError(
-            name, f'must be a 3-vector of numbers, got {value!r}')
-    if not all(math.isfinite(v) for v in vector):
-        raise RobotParameterError(name, f'must be finite, got {value!r}')
-    low, high = LIMITS[name]
-    if not all(low <= v <= high for v in vector):
-        raise RobotParameterError(name, (
-            f'each component must lie in [{low:g}, {high:g}] '
-            f'{UNITS[name]}, got {value!r}'))
-    return tuple(float(v) for v in vector)
+def _number(value):
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _bad(row, rule):
+    return ParameterError(f'robot.{row.name}', rule)

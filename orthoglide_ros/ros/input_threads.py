@@ -43,7 +43,8 @@ from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.serialization import deserialize_message
 
-from orthoglide_ros.cores.inputs import clip, Rejected, SMALL_MESSAGE_BYTES
+from orthoglide_ros.formats.text import clip
+from orthoglide_ros.cores.inputs import Rejected, SMALL_MESSAGE_BYTES
 
 
 # Longest wait of an input thread before it looks at its stop flag and the

@@ -32,7 +32,7 @@ state (``lifecycle state``).
 from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
 
-from orthoglide_ros.cores.inputs import clip
+from orthoglide_ros.formats.text import clip
 from orthoglide_ros.cores.parameters import Spec
 from orthoglide_ros.ros.node_runtime import declare_specs, InputNode
 

@@ -46,7 +46,8 @@ from rcl_interfaces.msg import (FloatingPointRange, IntegerRange,
                                 ParameterDescriptor, SetParametersResult)
 
 from orthoglide_ros.cores import realtime
-from orthoglide_ros.cores.inputs import clip, Rejected
+from orthoglide_ros.formats.text import clip
+from orthoglide_ros.cores.inputs import Rejected
 from orthoglide_ros.cores.parameters import ParameterError
 from orthoglide_ros.cores.status import OK, Status, WARN
 from orthoglide_ros.ros.console import install_signal_handlers

@@ -34,7 +34,7 @@ from rcl_interfaces.srv import SetParameters, SetParametersAtomically
 from orthoglide_ros.ros.service_replies import (DROP, REPLY_POLL,
                                                 REPLY_TIMED_OUT, ReplyRoutes,
                                                 SEND)
-from orthoglide_ros.cores.inputs import clip
+from orthoglide_ros.formats.text import clip
 
 # Parameter value types a request may carry (ParameterType's constants).
 _PARAMETER_TYPES = frozenset(range(ParameterType.PARAMETER_NOT_SET,

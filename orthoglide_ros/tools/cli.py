@@ -50,7 +50,7 @@ from orthoglide_ros.tools.identification import DEFAULT_CUTOFF
 from orthoglide_ros.cores.parameters import JOINT_NAMES, joint_names
 from orthoglide_ros.formats.params_file import (load_parameters, load_robot,
                                                 ParametersFileError)
-from orthoglide_ros.model.robot import Robot, RobotParameterError
+from orthoglide_ros.model.robot import ParameterError, Robot
 
 PROG = 'orthoglide'
 LEGS = ('a', 'b', 'c')
@@ -105,9 +105,9 @@ def main(argv=None):
     except CliError as error:
         _fail(str(error))
         return error.code
-    except (ParametersFileError, RobotParameterError) as error:
+    except (ParametersFileError, ParameterError) as error:
         where = f'{args.params}: ' if isinstance(
-            error, RobotParameterError) else ''
+            error, ParameterError) else ''
         _fail(where + str(error))
         return 2
 

@@ -454,7 +454,7 @@ def split(robot, base, values, stribeck_velocity=None):
     departure from the plain rule is a note. The law is ``base.law``
     (with ``stribeck_velocity``, m/s). Raises :class:`IdentificationError`
     only when the robot so made is refused (a value beyond a bound of
-    :data:`robot.LIMITS`).
+    :data:`robot.ROWS`).
     """
     names = standard_names(base.law)
     nominal = standard_parameters(robot, base.law)

@@ -17,7 +17,7 @@ from collections import namedtuple
 import numpy as np
 
 from orthoglide_ros.model import mechanics
-from orthoglide_ros.model.robot import DESCRIPTIONS, LIMITS
+from orthoglide_ros.model.robot import ROW
 
 MASSES = ('m1', 'm2', 'm3', 'm4', 'm5', 'm6')
 LEGS = ('a', 'b', 'c')
@@ -80,15 +80,15 @@ UNITS = dict.fromkeys(MASSES + ARMATURES, 'kg') | {
     for leg in LEGS}
 # What each standard parameter is, in words (the masses' from the robot's
 # parameter descriptions).
-MEANINGS = {m: DESCRIPTIONS[m].split(';')[0] for m in MASSES} | {
+MEANINGS = {m: ROW[m].description.split(';')[0] for m in MASSES} | {
     f'armature_{leg}': f'drive inertia reflected onto slider {leg.upper()}'
     for leg in LEGS} | {
     f'{kind}_{leg}': f'{words} of slider {leg.upper()}'
     for kind, (_, _, words) in FRICTION_KINDS.items() for leg in LEGS}
 # Lowest value of each standard parameter (a Robot's bound).
-LOWER = dict.fromkeys(MASSES, LIMITS['m1'][0]) | dict.fromkeys(
-    ARMATURES, LIMITS['armature'][0]) | {
-    f'{kind}_{leg}': LIMITS[field][0]
+LOWER = dict.fromkeys(MASSES, ROW['m1'].limits[0]) | dict.fromkeys(
+    ARMATURES, ROW['armature'].limits[0]) | {
+    f'{kind}_{leg}': ROW[field].limits[0]
     for kind, (field, _, _) in FRICTION_KINDS.items() for leg in LEGS}
 
 

@@ -36,7 +36,6 @@ Rates. The control loop (setpoints, feedforward, commands) runs at
 four Python nodes and the recorder at 1 kHz would need more than this
 machine's two cores (see doc/measurements.md).
 
-Import it with the test directory on ``sys.path``.
 """
 
 from collections import namedtuple
@@ -55,9 +54,11 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
-from node_harness import (cartesian_message, node_executable,
-                          realtime_args, realtime_client, REALTIME,
-                          start_node_process, stop_process)
+from orthoglide_ros.harness.load import (REALTIME, realtime_args,
+                                         realtime_client)
+from orthoglide_ros.harness.messages import cartesian_message
+from orthoglide_ros.harness.processes import (node_executable,
+                                              start_node_process, stop_process)
 
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
@@ -215,7 +216,7 @@ class ClosedLoop:
     where the OS grants it): the loop's nodes (the setpoint publisher's
     included) run every thread SCHED_FIFO NODE_PRIORITY (their
     ``thread_priority``) and this process, the recorder, SCHED_FIFO
-    CLIENT_PRIORITY, its children reset (``node_harness.realtime_client``).
+    CLIENT_PRIORITY, its children reset (:func:`load.realtime_client`).
     """
 
     def __init__(self, context, loop_rate=LOOP_RATE, plant_rate=PLANT_RATE,

@@ -11,7 +11,6 @@ also on failure; a process in it is started by :meth:`Namespace.command`.
 :func:`unavailable` says why namespaces cannot be made (not root, no
 ``ip``, a kernel or container that refuses): the tests then skip with it.
 
-Import it with the test directory on ``sys.path``.
 """
 
 from contextlib import contextmanager

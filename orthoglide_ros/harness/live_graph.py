@@ -1,12 +1,12 @@
 """
-The feedforward in a live graph (issue 18): joins, discovery, two hosts.
+The feedforward in a live graph: joins, discovery, two hosts.
 
 Every case here gives a process DDS settings other than LOCALHOST, so it
-runs inside network namespaces (``netns.py``): :func:`in_namespace` starts
-this file as a script inside a new namespace, where it runs one case and
+runs inside network namespaces (:mod:`.netns`): :func:`in_namespace` starts
+this module as a script inside a new namespace, where it runs one case and
 prints its result as one JSON line; the processes it starts inherit the
 namespace (or are put in the other one of a pair with ``ip netns exec``).
-The processes are ``reliability_harness``'s: the node (its console
+The processes are :mod:`.reliability`'s: the node (its console
 script), a producer and a recorder, and plain readers (``bystand``).
 
 - :func:`joins`: the feedforward streams at 500 Hz to a recorder while
@@ -17,7 +17,7 @@ script), a producer and a recorder, and plain readers (``bystand``).
 - :func:`two_hosts`: the node in one namespace, the producer and the
   recorder in another, over a veth pair, with the several-host settings of
   doc/deployment.md; latency and restart time.
-- ``kill_restart``: ``reliability_harness.kill_restart`` (the one-host
+- ``kill_restart``: :func:`reliability.kill_restart` (the one-host
   profile is the default there).
 """
 
@@ -30,12 +30,12 @@ import time
 
 import numpy as np
 
-import netns
-import reliability_harness as rh
-from reliability_harness import (Child, load_outputs, ONE_HOST_PROFILE,
-                                 profile_environment, Run, START_TIMEOUT)
+from orthoglide_ros.harness import netns, ROOT
+from orthoglide_ros.harness import reliability as rh
+from orthoglide_ros.harness.reliability.runs import (
+    Child, load_outputs, ONE_HOST_PROFILE, profile_environment, Run,
+    START_TIMEOUT)
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 # An output gap this long is the shared-memory health check's stall (ms):
 # it sleeps healthy_check_timeout_ms / 3 = 333 ms; scheduling on a busy
 # machine makes gaps of tens of ms, never this.
@@ -229,7 +229,7 @@ def in_namespace(case, namespace=None, **kwargs):
     a HarnessError with the case's output when it failed.
     """
     env = dict(os.environ, ROS_DOMAIN_ID=str(namespace_domain()))
-    command = [sys.executable, os.path.abspath(__file__), case,
+    command = [sys.executable, '-m', __spec__.name, case,
                json.dumps(kwargs)]
     if namespace is None:
         with netns.Namespace() as ns:
@@ -239,7 +239,7 @@ def in_namespace(case, namespace=None, **kwargs):
 
 def _run(command, env):
     proc = subprocess.run(command, env=env, capture_output=True, text=True,
-                          timeout=CASE_TIMEOUT, cwd=HERE)
+                          timeout=CASE_TIMEOUT, cwd=str(ROOT))
     for line in reversed(proc.stdout.splitlines()):
         if line.startswith('result '):
             return json.loads(line[len('result '):])
@@ -261,7 +261,7 @@ def main(argv=None):
     parser.add_argument('kwargs', help='keyword arguments, as JSON')
     args = parser.parse_args(argv)
     if not rh.in_own_namespace():
-        parser.error('runs only inside a network namespace (netns.py)')
+        parser.error('runs only inside a network namespace (harness.netns)')
     result = CASES[args.case](**json.loads(args.kwargs))
     print('result ' + json.dumps(result, default=_plain), flush=True)
     return 0

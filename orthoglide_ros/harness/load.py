@@ -1,0 +1,103 @@
+"""
+A loaded machine, and the real-time set the demos and timing tests use.
+
+The nodes of a loop run every thread SCHED_FIFO NODE_PRIORITY (their
+``thread_priority``, ros2_control's default), the process that feeds and
+records them CLIENT_PRIORITY, above it (doc/deployment.md#real-time);
+REALTIME says whether the OS grants it here. :func:`busy_loops` loads
+the machine; :func:`add_load_options` gives a demo its ``--realtime`` and
+``--load N``.
+"""
+
+from contextlib import contextmanager
+import subprocess
+import sys
+
+from orthoglide_ros.cores import realtime
+
+NODE_PRIORITY = 50
+CLIENT_PRIORITY = 60
+# Whether the OS grants it here: the timing tests then run their nodes
+# and their recording processes at it, so that their verdicts do not
+# depend on what else the machine runs.
+REALTIME = realtime.granted(CLIENT_PRIORITY)
+# A busy loop that puts itself at normal scheduling first: a real-time
+# parent's children inherit its policy unless it resets them.
+BUSY_LOOP = ('import os; os.sched_setscheduler(0, os.SCHED_OTHER, '
+             'os.sched_param(0))\nwhile True: pass')
+
+
+def realtime_args(on=REALTIME):
+    """Return a node's arguments for NODE_PRIORITY (none if not ``on``)."""
+    return ['-p', f'thread_priority:={NODE_PRIORITY}'] if on else []
+
+
+def client_prefix(on=REALTIME):
+    """Return the command prefix of a client process at CLIENT_PRIORITY."""
+    return ['chrt', '-f', str(CLIENT_PRIORITY)] if on else []
+
+
+def elevate(proc, on=REALTIME):
+    """
+    Put a started client process at CLIENT_PRIORITY (every thread).
+
+    For a process whose start-up (imports, discovery: a second of CPU)
+    must not preempt a real-time loop already running, as
+    :func:`client_prefix` would make it.
+    """
+    if on:
+        realtime.client(CLIENT_PRIORITY, proc.pid)
+
+
+@contextmanager
+def realtime_client(on=REALTIME):
+    """
+    Run every thread of this process at CLIENT_PRIORITY meanwhile.
+
+    For a test or demo that records a real-time node in its own process;
+    its children start at normal scheduling (:func:`realtime.client`).
+    Call it once the process's DDS participant exists.
+    """
+    if on:
+        realtime.client(CLIENT_PRIORITY)
+    try:
+        yield
+    finally:
+        if on:
+            realtime.normal()
+
+
+@contextmanager
+def busy_loops(count):
+    """Run ``count`` busy loops (processes, normal scheduling) meanwhile."""
+    procs = [subprocess.Popen([sys.executable, '-c', BUSY_LOOP],
+                              stdin=subprocess.DEVNULL)
+             for _ in range(count)]
+    try:
+        yield procs
+    finally:
+        for proc in procs:
+            proc.kill()
+            proc.wait()
+
+
+def add_load_options(parser):
+    """Add a demo's ``--realtime`` and ``--load N`` to its ``parser``."""
+    parser.add_argument('--realtime', action='store_true', help=(
+        'run every thread of the loop\'s nodes SCHED_FIFO '
+        f'{NODE_PRIORITY} (their thread_priority) and this '
+        f'recorder SCHED_FIFO {CLIENT_PRIORITY}: '
+        'doc/deployment.md#real-time'))
+    parser.add_argument('--load', type=int, default=0, metavar='N',
+                        help='run N busy loops meanwhile, a loaded machine '
+                        '(default 0)')
+
+
+def check_load_options(parser, args):
+    """Refuse a negative load, or --realtime where it is not granted."""
+    if args.load < 0:
+        parser.error('--load must be >= 0')
+    if args.realtime and not realtime.granted(CLIENT_PRIORITY):
+        parser.error('--realtime: SCHED_FIFO is not granted here '
+                     '(CAP_SYS_NICE or an RLIMIT_RTPRIO, '
+                     'doc/deployment.md#real-time)')
