@@ -47,7 +47,6 @@ def needs_scripts(*names):
     ``names`` default to the feedforward; the scripts are looked for next to
     the running Python (:func:`node_executable`).
     """
-
     missing = [name for name in names or ('feedforward',)
                if not os.path.exists(node_executable(name))]
     return pytest.mark.skipif(

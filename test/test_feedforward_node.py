@@ -489,7 +489,6 @@ def test_a_payload_set_over_dds_is_the_next_setpoints_and_shown(graph):
 
 
 def test_valid_changes_apply_to_next_setpoint(graph):
-
     """Mass, joint names and singularity margin, one by one."""
     g = graph()
     probe = g.probe

@@ -1,7 +1,7 @@
 """
 The rules of the node runtime that need no DDS.
 
-- ``inputs.clip``: the one place text from messages is shortened;
+- ``text.clip``: the one place text from messages is shortened;
 - the set-parameters requests refused before rclpy sees them;
 - the feedforward's trajectory stamp rule (header + time_from_start, the
   zero header meaning "now", nanosec in [0, 1e9) on both);
@@ -11,7 +11,7 @@ The rules of the node runtime that need no DDS.
 import pytest
 
 from orthoglide_ros.cores import feedforward, simulator
-from orthoglide_ros.cores import inputs
+from orthoglide_ros.formats import text
 from orthoglide_ros.cores.inputs import Rejected
 
 reply_guard = pytest.importorskip('orthoglide_ros.ros.reply_guard')
@@ -24,10 +24,10 @@ ZERO = (0.0, 0.0, 0.0)
 
 
 def test_clip_keeps_short_text_and_cuts_long_text_in_the_middle():
-    assert inputs.clip('short') == 'short'
-    text = 'a' * 1000 + 'b' * 5_000_000 + 'c' * 1000
-    cut = inputs.clip(text)
-    assert len(cut) <= inputs.TEXT_LIMIT + 60
+    assert text.clip('short') == 'short'
+    long = 'a' * 1000 + 'b' * 5_000_000 + 'c' * 1000
+    cut = text.clip(long)
+    assert len(cut) <= text.TEXT_LIMIT + 60
     assert cut.startswith('a' * 1000) and cut.endswith('c' * 1000)
     assert '5000000 characters cut' in cut
 
