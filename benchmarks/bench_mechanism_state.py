@@ -37,11 +37,11 @@ def timing(calls):
     for label, rates in (('positions only', []),
                          ('with velocities', list(s.lambdadot))):
         for _ in range(200):
-            core.joint_state(NAMES, list(s.lambda_), rates, 0.0)
+            core.joint_state((1, 0), '', NAMES, list(s.lambda_), rates, (), 0.0)
         times = []
         for _ in range(calls):
             start = time.perf_counter_ns()
-            core.joint_state(NAMES, list(s.lambda_), rates, 0.0)
+            core.joint_state((1, 0), '', NAMES, list(s.lambda_), rates, (), 0.0)
             times.append(time.perf_counter_ns() - start)
         times = np.array(times) / 1e3
         rows.append((label, np.median(times), np.percentile(times, 99)))

@@ -7,8 +7,9 @@ EventsExecutor spun by ``spin_once`` and a thread that sleeps 1 ms in a
 loop and records its gaps:
 
 - ``bare``: a plain rclpy Node (the baseline);
-- ``guarded``: a ``node_runtime.InputNode``, whose service replies wait for
-  their client without the GIL and are dropped when it has gone.
+- ``guarded``: a ``managed_node.ManagedNode`` (the package's nodes' one
+  shape), whose service replies wait for their client without the GIL and
+  are dropped when it has gone.
 
 For each, a client process sends ``--requests`` SetParameters requests and
 shuts down cleanly at once. The report: the gaps of the sleeping thread
@@ -38,10 +39,24 @@ def serve(kind, seconds):
     from rclpy.experimental import EventsExecutor
     from rclpy.node import Node
 
-    from orthoglide_ros.ros.node_runtime import InputNode
+    from orthoglide_ros.cores.core import Core
+    from orthoglide_ros.cores.parameters import Spec, Table
+    from orthoglide_ros.ros.managed_node import ManagedNode
+
+    class Victim(ManagedNode):
+        NAME = TITLE = 'victim'
+        PARAMETERS = Table('VictimSettings', (
+            Spec('x', 'double', 1.0, 'a parameter to set'),))
+
+        def build(self, settings):
+            self.core = Core(settings)
+            return ()
     rclpy.init()
-    node = (InputNode if kind == 'guarded' else Node)('victim')
-    node.declare_parameter('x', 1.0)
+    if kind == 'guarded':
+        node = Victim()
+    else:
+        node = Node('victim')
+        node.declare_parameter('x', 1.0)
     gaps, stop = [], []
 
     def sleeper():
@@ -63,7 +78,7 @@ def serve(kind, seconds):
     thread.join()
     stalls = [g for g in gaps if g > STALL]
     print('result', len(stalls), sum(stalls), max(gaps, default=0.0),
-          getattr(node, 'replies_dropped', 0), flush=True)
+          node.replies.replies_dropped if kind == 'guarded' else 0, flush=True)
     node.destroy_node()
     rclpy.shutdown()
     return 0

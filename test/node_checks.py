@@ -5,6 +5,7 @@ What the DDS tests assert of a node: its outputs, its exit, its scripts.
   ``mechanics.solve`` to TOL (the node publishes the core's doubles
   unchanged);
 - :func:`assert_clean_exit`: exit code 0 within a bound, no traceback;
+- :func:`assert_declared`: every row of a parameter table declared;
 - :func:`needs_scripts`: skip unless the console scripts are installed.
 """
 
@@ -52,3 +53,15 @@ def needs_scripts(*names):
     return pytest.mark.skipif(
         bool(missing), reason='not installed next to python: '
         + ', '.join(missing))
+
+
+def assert_declared(node, table):
+    """Every Spec of ``table`` is a parameter of ``node``, as the row says."""
+    for spec in table.specs:
+        assert node.has_parameter(spec.name), spec.name
+        descriptor = node.describe_parameter(spec.name)
+        assert descriptor.description == spec.description
+        if spec.range is not None:
+            r = (descriptor.integer_range if spec.type == 'integer'
+                 else descriptor.floating_point_range)[0]
+            assert (r.from_value, r.to_value) == spec.range

@@ -13,8 +13,8 @@ import pytest
 
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.cores.feedforward import (Feedforward, INPUTS, MAX_PENDING,
-                                              ORIENTATION_TOLERANCE, PARAMETERS,
-                                              REASONS)
+                                              PARAMETERS, REASONS)
+from orthoglide_ros.cores.setpoint_rules import ORIENTATION_TOLERANCE
 from orthoglide_ros.cores.inputs import Rejected
 from orthoglide_ros.cores.parameters import ROBOT_SPECS
 from orthoglide_ros.model.robot import Robot
@@ -103,7 +103,7 @@ def test_pairs_by_exact_stamp_in_any_order(order):
     assert ff.latest is out and ff.latest_arrival == 3.0
     assert ff.pending == 0 and ff.computed == 1
     assert ff.received == {'pose': 1, 'twist': 1, 'accel': 1,
-                           'trajectory': 0}
+                           'trajectory': 0, 'cartesian_trajectory': 0}
     assert not any(ff.rejected.values())
 
 
@@ -320,7 +320,7 @@ def test_singularity_margin_setting_used():
                                            (2, 'acceleration_limit')],
                          ids=['velocity', 'acceleration'])
 def test_absurd_motion_refused_before_the_mechanics(which, reason):
-    """Issue 16: finite but absurd (1e160, 1e200) is refused by its bound."""
+    """Finite but absurd (1e160, 1e200) is refused by its bound."""
     ff = core()
     sample = [SAMPLES[0][0], ZERO, ZERO]
     sample[which] = HUGE[which]
@@ -378,7 +378,7 @@ def test_pose_only_serves_pose_alone():
     assert out.solution == expected(ff, position, ZERO, ZERO)
     assert out.solution.lambdadot == ZERO
     assert ff.received == {'pose': 1, 'twist': 1, 'accel': 1,
-                           'trajectory': 0}
+                           'trajectory': 0, 'cartesian_trajectory': 0}
     # Checks still apply.
     rejected(ff, 'frame', lambda: ff.pose((2, 0), 'map', position, IDENTITY,
                                           0.0))
@@ -426,10 +426,12 @@ def test_reject_malformed_counts():
 
 # Freshness -------------------------------------------------------------------
 def test_fresh_tick_stale_by_arrival_time():
-    ff = core(setpoint_timeout=0.5, pairing_timeout=0.05)
+    ff = core(setpoint_timeout=0.5, pairing_timeout=0.05, rate_hz=100.0)
     assert not ff.fresh(0.0) and ff.tick(0.0) is None
-    # The stamp is far in the past: freshness ignores it.
-    out = complete(ff, (1, 0), SAMPLES[0], 100.0)
+    # The stamp is far in the past: freshness ignores it. At a fixed rate
+    # a setpoint is published by the ticks, not as it completes.
+    assert complete(ff, (1, 0), SAMPLES[0], 100.0) is None
+    out = ff.latest
     assert ff.fresh(100.0) and ff.tick(100.0) is out
     assert ff.tick(100.49) is out
     assert ff.tick(100.51) is None and not ff.fresh(100.51)
@@ -438,8 +440,10 @@ def test_fresh_tick_stale_by_arrival_time():
         ff, (2, 0), (UNREACHABLE, ZERO, ZERO), 100.6))
     assert ff.tick(100.6) is None
     # A fresh one resumes, with its own stamp, even if older than the last.
-    out2 = complete(ff, (0, 5), SAMPLES[1], 101.0)
+    complete(ff, (0, 5), SAMPLES[1], 101.0)
+    out2 = ff.latest
     assert ff.tick(101.2) is out2 and out2.stamp == (0, 5)
+    assert ff.published == 3     # the ticks that found a fresh result
 
 
 def test_rejected_setpoint_leaves_latest_unchanged():

@@ -25,7 +25,7 @@ from orthoglide_ros.ros.feedforward_node import FeedforwardNode
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.trajectory import paper_sample, paper_times
 
-from node_checks import assert_vector, close
+from node_checks import assert_declared, assert_vector, close
 from orthoglide_ros.harness.messages import (diagnostic_values, header_stamp,
                                              stamp_of)
 from orthoglide_ros.harness.probe import (call, node_graphs, parameter_client,
@@ -514,14 +514,7 @@ def test_declared_parameters_and_qos_override(graph):
     g = graph({f'qos_overrides.{topic}.subscription.reliability':
                'best_effort', 'robot.m4': 0.25})
     node = g.node
-    for spec in PARAMETERS.specs:
-        assert node.has_parameter(spec.name), spec.name
-        descriptor = node.describe_parameter(spec.name)
-        assert descriptor.description == spec.description
-        if spec.range is not None:
-            r = (descriptor.integer_range if spec.type == 'integer'
-                 else descriptor.floating_point_range)[0]
-            assert (r.from_value, r.to_value) == spec.range
+    assert_declared(node, PARAMETERS)
     assert node.get_parameter('robot.m4').value == 0.25
     assert node.core.settings.robot == Robot(m4=0.25)
 

@@ -1,9 +1,9 @@
 """
 Hostile peers and stalls: no other process may stop, starve or fool a node.
 
-Issue 13, over real DDS with the installed executables.
+Over real DDS with the installed executables.
 
-One test per defect the issue lists, each played by a client of this test
+One test per defect a hostile peer showed, each played by a client of this test
 (or a child process of its own), never by the node's code; the cases
 themselves are ``harness.hostile`` and ``harness.reliability`` functions
 that ``scripts/reliability_report.sh`` runs too:
@@ -133,7 +133,10 @@ def test_simulator_at_10_khz_keeps_taking_commands_and_says_it_is_slow():
     Steps it cannot keep up with never stop its commands, and it says so.
 
     The behaviour: no spurious timeout brake (one brake, after the last
-    command), so commands kept coming in while the steps ran late, and a
+    command, besides those of the simulator's own stalls longer than its
+    command timeout, a drive's brake on a stalled cycle that a loaded
+    machine can cause), so commands kept coming in while the steps ran
+    late, and a
     WARN whenever real time is not kept. How many of the 1,600 commands
     one run takes is a figure of the machine's load (1557 with one core
     busy): ``scripts/reliability_report.sh`` prints it.
@@ -142,7 +145,9 @@ def test_simulator_at_10_khz_keeps_taking_commands_and_says_it_is_slow():
     print(result)
     assert result.alive
     assert result.received > 0, result
-    assert result.timeouts == 1, result      # the brake at the end
+    assert result.stall_brakes >= 0, result
+    # The brake at the end, and one after each stall of its own.
+    assert result.timeouts == 1 + result.stall_brakes, result
     # Every run: real time kept, or a WARN that says it is not.
     slow = result.step_rate < 0.9 * 10000.0
     assert not slow or (result.level == 1 and 'slower than real time'
@@ -159,7 +164,7 @@ def test_looping_setpoints_go_back_smoothly():
 
 def test_a_trajectory_flood_never_saturates_and_a_normal_one_follows():
     """
-    Issue 16: a new joint trajectory every millisecond to the controller.
+    A new joint trajectory every millisecond to the controller.
 
     Alternating targets 0 and 10 mm, 50 ms ahead, with the simulator as
     plant: no command at force_limit, no slider faster than 0.5 m/s, and
@@ -174,7 +179,7 @@ def test_a_trajectory_flood_never_saturates_and_a_normal_one_follows():
 
 def test_absurd_finite_values_are_refused_by_reason_never_published():
     """
-    Issue 16: 1e200 m/s^2, 1e300 N and m/s, a spoofed 5 m.
+    1e200 m/s^2, 1e300 N and m/s, a spoofed 5 m.
 
     The feedforward publishes no joint state and no joint trajectory for
     them, the controller no command; each is counted under its reason.

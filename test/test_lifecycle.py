@@ -1,5 +1,5 @@
 """
-The managed lifecycle of ``feedforward`` and ``tracking_controller`` (issue 18).
+The managed lifecycle of ``feedforward`` and ``tracking_controller``.
 
 Each node runs as a process (its console script) with ``autostart:=false``;
 this test drives every transition through the standard

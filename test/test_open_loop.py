@@ -29,6 +29,7 @@ from orthoglide_ros.model.trajectory import paper_sample, PAPER_DURATION
 OPEN_LOOP_BOUND = 0.025     # m, largest position error in the first second
 LOOP_RATE, PLANT_RATE = 250.0, 500.0
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
+STAMP = (1, 0)     # a joint state's stamp (the controller does not read it)
 
 
 def open_loop(mass_factor, duration=PAPER_DURATION, engine='builtin'):
@@ -65,13 +66,13 @@ def open_loop(mass_factor, duration=PAPER_DURATION, engine='builtin'):
             times.append(instant)
             errors.append(np.subtract(tick.position, paper_sample(instant)[0]))
         lam, lamdot = tick.lambda_, tick.lambdadot
-        control.measured(JOINT_NAMES, lam, lamdot, (), now)
+        control.measured(STAMP, '', JOINT_NAMES, lam, lamdot, (), now)
         stamp += 1
         position, velocity, acceleration = paper_sample(now)
         output = ff.trajectory_point((stamp, 0), '', position, IDENTITY,
                                      velocity, acceleration, now)
         s = output.solution
-        pending = control.desired(JOINT_NAMES, s.lambda_, s.lambdadot,
+        pending = control.desired(STAMP, '', JOINT_NAMES, s.lambda_, s.lambdadot,
                                   s.force, now).force
     return np.array(times), np.linalg.norm(errors, axis=1)
 

@@ -90,7 +90,7 @@ def test_incompatible_publisher_warned_by_the_input_thread(ros_context,
     A best-effort publisher on a reliable input: the node says so.
 
     The inputs' QoS events are served by the node's input thread (not by
-    an executor, see ``node_runtime.InputNode.waitables``): rclpy's default
+    an executor, see ``managed_node.ManagedNode.waitables``): rclpy's default
     handler logs the incompatible offer, here with no executor spinning.
     """
     node = FeedforwardNode(context=ros_context)

@@ -77,43 +77,36 @@ def check_bag(path):
         (1.0 + k, -2.0 - k, 250.0 + k)))
 
 
-def test_record_writes_every_joint_state_into_an_mcap_bag(ros_context,
-                                                          tmp_path):
+def record_a_source(ros_context, tmp_path, arguments, finish, suffix):
+    """Record the joint states published; check the bag's ``suffix`` file."""
     node = rclpy.create_node('joint_state_source', context=ros_context)
     try:
         publisher = node.create_publisher(JointState, 'joint_states', QOS)
-        # Stopped by SIGINT long before its duration: a complete bag.
-        proc = record(['--output', str(tmp_path / 'bag'), '--duration',
-                       '600'])
+        proc = record(['--output', str(tmp_path / 'bag'), *arguments])
         try:
             publish_states(node, publisher, proc)
-            time.sleep(0.2)
+            finish(proc)
         finally:
             code, err = stop_process(proc)
         assert code == 0, err
-        assert list((tmp_path / 'bag').glob('*.mcap'))
+        assert list((tmp_path / 'bag').glob(f'*{suffix}'))
         check_bag(tmp_path / 'bag')
     finally:
         node.destroy_node()
+
+
+def test_record_writes_every_joint_state_into_an_mcap_bag(ros_context,
+                                                          tmp_path):
+    # Stopped by SIGINT long before its duration: a complete bag.
+    record_a_source(ros_context, tmp_path, ['--duration', '600'],
+                    lambda proc: time.sleep(0.2), '.mcap')
 
 
 def test_record_stops_by_itself_into_a_sqlite3_bag(ros_context, tmp_path):
-    node = rclpy.create_node('joint_state_source', context=ros_context)
-    try:
-        publisher = node.create_publisher(JointState, 'joint_states', QOS)
-        proc = record(['--output', str(tmp_path / 'bag'), '--storage',
-                       'sqlite3', '--duration', '4', '--topic',
-                       '/joint_states'])
-        try:
-            publish_states(node, publisher, proc)
-            proc.wait(timeout=MATCH_TIMEOUT)
-        finally:
-            code, err = stop_process(proc)
-        assert code == 0, err
-        assert list((tmp_path / 'bag').glob('*.db3'))
-        check_bag(tmp_path / 'bag')
-    finally:
-        node.destroy_node()
+    record_a_source(ros_context, tmp_path,
+                    ['--storage', 'sqlite3', '--duration', '4', '--topic',
+                     '/joint_states'],
+                    lambda proc: proc.wait(timeout=MATCH_TIMEOUT), '.db3')
 
 
 def test_record_without_a_publisher_exits_2(tmp_path):
@@ -125,5 +118,8 @@ def test_record_without_a_publisher_exits_2(tmp_path):
     finally:
         code, err = stop_process(proc)
     assert code == 2
+    # The tool's one-line error, not a node's FATAL log line.
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith('orthoglide: error: '), err
     assert 'nobody_publishes_this' in err
     assert not (tmp_path / 'bag').exists()

@@ -114,6 +114,7 @@ def test_own_stall_longer_than_the_command_timeout_brakes():
     sim.command([50.0, 50.0, 300.0], 0.12)
     tick, _ = sim.step_due(0.12)
     assert tick.event is None and sim.state == simulator.RUNNING
+    assert sim.stall_brakes == 0
     while sim.step_due(0.12) is not None:
         pass
     # 2 s standing still; a queued command is read on waking, then the tick.
@@ -121,6 +122,8 @@ def test_own_stall_longer_than_the_command_timeout_brakes():
     tick, _ = sim.step_due(2.12)
     assert (tick.event, tick.state) == ('timeout', simulator.HELD)
     assert sim.plant.velocity == (0.0,) * 3 and sim.timed_out
+    # Counted as a timeout and as this process's own (a stall brake).
+    assert (sim.timeouts, sim.stall_brakes) == (1, 1)
     # The controller's next command resumes from rest.
     sim.command([0.0, 0.0, 256.5315], 2.125)
     tick, _ = sim.step_due(2.126)

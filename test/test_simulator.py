@@ -42,11 +42,17 @@ def core(**changes):
 
 
 def run_steps(sim, force, count, start=0.0):
-    """Command ``force`` and tick ``count`` times, 1 ms apart from start."""
+    """
+    Command ``force`` and tick ``count`` times, 1 ms apart from start.
+
+    Once stopped, the commands are refused (``stopped``) and the ticks go
+    on, as a node's do.
+    """
     ticks = []
     for k in range(count):
         now = start + k * DT
-        sim.command(force, now)
+        if sim.state != STOPPED:
+            sim.command(force, now)
         ticks.append(sim.tick(now + DT / 2))
     return ticks
 
@@ -59,7 +65,7 @@ def joints(robot, position, velocity, margin=0.2):
 
 # Settings -------------------------------------------------------------------
 def test_spec_table_is_the_robot_table_plus_the_simulator_contract():
-    """Names are the issue's contract; robot.* is the feedforward's table."""
+    """Names are the node's contract; robot.* is the feedforward's table."""
     assert SIMULATOR_SPECS[:len(ROBOT_SPECS)] == ROBOT_SPECS
     own = [s.name for s in SIMULATOR_SPECS[len(ROBOT_SPECS):]]
     assert own == ['rate_hz', 'publish_rate_hz', 'initial_position',
@@ -74,7 +80,7 @@ def test_spec_table_is_the_robot_table_plus_the_simulator_contract():
 
 
 def test_default_settings():
-    """The defaults of the issue's decisions."""
+    """The defaults doc/decisions.md gives."""
     s = settings()
     assert s.robot == Robot()
     assert s.rate_hz == 1000.0
@@ -141,7 +147,7 @@ def test_held_until_the_first_command():
         tick = sim.tick(k * DT)
         assert tick == (HELD, START, lam, lamd, ZERO, None)
     assert sim.plant.time == 0.0 and sim.steps == 0
-    assert sim.command(HOLD, 1.0) == RUNNING
+    assert sim.command(HOLD, 1.0) is None and sim.state == RUNNING
     assert sim.tick(1.0).state == RUNNING
     assert sim.steps == 1 and sim.plant.time == DT
 
@@ -237,7 +243,9 @@ def test_stopped_on_a_step_into_the_singular_region(force_limit, force):
     # Frozen: commands are ignored (counted), ticks step nothing.
     steps, time = sim.steps, sim.plant.time
     for j in range(3):
-        assert sim.command(HOLD, 10.0 + j) == STOPPED
+        with pytest.raises(Rejected) as refused:
+            sim.command(HOLD, 10.0 + j)
+        assert refused.value.reason == 'stopped' and sim.state == STOPPED
         assert sim.tick(10.0 + j) == (STOPPED, previous, tick.lambda_, ZERO,
                                       ZERO, None)
     assert sim.ignored == 3
@@ -254,7 +262,8 @@ def test_reset_starts_over_and_applies_the_pending_plant():
     assert (sim.state, sim.plant.position, sim.plant.velocity,
             sim.plant.time) == (HELD, ZERO, ZERO, 0.0)
     assert sim.stop_reason is None and sim.stop_message is None
-    assert sim.command(HOLD, 100.0) == RUNNING
+    sim.command(HOLD, 100.0)
+    assert sim.state == RUNNING
     # Plant parameters wait for the reset; force_limit applies at once.
     heavy = Robot(m5=20.0)
     new = settings(initial_position=list(START), force_limit=100.0,
@@ -318,7 +327,7 @@ def test_bad_commands_counted_and_never_applied(command, reason):
         sim.command(command, 0.0)
     assert caught.value.reason == reason
     assert sim.rejected == {r: int(r == reason) for r in COMMAND_REASONS}
-    assert sim.state == HELD and sim.received == 0
+    assert sim.state == HELD and sim.valid == 0
     assert sim.tick(DT).effort == ZERO and sim.steps == 0
     # While running: the previous valid command stays the held one.
     force = (5.0, -5.0, 260.0)
@@ -326,7 +335,8 @@ def test_bad_commands_counted_and_never_applied(command, reason):
     with pytest.raises(Rejected):
         sim.command(command, 1.0)
     assert sim.tick(1.0 + DT).effort == force
-    assert sim.rejected[reason] == 2 and sim.received == 1
+    assert sim.rejected[reason] == 2 and sim.valid == 1
+    assert sim.received == {'commands': 3, 'joint_commands': 0}
     # A rejected command does not refresh the timeout either.
     with pytest.raises(Rejected):
         sim.command(command, 1.2)

@@ -24,6 +24,7 @@ from orthoglide_ros.cores.status import ERROR, OK, WARN
 from orthoglide_ros.model.trajectory import paper_sample
 
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
+STAMP = (1, 0)     # a joint state's stamp (the controller does not read it)
 NAMES = ['slider_a', 'slider_b', 'slider_c']
 HOLD_C = 256.5315       # N: about the static force of actuator C at home
 
@@ -70,7 +71,6 @@ def test_feedforward_waits_then_ok_then_stale():
     assert math.isnan(values(first)['singularity distance'])
     for k in range(10):
         trajectory_point(ff, (5, k), 0.1 * k, 1.0 + 0.01 * k)
-        ff.published += 1
     ok = ff.status(1.125)       # last setpoint at 1.09 s: still fresh
     assert (ok.level, ok.message) == (OK, 'ok')
     v = values(ok)
@@ -164,9 +164,9 @@ def tracking_core(**changes):
 def test_tracking_waits_then_ok():
     ctl = tracking_core()
     assert ctl.status(0.5)[:2] == (OK, 'waiting for desired states')
-    ctl.measured(NAMES, [0.0] * 3, [0.0] * 3, [], 1.0)
+    ctl.measured(STAMP, '', NAMES, [0.0] * 3, [0.0] * 3, [], 1.0)
     for k in range(5):
-        ctl.desired(NAMES, [0.001] * 3, [0.0] * 3, [1.0] * 3, 1.0 + k * 1e-3)
+        ctl.desired(STAMP, '', NAMES, [0.001] * 3, [0.0] * 3, [1.0] * 3, 1.0 + k * 1e-3)
     ok = ctl.status(1.5)
     assert ok[:2] == (OK, 'ok')
     v = values(ok)
@@ -177,11 +177,11 @@ def test_tracking_waits_then_ok():
 
 def test_tracking_skips_and_rejections_warn():
     ctl = tracking_core()
-    assert ctl.desired(NAMES, [0.0] * 3, [0.0] * 3, [0.0] * 3, 0.1) is None
+    assert ctl.desired(STAMP, '', NAMES, [0.0] * 3, [0.0] * 3, [0.0] * 3, 0.1) is None
     skipped = ctl.status(1.0)
     assert skipped.level == WARN and 'no measurement yet' in skipped.message
     with pytest.raises(Rejected):
-        ctl.measured(['x', 'y', 'z'], [0.0] * 3, [0.0] * 3, [], 1.5)
+        ctl.measured(STAMP, '', ['x', 'y', 'z'], [0.0] * 3, [0.0] * 3, [], 1.5)
     rejected = ctl.status(2.0)
     assert rejected[:2] == (WARN,
                             '1 joint state(s) rejected in the last period')

@@ -24,6 +24,7 @@ controller_settings_from_parameters = PARAMETERS.parse
 default_controller_parameters = PARAMETERS.defaults
 
 NAMES = ('slider_a', 'slider_b', 'slider_c')
+STAMP = (1, 0)     # a joint state's stamp (the controller does not read it)
 ZERO3 = (0.0, 0.0, 0.0)
 NAN = float('nan')
 INF = float('inf')
@@ -295,11 +296,11 @@ def test_name_order_does_not_matter(order, lam_d, dlam_d, f_ff, lam, dlam):
         return [values[i] for i in order]
 
     reference = Tracking(settings(measurement_timeout=1.0))
-    reference.measured(NAMES, lam, dlam, [], 0.0)
-    expected = reference.desired(NAMES, lam_d, dlam_d, f_ff, 0.0)
+    reference.measured(STAMP, '', NAMES, lam, dlam, [], 0.0)
+    expected = reference.desired(STAMP, '', NAMES, lam_d, dlam_d, f_ff, 0.0)
     core = Tracking(settings(measurement_timeout=1.0))
-    core.measured(shuffled(NAMES), shuffled(lam), shuffled(dlam), [], 0.0)
-    got = core.desired(shuffled(NAMES), shuffled(lam_d), shuffled(dlam_d),
+    core.measured(STAMP, '', shuffled(NAMES), shuffled(lam), shuffled(dlam), [], 0.0)
+    got = core.desired(STAMP, '', shuffled(NAMES), shuffled(lam_d), shuffled(dlam_d),
                        shuffled(f_ff), 0.0)
     assert got == expected
 
@@ -307,13 +308,13 @@ def test_name_order_does_not_matter(order, lam_d, dlam_d, f_ff, lam, dlam):
 # The core: timing and counters -----------------------------------------------
 def send_measured(core, position, now, velocity=(0.0, 0.0, 0.0)):
     """Send a measurement in joint_names order."""
-    core.measured(core.settings.joint_names, position, velocity, [], now)
+    core.measured(STAMP, '', core.settings.joint_names, position, velocity, [], now)
 
 
 def send_desired(core, position, now, velocity=(0.0, 0.0, 0.0),
                  effort=(0.0, 0.0, 0.0)):
     """Send a desired state in joint_names order; return the command."""
-    return core.desired(core.settings.joint_names, position, velocity,
+    return core.desired(STAMP, '', core.settings.joint_names, position, velocity,
                         effort, now)
 
 
@@ -358,9 +359,9 @@ def test_rejected_inputs_counted_and_change_nothing():
     with pytest.raises(Rejected):
         send_measured(core, (NAN, 0.0, 0.0), 0.01)
     with pytest.raises(Rejected):
-        core.measured(['slider_a'], [1.0], [0.0], [], 0.01)
+        core.measured(STAMP, '', ['slider_a'], [1.0], [0.0], [], 0.01)
     with pytest.raises(Rejected):
-        core.desired(NAMES, [1.0] * 3, [], [], 0.02)
+        core.desired(STAMP, '', NAMES, [1.0] * 3, [], [], 0.02)
     assert core.measurement_arrival == 0.0
     assert core.rejected['measured', 'non_finite'] == 1
     assert core.rejected['measured', 'missing_joint'] == 1
@@ -378,10 +379,10 @@ def test_feedforward_on_needs_effort_off_does_not():
     core = Tracking(settings())
     send_measured(core, (0.0, 0.0, 0.0), 0.0)
     with pytest.raises(Rejected) as info:
-        core.desired(NAMES, [0.0] * 3, [0.0] * 3, [], 0.01)
+        core.desired(STAMP, '', NAMES, [0.0] * 3, [0.0] * 3, [], 0.01)
     assert info.value.reason == 'missing_effort'
     core.configure(settings(feedforward=False))
-    command = core.desired(NAMES, [0.001] * 3, [0.0] * 3, [], 0.01)
+    command = core.desired(STAMP, '', NAMES, [0.001] * 3, [0.0] * 3, [], 0.01)
     assert command.force == pytest.approx((20.0, 20.0, 20.0))
 
 
@@ -394,11 +395,11 @@ def test_clipped_counted_and_configure_applies():
     assert core.clipped == 2
     core.configure(settings(force_limit=50000.0, joint_names=['a', 'b', 'c']))
     # New names: the measurement read by the old ones is forgotten.
-    assert core.desired(['a', 'b', 'c'], [0.0] * 3, [0.0] * 3, [0.0] * 3,
+    assert core.desired(STAMP, '', ['a', 'b', 'c'], [0.0] * 3, [0.0] * 3, [0.0] * 3,
                         0.02) is None
     assert core.skipped['no_measurement'] == 1
-    core.measured(['b', 'c', 'a'], [0.0] * 3, [0.0] * 3, [], 0.02)
-    command = core.desired(['c', 'b', 'a'], [0.0, -1.0, 1.0], [0.0] * 3,
+    core.measured(STAMP, '', ['b', 'c', 'a'], [0.0] * 3, [0.0] * 3, [], 0.02)
+    command = core.desired(STAMP, '', ['c', 'b', 'a'], [0.0, -1.0, 1.0], [0.0] * 3,
                            [0.0] * 3, 0.02)
     assert command.force == (20000.0, -20000.0, 0.0)
     assert core.clipped == 2 and core.commands == 2
@@ -532,7 +533,7 @@ def test_hold_bias_before_any_command():
     assert send_desired(off, (0.0, 0.0, 0.3), 0.01).force == (0.0,) * 3
 
 
-# Plausibility bounds and the hold's bias (issue 16) --------------------------
+# Plausibility bounds and the hold's bias -------------------------------------
 @pytest.mark.parametrize('source, position, velocity, effort, reason', [
     ('measured', (0.0, 5.0, 0.0), ZERO3, ZERO3, 'position_limit'),
     ('measured', ZERO3, (0.0, 0.0, 1e300), ZERO3, 'velocity_limit'),
@@ -547,7 +548,7 @@ def test_implausible_joint_states_are_refused_and_change_nothing(
     send_measured(core, ZERO3, 0.0)
     call = core.measured if source == 'measured' else core.desired
     with pytest.raises(Rejected) as info:
-        call(NAMES, position, velocity, effort, 0.001)
+        call(STAMP, '', NAMES, position, velocity, effort, 0.001)
     assert info.value.reason == reason
     assert core.rejected[source, reason] == 1
     assert core.measurement.position == ZERO3 and core.commands == 0
@@ -557,7 +558,7 @@ def test_implausible_joint_states_are_refused_and_change_nothing(
     send_measured(looser, ZERO3, 0.0)
     if max(map(abs, velocity + effort)) < 1e3:
         call = looser.measured if source == 'measured' else looser.desired
-        call(NAMES, position, velocity, effort, 0.001)
+        call(STAMP, '', NAMES, position, velocity, effort, 0.001)
 
 
 def test_a_saturated_command_is_never_the_hold_bias():

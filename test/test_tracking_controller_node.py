@@ -25,7 +25,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from orthoglide_ros.cores.tracking_controller import INPUTS, PARAMETERS, REASONS
 from orthoglide_ros.ros.tracking_controller_node import TrackingControllerNode
 
-from node_checks import needs_scripts
+from node_checks import assert_declared, needs_scripts
 from orthoglide_ros.harness.messages import diagnostic_values
 from orthoglide_ros.harness.probe import (call, node_graphs, parameter_client,
                                           PROBE_QOS, spin_for, spin_until,
@@ -342,14 +342,14 @@ def test_internal_error_reported_and_node_goes_on(graph):
     """A defect in a callback: counted, ERROR in diagnostics, node lives."""
     g = graph(PATIENT)
     core = g.node.core
-    original = core.desired
+    original = core._command     # what core.desired (the input's) calls
 
     def broken(*args):
-        core.desired = original
+        core._command = original
         raise RuntimeError('injected defect')
 
     measure(g, ZERO)
-    core.desired = broken
+    core._command = broken
     g.probe.send('desired', (0.001, 0.0, 0.0), ZERO, ZERO)
     msg = wait_diagnostics(g, lambda d: d['internal errors'] == '1')
     assert msg.status[0].level == DiagnosticStatus.ERROR
@@ -451,14 +451,7 @@ def test_valid_change_applied_to_next_command(graph):
 def test_declared_parameters(graph):
     """Every PARAMETERS row is declared with its description."""
     node = graph().node
-    for spec in PARAMETERS.specs:
-        assert node.has_parameter(spec.name), spec.name
-        descriptor = node.describe_parameter(spec.name)
-        assert descriptor.description == spec.description
-        if spec.range is not None:
-            r = (descriptor.integer_range if spec.type == 'integer'
-                 else descriptor.floating_point_range)[0]
-            assert (r.from_value, r.to_value) == spec.range
+    assert_declared(node, PARAMETERS)
 
 
 def test_invalid_start_parameters_raise(ros_context):

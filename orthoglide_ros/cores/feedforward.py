@@ -43,14 +43,16 @@ import time
 import numpy as np
 
 from orthoglide_ros.model import mechanics
-from orthoglide_ros.cores.inputs import check_stamp, NANOSECONDS, Rejected
-from orthoglide_ros.cores import realtime
+from orthoglide_ros.model.mechanics import ZERO
+from orthoglide_ros.cores import realtime, setpoint_rules
+from orthoglide_ros.cores.core import Core
+from orthoglide_ros.cores.inputs import (check_stamp, check_time,
+                                         NANOSECONDS, Rejected,
+                                         trajectory_times)
 from orthoglide_ros.cores.parameters import joint_names_spec, \
     nonnegative_triple, ParameterError, Spec, Table
-from orthoglide_ros.cores.status import first, OK, Period, Status, WARN
+from orthoglide_ros.cores.status import OK, WARN
 
-# Largest rotation of the platform accepted as "the identity" (rad).
-ORIENTATION_TOLERANCE = 1e-3
 # Most partial setpoints held at once; beyond, the oldest is dropped.
 MAX_PENDING = 1000
 # Period of the tick while rate_hz is 0.0 (it then only waits), s.
@@ -64,7 +66,7 @@ TRAJECTORY_REASONS = ('empty', 'frame', 'stamp', 'time', 'malformed',
 REASONS = ('non_finite', 'speed_limit', 'acceleration_limit', 'unreachable',
            'singular', 'overflow', 'force_limit', 'frame', 'orientation',
            'stamp', 'malformed', 'oversize', 'unpaired')
-INPUTS = ('pose', 'twist', 'accel', 'trajectory')
+INPUTS = ('pose', 'twist', 'accel', 'trajectory', 'cartesian_trajectory')
 
 Conversion = namedtuple('Conversion', 'stamp frame time solution')
 Conversion.__doc__ = """A converted Cartesian trajectory.
@@ -77,51 +79,33 @@ Output = namedtuple('Output', 'stamp solution')
 Output.__doc__ = """A result: ``stamp`` (sec, nanosec) of its setpoint and
 the :class:`mechanics.Solution`."""
 
-_ZERO = (0.0, 0.0, 0.0)
-
 
 def convert_trajectory(settings, waypoints):
     """
     Convert every point of a Cartesian trajectory, or refuse it whole.
 
-    ``waypoints``: :class:`orthoglide_ros.formats.cdr.Waypoints` (the arrays of a
-    MultiDOFJointTrajectory). The rules, in this order, the first broken
-    one raising :class:`Rejected` with a reason of TRAJECTORY_REASONS and,
-    where a point is at fault, its 0-based index:
+    ``waypoints``: :class:`orthoglide_ros.formats.cdr.Waypoints` (the arrays
+    of a MultiDOFJointTrajectory). The rules, in this order, the first
+    broken one raising :class:`Rejected` with a reason of
+    TRAJECTORY_REASONS and, where a point is at fault, its 0-based index:
 
     - ``empty``: no point; ``frame``: a frame neither empty nor
-      ``base_frame``; ``stamp``: a header nanosec outside [0, 1e9) or
-      negative seconds (a zero stamp means "start now" and passes
-      unchanged);
+      ``base_frame``; ``stamp``: a header stamp that is not a valid time
+      (:func:`check_stamp`; zero means "start now" and passes unchanged);
     - ``malformed``: a point without a transform, or without a velocity or
       acceleration (unless ``pose_only``: zero);
-    - ``time``: a time_from_start with nanosec outside [0, 1e9), negative,
-      or not after the previous point's;
-    - ``orientation`` / ``non_finite``: a rotation more than
-      ORIENTATION_TOLERANCE from the identity, or not finite;
-    - ``speed_limit`` / ``acceleration_limit``: a speed or acceleration of
-      G beyond ``max_speed`` or ``max_acceleration``;
-    - the mechanics' refusals (``non_finite``, ``unreachable``,
-      ``singular``, ``overflow``) of :func:`mechanics.solve_batch`;
-    - ``velocity_limit`` / ``force_limit``: a |lambdadot| or |f| beyond
-      the node's limit of that actuator (0.0: none), or an |f| beyond
-      ``max_force``.
+    - ``time``: a time_from_start not a valid time, negative, or not after
+      the previous point's (:func:`trajectory_times`);
+    - the rules of every setpoint (:func:`setpoint_rules.solve_setpoints`),
+      with the per-actuator ``velocity_limit`` and ``force_limit``.
 
     Returns a :class:`Conversion`.
     """
     w = waypoints
-    n = len(w.time)
-    if n == 0:
+    if len(w.time) == 0:
         raise Rejected('empty', 'trajectory without points')
-    if w.frame and w.frame != settings.base_frame:
-        raise Rejected('frame', (
-            f'trajectory in frame {w.frame!r}, expected '
-            f'{settings.base_frame!r} (or empty)'))
-    sec, nanosec = w.stamp
-    if sec < 0 or not 0 <= nanosec < NANOSECONDS:
-        raise Rejected('stamp', (
-            f'header stamp {sec} s + {nanosec} ns: seconds must be >= 0 and '
-            'nanosec in [0, 1e9)'))
+    setpoint_rules.check_frame(w.frame, settings, 'trajectory')
+    check_stamp(w.stamp, zero_means_now=True)
     _first_bad('malformed', ~w.transform, 'has no transform')
     velocity, acceleration = w.linear_velocity, w.linear_acceleration
     if settings.pose_only:
@@ -132,64 +116,12 @@ def convert_trajectory(settings, waypoints):
                    'pose_only to take it as zero)')
         _first_bad('malformed', ~w.acceleration, 'has no acceleration (set '
                    'pose_only to take it as zero)')
-    seconds, nanoseconds = w.time[:, 0], w.time[:, 1]
-    _first_bad('time', (nanoseconds < 0) | (nanoseconds >= NANOSECONDS),
-               'has a time_from_start nanosec outside [0, 1e9)')
-    total = seconds * NANOSECONDS + nanoseconds
-    _first_bad('time', total < 0, 'has a negative time_from_start')
-    _first_bad('time', np.r_[False, np.diff(total) <= 0],
-               'is not later than the point before it')
-    q = w.orientation
-    _first_bad('non_finite', ~np.isfinite(q).all(1), 'has a rotation that '
-               'is not finite')
-    with np.errstate(all='ignore'):
-        vector = np.sqrt((q[:, :3] ** 2).sum(1))
-        angle = 2.0 * np.arctan2(vector, np.abs(q[:, 3]))
-    _first_bad('orientation', ~(angle <= ORIENTATION_TOLERANCE) |
-               ((vector == 0.0) & (q[:, 3] == 0.0)),
-               f'turns the platform more than {ORIENTATION_TOLERANCE:g} rad '
-               'from the identity (the Orthoglide only translates)')
-    finite = np.isfinite(w.position).all(1) & np.isfinite(
-        velocity).all(1) & np.isfinite(acceleration).all(1)
-    for reason, values, (bound, name, unit) in zip(
-            ('speed_limit', 'acceleration_limit'), (velocity, acceleration),
-            _motion_bounds(settings)):
-        # A NaN or an infinity in a point is the mechanics' non_finite.
-        with np.errstate(invalid='ignore'):
-            norms = np.hypot(np.hypot(values[:, 0], values[:, 1]),
-                             values[:, 2])
-            beyond = (norms > bound) & finite
-        _first_bad(reason, beyond, (
-            f'has a {name.removeprefix("max_")} beyond {name} {bound:g} '
-            f'{unit}'))
-    try:
-        solution = mechanics.solve_batch(settings.robot, w.position,
-                                         velocity, acceleration,
-                                         settings.singularity_margin)
-    except mechanics.WorkspaceError as error:
-        raise Rejected(error.reason, f'point {error.row}: '
-                       + str(error).split(': ', 1)[-1]) from None
-    for reason, values, limits, unit in (
-            ('velocity_limit', solution.lambdadot, settings.velocity_limit,
-             'm/s'),
-            ('force_limit', solution.force, settings.force_limit, 'N')):
-        limit = np.where(np.asarray(limits) > 0.0, limits, np.inf)
-        if reason == 'force_limit':
-            limit = np.minimum(limit, settings.max_force)
-        beyond = np.abs(values) > limit
-        if beyond.any():
-            row, leg = np.argwhere(beyond)[0]
-            raise Rejected(reason, (
-                f'point {row}: actuator {"ABC"[leg]} needs '
-                f'{values[row, leg]:.6g} {unit}, beyond its limit '
-                f'{limit[leg]:g} {unit}'))
+    trajectory_times(w.time)
+    with np.errstate(all='ignore'):     # a NaN or an inf: refused inside
+        solution = setpoint_rules.solve_setpoints(
+            settings, w.position, velocity, acceleration, w.orientation,
+            setpoint_rules.POINTS, per_actuator=True)
     return Conversion(w.stamp, w.frame, w.time, solution)
-
-
-def _motion_bounds(settings):
-    """Return the (bound, name, unit) of a setpoint's speed and accel."""
-    return ((settings.max_speed, 'max_speed', 'm/s'),
-            (settings.max_acceleration, 'max_acceleration', 'm/s^2'))
 
 
 def _first_bad(reason, bad, what):
@@ -254,21 +186,24 @@ PARAMETERS = Table('Settings', (
 ), rules=(_pairing_within_setpoint_timeout,), robot=True)
 
 
-class Feedforward:
+class Feedforward(Core):
     """
     Pairing, checks, mechanics and counters of the feedforward node.
 
-    Every method takes ``now``, a monotonic time in seconds, so tests can
-    drive time. Methods that complete a setpoint return its :class:`Output`
-    or raise :class:`Rejected`; the rejection is already counted.
+    The core of :mod:`orthoglide_ros.cores.core`: every method takes
+    ``now``, a monotonic time in seconds, so tests can drive time. The
+    input methods return the :class:`Output` to publish at once (with
+    ``rate_hz`` 0.0; else None, :meth:`tick` publishes) or raise
+    :class:`Rejected`, already counted.
     """
 
+    INPUTS = INPUTS
+    REASONS = REASONS
+
     def __init__(self, settings, now=0.0):
-        self.settings = settings
+        super().__init__(settings, now)
         self.latest = None
         self.latest_arrival = None
-        self.received = dict.fromkeys(INPUTS, 0)
-        self.rejected = dict.fromkeys(REASONS, 0)
         self.computed = 0
         self.compute_ns_total = 0
         self.compute_ns_max = 0
@@ -278,29 +213,15 @@ class Feedforward:
         self.trajectory_seconds = math.nan      # the last one's, s
         self.trajectory_seconds_max = 0.0       # the period's largest, s
         self.trajectory_rejected = dict.fromkeys(TRAJECTORY_REASONS, 0)
-        self.active = True      # a lifecycle node's state: outputs go out
         self.withheld = 0       # outputs not published while inactive
         self._pending = {}
-        self._period = Period(now)
-
-    def configure(self, settings):
-        """Use new settings from the next setpoint on (one assignment)."""
-        self.settings = settings
-
-    def activate(self):
-        """Publish outputs (a lifecycle node's ``active`` state)."""
-        self.active = True
-
-    def deactivate(self):
-        """Publish nothing; inputs are still taken and counted."""
-        self.active = False
 
     def pose(self, stamp, frame, position, orientation, now):
         """Take a pose of G (m) and the platform orientation (quaternion)."""
         self.received['pose'] += 1
         if self.settings.pose_only:
             self._check_stamp(stamp)
-            return self._complete(stamp, (frame,), position, _ZERO, _ZERO,
+            return self._complete(stamp, (frame,), position, ZERO, ZERO,
                                   orientation, now)
         return self._part(stamp, 0, (frame, position, orientation), now)
 
@@ -331,11 +252,11 @@ class Feedforward:
         self._check_stamp(stamp)
         if velocity is None or acceleration is None:
             if not self.settings.pose_only:
-                self._reject('malformed', (
+                self.refuse('trajectory', 'malformed', (
                     'trajectory point without velocities or accelerations '
                     '(set pose_only to accept them as zero)'))
-            velocity = velocity or _ZERO
-            acceleration = acceleration or _ZERO
+            velocity = velocity or ZERO
+            acceleration = acceleration or ZERO
         return self._complete(stamp, (frame,), position, velocity,
                               acceleration, orientation, now)
 
@@ -346,18 +267,14 @@ class Feedforward:
         Take a trajectory message's point: its stamp, then the setpoint.
 
         The point's stamp is ``header_stamp + time_from_start``, both
-        ``(sec, nanosec)`` with nanoseconds in [0, 1e9); a zero header
-        stamp means "now", ``clock_stamp`` (the node's clock), as for
-        ``trajectory_msgs`` in general. Then as :meth:`trajectory_point`.
+        ``(sec, nanosec)`` valid times (:func:`check_time`); a zero header
+        stamp means "now", ``clock_stamp`` (the node's clock at arrival),
+        as for ``trajectory_msgs`` in general. Then as
+        :meth:`trajectory_point`.
         """
         try:
-            for what, (sec, nanosec) in (('header stamp', header_stamp),
-                                         ('time_from_start',
-                                          time_from_start)):
-                if not 0 <= nanosec < NANOSECONDS:
-                    raise Rejected('stamp', (
-                        f'{what} {sec} s + {nanosec} ns: nanosec must lie in '
-                        '[0, 1e9)'))
+            check_time('header stamp', *header_stamp)
+            check_time('time_from_start', *time_from_start)
         except Rejected as rejection:
             self.reject('trajectory', rejection)
             raise
@@ -368,35 +285,33 @@ class Feedforward:
         return self.trajectory_point(stamp, frame, position, orientation,
                                      velocity, acceleration, now)
 
-    def count_trajectory(self, conversion, seconds):
+    def cartesian_trajectory(self, conversion, converted, now):
         """
-        Count a converted Cartesian trajectory; return whether to publish it.
+        Take a converted Cartesian trajectory; return ``converted`` to publish.
 
-        ``conversion``: a :class:`Conversion`; ``seconds``: from its
-        reception to its publication (the node's side of a conversion:
-        reading, the kernel, writing). Not published while inactive.
+        ``conversion``: its :class:`Conversion`; ``converted``: what the
+        node publishes (the JointTrajectory, serialized); ``now``: its
+        arrival, so that the time to its publication (the node's side of
+        a conversion: reading, the kernel, writing) is counted. None
+        (withheld) while inactive.
         """
+        self.received['cartesian_trajectory'] += 1
         if not self.active:
             self.withheld += 1
-            return False
+            return None
+        seconds = time.monotonic() - now
         self.trajectories += 1
         self.trajectory_points += len(conversion.time)
         self.trajectory_seconds = seconds
         self.trajectory_seconds_max = max(self.trajectory_seconds_max,
                                           seconds)
-        return True
+        return converted
 
-    def reject(self, source, rejection):
-        """
-        Count a message on input ``source`` refused whole.
-
-        ``cartesian_trajectory`` counts among the trajectories' refusals,
-        any other input among the setpoints'.
-        """
+    def count(self, source, rejection):
+        """Count a refusal: a whole trajectory's apart from setpoints'."""
         if source == 'cartesian_trajectory':
             self.trajectory_rejected[rejection.reason] += 1
         else:
-            self.received[source] += 1
             self.rejected[rejection.reason] += 1
 
     def expire(self, now):
@@ -419,29 +334,16 @@ class Feedforward:
                 and now - self.latest_arrival <= self.settings.setpoint_timeout)
 
     def tick(self, now):
-        """Return the newest result if it is fresh, else None (timer mode)."""
-        return self.latest if self.fresh(now) else None
-
-    def output_now(self, output):
-        """
-        Return ``output`` (a completed setpoint, or None) to publish at once.
-
-        With ``rate_hz`` 0.0 each setpoint is published once, as it
-        completes; else None (the tick publishes). Counts it as published.
-        """
-        if output is None or self.settings.rate_hz != 0.0:
-            return None
-        return self._published(output)
-
-    def output_at_tick(self, now):
         """
         Return the result to publish at a tick of the fixed rate, or None.
 
         None with ``rate_hz`` 0.0 (each setpoint is published as it
-        completes) or when stale (:meth:`tick`). Counts it as published.
+        completes) or when no result is fresh (:meth:`fresh`). Counted as
+        published; withheld while inactive.
         """
-        output = self.tick(now) if self.settings.rate_hz != 0.0 else None
-        return None if output is None else self._published(output)
+        if self.settings.rate_hz == 0.0 or not self.fresh(now):
+            return None
+        return self._published(self.latest)
 
     def _published(self, output):
         """Count ``output`` as published and return it; withheld if inactive."""
@@ -461,36 +363,33 @@ class Feedforward:
         """Count the partial setpoints waiting for partners."""
         return len(self._pending)
 
-    def status(self, now, internal_errors=0):
-        """
-        Return the :class:`Status` of the period ending at ``now``.
+    # Status: ERROR after an internal error; WARN when setpoints or
+    # trajectories were rejected in the period, or when stale; else OK
+    # (``waiting for the first setpoint`` until there is one).
+    def period_counters(self):
+        """Return the counters of the period's rates."""
+        return dict(published=self.published, computed=self.computed,
+                    compute_ns=self.compute_ns_total,
+                    trajectories_rejected=sum(
+                        self.trajectory_rejected.values()))
 
-        ERROR after an internal error; WARN when setpoints or
-        trajectories were rejected in the period, or when stale; else OK
-        (``waiting for the first setpoint`` until there is one). The values: rates over the period,
-        compute times (the maximum restarts with each period), counters.
-        """
-        rejected = sum(self.rejected.values())
-        seconds, new = self._period.advance(
-            now, published=self.published, computed=self.computed,
-            compute_ns=self.compute_ns_total, rejected=rejected,
-            trajectories_rejected=sum(self.trajectory_rejected.values()))
-        age = None if self.latest_arrival is None \
-            else now - self.latest_arrival
-        fresh = self.fresh(now)
-        level, message = first(
-            internal_errors,
-            (not self.active, OK, 'inactive: inputs taken, no output '
-             'published'),
+    def ladder(self, now, seconds, new):
+        """Return the rejections, the wait and staleness steps."""
+        age = self._age(now)
+        return (
             (new['rejected'], WARN,
              f'{new["rejected"]} setpoint(s) rejected in the last period'),
             (new['trajectories_rejected'], WARN,
              f'{new["trajectories_rejected"]} trajectory(ies) rejected in '
              'the last period'),
             (age is None, OK, 'waiting for the first setpoint'),
-            (not fresh, WARN,
+            (not self.fresh(now), WARN,
              f'stale: no fresh setpoint for {age or 0.0:.2f} s, outputs '
              'stopped'))
+
+    def values(self, now, seconds, new):
+        """Return the rates, compute times and counters (maxima restart)."""
+        age = self._age(now)
         mean_us = new['compute_ns'] / new['computed'] / 1e3 \
             if new['computed'] else 0.0
         distance = self.latest.solution.singularity_distance \
@@ -502,7 +401,7 @@ class Feedforward:
             ('setpoints computed', self.computed),
             ('outputs published', self.published),
             ('outputs withheld (inactive)', self.withheld),
-            ('stale', not fresh),
+            ('stale', not self.fresh(now)),
             ('time since last setpoint (s)',
              age if age is not None else math.nan),
             ('singularity distance', distance),
@@ -510,27 +409,28 @@ class Feedforward:
             ('payload (kg)', self.settings.robot.payload),
             ('pending partial setpoints', self.pending),
             ('rate_hz', self.settings.rate_hz),
-            ('internal errors', internal_errors),
+            ('trajectories converted', self.trajectories),
+            ('trajectory points converted', self.trajectory_points),
+            ('trajectory receive to publish last (ms)',
+             self.trajectory_seconds * 1e3),
+            ('trajectory receive to publish max (ms)',
+             self.trajectory_seconds_max * 1e3),
         ]
-        values += [(f'received {k}', v) for k, v in self.received.items()]
-        values += [(f'rejected {r}', self.rejected[r]) for r in REASONS]
-        values += [('trajectories converted', self.trajectories),
-                   ('trajectory points converted', self.trajectory_points),
-                   ('trajectory receive to publish last (ms)',
-                    self.trajectory_seconds * 1e3),
-                   ('trajectory receive to publish max (ms)',
-                    self.trajectory_seconds_max * 1e3)]
-        self.trajectory_seconds_max = 0.0
         values += [(f'rejected trajectory {r}', self.trajectory_rejected[r])
                    for r in TRAJECTORY_REASONS]
+        self.trajectory_seconds_max = 0.0
         self.compute_ns_max = 0
-        return Status(level, message, values)
+        return values
+
+    def _age(self, now):
+        return None if self.latest_arrival is None \
+            else now - self.latest_arrival
 
     def _check_stamp(self, stamp):
         try:
             check_stamp(stamp)
         except Rejected as rejection:
-            self.rejected[rejection.reason] += 1
+            self.count('stamp', rejection)
             raise
 
     def _part(self, stamp, slot, value, now):
@@ -557,37 +457,24 @@ class Feedforward:
 
     def _complete(self, stamp, frames, position, velocity, acceleration,
                   orientation, now):
+        """
+        Check and solve a complete setpoint; return it if published now.
+
+        The rules of :mod:`setpoint_rules` on one sample; the result
+        becomes the newest (:attr:`latest`), published at once with
+        ``rate_hz`` 0.0 (else by :meth:`tick`).
+        """
         settings = self.settings
-        for frame in frames:
-            if frame and frame != settings.base_frame:
-                self._reject('frame', (
-                    f'setpoint in frame {frame!r}, expected '
-                    f'{settings.base_frame!r} (or empty)'))
-        self._check_orientation(orientation)
-        # A NaN or an infinity anywhere is the mechanics' non_finite.
-        finite = all(math.isfinite(c)
-                     for c in (*position, *velocity, *acceleration))
-        for reason, vector, (bound, name, unit) in zip(
-                ('speed_limit', 'acceleration_limit'),
-                (velocity, acceleration), _motion_bounds(settings)):
-            # hypot: no squares to overflow.
-            if finite and math.hypot(*vector) > bound:
-                self._reject(reason, (
-                    f'{name.removeprefix("max_")} '
-                    f'{mechanics.format_vector(vector)} {unit} is beyond '
-                    f'{name} {bound:g} {unit}'))
         start = time.perf_counter_ns()
         try:
-            solution = mechanics.solve(
-                settings.robot, position, velocity, acceleration,
-                settings.singularity_margin)
-        except mechanics.WorkspaceError as error:
-            self._reject(error.reason, str(error))
-        largest = max(abs(f) for f in solution.force)
-        if largest > settings.max_force:
-            self._reject('force_limit', (
-                f'it needs {largest:.6g} N on an actuator, beyond max_force '
-                f'{settings.max_force:g} N'))
+            for frame in frames:
+                setpoint_rules.check_frame(frame, settings)
+            solution = setpoint_rules.solve_setpoints(
+                settings, position, velocity, acceleration, orientation,
+                setpoint_rules.SAMPLE)
+        except Rejected as rejection:
+            self.count('setpoint', rejection)
+            raise
         spent = time.perf_counter_ns() - start
         self.computed += 1
         self.compute_ns_total += spent
@@ -595,24 +482,6 @@ class Feedforward:
             self.compute_ns_max = spent
         self.latest = Output(stamp, solution)
         self.latest_arrival = now
-        return self.latest
-
-    def _check_orientation(self, q):
-        x, y, z, w = q
-        if not math.isfinite(x + y + z + w) and not all(
-                math.isfinite(c) for c in q):
-            self._reject('non_finite', f'orientation {q} is not finite')
-        # hypot: no squares to overflow (1e200) or underflow (1e-200).
-        vector = math.hypot(x, y, z)
-        if vector == 0.0 and w == 0.0:
-            self._reject('orientation', 'orientation is the zero quaternion')
-        angle = 2.0 * math.atan2(vector, abs(w))
-        if angle > ORIENTATION_TOLERANCE:
-            self._reject('orientation', (
-                f'platform orientation turns {angle:.3g} rad from the '
-                f'identity (tolerance {ORIENTATION_TOLERANCE:g} rad): the '
-                'Orthoglide only translates'))
-
-    def _reject(self, reason, message):
-        self.rejected[reason] += 1
-        raise Rejected(reason, message)
+        if settings.rate_hz != 0.0:
+            return None
+        return self._published(self.latest)

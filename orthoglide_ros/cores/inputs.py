@@ -4,8 +4,9 @@ Rules every node applies to what it receives, without ROS.
 - :class:`Rejected`: the one exception a core raises when an input breaks
   a rule; its ``reason`` is the key the node counts it under (and reports
   in ``/diagnostics`` as ``rejected <reason>``).
-- :func:`check_stamp`: the one rule for a ``builtin_interfaces/Time``
-  stamp, applied to every stamped input;
+- :func:`check_time`: the one rule for a ``builtin_interfaces`` time
+  (nanosec in [0, 1e9)), on which :func:`check_stamp` (every stamped
+  input) and :func:`trajectory_times` (every trajectory's points) build;
 - :func:`read_joint_state`: the one way to pick the actuated joints out of
   a ``sensor_msgs/JointState``, by name, in any order, and
   :func:`read_joint_trajectory` the same for every point of a
@@ -50,13 +51,32 @@ class Rejected(ValueError):
         self.reason = reason
 
 
-def check_stamp(stamp):
+def check_time(what, sec, nanosec, reason='stamp'):
+    """
+    Refuse (``reason``) a Time or Duration whose nanosec is not in [0, 1e9).
+
+    The one check of a ``builtin_interfaces`` time, which every stamp and
+    time_from_start of every input passes: outside that range the same
+    instant would have two spellings, which never pair. ``sec`` and
+    ``nanosec`` may be (N,) arrays (every point of a trajectory): the
+    first point at fault is named.
+    """
+    bad = (np.asarray(nanosec) < 0) | (np.asarray(nanosec) >= NANOSECONDS)
+    if bad.any():
+        if bad.ndim:
+            i = int(np.argmax(bad))
+            what, sec, nanosec = f'point {i}: {what}', sec[i], nanosec[i]
+        raise Rejected(reason, f'{what} {sec} s + {nanosec} ns: nanosec '
+                       'must lie in [0, 1e9)')
+
+
+def check_stamp(stamp, zero_means_now=False):
     """
     Refuse a stamp ``(sec, nanosec)`` that cannot pair or be published.
 
     Raises :class:`Rejected` (``stamp``) for nanoseconds outside [0, 1e9)
-    (not a valid ``builtin_interfaces/Time``: the same instant would have
-    two spellings, which never pair), a zero or negative stamp (it cannot
+    (:func:`check_time`), a negative stamp, a zero one unless
+    ``zero_means_now`` (a trajectory's header: "start now"; else it cannot
     tell one setpoint from another) and seconds beyond int32.
 
     >>> check_stamp((12, 5))
@@ -72,10 +92,8 @@ def check_stamp(stamp):
     stamp
     """
     sec, nanosec = stamp
-    if not 0 <= nanosec < NANOSECONDS:
-        raise Rejected('stamp', f'stamp {sec} s + {nanosec} ns: nanosec '
-                       'must lie in [0, 1e9)')
-    if sec < 0 or stamp == (0, 0):
+    check_time('stamp', sec, nanosec)
+    if sec < 0 or (stamp == (0, 0) and not zero_means_now):
         raise Rejected('stamp', (
             f'stamp {sec}.{nanosec:09d} cannot pair pose, twist and '
             'accel: stamp setpoints with their time'))
@@ -83,6 +101,25 @@ def check_stamp(stamp):
         raise Rejected('stamp', (
             f'stamp {sec}.{nanosec:09d} is beyond the int32 seconds '
             'of builtin_interfaces/Time'))
+
+
+def trajectory_times(time):
+    """
+    Return a trajectory's time_from_start (N, 2) as (N,) seconds.
+
+    Raises :class:`Rejected` (``time``) naming the first point whose
+    nanosec is not in [0, 1e9) (:func:`check_time`), that is negative or
+    not after the point before it.
+    """
+    seconds, nanoseconds = time[:, 0], time[:, 1]
+    check_time('time_from_start', seconds, nanoseconds, 'time')
+    total = seconds * NANOSECONDS + nanoseconds
+    for bad, what in ((total < 0, 'negative time_from_start'),
+                      (np.r_[False, np.diff(total) <= 0],
+                       'not later than the point before it')):
+        if bad.any():
+            raise Rejected('time', f'point {int(np.argmax(bad))}: {what}')
+    return total / NANOSECONDS
 
 
 JointValues = namedtuple('JointValues', 'position velocity effort')
@@ -195,15 +232,6 @@ def read_joint_trajectory(joint_names, points, need_effort):
                 f'point {int(np.argmin(finite))}: {field} of '
                 f'{list(joint_names)} not finite'))
         arrays.append(picked)
-    seconds, nanoseconds = points.time[:, 0], points.time[:, 1]
-    total = seconds * NANOSECONDS + nanoseconds
-    for bad, what in (
-            ((nanoseconds < 0) | (nanoseconds >= NANOSECONDS),
-             'time_from_start nanosec outside [0, 1e9)'),
-            (total < 0, 'negative time_from_start'),
-            (np.r_[False, np.diff(total) <= 0],
-             'not later than the point before it')):
-        if bad.any():
-            raise Rejected('time', f'point {int(np.argmax(bad))}: {what}')
+    times = trajectory_times(points.time)
     efforts = arrays[2] if need_effort else np.zeros((n, 3))
-    return total / NANOSECONDS, arrays[0], arrays[1], efforts
+    return times, arrays[0], arrays[1], efforts

@@ -7,7 +7,7 @@ bars are. :func:`joint_state` solves every non-fixed joint of the URDF from
 the sliders in closed form: the platform centre G by the forward kinematics
 (eq. 14, :func:`mechanics.forward_kinematics`), its velocity by eq. (15)
 (:func:`mechanics.platform_velocity`), then each leg's angles and rates by
-the inverse kinematics (eqs. 9 and 13, :func:`mechanics.leg_joints`). The
+the inverse kinematics (eqs. 9 and 13, :func:`bodies.leg_joints`). The
 result closes every cut of the URDF (``x_leg_end`` on ``x_platform_mount``,
 ``x_a7_bar`` on ``x_a7_rod``). The ROS node
 (``mechanism_state_publisher_node``) only converts messages, so every rule
@@ -35,12 +35,13 @@ Rules (``doc/mechanism_state_publisher.md`` states them for users):
 from collections import namedtuple
 import math
 
-from orthoglide_ros.model import mechanics
+from orthoglide_ros.model import bodies, mechanics
 from orthoglide_ros.cores.inputs import read_joint_state, Rejected
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import joint_names_spec, Spec, Table
-from orthoglide_ros.cores.status import first, OK, Period, Status, WARN
+from orthoglide_ros.cores.core import Core
+from orthoglide_ros.cores.status import OK, WARN
 from orthoglide_ros.model.urdf import moving_joints, RATES
 
 REASONS = ('missing_joint', 'malformed', 'missing_position', 'non_finite',
@@ -85,7 +86,7 @@ def joint_state(robot, joint_names, lam, lambdadot=None,
     position = tuple(mechanics.forward_kinematics(robot, lam).tolist())
     velocity = ZERO if lambdadot is None else \
         mechanics.platform_velocity(robot, position, lambdadot)
-    legs = mechanics.leg_joints(robot, position, velocity, margin)
+    legs = bodies.leg_joints(robot, position, velocity, margin)
     joints = moving_joints(joint_names)
     values = [getattr(legs[leg], variable) for _, leg, variable in joints]
     values[:3] = lam
@@ -104,42 +105,37 @@ def joint_state(robot, joint_names, lam, lambdadot=None,
                            tuple(float(v) + 0.0 for v in values), rates)
 
 
-class MechanismState:
+class MechanismState(Core):
     """
     Inputs, rules and counters of the mechanism state publisher.
 
-    Every method takes ``now``, a monotonic time in seconds, so tests can
-    drive time. :meth:`joint_state` returns the :class:`MechanismJoints` to
-    publish or raises :class:`Rejected`, already counted.
+    The core of :mod:`orthoglide_ros.cores.core`: every method takes
+    ``now``, a monotonic time in seconds, so tests can drive time.
+    :meth:`joint_state` returns what to publish or raises
+    :class:`Rejected`, already counted.
     """
 
+    INPUTS = ('joint_states',)
+    REASONS = REASONS
+
     def __init__(self, settings, now=0.0):
-        self.settings = settings
-        self.received = 0
+        super().__init__(settings, now)
         self.published = 0
-        self.rejected = dict.fromkeys(REASONS, 0)
+        self.withheld = 0               # not published while inactive
         self.latest = None              # the last MechanismJoints published
         self.latest_arrival = None
         self.last_rejection = None      # the last Rejected
-        self._period = Period(now)
 
-    def configure(self, settings):
-        """Use new settings from the next message on."""
-        self.settings = settings
-
-    def reject(self, source, rejection):
-        """Count a message refused before it was read (one input)."""
-        self.received += 1
-        self._count(rejection)
-
-    def joint_state(self, names, position, velocity, now):
+    def joint_state(self, stamp, frame, names, position, velocity, effort,
+                    now):
         """
-        Take one JointState's arrays; return the :class:`MechanismJoints`.
+        Take one JointState; return ``(stamp, frame, MechanismJoints)``.
 
-        ``names``, ``position``, ``velocity``: the message's sequences (its
-        efforts are not used).
+        The message's fields, as :func:`orthoglide_ros.formats.cdr.joint_state`
+        reads them (its efforts are not used); the output keeps its stamp
+        and frame. None (withheld) while inactive.
         """
-        self.received += 1
+        self.received['joint_states'] += 1
         settings = self.settings
         try:
             values = read_joint_state(settings.joint_names, names, position,
@@ -153,43 +149,46 @@ class MechanismState:
                     f'lambda {mechanics.format_vector(values.position)} m: '
                     f'{error}')) from None
         except Rejected as rejection:
-            self._count(rejection)
+            self.count('joint_states', rejection)
             raise
+        if not self.active:
+            self.withheld += 1
+            return None
         self.published += 1
         self.latest, self.latest_arrival = state, now
-        return state
+        return stamp, frame, state
 
-    def _count(self, rejection):
-        self.rejected[rejection.reason] += 1
+    def count(self, source, rejection):
+        """Count a refusal, and keep it for the status message."""
+        super().count(source, rejection)
         self.last_rejection = rejection
 
-    def status(self, now, internal_errors=0):
-        """
-        Return the :class:`Status` of the period ending at ``now``.
+    # Status: ERROR after an internal error; WARN when joint states were
+    # rejected in the period (the message gives the last reason); else OK
+    # (``waiting for joint states`` until one came).
+    def period_counters(self):
+        """Return the counters of the period's rates."""
+        return dict(published=self.published)
 
-        ERROR after an internal error; WARN when joint states were rejected
-        in the period (the message gives the last reason); else OK
-        (``waiting for joint states`` until one came).
-        """
-        rejected = sum(self.rejected.values())
-        seconds, new = self._period.advance(
-            now, published=self.published, rejected=rejected)
+    def ladder(self, now, seconds, new):
+        """Return the rejections and the wait steps."""
         last = self.last_rejection
-        level, message = first(
-            internal_errors,
+        return (
             (new['rejected'], WARN,
              f'{new["rejected"]} joint state(s) rejected in the last '
              f'period, the last ({last.reason if last else ""}): {last}'),
-            (self.received == 0, OK, 'waiting for joint states'))
+            (self.received['joint_states'] == 0, OK,
+             'waiting for joint states'))
+
+    def values(self, now, seconds, new):
+        """Return the rate, the counters and the margin."""
         age = math.nan if self.latest_arrival is None \
             else now - self.latest_arrival
-        values = [
+        return [
             ('publish rate (Hz)', new['published'] / seconds),
             ('joint states published', self.published),
-            ('joint states received', self.received),
+            ('joint states received', self.received['joint_states']),
+            ('outputs withheld (inactive)', self.withheld),
             ('time since last published (s)', age),
             ('singularity margin', self.settings.singularity_margin),
-            ('internal errors', internal_errors),
         ]
-        values += [(f'rejected {r}', self.rejected[r]) for r in REASONS]
-        return Status(level, message, values)

@@ -34,6 +34,8 @@ True
 
 from orthoglide_ros.model import trajectory
 from orthoglide_ros.cores import realtime
+from orthoglide_ros.cores.core import Core
+from orthoglide_ros.cores.status import OK
 from orthoglide_ros.cores.parameters import ParameterError, Spec, Table, triple
 
 INPUTS = ('trajectory', 'topics')
@@ -100,18 +102,24 @@ PARAMETERS = Table('SetpointSettings', (
 ), rules=(_excitation_has_a_period,))
 
 
-class Stream:
+class Stream(Core):
     """
     The setpoints of the passes, and the counters of the summary.
 
+    The core of :mod:`orthoglide_ros.cores.core`, without inputs:
     :meth:`next` takes the stamp (ns) the next setpoint would carry and
     returns its ``(position, velocity, acceleration)`` (m, m/s, m/s^2), or
-    None once the last pass is over (:attr:`done`).
+    None while inactive and once the last pass is over (:attr:`done`).
+    Activated again, the motion starts over from its start (home, at
+    rest): a stream stopped in mid-motion does not jump to where it would
+    have been.
     """
 
-    def __init__(self, settings):
+    INACTIVE = 'inactive: no setpoint published'
+
+    def __init__(self, settings, now=0.0):
         """Start before the first pass (nothing published yet)."""
-        self.settings = settings
+        super().__init__(settings, now)
         self.done = False
         self.published = 0
         self.passes = 0
@@ -128,9 +136,14 @@ class Stream:
                 self._pass(settings.duration), self._pass(0.0),
                 settings.return_duration)
 
+    def activate(self):
+        """Publish again, the motion from its start."""
+        self.active = True
+        self._first_ns = self._last_ns = None
+
     def next(self, stamp_ns):
-        """Return the setpoint at ``stamp_ns`` (ns), or None when done."""
-        if self.done:
+        """Return the setpoint at ``stamp_ns`` (ns), or None (see above)."""
+        if self.done or not self.active:
             return None
         if self._first_ns is None:
             self._first_ns = stamp_ns
@@ -184,3 +197,21 @@ class Stream:
                 f'({self.settings.input}) over {span:.3f} s in '
                 f'{self.passes} pass(es): mean {rate:.1f} Hz, largest gap '
                 f'{self.largest_gap_ns / 1e6:.2f} ms')
+
+    def period_counters(self):
+        """Return the counters of the period's rate."""
+        return dict(published=self.published)
+
+    def ladder(self, now, seconds, new):
+        """Return the end and the wait steps."""
+        return ((self.done, OK, f'done: {self.summary()}'),
+                (self.published == 0, OK, 'waiting to start'))
+
+    def values(self, now, seconds, new):
+        """Return the rate, the counters and the motion."""
+        return [('setpoint rate (Hz)', new['published'] / seconds),
+                ('setpoints published', self.published),
+                ('passes', self.passes),
+                ('largest gap (ms)', self.largest_gap_ns / 1e6),
+                ('motion', self.settings.motion),
+                ('input', self.settings.input)]

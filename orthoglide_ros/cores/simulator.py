@@ -73,7 +73,8 @@ from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import joint_names_spec, ParameterError, \
     Spec, Table, triple
 from orthoglide_ros.model.plant import Plant
-from orthoglide_ros.cores.status import ERROR, first, OK, Period, Status, WARN
+from orthoglide_ros.cores.core import Core
+from orthoglide_ros.cores.status import ERROR, OK, WARN
 
 HELD, RUNNING, STOPPED = 'held', 'running', 'stopped'
 # Why a command was rejected: the keys of Simulator.rejected.
@@ -212,7 +213,7 @@ went back to held) or ``'stopped'`` (this tick's step was refused).
 """
 
 
-class Simulator:
+class Simulator(Core):
     """
     The simulated Orthoglide behind the ``simulator`` node: a state machine.
 
@@ -224,28 +225,39 @@ class Simulator:
     last ``running`` ended by the command timeout; ``stop_reason`` and
     ``stop_message`` why the simulation stopped.
 
-    Counters: ``received`` valid commands, ``rejected`` by reason,
-    ``ignored`` (valid, while stopped), ``steps`` (since start),
-    ``clipped`` (steps with at least one force clipped), ``timeouts``,
+    The core of :mod:`orthoglide_ros.cores.core`; inactive, it holds
+    (brakes on, no step, nothing published) and takes no command.
+
+    Counters: ``received`` messages per input, ``valid`` commands taken,
+    ``rejected`` by reason, ``ignored`` (valid, while stopped),
+    ``withheld`` (valid, while inactive), ``steps`` (since start),
+    ``clipped`` (steps with at least one force clipped), ``timeouts``
+    (``stall_brakes`` of them after this process stood still),
     ``step_ns_total`` / ``step_ns_max`` (CPU of :meth:`Plant.step`).
 
     >>> sim = Simulator(PARAMETERS.parse({}))
     >>> sim.state, sim.tick(0.0).effort
     ('held', (0.0, 0.0, 0.0))
     >>> sim.command([0.0, 0.0, 256.5315], 0.0)
+    >>> sim.state
     'running'
     >>> sim.tick(0.001).effort, sim.plant.time
     ((0.0, 0.0, 256.5315), 0.001)
     """
 
+    INPUTS = ('commands', 'joint_commands')
+    REASONS = COMMAND_REASONS
+    INACTIVE = 'inactive: held, commands counted and not applied'
+
     def __init__(self, settings, now=0.0):
-        self.settings = settings
-        self.received = 0
-        self.rejected = dict.fromkeys(COMMAND_REASONS, 0)
+        super().__init__(settings, now)
+        self.valid = 0
         self.ignored = 0
+        self.withheld = 0
         self.steps = 0
         self.clipped = 0
         self.timeouts = 0
+        self.stall_brakes = 0       # of the timeouts, by this process's stall
         self.step_ns_total = 0
         self.step_ns_max = 0
         self.published = 0
@@ -255,7 +267,6 @@ class Simulator:
         self._grid = None           # time of the next step due (s)
         self._next_publish = None   # grid time of the next state published
         self._model = None
-        self._period = Period(now)
         self.reset()
 
     # Settings -------------------------------------------------------------
@@ -283,45 +294,45 @@ class Simulator:
         """Whether plant parameters changed since the last reset."""
         return _plant_model(self.settings) != self._model
 
+    def activate(self):
+        """Take commands and step again, on a new grid from the next call."""
+        self.active = True
+        self._grid = None
+
+    def deactivate(self):
+        """Hold: brake a running platform; no step until activated."""
+        self.active = False
+        if self.state == RUNNING:
+            self._brake(HELD)
+
     # Inputs ---------------------------------------------------------------
     def command(self, forces, now):
         """
-        Take a command ``[f_A, f_B, f_C]`` (N); return the state after it.
+        Take a command ``[f_A, f_B, f_C]`` (N) of input ``commands``.
 
         Raises :class:`Rejected` (counted) unless it is three finite
         numbers. A valid command becomes the one held over the next steps
         and starts (or resumes) ``running``; while ``stopped`` it is counted
-        in ``ignored`` and changes nothing.
+        in ``ignored``, refused (``stopped``) and changes nothing; while
+        inactive it is counted in ``withheld``. Returns None (a command
+        publishes nothing).
         """
-        if len(forces) != 3:
-            self._reject('length', (
-                f'command of {len(forces)} value(s), expected 3 forces '
-                '[f_A, f_B, f_C] (N)'))
-        fa, fb, fc = (float(f) for f in forces)
-        if not math.isfinite(fa + fb + fc):
-            self._reject('non_finite',
-                         f'command {[fa, fb, fc]} N is not finite')
-        if self.state == STOPPED:
-            self.ignored += 1
-            return self.state
-        self.received += 1
-        self._command = (fa, fb, fc)
-        self.latest_arrival = now
-        self.state = RUNNING
-        self.timed_out = False
-        return self.state
+        self.received['commands'] += 1
+        self._take('commands', forces, now)
 
-    def joint_command(self, names, effort, now):
+    def joint_command(self, stamp, frame, names, position, velocity, effort,
+                      now):
         """
         Take an effort command as a JointState, by joint name.
 
-        The form topic-based ros2_control hardware interfaces publish:
-        ``names`` and ``effort`` (N) of the message; the forces of
-        ``joint_names`` are picked by name, other joints ignored. Refused
-        (counted) when one is absent (``missing_joint``), names repeat or
-        ``effort`` is not as long as ``names`` (``malformed``); then as
-        :meth:`command`.
+        The form topic-based ros2_control hardware interfaces publish: the
+        fields of a JointState (only ``names`` and ``effort``, N, are
+        used); the forces of ``joint_names`` are picked by name, other
+        joints ignored. Refused (counted) when one is absent
+        (``missing_joint``), names repeat or ``effort`` is not as long as
+        ``names`` (``malformed``); then as :meth:`command`.
         """
+        self.received['joint_commands'] += 1
         try:
             rows = joint_columns(self.settings.joint_names, names)
             if len(effort) != len(names):
@@ -329,9 +340,31 @@ class Simulator:
                     f'{len(effort)} effort(s) for {len(names)} joint '
                     'name(s)'))
         except Rejected as rejection:
-            self.reject('commands', rejection)
+            self.count('joint_commands', rejection)
             raise
-        return self.command([effort[i] for i in rows], now)
+        self._take('joint_commands', [effort[i] for i in rows], now)
+
+    def _take(self, source, forces, now):
+        if len(forces) != 3:
+            self.refuse(source, 'length', (
+                f'command of {len(forces)} value(s), expected 3 forces '
+                '[f_A, f_B, f_C] (N)'))
+        fa, fb, fc = (float(f) for f in forces)
+        if not math.isfinite(fa + fb + fc):
+            self.refuse(source, 'non_finite',
+                        f'command {[fa, fb, fc]} N is not finite')
+        if self.state == STOPPED:
+            self.ignored += 1
+            raise Rejected('stopped', 'command ignored: the simulation is '
+                           'stopped (call ~/reset)')
+        if not self.active:
+            self.withheld += 1
+            return
+        self.valid += 1
+        self._command = (fa, fb, fc)
+        self.latest_arrival = now
+        self.state = RUNNING
+        self.timed_out = False
 
     def tick(self, now):
         """
@@ -393,6 +426,8 @@ class Simulator:
         milliseconds the controller took to answer, to 0.74 m/s after a
         2 s SIGSTOP).
         """
+        if not self.active:
+            return None
         period = 1.0 / self.settings.rate_hz
         if self._grid is None:
             self._grid = now - 0.5 * period
@@ -402,6 +437,8 @@ class Simulator:
                 # a command read on waking up waited in the queue, of
                 # unknown age. Brake (the next tick times out), as a drive
                 # whose cycle stalled would.
+                if self.state == RUNNING:
+                    self.stall_brakes += 1
                 self.latest_arrival = -math.inf
             self.overruns += 1
             late = now - (MAX_CATCH_UP - 0.5) * period
@@ -479,23 +516,19 @@ class Simulator:
         """Return the singularity distance of the current position."""
         return self._solution.singularity_distance
 
-    def status(self, now, internal_errors=0):
-        """
-        Return the :class:`Status` of the period ending at ``now``.
+    # Status: ERROR after an internal error or when stopped; WARN when the
+    # steps fell behind real time (more than SLOW_FRACTION of the period
+    # dropped: a sustained lag, not one hiccup), when held by the command
+    # timeout or when commands were rejected in the period; else OK
+    # (``held: waiting for a command`` or ``running``).
+    def period_counters(self):
+        """Return the counters of the period's rates."""
+        return dict(published=self.published, steps=self.steps,
+                    step_ns=self.step_ns_total, dropped=self.dropped_time)
 
-        ERROR after an internal error or when stopped; WARN when the steps
-        fell behind real time (more than SLOW_FRACTION of the period
-        dropped: a sustained lag, not one hiccup), when held by the command
-        timeout or when commands were rejected in the period; else OK
-        (``held: waiting for a command`` or ``running``).
-        """
-        rejected = sum(self.rejected.values())
-        seconds, new = self._period.advance(
-            now, published=self.published, steps=self.steps,
-            step_ns=self.step_ns_total, rejected=rejected,
-            dropped=self.dropped_time)
-        level, message = first(
-            internal_errors,
+    def ladder(self, now, seconds, new):
+        """Return the stop, lag, timeout, rejections and state steps."""
+        return (
             (self.state == STOPPED, ERROR, f'stopped: {self.stop_message}'),
             (new['dropped'] > SLOW_FRACTION * seconds, WARN,
              f'slower than real time: {new["steps"] / seconds:.0f} of '
@@ -506,9 +539,12 @@ class Simulator:
              f'{self.settings.command_timeout:g} s, braked'),
             (new['rejected'], WARN,
              f'{new["rejected"]} command(s) rejected in the last period'),
-            (self.received == 0 or self.state != RUNNING, OK,
+            (self.valid == 0 or self.state != RUNNING, OK,
              'held: waiting for a command'),
             (True, OK, 'running'))
+
+    def values(self, now, seconds, new):
+        """Return the state, rates, compute times, counters and position."""
         mean_us = new['step_ns'] / new['steps'] / 1e3 if new['steps'] \
             else 0.0
         plant = self.plant
@@ -522,10 +558,12 @@ class Simulator:
             ('outputs rate (Hz)', new['published'] / seconds),
             ('step compute time mean (us)', mean_us),
             ('step compute time max (us)', self.step_ns_max / 1e3),
-            ('commands received', self.received),
+            ('commands received', self.valid),
             ('commands ignored (stopped)', self.ignored),
+            ('commands withheld (inactive)', self.withheld),
             ('clipped steps', self.clipped),
             ('timeouts', self.timeouts),
+            ('stall brakes', self.stall_brakes),
             ('overruns (time dropped)', self.overruns),
             ('time dropped (s)', self.dropped_time),
             ('position x (m)', plant.position[0]),
@@ -537,12 +575,9 @@ class Simulator:
             ('payload (kg)', self.plant.robot.payload),
             ('rate_hz', self.settings.rate_hz),
             ('publish_rate_hz', self.settings.publish_rate_hz),
-            ('internal errors', internal_errors),
         ]
-        values += [(f'rejected {r}', self.rejected[r])
-                   for r in COMMAND_REASONS]
         self.step_ns_max = 0
-        return Status(level, message, values)
+        return values
 
     def _brake(self, state):
         """Stop the platform where it is (velocity zero) in ``state``."""
@@ -574,15 +609,6 @@ class Simulator:
             plant.robot, plant.position, plant.velocity, ZERO, plant.margin)
         self._joints = (s.lambda_, s.lambdadot) if plant.closed_form \
             else plant.joint_state()
-
-    def reject(self, source, rejection):
-        """Count a command refused before it was read (one input)."""
-        self.rejected[rejection.reason] += 1
-
-    def _reject(self, reason, message):
-        rejection = Rejected(reason, message)
-        self.reject('commands', rejection)
-        raise rejection
 
 
 def _plant_model(settings):

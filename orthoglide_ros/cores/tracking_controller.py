@@ -81,11 +81,13 @@ import numpy as np
 from orthoglide_ros.cores.inputs import (JointValues, read_joint_state,
                                          read_joint_trajectory, Rejected)
 from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.mechanics import ZERO
 from orthoglide_ros.model.joint_plan import JointPlan
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import joint_names_spec, \
     nonnegative_triple, Spec, Table
-from orthoglide_ros.cores.status import ERROR, first, OK, Period, Status, WARN
+from orthoglide_ros.cores.core import Core
+from orthoglide_ros.cores.status import ERROR, OK, WARN
 
 FORCE_LIMIT_MAX = 1.0e6     # N: the largest force_limit accepted
 INPUTS = ('desired', 'measured', 'trajectory')
@@ -98,7 +100,6 @@ SKIPS = ('no_measurement', 'stale_measurement', 'trajectory_active',
 FOLLOWING, HOLDING = 'following', 'holding'
 # Largest |lambdadot_d - lambdadot| (m/s) of a desired state that re-arms.
 REARM_SPEED = 0.01
-_ZERO = (0.0, 0.0, 0.0)
 
 PARAMETERS = Table('ControllerSettings', (
     Spec('kp', 'double_array', [20000.0, 20000.0, 20000.0],
@@ -186,22 +187,26 @@ def control_law(settings, desired, measured):
     return Command(tuple(forces), tuple(errors), clipped)
 
 
-class Tracking:
+class Tracking(Core):
     """
     Inputs, freshness, the law and the counters of the tracking controller.
 
-    Every method takes ``now``, a monotonic time in seconds, so tests can
-    drive time. :meth:`desired` returns a :class:`Command` or None
-    (skipped); both inputs raise :class:`Rejected`, already counted.
+    The core of :mod:`orthoglide_ros.cores.core`: every method takes
+    ``now``, a monotonic time in seconds, so tests can drive time.
+    :meth:`desired` and :meth:`tick` return the :class:`Command` to
+    publish or None (skipped); the inputs raise :class:`Rejected`, already
+    counted.
     """
 
+    INPUTS = INPUTS
+    REASONS = REASONS
+    REJECTED_BY_INPUT = True
+
     def __init__(self, settings, now=0.0):
-        self.settings = settings
+        super().__init__(settings, now)
         self.measurement = None
         self.measurement_arrival = None
         self.latest = None
-        self.received = dict.fromkeys(INPUTS, 0)
-        self.rejected = {(i, r): 0 for i in INPUTS for r in REASONS}
         self.skipped = dict.fromkeys(SKIPS, 0)
         self.commands = 0
         self.clipped = 0
@@ -218,9 +223,7 @@ class Tracking:
         self.superseded = 0
         self._incoming = None       # a trajectory waiting for the next tick
         self._accepted = None       # monotonic time of the last acceptance
-        self.active = True          # a lifecycle node's state: commands go
-        self._hold_is_fault = True  # holding after a trip or a stall
-        self._period = Period(now)
+        self.hold_is_fault = True  # holding after a trip or a stall
 
     def configure(self, settings):
         """
@@ -247,30 +250,31 @@ class Tracking:
         self.plan = self._incoming = None
         self.plan_finished = False
         if self.measurement is not None:
-            self._hold(JointValues(self.measurement.position, _ZERO, _ZERO),
+            self._hold(JointValues(self.measurement.position, ZERO, ZERO),
                        'deactivated', fault=False)
 
     def activate(self):
         """Command again (holding first if :meth:`deactivate` held)."""
         self.active = True
 
-    def reject(self, source, rejection):
-        """Count a message on ``source`` refused before it was read."""
-        self.received[source] += 1
-        self.rejected[source, rejection.reason] += 1
+    def measured(self, stamp, frame, names, position, velocity, effort, now):
+        """
+        Take a measured joint state; it becomes the newest measurement.
 
-    def measured(self, names, position, velocity, effort, now):
-        """Take a measured joint state; it becomes the newest measurement."""
+        The fields of a JointState (``stamp`` and ``frame`` not used), as
+        :func:`orthoglide_ros.formats.cdr.joint_state` reads them.
+        """
         self.received['measured'] += 1
         values = self._read('measured', names, position, velocity, effort,
                             False)
         self.measurement = values
         self.measurement_arrival = now
 
-    def desired(self, names, position, velocity, effort, now):
+    def desired(self, stamp, frame, names, position, velocity, effort, now):
         """
         Take a desired joint state; return its Command, or None if skipped.
 
+        The fields of a JointState, as for :meth:`measured`.
         Skipped (and counted) when no measurement is fresh: none yet
         (``no_measurement``) or older than measurement_timeout
         (``stale_measurement``), or while a joint trajectory runs
@@ -316,7 +320,7 @@ class Tracking:
                     f'{start + times[-1]:.9f} s, received at {clock:.9f} s '
                     '(node clock)'))
         except Rejected as rejection:
-            self.rejected['trajectory', rejection.reason] += 1
+            self.count('trajectory', rejection)
             raise
         if not self.active:
             self.skipped['inactive'] += 1
@@ -346,13 +350,12 @@ class Tracking:
             held = self._held_force(tuple(efforts[0]))
             state = (self.measurement.position, self.measurement.velocity,
                      held) if self.fresh(now) else (tuple(positions[0]),
-                                                    _ZERO, held)
+                                                    ZERO, held)
         plan = JointPlan(start, times, positions, velocities, efforts,
                          state, clock)
         peak, joint = plan.peak_velocity()
         if peak > self.settings.max_velocity:
-            self.rejected['trajectory', 'velocity_limit'] += 1
-            raise Rejected('velocity_limit', (
+            self.refuse('trajectory', 'velocity_limit', (
                 f'its motion from the current state needs {peak:.4g} m/s on '
                 f'{self.settings.joint_names[joint]!r}, beyond max_velocity '
                 f'{self.settings.max_velocity:g} m/s'))
@@ -390,11 +393,9 @@ class Tracking:
                     self.settings.robot, payload, position, velocity,
                     self.plan.acceleration(clock))
             except mechanics.WorkspaceError as error:
-                self.rejected['trajectory', 'position_limit'] += 1
-                raise Rejected('position_limit', (
+                self.refuse('trajectory', 'position_limit', (
                     f'the payload\'s force is undefined at lambda '
-                    f'{mechanics.format_vector(position)} m: {error}')) \
-                    from None
+                    f'{mechanics.format_vector(position)} m: {error}'))
             effort = tuple(e + c for e, c in zip(effort, carried))
         return self._command('trajectory', JointValues(
             position, velocity, effort), now)
@@ -408,7 +409,7 @@ class Tracking:
         else zero.
         """
         return tuple(self._bias or (effort if self.settings.feedforward
-                                    else _ZERO))
+                                    else ZERO))
 
     def _command(self, source, values, now):
         """Apply the law to one desired state of ``source`` (None: skipped)."""
@@ -441,7 +442,7 @@ class Tracking:
                 if not command.clipped:
                     self._bias = command.force
         except Rejected as rejection:
-            self.rejected[source, rejection.reason] += 1
+            self.count(source, rejection)
             raise
         self.commands += 1
         self._last_command = now
@@ -495,8 +496,8 @@ class Tracking:
         """
         measured = self.measurement.position
         self.mode = HOLDING
-        self._hold_is_fault = fault
-        self.hold = JointValues(measured, _ZERO,
+        self.hold_is_fault = fault
+        self.hold = JointValues(measured, ZERO,
                                 self._held_force(desired.effort))
         self.hold_message = (
             f'{why}; holds lambda = {[round(x, 6) for x in measured]} m, '
@@ -514,29 +515,27 @@ class Tracking:
                 and now - self.measurement_arrival
                 <= self.settings.measurement_timeout)
 
-    def status(self, now, internal_errors=0):
-        """
-        Return the :class:`Status` of the period ending at ``now``.
+    # Status: ERROR after an internal error or while holding (path
+    # tolerance exceeded, or a stall); WARN when desired states were
+    # skipped (no fresh measurement) or joint states rejected in the
+    # period; else OK (``waiting for desired states`` until one came).
+    def inactive_message(self):
+        """Return the inactive message, with the hold if any."""
+        return self.INACTIVE + (f' ({self.hold_message})'
+                                if self.mode == HOLDING else '')
 
-        ERROR after an internal error or while holding (path tolerance
-        exceeded, or a stall); WARN when desired states were
-        skipped (no fresh measurement) or joint states rejected in the
-        period; else OK (``waiting for desired states`` until one came).
-        """
-        skipped = sum(self.skipped.values())
-        rejected = sum(self.rejected.values())
-        seconds, new = self._period.advance(
-            now, commands=self.commands, skipped=skipped, rejected=rejected)
-        age = None if self.measurement_arrival is None \
-            else now - self.measurement_arrival
+    def period_counters(self):
+        """Return the counters of the period's rates."""
+        return dict(commands=self.commands,
+                    skipped=sum(self.skipped.values()))
+
+    def ladder(self, now, seconds, new):
+        """Return the hold, skips, rejections and the wait steps."""
+        age = self._age(now)
         what = 'no measurement yet' if age is None \
             else f'newest measurement {age:.3f} s old'
-        level, message = first(
-            internal_errors,
-            (not self.active, OK, 'inactive: inputs taken, no command '
-             'published' + (f' ({self.hold_message})' if self.mode == HOLDING
-                            else '')),
-            (self.mode == HOLDING, ERROR if self._hold_is_fault else WARN,
+        return (
+            (self.mode == HOLDING, ERROR if self.hold_is_fault else WARN,
              self.hold_message),
             (new['skipped'], WARN,
              f'{new["skipped"]} desired state(s) without a fresh '
@@ -546,7 +545,11 @@ class Tracking:
              'period'),
             (self.received['desired'] == 0 and self.plan is None, OK,
              'waiting for desired states'))
+
+    def values(self, now, seconds, new):
+        """Return the rates, errors, skips, trajectory and mode values."""
         settings = self.settings
+        age = self._age(now)
         errors = self.latest.error if self.latest is not None \
             else (math.nan,) * 3
         values = [
@@ -560,9 +563,6 @@ class Tracking:
         values += [(f'tracking error {name} (m)', e)
                    for name, e in zip(settings.joint_names, errors)]
         values += [(f'skipped {s}', self.skipped[s]) for s in SKIPS]
-        values += [(f'received {i}', self.received[i]) for i in INPUTS]
-        values += [(f'rejected {i} {r}', self.rejected[i, r])
-                   for i in INPUTS for r in REASONS]
         values += [
             ('trajectory', 'none' if self.plan is None else
              'holding its last point' if self.plan_finished else 'running'),
@@ -574,9 +574,12 @@ class Tracking:
             ('feedforward', settings.feedforward),
             ('payload (kg)', settings.robot.payload),
             ('force_limit (N)', settings.force_limit),
-            ('internal errors', internal_errors),
         ]
-        return Status(level, message, values)
+        return values
+
+    def _age(self, now):
+        return None if self.measurement_arrival is None \
+            else now - self.measurement_arrival
 
     def _read(self, source, names, position, velocity, effort, need_effort):
         settings = self.settings
@@ -586,7 +589,7 @@ class Tracking:
             _bounded(settings, values.position, values.velocity,
                      values.effort if need_effort else None)
         except Rejected as rejection:
-            self.rejected[source, rejection.reason] += 1
+            self.count(source, rejection)
             raise
         return values
 

@@ -15,8 +15,9 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from trajectory_msgs.msg import (MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
+from orthoglide_ros.model.mechanics import ZERO
+
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
-ZERO = (0.0, 0.0, 0.0)
 INPUT_TOPICS = {'trajectory': ('trajectory',),
                 'topics': ('pose', 'twist', 'accel')}
 

@@ -1,14 +1,16 @@
 """
 The recorder behind ``orthoglide record``: topics into a rosbag2 bag.
 
-A thin rclpy node over the writer of the ``rosbags`` library. Each topic is
-an input of :class:`node_runtime.InputNode` (a raw subscription read on the
-input thread, with a byte limit), and each message's serialized bytes go
-into the bag unchanged, as rosbag2 stores them (CDR), stamped with the node
-clock at reception. The bag is opened, written and closed by one thread of
-its own (:class:`BagThread`; sqlite3 refuses a connection used from
-another thread than its own), fed through a queue, so the input thread
-never waits for the disk. MCAP (the default) or sqlite3 storage, bag format
+A thin rclpy node over the writer of the ``rosbags`` library, managed as
+every node of the package (:mod:`orthoglide_ros.ros.managed_node`) around
+its core (:class:`orthoglide_ros.cores.recording.Recording`). Each topic
+is an input (a raw subscription read on the input thread, with a byte
+limit), and each message's serialized bytes go into the bag unchanged, as
+rosbag2 stores them (CDR), stamped with the node clock at reception. The
+bag is opened, written and closed by one thread of its own
+(:class:`BagThread`; sqlite3 refuses a connection used from another thread
+than its own), fed through a queue, so the input thread never waits for
+the disk. MCAP (the default) or sqlite3 storage, bag format
 version 9 (ROS 2 Jazzy's); ``ros2 bag info`` and ``orthoglide identify``
 read it. The topics' types are taken from the graph (their publishers) and
 must be in the ROS 2 Jazzy type store of ``rosbags``, which writes their
@@ -30,8 +32,11 @@ import time
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from orthoglide_ros.cores.inputs import RECORD_MESSAGE_BYTES
+from orthoglide_ros.cores.parameters import Table
+from orthoglide_ros.cores.recording import Recording
 from orthoglide_ros.ros import console
-from orthoglide_ros.ros.node_runtime import InputNode, run
+from orthoglide_ros.ros.managed_node import Input, ManagedNode
+from orthoglide_ros.ros.node_runtime import run
 
 # History of each subscription: the messages that may wait for the writer.
 RECORD_DEPTH = 1000
@@ -89,41 +94,48 @@ class BagThread(threading.Thread):
         writer.close()
 
 
-class Recorder(InputNode):
+class Recorder(ManagedNode):
     """Node ``orthoglide_record``: writes ``topics`` into the bag ``output``."""
+
+    NAME = 'orthoglide_record'
+    TITLE = 'orthoglide record'
+    PARAMETERS = Table('RecorderSettings', ())
 
     def __init__(self, output, topics, storage='mcap', duration=None,
                  wait=10.0):
-        super().__init__('orthoglide_record')
+        self._request = (output, topics, storage, wait)
+        self._bag = None
+        self._end = None if duration is None else time.monotonic() + duration
+        super().__init__()
+
+    def build(self, settings):
+        """Configure: find the topics' types, open the bag; the inputs."""
         from rosbags.typesys import get_typestore, Stores
+        output, topics, storage, wait = self._request
         typestore = get_typestore(Stores.ROS2_JAZZY)
         found = self._topic_types(topics, wait)
         for topic, type_name in found.items():
             if type_name not in typestore.types:
                 raise ValueError(f'{topic}: type {type_name} is not in the '
                                  'ROS 2 Jazzy type store of rosbags')
-        self._bag = BagThread(output, storage, list(found.items()),
-                              typestore)
-        self._bag.start()
-        self._bag.ready.wait()
-        if self._bag.error is not None:
-            raise ValueError(f'cannot write the bag {output}: '
-                             f'{self._bag.error}')
-        self._open = True
-        self.output = output
-        self.counts = dict.fromkeys(found, 0)
-        for index, (topic, type_name) in enumerate(found.items()):
-            # The publishers' QoS, not the package's: read_input.
-            self.read_input(
-                _message_class(type_name), topic,
-                functools.partial(self._write, topic, index),
-                self._qos(topic), topic, decode=bytes,
-                max_bytes=RECORD_MESSAGE_BYTES)
-        self._end = None if duration is None else time.monotonic() + duration
-        self.get_logger().info(
+        bag = BagThread(output, storage, list(found.items()), typestore)
+        bag.start()
+        bag.ready.wait()
+        if bag.error is not None:
+            raise ValueError(f'cannot write the bag {output}: {bag.error}')
+        self._bag = bag
+        self._index = {topic: i for i, topic in enumerate(found)}
+        self.core = Recording(found, time.monotonic())
+        self.log('info', (
             f'recording {", ".join(f"{t} ({n})" for t, n in found.items())}'
-            f' into {output} ({storage})')
-        self.start_threads()
+            f' into {output} ({storage})'))
+        # The publishers' QoS, not the package's.
+        return tuple(
+            Input(topic, _message_class(type_name), _raw,
+                  functools.partial(self.core.message, topic),
+                  RECORD_MESSAGE_BYTES, output=self._write,
+                  qos=self._qos(topic))
+            for topic, type_name in found.items())
 
     def _topic_types(self, topics, wait):
         """Return ``{resolved topic: type}`` once each has a publisher."""
@@ -155,13 +167,11 @@ class Recorder(InputNode):
             reliability=ReliabilityPolicy.BEST_EFFORT if best_effort
             else ReliabilityPolicy.RELIABLE)
 
-    def _write(self, topic, index, data):
+    def _write(self, item):
         """Queue one message for the bag (runs with the lock held)."""
-        if not self._open:
-            return
-        self._bag.queue.put((index, self.get_clock().now().nanoseconds,
-                             data))
-        self.counts[topic] += 1
+        topic, data = item
+        self._bag.queue.put((self._index[topic],
+                             self.get_clock().now().nanoseconds, data))
 
     @property
     def finished(self):
@@ -170,16 +180,23 @@ class Recorder(InputNode):
 
     def on_stop(self, interrupted):
         """Close the bag (complete, whatever stopped the recording)."""
-        with self.lock:
-            self._open = False
-            self._bag.queue.put(None)
+        if self._bag is None:
+            return
+        self.inputs.stop()
+        self._bag.queue.put(None)
         self._bag.join()
         failed = f'; {self._bag.failed} write(s) failed' \
             if self._bag.failed else ''
-        self.get_logger().info(
-            f'recorded {sum(self.counts.values())} message(s) ('
-            + ', '.join(f'{t}: {n}' for t, n in self.counts.items())
-            + f') into {self.output}{failed}')
+        counts = self.core.received if self.core is not None else {}
+        self.log('info', (
+            f'recorded {sum(counts.values())} message(s) ('
+            + ', '.join(f'{t}: {n}' for t, n in counts.items())
+            + f') into {self._request[0]}{failed}'))
+
+
+def _raw(data):
+    """Keep a message's bytes as they came (its one field)."""
+    return (data,)
 
 
 def _message_class(type_name):
@@ -188,8 +205,14 @@ def _message_class(type_name):
     return getattr(importlib.import_module(f'{package}.{kind}'), name)
 
 
-def main(output, topics, storage='mcap', duration=None, wait=10.0):
-    """Record until ``duration`` (s), Ctrl-C or SIGTERM; return the code."""
+def main(output, topics, storage='mcap', duration=None, wait=10.0,
+         report=None):
+    """
+    Record until ``duration`` (s), Ctrl-C or SIGTERM; return the code.
+
+    A refusal to start (no publisher within ``wait``, a bad output) goes to
+    ``report(reason)`` when given (the tool's one-line error), else FATAL.
+    """
     return run(functools.partial(Recorder, output, topics, storage,
                                  duration, wait), 'orthoglide_record',
-               args=[])
+               args=[], report=report)

@@ -1,8 +1,10 @@
 """
 Service callbacks and replies that can neither end nor stall a node.
 
-:class:`ReplyGuard` is the part of :class:`~orthoglide_ros.ros.node_runtime.InputNode`
-that wraps every service of the node, the parameter services included.
+:class:`ReplyGuard`, owned by a node
+(:class:`~orthoglide_ros.ros.managed_node.ManagedNode`), wraps every
+service of the node: the parameter and lifecycle services as it is made,
+each later one as the node creates it (:meth:`ReplyGuard.guard`).
 
 Upstream behaviour it works around:
 
@@ -43,24 +45,20 @@ _PARAMETER_TYPES = frozenset(range(ParameterType.PARAMETER_NOT_SET,
 
 class ReplyGuard:
     """
-    Every service of a Node guarded: its callback and its reply.
+    Every service of a node guarded: its callback and its reply.
 
-    The node provides ``warn_throttled`` and ``report_defect``; it calls
-    :meth:`_init_reply_guard` once its parameter services exist.
+    Made once the node's parameter and lifecycle services exist, which it
+    guards; the node's ``warn_throttled`` and ``report_defect`` report
+    what it refuses.
     """
 
-    def _init_reply_guard(self):
+    def __init__(self, node):
+        self._node = node
         self.replies_dropped = 0
-        for service in self.services:   # the parameter services
-            self._guard_service(service)
+        for service in node.services:
+            self.guard(service)
 
-    def create_service(self, *args, **kwargs):
-        """Create a service whose callback and reply are guarded."""
-        service = super().create_service(*args, **kwargs)
-        self._guard_service(service)
-        return service
-
-    def _guard_service(self, service):
+    def guard(self, service):
         """
         Keep a service from ending or stalling the node.
 
@@ -73,8 +71,9 @@ class ReplyGuard:
         :class:`~orthoglide_ros.ros.service_replies.ReplyRoutes` (the rule)
         says it may go to rmw, which would otherwise wait for a departed
         client's reader up to 100 ms with the GIL held; a reply the rule
-        drops is counted in :attr:`replies_dropped`.
+        drops is counted in :attr:`replies_dropped`. Returns ``service``.
         """
+        node = self._node
         callback, send = service.callback, service.send_response
         reply_topic = f'rr{service.service_name}Reply'
         request_topic = f'rq{service.service_name}Request'
@@ -87,9 +86,9 @@ class ReplyGuard:
                 if refusal is None:
                     return callback(request, response)
             except Exception:   # a defect: answer, keep the node
-                self.report_defect(f'in the service {service.service_name}')
+                node.report_defect(f'in the service {service.service_name}')
                 return srv_type.Response()
-            self.warn_throttled('malformed request', refusal)
+            node.warn_throttled('malformed request', refusal)
             result = SetParametersResult(successful=False, reason=refusal)
             if srv_type is SetParameters:
                 response.results = [result] * len(request.parameters)
@@ -107,10 +106,10 @@ class ReplyGuard:
                 routes.poll(
                     time.time(), now,
                     [info.endpoint_gid for info in
-                     self.get_publishers_info_by_topic(
+                     node.get_publishers_info_by_topic(
                          request_topic, no_mangle=True)],
                     [info.endpoint_gid for info in
-                     self.get_subscriptions_info_by_topic(
+                     node.get_subscriptions_info_by_topic(
                          reply_topic, no_mangle=True)])
                 decision = routes.decide(received, now, begin)
                 if decision == SEND:
@@ -126,6 +125,7 @@ class ReplyGuard:
 
         service.callback = guarded_callback
         service.send_response = guarded_send
+        return service
 
 
 def _malformed_parameters(srv_type, request):

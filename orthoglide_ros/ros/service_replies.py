@@ -5,7 +5,7 @@ rmw_fastrtps sends a reply only to the requesting client's reply reader
 once its reply writer has matched it, and waits up to 100 ms for that match
 with the Python GIL held: every thread of the node stops meanwhile. A reply
 to a client that has left would stop the node 100 ms each time, so the node
-(``node_runtime.InputNode``) hands a reply to rmw only once
+(``managed_node.ManagedNode``'s ``reply_guard``) hands a reply to rmw only once
 :meth:`ReplyRoutes.decide` says ``SEND``, polling the ROS graph (the
 service's request writers and reply readers) while it says ``WAIT``, and
 drops the reply when it says ``DROP``.

@@ -17,6 +17,8 @@ their own, on a steady schedule, not from the executor. Run it with
 input:=topics``; ``doc/setpoint_publisher.md`` has the parameters.
 """
 
+import time
+
 from rclpy.duration import Duration
 from rclpy.task import Future
 
@@ -25,7 +27,8 @@ from geometry_msgs.msg import (AccelStamped, PoseStamped, Transform, Twist,
 from trajectory_msgs.msg import (MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
-from orthoglide_ros.ros.node_runtime import InputNode, run
+from orthoglide_ros.ros.managed_node import ManagedNode
+from orthoglide_ros.ros.node_runtime import run
 from orthoglide_ros.cores.setpoint_publisher import PARAMETERS, Stream
 
 # The platform centre G as the one multi-DOF "joint" of a trajectory.
@@ -37,14 +40,20 @@ ACK_TIMEOUT = 1.0   # s to wait at the end for subscribers to acknowledge
 MATCH_SETTLE = 0.25  # s
 
 
-class SetpointPublisher(InputNode):
+class SetpointPublisher(ManagedNode):
     """Node ``setpoint_publisher``: a motion in real time, one pass or more."""
 
+    NAME = 'setpoint_publisher'
+    TITLE = 'Orthoglide setpoint publisher'
+    PARAMETERS = PARAMETERS
+
     def __init__(self, **kwargs):
-        super().__init__('setpoint_publisher', **kwargs)
-        # Raises ValueError on an invalid start-up set (run() reports it).
-        settings = self.declare_settings(PARAMETERS)
-        self._stream = Stream(settings)
+        self.done = Future()
+        super().__init__(**kwargs)
+
+    def build(self, settings):
+        """Configure: the stream, the outputs, the timer; no input."""
+        self.core = Stream(settings, time.monotonic())
         frame = settings.frame_id
         if settings.input == 'trajectory':
             self._trajectory = MultiDOFJointTrajectory(
@@ -53,32 +62,30 @@ class SetpointPublisher(InputNode):
                     transforms=[Transform()], velocities=[Twist()],
                     accelerations=[Twist()])])
             self._trajectory.header.frame_id = frame
-            self._publishers = [self.create_output(MultiDOFJointTrajectory,
-                                                   'setpoint/trajectory')]
+            self._stream_publishers = [self.create_output(
+                MultiDOFJointTrajectory, 'setpoint/trajectory')]
         else:
             # Default orientation: the identity quaternion (w = 1).
             self._pose, self._twist, self._accel = (
                 PoseStamped(), TwistStamped(), AccelStamped())
             for msg in (self._pose, self._twist, self._accel):
                 msg.header.frame_id = frame
-            self._publishers = [
+            self._stream_publishers = [
                 self.create_output(kind, f'setpoint/{name}')
                 for kind, name in ((PoseStamped, 'pose'),
                                    (TwistStamped, 'twist'),
                                    (AccelStamped, 'accel'))]
-
-        self.done = Future()
         self._created_ns = self._now_ns()
         self._matched_ns = None     # when every output got its subscribers
         self._started = False
-        self.create_periodic(lambda: 1.0 / settings.rate_hz,
+        self.inputs.periodic(lambda: 1.0 / settings.rate_hz,
                              self._on_timer, 'setpoints')
-        self.start_threads()
+        return ()
 
     @property
     def published(self):
         """Setpoints published so far."""
-        return self._stream.published
+        return self.core.published
 
     @property
     def finished(self):
@@ -90,12 +97,12 @@ class SetpointPublisher(InputNode):
 
     def _ready(self, now_ns):
         """Whether to start: outputs matched and settled, or delay over."""
-        settings = self._stream.settings
+        settings = self.core.settings
         if (now_ns - self._created_ns) / 1e9 >= settings.start_delay:
             return True
         if self._matched_ns is None:
             if all(p.get_subscription_count() >= settings.min_subscribers
-                   for p in self._publishers):
+                   for p in self._stream_publishers):
                 self._matched_ns = now_ns
             return False
         return (now_ns - self._matched_ns) / 1e9 >= MATCH_SETTLE
@@ -108,17 +115,19 @@ class SetpointPublisher(InputNode):
             if not self._ready(now_ns):
                 return
             self._started = True
-        sample = self._stream.next(now_ns)
-        if sample is None:
+        with self.lock:
+            sample = self.core.next(now_ns)
+            done = self.core.done
+        if done:
             self.done.set_result(True)
-            return
-        self._publish(now_ns, sample)
+        elif sample is not None:
+            self._publish(now_ns, sample)
 
     def _publish(self, stamp_ns, sample):
         """Publish one setpoint stamped ``stamp_ns`` (ns)."""
         (x, y, z), (vx, vy, vz), (ax, ay, az) = sample
         sec, nanosec = divmod(stamp_ns, 10**9)
-        if self._stream.settings.input == 'trajectory':
+        if self.core.settings.input == 'trajectory':
             msg = self._trajectory
             msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
             point = msg.points[0]
@@ -128,7 +137,7 @@ class SetpointPublisher(InputNode):
             p.x, p.y, p.z = x, y, z
             v.x, v.y, v.z = vx, vy, vz
             a.x, a.y, a.z = ax, ay, az
-            self._publishers[0].publish(msg)
+            self._stream_publishers[0].publish(msg)
             return
         for msg in (self._pose, self._twist, self._accel):
             msg.header.stamp.sec, msg.header.stamp.nanosec = sec, nanosec
@@ -138,15 +147,17 @@ class SetpointPublisher(InputNode):
         p.x, p.y, p.z = x, y, z
         v.x, v.y, v.z = vx, vy, vz
         a.x, a.y, a.z = ax, ay, az
-        for publisher, msg in zip(self._publishers, (
+        for publisher, msg in zip(self._stream_publishers, (
                 self._pose, self._twist, self._accel)):
             publisher.publish(msg)
 
     def on_stop(self, interrupted):
         """Log the summary, after the subscribers' acknowledgements."""
-        for publisher in () if interrupted else self._publishers:
+        if self.core is None:
+            return
+        for publisher in () if interrupted else self._stream_publishers:
             publisher.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT))
-        self.get_logger().info(self._stream.summary())
+        self.log('info', self.core.summary())
 
 
 def main(args=None):

@@ -4,7 +4,9 @@ The ``simulator`` ROS 2 node: actuator forces in, measured joint states out.
 A thin layer over :class:`orthoglide_ros.cores.simulator.Simulator`: it declares
 the parameters of :data:`orthoglide_ros.cores.simulator.PARAMETERS`, reads
 the commands, runs the step timer, publishes, serves ``~/reset`` and
-publishes the core's status on ``/diagnostics``. Run it with ``ros2 run
+publishes the core's status on ``/diagnostics``. A managed node
+(:mod:`orthoglide_ros.ros.managed_node`), configured and activated at
+start unless ``autostart`` is false; inactive, it holds. Run it with ``ros2 run
 orthoglide_ros simulator``; ``doc/simulator.md`` has the topics,
 parameters and states.
 
@@ -26,52 +28,48 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.ros.node_runtime import InputNode, run
-from orthoglide_ros.cores.simulator import PARAMETERS, Simulator, STOPPED
+from orthoglide_ros.ros.managed_node import Input, ManagedNode
+from orthoglide_ros.ros.node_runtime import run
+from orthoglide_ros.cores.simulator import PARAMETERS, Simulator
 
 # Longest span (s) of the two monotonic reads around a node-clock read.
 CLOCK_READ = 20e-6
 
 
-class SimulatorNode(InputNode):
+class SimulatorNode(ManagedNode):
     """
     Node ``simulator``: the Orthoglide's forward dynamics in real time.
 
-    The ``commands`` input is read on the input thread of
-    :class:`InputNode`; the steps and the diagnostics run on periodic
-    threads; ``~/reset`` and the parameter services on the executor; all
-    hold ``self.lock`` on the core.
+    The command inputs are read on the ``inputs`` thread; the steps run on
+    a periodic thread; ``~/reset``, the parameter and lifecycle services
+    on the executor; all hold ``self.lock`` on the core.
     """
 
-    def __init__(self, **kwargs):
-        super().__init__('simulator', **kwargs)
-        # Raises ValueError on an invalid start-up set (run() reports it).
-        self.core = Simulator(self.declare_settings(PARAMETERS),
-                              time.monotonic())
+    NAME = 'simulator'
+    TITLE = 'Orthoglide simulator'
+    PARAMETERS = PARAMETERS
+
+    def build(self, settings):
+        """Configure: the core, the outputs, ~/reset, the steps; the inputs."""
+        core = self.core = Simulator(settings, time.monotonic())
         self._clock_offset = None   # node clock - monotonic (a Time)
         self._pub_joints = self.create_output(JointState, 'joint_states')
         self._pub_pose = self.create_output(PoseStamped, 'platform/pose')
-        self.create_input(Float64MultiArray, 'commands', self._on_command,
-                          'commands', decode=cdr.float64_array)
-        # The same commands by joint name: topic-based ros2_control.
-        self.create_input(JointState, 'joint_commands',
-                          self._on_joint_command, 'joint_commands',
-                          decode=cdr.joint_state)
-        self.create_service(Trigger, '~/reset', self._on_reset)
-
+        self.create_guarded_service(Trigger, '~/reset', self._on_reset)
         self._joints = JointState()
         self._pose = PoseStamped()
         self._pose.pose.orientation.w = 1.0
         self._apply_names()
-        self.create_periodic(lambda: 1.0 / self.core.settings.rate_hz,
+        self.inputs.periodic(lambda: 1.0 / self.core.settings.rate_hz,
                              self._on_steps, 'steps')
-        self.publish_status('Orthoglide simulator')
-        # Last: the QoS override parameters declared above are no concern.
-        self.apply_changes_with(self._configure)
-        self.start_threads()
+        return (
+            Input('commands', Float64MultiArray, _forces, core.command),
+            # The same commands by joint name: topic-based ros2_control.
+            Input('joint_commands', JointState, cdr.joint_state,
+                  core.joint_command),
+        )
 
-    # Parameters -----------------------------------------------------------
-    def _configure(self, settings):
+    def reconfigure(self, settings):
         """Apply the live settings at once (lock held); the plant's wait."""
         self.core.configure(settings)
         self._apply_names()
@@ -84,21 +82,6 @@ class SimulatorNode(InputNode):
         self._joints.name = list(settings.joint_names)
         self._joints.header.frame_id = ''
         self._pose.header.frame_id = settings.base_frame
-
-    # Inputs ---------------------------------------------------------------
-    def _on_command(self, forces):
-        """Take one command (input thread, lock held)."""
-        self._taken(self.core.command(forces, self.arrival))
-
-    def _on_joint_command(self, fields):
-        """Take one command by joint name (input thread, lock held)."""
-        _, _, names, _, _, effort = fields
-        self._taken(self.core.joint_command(names, effort, self.arrival))
-
-    def _taken(self, state):
-        if state == STOPPED:
-            self.warn_throttled('ignored', 'command ignored: the simulation '
-                                'is stopped (call ~/reset)')
 
     def _on_reset(self, request, response):
         with self.lock:
@@ -164,6 +147,11 @@ class SimulatorNode(InputNode):
                 nanoseconds=round(0.5 * (before + after) * 1e9))
         return self._clock_offset + Duration(
             nanoseconds=round(instant * 1e9))
+
+
+def _forces(data):
+    """Read a command: its forces, as the core's one field."""
+    return (cdr.float64_array(data),)
 
 
 def main(args=None):

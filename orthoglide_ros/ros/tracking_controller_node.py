@@ -5,7 +5,7 @@ A thin layer over :class:`orthoglide_ros.cores.tracking_controller.Tracking`: it
 parameters of :data:`orthoglide_ros.cores.tracking_controller.PARAMETERS`, hands the
 joint states' arrays to the core, publishes the commands, logs throttled
 warnings and publishes the core's status on ``/diagnostics``. A managed
-node (:mod:`orthoglide_ros.ros.lifecycle`): configured and activated at
+node (:mod:`orthoglide_ros.ros.managed_node`): configured and activated at
 start unless ``autostart`` is false; deactivated, it holds (see
 :meth:`~orthoglide_ros.cores.tracking_controller.Tracking.deactivate`).
 Run it with ``ros2 run orthoglide_ros tracking_controller``;
@@ -20,88 +20,75 @@ from trajectory_msgs.msg import JointTrajectory
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.ros.lifecycle import ManagedNode
+from orthoglide_ros.ros.managed_node import Input, ManagedNode
 from orthoglide_ros.ros.node_runtime import run
 from orthoglide_ros.cores.inputs import JOINT_TRAJECTORY_BYTES
-from orthoglide_ros.cores.tracking_controller import (HOLDING, PARAMETERS,
-                                                      Tracking)
+from orthoglide_ros.cores.tracking_controller import (FOLLOWING, HOLDING,
+                                                      PARAMETERS, Tracking)
 
 
 class TrackingControllerNode(ManagedNode):
     """
     Node ``tracking_controller``: PD plus feedforward on the three actuators.
 
-    Both joint-state inputs are read on the input thread of
-    :class:`InputNode` (raw, decoded by :mod:`cdr` outside the lock),
-    joint trajectories on a thread of their own; a periodic thread samples
-    the trajectory followed at ``rate_hz``; the diagnostics run on a
-    periodic thread and the parameter and lifecycle services on the
-    executor; all hold ``self.lock`` on the core.
+    Both joint-state inputs are read on the ``inputs`` thread (raw, decoded
+    by :mod:`cdr` outside the lock), joint trajectories on a thread of
+    their own; a periodic thread samples the trajectory followed at
+    ``rate_hz``; the executor serves the parameter and lifecycle services;
+    all hold ``self.lock`` on the core.
     """
 
-    def __init__(self, **kwargs):
-        super().__init__('tracking_controller', **kwargs)
-        self.declare_table(PARAMETERS, 'Orthoglide tracking controller')
-        # The core swaps its settings at once (under the lock).
-        self.apply_changes_with(lambda settings: self.core.configure(
-            settings))
-        self.start()
+    NAME = 'tracking_controller'
+    TITLE = 'Orthoglide tracking controller'
+    PARAMETERS = PARAMETERS
 
     def build(self, settings):
-        """Configure: the core, the inputs, the command output, the loop."""
-        self.core = Tracking(settings, time.monotonic())
-        self.core.active = False
+        """Configure: the core, the command output, the loop; the inputs."""
+        core = self.core = Tracking(settings, time.monotonic())
+        self._mode = FOLLOWING
         self._pub_commands = self.create_output(Float64MultiArray, 'commands')
-        # Measured first: when both inputs are ready in one wake-up of the
-        # input thread, the measurements are taken before the desired
-        # states, so a command uses the newest measurement.
-        self.create_input(JointState, 'joint_states', self._on_measured,
-                          'measured', decode=cdr.joint_state)
-        self.create_input(JointState, 'feedforward/joint_states',
-                          self._on_desired, 'desired', decode=cdr.joint_state)
-        # A joint_trajectory_controller's input: whole trajectories.
-        self.create_input(
-            JointTrajectory, 'joint_trajectory', self._on_trajectory,
-            'trajectory', decode=cdr.joint_trajectory_points,
-            max_bytes=JOINT_TRAJECTORY_BYTES, group='trajectories')
-        self.create_periodic(lambda: 1.0 / self.core.settings.rate_hz,
-                             self._on_tick, 'trajectory')
-
         self._command = Float64MultiArray()
         self._command.layout.dim = [
             MultiArrayDimension(label='actuator', size=3, stride=3)]
+        self.inputs.periodic(lambda: 1.0 / self.core.settings.rate_hz,
+                             self._on_tick, 'trajectory')
+        # Measured first: when both inputs are ready in one wake-up of the
+        # input thread, the measurements are taken before the desired
+        # states, so a command uses the newest measurement. Trajectories,
+        # a joint_trajectory_controller's input, on a thread of their own.
+        return (
+            Input('joint_states', JointState, cdr.joint_state, core.measured,
+                  source='measured'),
+            Input('feedforward/joint_states', JointState, cdr.joint_state,
+                  core.desired, source='desired', output=self._send),
+            Input('joint_trajectory', JointTrajectory, self._trajectory,
+                  core.trajectory, JOINT_TRAJECTORY_BYTES,
+                  source='trajectory', group='trajectories'),
+        )
 
-    # Inputs (input thread, self.lock held) --------------------------------
-    def _on_measured(self, fields):
-        _, _, names, position, velocity, effort = fields
-        self.core.measured(names, position, velocity, effort, self.arrival)
-
-    def _on_desired(self, fields):
-        _, _, names, position, velocity, effort = fields
-        mode = self.core.mode
-        self._send(self.core.desired(names, position, velocity, effort,
-                                     self.arrival), mode)
-
-    def _on_trajectory(self, points):
-        self.core.trajectory(points, self._node_seconds(), self.arrival)
+    def _trajectory(self, data):
+        """Read a joint trajectory's points, and the node clock now (s)."""
+        return cdr.joint_trajectory_points(data), self._node_seconds()
 
     # The trajectory loop (its own thread) ---------------------------------
     def _on_tick(self):
         if self.core.idle:      # no trajectory: not even the lock
             return
         with self.lock:
-            mode = self.core.mode
             self._send(self.core.tick(self._node_seconds(),
-                                      time.monotonic()), mode)
+                                      time.monotonic()))
 
     def _node_seconds(self):
         """Return the node clock's time now (s), the trajectories' clock."""
         return self.get_clock().now().nanoseconds * 1e-9
 
-    def _send(self, command, mode):
+    def _send(self, command):
         """Publish a command (None: none); log a change of mode."""
-        if self.core.mode != mode:
-            self.log('error' if self.core.mode == HOLDING else 'info',
+        mode = self.core.mode
+        if mode != self._mode:
+            self._mode = mode
+            self.log('info' if mode != HOLDING else 'error'
+                     if self.core.hold_is_fault else 'warning',
                      self.core.hold_message or 'path tolerance re-armed: '
                      'following the desired states again')
         if command is not None:

@@ -46,6 +46,7 @@ class FastSimulator:
     received: int
     sent: int
     timeouts: int           # one is the brake after the last command
+    stall_brakes: int       # timeouts after the simulator itself stood still
     level: int
     message: str
     step_rate: float
@@ -176,7 +177,9 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
 
     Returns, from its diagnostics once the commands are over, the commands
     ``received`` and the ``timeouts`` (one is the brake after the last
-    command: more would be spurious), and the level, message and step rate
+    command: more would be spurious, but for the ``stall_brakes`` of a
+    simulator that itself stood still longer than its command timeout),
+    and the level, message and step rate
     of a status made while it was commanded.
     """
     with Nodes() as nodes, Peer() as peer:
@@ -201,8 +204,10 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
                     found = peer.diagnostics.get('simulator')
                 if found is not None and found[3] > start + 1.0:
                     during = found[:3]
-        # The brake after the last command, once its diagnostics say so.
-        peer.wait(lambda: _counter(peer, 'simulator', 'timeouts') > 0,
+        # The brake after the last command, once its diagnostics say so
+        # (a brake after the process's own stall is not its peer's silence).
+        peer.wait(lambda: _counter(peer, 'simulator', 'timeouts')
+                  > _counter(peer, 'simulator', 'stall brakes'),
                   START_TIMEOUT)
         with peer.lock:
             values = peer.diagnostics.get('simulator', (None, None, {}))[2]
@@ -210,6 +215,7 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
         return FastSimulator(
             received=int(values.get('commands received', -1)),
             sent=commands, timeouts=int(values.get('timeouts', -1)),
+            stall_brakes=int(values.get('stall brakes', -1)),
             level=level, message=message,
             step_rate=float(seen.get('step rate (Hz)', 'nan')),
             alive=nodes.alive('simulator'))

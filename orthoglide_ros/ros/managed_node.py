@@ -1,0 +1,483 @@
+"""
+The one shape of the package's nodes: a managed node around one core.
+
+:class:`ManagedNode` is rclpy's ``LifecycleNode`` with the standard
+``~/change_state`` and ``~/get_state`` services and the states of the ROS 2
+design, around one core of :mod:`orthoglide_ros.cores` (the contract:
+:mod:`orthoglide_ros.cores.core`). It owns, rather than inherits, what
+works around upstream behaviour: :class:`InputThreads` (its inputs and
+periodic work, on threads of their own) and :class:`ReplyGuard` (its
+services), and :class:`Diagnostics` (``/diagnostics`` once a second).
+
+- made: the parameters of the node's table (``autostart`` among them, and
+  the real-time ones, applied at once: :mod:`orthoglide_ros.cores.realtime`),
+  the diagnostics and the lifecycle services; ``unconfigured``, nothing
+  published but the diagnostics;
+- configure: the parameters are checked as a whole (an invalid set:
+  FAILURE, stays unconfigured, the reason logged), then the subclass's
+  :meth:`ManagedNode.build` makes the core, the outputs and the periodic
+  work and returns the node's input table (rows of :class:`Input`), which
+  the input threads serve; ``inactive``: inputs are read and counted,
+  nothing is published;
+- activate / deactivate: the core's ``activate()`` / ``deactivate()``,
+  under the lock: outputs start, or stop at once;
+- cleanup / shutdown: the threads stop, inputs, outputs and services made
+  at configure are destroyed, the core is dropped;
+- an exception in a transition: one line at ERROR (no traceback), the
+  error state, whose handler releases what configure made and returns to
+  ``unconfigured``.
+
+``autostart`` (default true) configures and activates as the node is made,
+so that ``ros2 run`` and code that makes the node get a running node: an
+invalid start-up set raises ValueError, and the process exits 2
+(:func:`~orthoglide_ros.ros.node_runtime.run`).
+
+One input, as it goes: the input thread takes the message, checks its byte
+limit and decodes it (outside the lock); with the lock held,
+:meth:`ManagedNode.take` calls the row's core method with the fields and
+the arrival time and hands what it returns to the row's output; a
+:class:`Rejected` (counted by the core) becomes a throttled warning, any
+other exception a defect report.
+"""
+
+from copy import copy
+import threading
+import time
+import traceback
+
+from rclpy.exceptions import ParameterException
+from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos_overriding_options import QoSOverridingOptions
+
+from rcl_interfaces.msg import SetParametersResult
+
+from orthoglide_ros.cores import realtime
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.parameters import Spec
+from orthoglide_ros.formats.text import clip
+from orthoglide_ros.ros.diagnostics import Diagnostics
+from orthoglide_ros.ros.input_threads import Input, InputThreads
+from orthoglide_ros.ros.node_runtime import NotStarting
+from orthoglide_ros.ros.parameters import declare_specs, spec_values
+from orthoglide_ros.ros.reply_guard import ReplyGuard
+
+__all__ = ('AUTOSTART', 'default_qos', 'Input', 'ManagedNode')
+
+AUTOSTART = Spec(
+    'autostart', 'bool', True,
+    'configure and activate at start (ros2 run as a plain node); false: '
+    'wait unconfigured for ~/change_state', read_only=True)
+WARNING_PERIOD = 1.0        # s between two warnings of the same reason
+
+# Reliable, keep-last 10 on every input and output; users override it with
+# the standard qos_overrides.<topic>.<publisher|subscription>.* parameters.
+_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                  reliability=ReliabilityPolicy.RELIABLE)
+SUCCESS = TransitionCallbackReturn.SUCCESS
+FAILURE = TransitionCallbackReturn.FAILURE
+ERROR = TransitionCallbackReturn.ERROR
+# The state a successful transition ends in.
+_STATE_AFTER = {'configure': 'inactive', 'activate': 'active',
+                'deactivate': 'inactive', 'cleanup': 'unconfigured',
+                'shutdown': 'finalized'}
+
+
+def default_qos():
+    """
+    Return a new reliable keep-last 10 profile.
+
+    A new one per entity: rclpy writes the QoS overrides into the profile
+    it is given, so a shared one would leak them between entities.
+    """
+    return copy(_QOS)
+
+
+class ManagedNode(LifecycleNode):
+    """
+    A node of the package (see the module docstring).
+
+    Subclasses set :attr:`NAME`, :attr:`TITLE` (of its diagnostics) and
+    :attr:`PARAMETERS` (its :class:`orthoglide_ros.cores.parameters.Table`),
+    implement :meth:`build`, and may override :meth:`reconfigure`,
+    :meth:`inputs_idle`, :attr:`finished` and :meth:`on_stop`. All work on
+    the core holds :attr:`lock`.
+    """
+
+    NAME = None
+    TITLE = None
+    PARAMETERS = None
+
+    def __init__(self, **kwargs):
+        super().__init__(self.NAME, **kwargs)
+        self.lock = threading.Lock()
+        self.core = None
+        self._internal_errors = 0
+        self._last_warning = {}
+        self._made_publishers = []       # made at configure, ended at cleanup
+        self._made_services = []
+        self._announce = False      # log transitions, not autostart's
+        self._refused = None        # why the last transition failed
+        self.inputs = InputThreads(self)
+        self.replies = ReplyGuard(self)
+        declare_specs(self, (AUTOSTART, *self.PARAMETERS.specs))
+        self.diagnostics = Diagnostics(self, self.TITLE,
+                                       self._apply_realtime())
+        self.add_on_set_parameters_callback(self._validate_parameters)
+        self.add_post_set_parameters_callback(self._apply_parameters)
+        self._refuse_unavailable_transitions()
+        self.inputs.start()
+        self._autostart()
+
+    # What a node provides -------------------------------------------------
+    def build(self, settings):
+        """
+        Override: make the core, outputs and periodic work (configure).
+
+        Returns the node's input table: rows of :class:`Input`.
+        """
+        raise NotImplementedError
+
+    def reconfigure(self, settings):
+        """Apply accepted run-time parameter changes (lock held)."""
+        self.core.configure(settings)
+
+    def inputs_idle(self):
+        """
+        Override: run when a wait of the ``inputs`` group ends with no input.
+
+        That is after INPUT_WAIT without input, or a QoS event alone; the
+        lock is held. Every message the middleware had received is
+        handled by then, so a timeout judged here by ``time.monotonic()``
+        cannot drop what a message still waiting in a queue would have
+        completed (a timer could: its thread may run while this one is
+        stalled).
+        """
+
+    @property
+    def finished(self):
+        """Override: whether the node's work is over (``run`` stops)."""
+        return False
+
+    def on_stop(self, interrupted):
+        """
+        Override: run by ``run`` before the node is destroyed.
+
+        ``interrupted``: stopped by a signal (else the node finished).
+        """
+
+    # Entities -------------------------------------------------------------
+    def create_output(self, msg_type, topic):
+        """Create a publisher with the package's QoS and the QoS overrides."""
+        publisher = self.create_publisher(
+            msg_type, topic, default_qos(),
+            qos_overriding_options=QoSOverridingOptions
+            .with_default_policies())
+        self._made_publishers.append(publisher)
+        return publisher
+
+    def create_guarded_service(self, srv_type, name, callback):
+        """Create a service, guarded (:class:`ReplyGuard`), that cleanup ends."""
+        service = self.replies.guard(
+            self.create_service(srv_type, name, callback))
+        self._made_services.append(service)
+        return service
+
+    @property
+    def subscriptions(self):
+        """Return the subscriptions an executor serves (not the inputs)."""
+        return (s for s in super().subscriptions if not self.inputs.hides(s))
+
+    @property
+    def waitables(self):
+        """Return the waitables an executor serves (not the inputs' events)."""
+        return (w for w in super().waitables if not self.inputs.hides(w))
+
+    # Inputs ---------------------------------------------------------------
+    def take(self, row, fields, arrival, rejection):
+        """
+        Handle one input, the lock held: the one place for it.
+
+        ``row.method(*fields, arrival)`` and its result to ``row.output``,
+        or the core counts ``rejection`` (a message refused before it was
+        read). A :class:`Rejected` (the core has counted it) becomes a
+        warning, at most one a second per source and reason; any other
+        exception is a defect (:meth:`report_defect`).
+        """
+        try:
+            if rejection is not None:
+                self.core.reject(row.source, rejection)
+            else:
+                result = row.method(*fields, arrival)
+                if result is not None:
+                    row.output(result)
+                return
+        except Rejected as refused:
+            rejection = refused
+        except Exception:   # a defect: nothing published, the node goes on
+            self.report_defect(f'on {row.source}, nothing published')
+            return
+        self.warn_throttled((row.source, rejection.reason),
+                            f'{row.source} rejected ({rejection.reason}): '
+                            f'{rejection}')
+
+    def outcome(self, name, work):
+        """
+        Run ``work()`` of a thread of the node; report what it raises.
+
+        A :class:`Rejected` becomes a throttled warning, any other
+        exception a defect: the thread goes on.
+        """
+        try:
+            work()
+        except Rejected as refused:
+            self.warn_throttled((name, refused.reason),
+                                f'{name} rejected ({refused.reason}): '
+                                f'{refused}')
+        except Exception:   # a defect: report it, keep running
+            self.report_defect(f'in {name}')
+
+    # Parameters -----------------------------------------------------------
+    def parse_settings(self):
+        """Return the declared parameters parsed (ValueError if invalid)."""
+        return self.PARAMETERS.parse(spec_values(self,
+                                                 self.PARAMETERS.specs))
+
+    def _apply_realtime(self):
+        """
+        Apply the table's real-time parameters to every thread, at start.
+
+        Before the node's own threads start and before its first input; a
+        bad value raises :class:`ParameterError` (the process exits 2), a
+        refusal of the OS is one warning per setting and the node runs on.
+        Returns the settings asked for, or None without such parameters.
+        """
+        if not set(realtime.NAMES) <= {s.name for s in
+                                       self.PARAMETERS.specs}:
+            return None
+        asked = realtime.settings_of(spec_values(self, realtime.SPECS))
+        for warning in realtime.apply(*asked):
+            self.log('warning', warning)
+        if any(asked):
+            effect = realtime.in_effect()
+            self.log('info', (
+                f'real time: {effect.policy} {effect.priority} on CPUs '
+                f'{realtime.format_cpus(effect.cpus)}, {effect.alike} of '
+                f'{effect.threads} threads, {effect.locked_kb // 1024} MiB '
+                'locked'))
+        return asked
+
+    def _validate_parameters(self, parameters):
+        """
+        Refuse a change unless the whole resulting set parses.
+
+        The parse error is the reason; an accepted change is applied by
+        :meth:`_apply_parameters`, so the next input sees all the new
+        values and none of the old.
+        """
+        try:
+            self.PARAMETERS.parse(spec_values(self, self.PARAMETERS.specs,
+                                              parameters))
+        except ValueError as error:
+            reason = clip(error)
+            self.log('warning', f'parameter change refused: {reason}')
+            return SetParametersResult(successful=False, reason=reason)
+        except Exception:   # a defect: refuse the change, report it
+            self.report_defect('validating a parameter change')
+            return SetParametersResult(
+                successful=False, reason='internal error: see the log')
+        return SetParametersResult(successful=True)
+
+    def _apply_parameters(self, parameters):
+        # Not the QoS overrides declared as outputs and inputs are made.
+        names = {spec.name for spec in self.PARAMETERS.specs}
+        if not any(parameter.name in names for parameter in parameters):
+            return
+        settings = self.parse_settings()
+        with self.lock:
+            if self.core is not None:   # once configured
+                self.reconfigure(settings)
+
+    # Logging --------------------------------------------------------------
+    def log(self, level, text):
+        """
+        Log ``text``, clipped (:func:`clip`), at ``level``.
+
+        ``level``: ``'info'``, ``'warning'``, ``'error'`` or ``'fatal'``.
+        One call per level: rclpy's logger keys its state by call site and
+        refuses two severities from one line.
+        """
+        logger, text = self.get_logger(), clip(text)
+        if level == 'info':
+            logger.info(text)
+        elif level == 'warning':
+            logger.warning(text)
+        elif level == 'error':
+            logger.error(text)
+        else:
+            logger.fatal(text)
+
+    def warn_throttled(self, reason, message):
+        """Log a warning, at most one per WARNING_PERIOD for ``reason``."""
+        if self._throttle(reason):
+            self.log('warning', message)
+
+    def _throttle(self, reason):
+        now = time.monotonic()
+        if now - self._last_warning.get(reason, -1e9) < WARNING_PERIOD:
+            return False
+        self._last_warning[reason] = now
+        return True
+
+    @property
+    def internal_errors(self):
+        """Return how many defects :meth:`report_defect` has counted."""
+        return self._internal_errors
+
+    def report_defect(self, where):
+        """
+        Count an exception that escaped a callback (a defect, not bad input).
+
+        Logged with its traceback at most once a WARNING_PERIOD; the node
+        goes on and its diagnostics turn ERROR. Call it from an ``except``.
+        """
+        self._internal_errors += 1
+        if self._throttle('internal'):
+            self.log('error', f'internal error {where}:\n'
+                     + traceback.format_exc())
+
+    # Lifecycle ------------------------------------------------------------
+    @property
+    def lifecycle_state(self):
+        """Return the state's label (``unconfigured``, ``active``...)."""
+        return self._state_machine.current_state[1]
+
+    def _refuse_unavailable_transitions(self):
+        """
+        Answer a transition the state does not offer with success false.
+
+        rclpy raises on it inside the service (rclcpp answers false): it
+        would be reported as a defect of the node.
+        """
+        service = self._service_change_state
+        callback = service.callback
+
+        def change_state(request, response):
+            wanted = request.transition
+            offered = [(t[0], t[1]) for t in
+                       self._state_machine.available_transitions]
+            if not any(wanted.label == label if wanted.label
+                       else wanted.id == number for number, label in offered):
+                self.log('warning', (
+                    f'transition {wanted.label or wanted.id} refused: not '
+                    f'available in state {self.lifecycle_state}'))
+                response.success = False
+                return response
+            return callback(request, response)
+        service.callback = change_state
+
+    def _autostart(self):
+        """
+        Configure and activate when ``autostart`` says so.
+
+        Raises NotStarting with the reason when configure or activate
+        fails (``run`` then exits 2); nothing of the node runs on.
+        """
+        if not self.get_parameter('autostart').value:
+            self.log('info', 'unconfigured: waiting for ~/change_state '
+                     '(autostart is false)')
+            self._announce = True
+            return
+        if self.trigger_configure() != SUCCESS:
+            refused = self._refused or 'configure failed'
+        elif self.trigger_activate() != SUCCESS:
+            refused = self._refused or 'activate failed'
+        else:
+            self._announce = True
+            return
+        self.inputs.stop()
+        raise NotStarting(refused)
+
+    def on_configure(self, state):
+        """Check the parameters, then build (see the module docstring)."""
+        try:
+            settings = self.parse_settings()
+        except (ValueError, ParameterException) as error:
+            self._refused = f'invalid parameters: {clip(error)}'
+            if self._announce:      # autostart's: run says it, once
+                self.log('error', f'configure refused: {self._refused}')
+            return FAILURE
+        return self._transition('configure', self._build, settings)
+
+    def _build(self, settings):
+        for row in self.build(settings):
+            self.inputs.add(row, row.qos or default_qos(),
+                            qos_overriding_options=None if row.qos else
+                            QoSOverridingOptions.with_default_policies())
+        self.core.active = False
+        self.inputs.start()
+
+    def on_activate(self, state):
+        """Start the outputs."""
+        return self._transition('activate', self._set_active, True)
+
+    def on_deactivate(self, state):
+        """Stop the outputs at once; inputs are still read and counted."""
+        return self._transition('deactivate', self._set_active, False)
+
+    def on_cleanup(self, state):
+        """Release what configure made."""
+        return self._transition('cleanup', self._release)
+
+    def on_shutdown(self, state):
+        """Release what configure made; the node is finalized."""
+        return self._transition('shutdown', self._release)
+
+    def on_error(self, state):
+        """After a failed transition: release everything, unconfigured."""
+        try:
+            self._release()
+        except Exception as error:  # still an error: finalized
+            self.log('error', f'error processing failed: {_line(error)}')
+            return FAILURE
+        return SUCCESS
+
+    def _transition(self, name, work, *args):
+        try:
+            work(*args)
+        except Exception as error:  # to the error state, one clear line
+            self._refused = clip(str(error)) if isinstance(error, ValueError) \
+                else _line(error)
+            if self._announce:      # autostart's: run says it, once
+                self.log('error', f'{name} failed: {self._refused}')
+            return ERROR
+        if self._announce:
+            self.log('info', f'{name}: {_STATE_AFTER[name]}')
+        return SUCCESS
+
+    def _set_active(self, active):
+        with self.lock:
+            if active:
+                self.core.activate()
+            else:
+                self.core.deactivate()
+
+    def _release(self):
+        self.inputs.release()
+        for publisher in self._made_publishers:
+            self.destroy_publisher(publisher)
+        for service in self._made_services:
+            self.destroy_service(service)
+        self._made_publishers, self._made_services = [], []
+        with self.lock:
+            self.core = None
+
+    def destroy_node(self):
+        """Stop the input and periodic threads, then destroy the node."""
+        self.inputs.stop()
+        super().destroy_node()
+
+
+def _line(error):
+    """Return an exception as one clipped line: its type and text."""
+    return clip(f'{type(error).__name__}: {error}'.splitlines()[0])
