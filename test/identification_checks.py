@@ -1,8 +1,8 @@
 """
-Issue 10's tolerances on identified base parameters, shared by the tests.
+The tolerances on identified base parameters, shared by the tests.
 
 Each base mass combination within 3 % of the truth, the lightest within
-10 %, each friction coefficient within 25 %: the figures issue 10 sets for
+10 %, each friction coefficient within 25 %: the figures set for
 a synthetic log, applied to the DDS loop's log too (whose least-squares
 standard deviations are optimistic: its residuals are not white).
 """
@@ -14,7 +14,7 @@ LIGHTEST_TOLERANCE = 0.10
 FRICTION_TOLERANCE = 0.25
 
 
-def assert_within_issue_tolerances(base, values, truth, robot, true_robot):
+def assert_within_tolerances(base, values, truth, robot, true_robot):
     """Check identified ``values`` (and ``robot``'s friction) against truth."""
     error = np.abs(values - truth) / truth
     masses = [i for i, j in enumerate(base.independent) if j < 6]

@@ -1,7 +1,7 @@
 """
 Invariant 1 (closure): every leg's chain (7) reaches the same G, a50 fixed.
 
-``mechanics.elements`` builds each leg's chain of eqs. (1)-(8) in frame 0;
+``bodies.elements`` builds each leg's chain of eqs. (1)-(8) in frame 0;
 its last point ``joints['G']`` must be the platform centre that was asked
 for, for every leg, and the platform's orientation ``a50`` must not change
 over the workspace (eq. 3), or the platform would not translate.
@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from mechanics_reference import (
     CUBE, cube_points, leg_geometry, LEGS, OTHER_ROBOT_VALUES, U1)
 import numpy as np
-from orthoglide_ros.model.mechanics import elements
+from orthoglide_ros.model.bodies import elements
 from orthoglide_ros.model.robot import Robot
 import pytest
 

@@ -21,7 +21,8 @@ from hypothesis import given, settings
 from mechanics_reference import (
     cube_points, LEGS, OTHER_ROBOT_VALUES, skew, U2, U3, vectors)
 import numpy as np
-from orthoglide_ros.model.mechanics import elements, solve
+from orthoglide_ros.model.bodies import elements
+from orthoglide_ros.model.mechanics import solve
 from orthoglide_ros.model.robot import Robot
 import pytest
 

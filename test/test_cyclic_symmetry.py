@@ -18,7 +18,8 @@ the weight of the whole robot for the rates and forces).
 from hypothesis import given, settings, strategies as st
 from mechanics_reference import cube_points, OTHER_ROBOT_VALUES, vectors
 import numpy as np
-from orthoglide_ros.model.mechanics import elements, solve
+from orthoglide_ros.model.bodies import elements
+from orthoglide_ros.model.mechanics import solve
 from orthoglide_ros.model.robot import Robot
 
 TURN = np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0]], dtype=float)

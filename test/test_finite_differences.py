@@ -3,7 +3,7 @@ Invariant 3: element velocities and accelerations are time derivatives.
 
 Along smooth trajectories (the paper's and fast ones), the velocity of every
 body's origin joint A_k, the angular velocity of every body and the
-relative rates that ``mechanics.elements`` returns must equal the time
+relative rates that ``bodies.elements`` returns must equal the time
 derivatives of the positions and rotations it returns, and the
 accelerations the derivatives of the velocities. Derivatives are taken by
 the fourth-order central difference with step ``H`` (s).
@@ -23,7 +23,7 @@ errors of order 10%.
 from mechanics_reference import (
     derivative, FAST_TRAJECTORIES, LEGS, OTHER_ROBOT_VALUES, unskew)
 import numpy as np
-from orthoglide_ros.model.mechanics import elements
+from orthoglide_ros.model.bodies import elements
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.trajectory import (
     PAPER_OMEGA, paper_sample, PAPER_TARGET)

@@ -1,5 +1,5 @@
 """
-Identification over DDS (issue 10): a better feedforward for an unknown plant.
+Identification over DDS: a better feedforward for an unknown plant.
 
 The loop of ``harness.closed_loop`` with a plant the feedforward does not
 know (``UNKNOWN_PLANT``: a 25 % heavier platform, heavier bars, friction
@@ -11,7 +11,7 @@ half a plant step before its state (``force_lag``), the plant's friction
 law (viscous + Coulomb: the law's choice is tested on synthetic logs).
 Checked:
 
-- the identified base parameters lie within issue 10's tolerances of the
+- the identified base parameters lie within the tolerances of the
   plant's (3 %, the lightest group 10 %, friction 25 %; measured within
   1 %). Not within a number of their standard deviations: those assume
   white residuals, and a loop over DDS leaves correlated ones (measured:
@@ -19,7 +19,7 @@ Checked:
 - on the paper's trajectory, PD + the identified feedforward tracks
   better (RMS) than PD + the nominal one, in medians of interleaved
   passes (``harness.closed_loop.median_runs``; a pass a stall spoiled is
-  run again once). Issue 10's criterion, within 1.5 times the error of
+  run again once). The criterion, within 1.5 times the error of
   PD + the exact feedforward, is checked where a pass is deterministic
   (``test_identification.py``) and printed here: over DDS a pass's error
   is set by the timing as much as by the model (0.08-0.20 mm with either
@@ -40,7 +40,7 @@ import time
 
 import pytest
 
-from identification_checks import assert_within_issue_tolerances
+from identification_checks import assert_within_tolerances
 from node_checks import needs_scripts
 from orthoglide_ros.harness.processes import start_node_process, stop_process
 
@@ -58,7 +58,7 @@ pytestmark = [pytest.mark.ros, needs_scripts(
     'simulator', 'feedforward', 'tracking_controller', 'setpoint_publisher')]
 
 SEED, PERIOD, PASSES = 0, 6.0, 3
-CRITERION = 1.5     # issue 10's, against the exact feedforward (printed)
+CRITERION = 1.5     # the target, against the exact feedforward (printed)
 REPEATS = 3         # passes of each compared case; the median counts
 EXCITATIONS = 3     # excitation runs recorded at most (see identified())
 
@@ -102,8 +102,8 @@ def test_identified_base_parameters_are_the_plants(identified):
                                       truth, result.std):
         print(f'{name}: {value:.4f} (plant {true:.4f}, std {std:.3g})',
               file=sys.stderr)
-    assert_within_issue_tolerances(result.base, result.values, truth,
-                                   result.robot, harness.UNKNOWN_PLANT)
+    assert_within_tolerances(result.base, result.values, truth,
+                             result.robot, harness.UNKNOWN_PLANT)
 
 
 def test_identified_feedforward_tracks_like_the_exact_one(closed_loop,
@@ -119,7 +119,7 @@ def test_identified_feedforward_tracks_like_the_exact_one(closed_loop,
         closed_loop, 'paper', compared, harness.UNKNOWN_PLANT, REPEATS,
         report)
     ratio = runs['identified'].rms_mm / runs['exact'].rms_mm
-    report(f'identified / exact: {ratio:.2f} (issue 10: {CRITERION:g}, '
+    report(f'identified / exact: {ratio:.2f} (target: {CRITERION:g}, '
            'checked without DDS)')
     assert runs['identified'].rms_mm < runs['nominal'].rms_mm
 

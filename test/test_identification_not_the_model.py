@@ -1,5 +1,5 @@
 """
-Identification of a robot that is not the model (issue 20), without ROS.
+Identification of a robot that is not the model , without ROS.
 
 A synthetic robot with what real Orthoglides have (each common on
 ball-screw or belt guideways and current-controlled drives), its log made
@@ -125,6 +125,17 @@ def test_the_law_chosen_holds_both_terms(found):
         TRUE.friction_stribeck_velocity, rel=0.5)
 
 
+def validation_rms(log, force_lag, **results):
+    """Return (and print) each result's RMS error (N) predicting ``log``."""
+    rms = {name: identification.validate(result.robot, log,
+                                         force_lag=force_lag).rms
+           for name, result in results.items()}
+    for name, values in rms.items():
+        print(f'{name}: validation RMS error (N) '
+              + ', '.join(f'{v:.4f}' for v in values))
+    return rms
+
+
 def test_the_lag_is_found_within_0_2_ms(found, logs):
     print(f'lag found {found.force_lag * 1e3:.4f} ms (true {LAG * 1e3} ms)')
     assert found.lag_estimated
@@ -145,13 +156,8 @@ def test_validation_is_near_the_best_and_beats_the_former_law(found, logs):
     best = identification.identify(NOMINAL, logs['clean'], friction=found.law,
                                    force_lag=0.0,
                                    stribeck_velocity=found.stribeck_velocity)
-    rms = {name: identification.validate(result.robot, logs['validate'],
-                                         force_lag=found.force_lag).rms
-           for name, result in (('found', found), ('former', former),
-                                ('best', best))}
-    for name, values in rms.items():
-        print(f'{name}: validation RMS error (N) '
-              + ', '.join(f'{v:.4f}' for v in values))
+    rms = validation_rms(logs['validate'], found.force_lag, found=found,
+                         former=former, best=best)
     assert (rms['found'] <= (1.0 + CLOSE) * rms['best']).all(), rms
     assert (rms['found'] <= (1.0 - BETTER) * rms['former']).all(), rms
 
@@ -270,13 +276,8 @@ def test_drives_predict_another_motion_within_10_percent_of_the_best(
     without = identification.identify(NOMINAL, logs['identify'],
                                       friction=Law(True, True, False),
                                       payload=PAYLOAD)
-    rms = {name: identification.validate(result.robot, logs['validate'],
-                                         force_lag=found.force_lag).rms
-           for name, result in (('found', found), ('best', best),
-                                ('no armature', without))}
-    for name, values in rms.items():
-        print(f'{name}: validation RMS error (N) '
-              + ', '.join(f'{v:.4f}' for v in values))
+    rms = validation_rms(logs['validate'], found.force_lag, found=found,
+                         best=best, **{'no armature': without})
     assert (rms['found'] <= (1.0 + CLOSE) * rms['best']).all(), rms
     # The drives matter: without them the masses cannot make up for them
     # (measured: 0.33, 0.28, 0.37 N against 1.33, 0.38, 0.76 N).

@@ -24,6 +24,7 @@ from orthoglide_ros.model.plant import Plant
 from orthoglide_ros.cores.tracking_controller import PARAMETERS, Tracking
 
 NAMES = ('slider_a', 'slider_b', 'slider_c')
+STAMP = (1, 0)     # a joint state's stamp (the controller does not read it)
 ZERO = (0.0, 0.0, 0.0)
 
 
@@ -142,7 +143,7 @@ def controller(**changes):
 
 def test_trajectory_followed_with_the_law_then_its_last_point_held():
     core = controller(kp=[100.0] * 3, kd=[10.0] * 3)
-    core.measured(NAMES, ZERO, ZERO, [], 0.0)
+    core.measured(STAMP, '', NAMES, ZERO, ZERO, [], 0.0)
     core.trajectory(points([0.0, 1.0], [ZERO, [0.01] * 3], [ZERO, ZERO],
                            [[5.0] * 3, [7.0] * 3]), 49.0, 0.0)
     # The measurement arrived 10 ms ago: sampled at 50.5 s, halfway,
@@ -151,13 +152,13 @@ def test_trajectory_followed_with_the_law_then_its_last_point_held():
     assert command.force == pytest.approx((6.0 + 0.5 + 0.15,) * 3)
     assert core.plan_finished is False
     # A desired state while it runs is skipped, counted.
-    assert core.desired(NAMES, ZERO, ZERO, ZERO, 0.02) is None
+    assert core.desired(STAMP, '', NAMES, ZERO, ZERO, ZERO, 0.02) is None
     assert core.skipped['trajectory_active'] == 1
-    core.measured(NAMES, [0.01] * 3, ZERO, [], 0.03)
+    core.measured(STAMP, '', NAMES, [0.01] * 3, ZERO, [], 0.03)
     held = core.tick(60.0, 0.04)
     assert core.plan_finished and held.force == pytest.approx((7.0,) * 3)
     # After the end a desired state takes over.
-    assert core.desired(NAMES, [0.01] * 3, ZERO, [1.0] * 3, 0.05)
+    assert core.desired(STAMP, '', NAMES, [0.01] * 3, ZERO, [1.0] * 3, 0.05)
     assert core.plan is None
 
 
@@ -172,7 +173,7 @@ def test_a_payload_the_plan_does_not_hold_is_added_to_its_efforts():
     for payload in (0.0, 5.0):
         core = controller(kp=[0.0] * 3, kd=[0.0] * 3,
                           **{'robot.payload': payload})
-        core.measured(NAMES, home.lambda_, ZERO, [], 0.0)
+        core.measured(STAMP, '', NAMES, home.lambda_, ZERO, [], 0.0)
         core.trajectory(trajectory, 49.0, 0.0)
         commands[payload] = core.tick(50.3, 0.0).force
         plan = core.plan
@@ -189,7 +190,7 @@ def test_a_payload_the_plan_does_not_hold_is_added_to_its_efforts():
 
 def test_zero_stamp_starts_at_reception_and_a_new_one_replaces_it():
     core = controller()
-    core.measured(NAMES, ZERO, ZERO, [], 0.0)
+    core.measured(STAMP, '', NAMES, ZERO, ZERO, [], 0.0)
     core.trajectory(points([0.5], [[0.01] * 3], [ZERO], [ZERO],
                            stamp=(0, 0)), 20.0, 0.0)
     assert core.plan.start == 20.0
@@ -214,8 +215,8 @@ def test_accepting_a_plan_does_not_change_the_force():
     state the plan starts from for the whole wait.
     """
     core = controller(kp=[100.0] * 3, kd=[10.0] * 3)
-    core.measured(NAMES, ZERO, ZERO, [], 0.0)
-    before = core.desired(NAMES, ZERO, ZERO, [3.0] * 3, 0.0)
+    core.measured(STAMP, '', NAMES, ZERO, ZERO, [], 0.0)
+    before = core.desired(STAMP, '', NAMES, ZERO, ZERO, [3.0] * 3, 0.0)
     assert before.force == pytest.approx((3.0,) * 3)
     core.trajectory(points([0.0, 1.0], [ZERO, [0.01] * 3], [ZERO, ZERO],
                            [[150.0] * 3, [7.0] * 3]), 49.0, 0.0)
@@ -230,7 +231,7 @@ def test_accepting_a_plan_does_not_change_the_force():
 def test_a_trajectory_that_ends_in_the_past_is_refused():
     """As JTC: a non-zero stamp whose last point is past; zero is now."""
     core = controller()
-    core.measured(NAMES, ZERO, ZERO, [], 0.0)
+    core.measured(STAMP, '', NAMES, ZERO, ZERO, [], 0.0)
     with pytest.raises(Rejected) as info:
         core.trajectory(points([0.5], [ZERO], [ZERO], [ZERO],
                                stamp=(10, 0)), 10.6, 0.0)
@@ -262,14 +263,14 @@ def test_a_bad_trajectory_is_refused_whole_and_counted(reason, build):
     assert core.plan is None
 
 
-# A flood of replacements (issue 16) ----------------------------------------
+# A flood of replacements ----------------------------------------------------
 def flood_loop(flood_seconds=1.0, after=None, clock=100.0):
     """
     Run the controller on the simulated robot under a trajectory flood.
 
     Every millisecond a new one-point trajectory, its target alternating
     between 0 and 10 mm on every slider 50 ms ahead (efforts zero), as the
-    hostile peer of issue 16 sends it; the robot measured every
+    hostile peer sends it; the robot measured every
     millisecond, the controller ticking at its rate_hz, the command held
     by the plant (RK4, 1 kHz). ``after``: a trajectory sent once the flood
     is over, followed for 1.5 s. Returns the commands and slider speeds.
@@ -285,7 +286,7 @@ def flood_loop(flood_seconds=1.0, after=None, clock=100.0):
         now = k * 1e-3
         lam, lamdot = plant.joint_state()
         speeds.append(max(abs(v) for v in lamdot))
-        core.measured(NAMES, lam, lamdot, [], now)
+        core.measured(STAMP, '', NAMES, lam, lamdot, [], now)
         if k < flood_seconds * 1000:
             target = [0.01 * (k % 2)] * 3
             core.trajectory(points([0.05], [target], [ZERO], [ZERO],
@@ -303,7 +304,7 @@ def flood_loop(flood_seconds=1.0, after=None, clock=100.0):
 
 def test_a_flood_of_replacements_never_saturates_nor_runs_away():
     """
-    Issue 16: 1 kHz of alternating one-point trajectories, then a normal one.
+    1 kHz of alternating one-point trajectories, then a normal one.
 
     Each replacement starts from the desired state being followed, never
     from the last command, and at most one is taken per tick: no command
@@ -324,7 +325,7 @@ def test_a_flood_of_replacements_never_saturates_nor_runs_away():
 
 
 def test_implausible_trajectories_are_refused_whole():
-    """Issue 16: efforts, positions, velocities of 1e300; a 15 m/s plan."""
+    """Efforts, positions, velocities of 1e300; a 15 m/s plan."""
     huge = [[0.0, 0.0, 1e300]]
     for reason, build in (
             ('effort_limit', lambda: points([0.5], [ZERO], [ZERO], huge)),
@@ -334,7 +335,7 @@ def test_implausible_trajectories_are_refused_whole():
             ('velocity_limit', lambda: points([0.001], [[0.01] * 3], [ZERO],
                                               [ZERO], stamp=(0, 0)))):
         core = controller()
-        core.measured(NAMES, ZERO, ZERO, [], 0.0)
+        core.measured(STAMP, '', NAMES, ZERO, ZERO, [], 0.0)
         with pytest.raises(Rejected) as info:
             core.trajectory(build(), 10.0, 0.0)
         assert info.value.reason == reason, info.value

@@ -12,8 +12,8 @@ from mechanics_reference import (
     COMPLEX_STEP, cube_points, lambda_jacobian, leg_geometry, LEGS,
     OTHER_ROBOT_VALUES, vectors)
 import numpy as np
-from orthoglide_ros.model.mechanics import (
-    leg_joints, platform_velocity, WorkspaceError)
+from orthoglide_ros.model.bodies import leg_joints
+from orthoglide_ros.model.mechanics import platform_velocity, WorkspaceError
 from orthoglide_ros.model.robot import Robot
 import pytest
 

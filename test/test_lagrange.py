@@ -25,7 +25,8 @@ from mechanics_reference import (
     cube_points, DRIVES_ROBOT_VALUES, lagrange_forces, lambda_jacobian,
     mass_matrix, OTHER_ROBOT_VALUES, potential_gradient, vectors)
 import numpy as np
-from orthoglide_ros.model.mechanics import elements, solve, solve_batch
+from orthoglide_ros.model.bodies import elements
+from orthoglide_ros.model.mechanics import solve, solve_batch
 from orthoglide_ros.model.robot import Robot
 
 DM_RELATIVE = 1e-8

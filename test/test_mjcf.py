@@ -38,7 +38,7 @@ mujoco = pytest.importorskip('mujoco')
 ROOT = __import__('pathlib').Path(__file__).resolve().parents[1]
 COMMITTED = ROOT / 'mjcf' / 'orthoglide.xml'
 PAPER = Robot()
-OPEN_LOOP_BOUND = 5e-5      # m after 1 s (the 0.05 mm)
+OPEN_LOOP_BOUND = 5e-5      # m after 1 s (0.05 mm)
 CLOSURE_BOUND = 1e-5        # m over the simulated motion
 
 

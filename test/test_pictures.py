@@ -4,13 +4,13 @@
 The pictures are read back with Pillow (matplotlib's own dependency): a
 valid PNG or GIF of the size asked for, the GIF with one frame per sample;
 bad input exits 2 with one clear line and writes nothing. The drawn bodies
-are ``mechanics.elements``' (checked on the scene's lines).
+are ``bodies.elements``' (checked on the scene's lines).
 """
 
 import struct
 
 import numpy as np
-from orthoglide_ros.model import mechanics
+from orthoglide_ros.model import bodies
 from orthoglide_ros.tools import cli, drawing
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.urdf import urdf
@@ -161,7 +161,7 @@ def test_the_drawn_bodies_are_the_models():
     position = (0.05, 0.1, -0.2)
     scene = drawing._Scene(robot, (200, 200), 1.0)
     scene.update(position, (1.0, 2.0, 3.0), 'test')
-    legs = mechanics.elements(robot, position)
+    legs = bodies.elements(robot, position)
     for leg in 'ABC':
         for start, end, _ in drawing.SEGMENTS:
             x, y, z = scene.lines[leg, start, end].get_data_3d()

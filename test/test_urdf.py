@@ -3,7 +3,7 @@ The URDF (orthoglide_ros.model.urdf) read by an independent library, yourdfpy.
 
 - The committed ``urdf/orthoglide.urdf`` is what ``orthoglide urdf`` writes
   for the paper's robot (so it cannot drift).
-- Names and tree: the links and joints the issue fixes, a cut tree.
+- Names and tree: the links and joints doc/urdf.md fixes, a cut tree.
 - Masses, centres and inertias equal doc/model.md's bodies table, written
   out here; the total mass is the model's.
 - Kinematics: with the joint state of ``mechanism_state_publisher.joint_state``, on
@@ -11,7 +11,7 @@ The URDF (orthoglide_ros.model.urdf) read by an independent library, yourdfpy.
   forward kinematics puts ``platform`` at G (``mechanics.forward_kinematics``
   of the sliders) with frame 0's orientation, each ``x_leg_end`` on its
   ``x_platform_mount`` and the parallelogram's two A7 frames together, to
-  1e-9 m and 1e-9 rad; every body's frame is where ``mechanics.elements``
+  1e-9 m and 1e-9 rad; every body's frame is where ``bodies.elements``
   puts it.
 - Joint limits hold every state of the workspace within the margin, and
   are near its extremes.
@@ -23,6 +23,7 @@ from mechanics_reference import (
     CUBE, leg_geometry, LEGS, OTHER_ROBOT_VALUES)
 import numpy as np
 from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.model.bodies import elements, leg_joints
 from orthoglide_ros.cores.mechanism_state_publisher import joint_state
 from orthoglide_ros.cores.parameters import JOINT_NAMES
 from orthoglide_ros.model.robot import Robot
@@ -203,7 +204,7 @@ def test_every_body_is_where_the_model_puts_it(paper_model):
         lam = mechanics.solve(PAPER, position).lambda_
         state = joint_state(PAPER, JOINT_NAMES, lam)
         paper_model.update_cfg(dict(zip(state.names, state.position)))
-        legs = mechanics.elements(PAPER, position)
+        legs = elements(PAPER, position)
         for leg in LEGS:
             bodies = legs[leg]['bodies']
             for body in (1, 2, 3, 4, 5, 6):
@@ -225,7 +226,7 @@ def test_limits_hold_the_workspace_and_are_near_its_extremes(paper_model):
     rng = np.random.default_rng(8)
     points = home_branch(PAPER, rng.uniform(-PAPER.l3, PAPER.l3,
                                             (200000, 3)))
-    legs = mechanics.leg_joints(PAPER, points)
+    legs = leg_joints(PAPER, points)
     for variable, (low, high) in limits.items():
         values = np.concatenate([getattr(legs[leg], variable)
                                  for leg in LEGS])
@@ -234,7 +235,7 @@ def test_limits_hold_the_workspace_and_are_near_its_extremes(paper_model):
         assert values.min() - low < 0.05 and high - values.max() < 0.05, (
             variable, values.min(), values.max(), low, high)
     # The paper's tested cube lies well inside.
-    cube = mechanics.leg_joints(PAPER, np.array(
+    cube = leg_joints(PAPER, np.array(
         [[x, y, z] for x in (-CUBE, CUBE) for y in (-CUBE, CUBE)
          for z in (-CUBE, CUBE)]))
     for variable, (low, high) in limits.items():

@@ -3,7 +3,7 @@ The URDF's masses and inertias proven by dynamics: Pinocchio's RNEA.
 
 The URDF is loaded into Pinocchio (``pin``, an independent rigid-body
 library). On the cut tree, with every joint's position, velocity and
-acceleration from the model (``mechanics.elements``: lambda, phi21, phi32
+acceleration from the model (``bodies.elements``: lambda, phi21, phi32
 and their rates and accelerations), its RNEA gives the joint forces ``tau``
 that the open tree needs. The cuts' constraint forces do no work on a motion
 that keeps every loop closed, so the virtual work of ``tau`` over such a
@@ -21,7 +21,7 @@ no place for it) gives the drives' forces.
 from mechanics_reference import (
     COMPLEX_STEP, FAST_TRAJECTORIES, lambda_jacobian, leg_geometry)
 import numpy as np
-from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.model import bodies, mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.urdf import moving_joints, urdf
 import pytest
@@ -47,7 +47,7 @@ def joint_index(model, name):
 
 def joint_state(model, robot, position, velocity, acceleration):
     """q, v, a of every joint from the model's elements."""
-    legs = mechanics.elements(robot, position, velocity, acceleration)
+    legs = bodies.elements(robot, position, velocity, acceleration)
     q, v, a = (np.zeros(model.nv) for _ in range(3))
     for name, leg, variable in moving_joints():
         i = joint_index(model, name)

@@ -17,8 +17,9 @@ import itertools
 import math
 
 import numpy as np
+from orthoglide_ros.model.bodies import elements
 from orthoglide_ros.model.mechanics import (
-    DEFAULT_SINGULARITY_MARGIN, elements, REASONS, solve, solve_batch,
+    DEFAULT_SINGULARITY_MARGIN, REASONS, solve, solve_batch,
     workspace_status, WorkspaceError)
 from orthoglide_ros.model.robot import Robot
 import pytest

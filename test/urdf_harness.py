@@ -20,7 +20,7 @@ yourdfpy = pytest.importorskip('yourdfpy')
 ROOT = Path(__file__).resolve().parents[1]
 COMMITTED_URDF = ROOT / 'urdf' / 'orthoglide.urdf'
 LEG_PREFIXES = ('a', 'b', 'c')
-# Closure tolerances of the issue: 1e-9 m and 1e-9 rad.
+# Closure tolerances: 1e-9 m and 1e-9 rad.
 TOLERANCE = 1e-9
 
 

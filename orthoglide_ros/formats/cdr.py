@@ -36,10 +36,15 @@ not use (``joint_names``) raises :class:`LimitError` beyond
 :data:`MAX_JOINT_NAMES`: what a message holds cannot make reading it slow.
 """
 
+from __future__ import annotations
+
+from typing import Optional, Sequence
 from collections import namedtuple
 import struct
 
 import numpy as np
+
+from orthoglide_ros.model.types import Array, Stamp, Triple
 
 _STAMP = struct.Struct('<iI')          # stamp.sec, stamp.nanosec
 _COUNT = struct.Struct('<I')
@@ -63,14 +68,14 @@ class LimitError(ValueError):
     """A well-formed buffer beyond what this reader reads (refuse it)."""
 
 
-def pose_stamped(buf):
+def pose_stamped(buf: bytes) -> tuple[Stamp, str, Triple, tuple[float, float, float, float]]:
     """Return ``(stamp, frame, position, orientation)`` of a PoseStamped."""
     stamp, frame, offset = _header(buf)
     values = _unpack(_POSE, buf, _align(offset, 8))
     return stamp, frame, values[:3], values[3:]
 
 
-def vector3_stamped(buf):
+def vector3_stamped(buf: bytes) -> tuple[Stamp, str, Triple]:
     """Return ``(stamp, frame, linear)`` of a TwistStamped or AccelStamped."""
     stamp, frame, offset = _header(buf)
     offset = _align(offset, 8)
@@ -78,7 +83,7 @@ def vector3_stamped(buf):
     return stamp, frame, _unpack(_VECTOR, buf, offset)
 
 
-def trajectory_point(buf):
+def trajectory_point(buf: bytes) -> tuple[Stamp, str, Optional[tuple]]:
     """
     Read a MultiDOFJointTrajectory's header and first point.
 
@@ -111,7 +116,7 @@ def trajectory_point(buf):
                           duration)
 
 
-def joint_state(buf):
+def joint_state(buf: bytes) -> tuple:
     """
     Read a JointState: ``(stamp, frame, names, position, velocity, effort)``.
 
@@ -131,7 +136,7 @@ def joint_state(buf):
     return (stamp, frame, tuple(names), *arrays)
 
 
-def float64_array(buf):
+def float64_array(buf: bytes) -> tuple[float, ...]:
     """Read a Float64MultiArray's ``data`` as a tuple of floats."""
     _encapsulation(buf)
     dims, offset = _count(buf, 4)
@@ -154,7 +159,7 @@ first twists (NaN where absent); ``time`` (N, 2) int64: time_from_start
 (sec, nanosec)."""
 
 
-def cartesian_trajectory(buf):
+def cartesian_trajectory(buf: bytes) -> 'Waypoints':
     """
     Read every point of a MultiDOFJointTrajectory; return :class:`Waypoints`.
 
@@ -310,7 +315,8 @@ k holds in its positions, velocities, accelerations, efforts; those four
 fewer, extra values dropped); ``time`` (N, 2) int64 time_from_start."""
 
 
-def joint_trajectory_points(buf, max_names=MAX_JOINT_NAMES):
+def joint_trajectory_points(buf: bytes,
+                            max_names: int = MAX_JOINT_NAMES) -> 'JointPoints':
     """Read a whole JointTrajectory; return :class:`JointPoints`."""
     stamp, frame, offset = _header(buf)
     count, offset = _count(buf, offset)
@@ -360,8 +366,9 @@ def joint_trajectory_points(buf, max_names=MAX_JOINT_NAMES):
     return JointPoints(stamp, frame, tuple(names), lengths, *arrays, time)
 
 
-def joint_trajectory(stamp, frame, names, time, positions, velocities,
-                     accelerations, efforts):
+def joint_trajectory(stamp: Stamp, frame: str, names: Sequence[str],
+                     time: Array, positions: Array, velocities: Array,
+                     accelerations: Array, efforts: Array) -> bytes:
     """
     Serialize a ``trajectory_msgs/JointTrajectory`` (little-endian CDR).
 

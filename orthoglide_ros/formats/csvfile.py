@@ -19,6 +19,10 @@ The one reader of the package's CSV inputs: the trajectories of
   than its 131072-character limit), is refused with its line.
 """
 
+from __future__ import annotations
+
+from typing import Optional, Sequence
+
 from array import array
 import contextlib
 import csv
@@ -26,6 +30,8 @@ import math
 import sys
 
 import numpy as np
+
+from orthoglide_ros.model.types import Array, Path
 
 # Most data rows read: 33 minutes at 1 kHz (about 200 MB of doubles for
 # the widest input, 13 columns).
@@ -36,7 +42,8 @@ class CsvError(ValueError):
     """A CSV file that cannot be read as asked; the message says where."""
 
 
-def read_columns(path, groups, name=None):
+def read_columns(path: Path, groups: Sequence[tuple[str, Sequence[str], bool]],
+                 name: Optional[str] = None) -> dict[str, Optional[Array]]:
     """
     Read the ``groups`` of columns of the CSV file ``path`` (``-``: stdin).
 

@@ -12,6 +12,9 @@ the sample and the column; :func:`crop` takes a window. Every refusal is
 a :class:`LogError`. Units: s, m, N, m/s.
 """
 
+from __future__ import annotations
+
+from typing import Callable, Optional, Sequence
 from collections import namedtuple
 import os
 
@@ -19,9 +22,8 @@ import numpy as np
 
 from orthoglide_ros.formats import cdr
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
-from orthoglide_ros.model.robot import JOINT_NAMES
-
-LEGS = ('a', 'b', 'c')
+from orthoglide_ros.model.robot import JOINT_NAMES, LEGS
+from orthoglide_ros.model.types import Path
 # The log's columns in a CSV file (those `orthoglide batch` writes); the
 # measured velocities are optional.
 LOG_GROUPS = (('time', ('t',), True),
@@ -45,7 +47,8 @@ class LogError(ValueError):
     """A log that cannot be read or used; the message says why."""
 
 
-def check_log(log, where=None):
+def check_log(log: 'Log',
+              where: Optional[Callable[[int], str]] = None) -> None:
     """
     Refuse a :class:`Log` that cannot be identified from (:class:`LogError`).
 
@@ -82,7 +85,8 @@ def check_log(log, where=None):
                        'identify anything')
 
 
-def crop(log, start=None, end=None):
+def crop(log: 'Log', start: Optional[float] = None,
+         end: Optional[float] = None) -> 'Log':
     """
     Return the samples of ``log`` from ``start`` to ``end`` (s, inclusive).
 
@@ -111,7 +115,8 @@ def crop(log, start=None, end=None):
                else np.asarray(log.lambdadots)[keep])
 
 
-def read_log(path, topic=DEFAULT_TOPIC, joint_names=JOINT_NAMES):
+def read_log(path: Path, topic: str = DEFAULT_TOPIC,
+             joint_names: Sequence[str] = JOINT_NAMES) -> 'Log':
     """
     Read a log: a rosbag2 bag (:func:`read_bag`) or a CSV (:func:`read_csv`).
 
@@ -125,7 +130,7 @@ def read_log(path, topic=DEFAULT_TOPIC, joint_names=JOINT_NAMES):
     return read_csv(path)
 
 
-def read_csv(path):
+def read_csv(path: Path) -> 'Log':
     """
     Read a log from a CSV file and check it (:func:`check_log`).
 
@@ -145,7 +150,8 @@ def read_csv(path):
     return log
 
 
-def read_bag(path, topic=DEFAULT_TOPIC, joint_names=JOINT_NAMES):
+def read_bag(path: Path, topic: str = DEFAULT_TOPIC,
+             joint_names: Sequence[str] = JOINT_NAMES) -> 'Log':
     """
     Read a log from the ``sensor_msgs/JointState`` messages of a rosbag2 bag.
 

@@ -22,6 +22,9 @@ apply the same rules here:
 identify`` does), with the same typing.
 """
 
+from __future__ import annotations
+
+from typing import Any, Sequence
 import math
 import re
 
@@ -30,6 +33,7 @@ import yaml
 from orthoglide_ros.formats.text import clip
 from orthoglide_ros.model.robot import (is_vector, ParameterError, Robot,
                                         ROW, ROWS)
+from orthoglide_ros.model.types import Path
 
 NODE_NAME = 'feedforward'     # the node whose robot the tools read
 ROBOT_PREFIX = 'robot.'
@@ -78,7 +82,7 @@ _RclLoader.add_implicit_resolver(
     list('-+0123456789.'))
 
 
-def load_parameters(path, node=NODE_NAME):
+def load_parameters(path: Path, node: str = NODE_NAME) -> dict[str, Any]:
     """
     Return node ``node``'s parameters in ``path`` as a flat ``{name: value}``.
 
@@ -123,7 +127,7 @@ def load_parameters(path, node=NODE_NAME):
     return params
 
 
-def rcl_typed(kind, value):
+def rcl_typed(kind: str, value: Any) -> Any:
     """
     Check ``value`` against rcl's typing of ``kind``; return it.
 
@@ -152,7 +156,7 @@ def rcl_typed(kind, value):
     return tuple(value)
 
 
-def robot_from_parameters(params):
+def robot_from_parameters(params: dict[str, Any]) -> Robot:
     """
     Build a :class:`Robot` from the ``robot.*`` entries of ``params``.
 
@@ -177,7 +181,7 @@ def robot_from_parameters(params):
     return Robot(**values)
 
 
-def load_robot(path):
+def load_robot(path: Path) -> Robot:
     """
     Return the :class:`Robot` of the ``robot.*`` keys in the file ``path``.
 
@@ -196,7 +200,8 @@ def _flatten(mapping, prefix, out):
             out[name] = value
 
 
-def robot_file_text(robot, comments=(), node=NODE_NAME):
+def robot_file_text(robot: Robot, comments: Sequence[str] = (),
+                    node: str = NODE_NAME) -> str:
     """
     Return a parameters file holding every ``robot.*`` value of ``robot``.
 

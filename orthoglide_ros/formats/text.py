@@ -7,11 +7,13 @@ reaches a log line, a reply or an error message: no input can make a line
 longer than that plus a few dozen characters.
 """
 
+from __future__ import annotations
+
 # Longest log line or reply reason made from a message's text (characters).
 TEXT_LIMIT = 2000
 
 
-def clip(text, limit=TEXT_LIMIT):
+def clip(text: object, limit: int = TEXT_LIMIT) -> str:
     """
     Return ``text`` cut to about ``limit`` characters (its middle dropped).
 

@@ -32,9 +32,14 @@ rate; tests drive it with plain numbers.
 ([0.5, 0.5, 0.5], (6.0, 6.0, 6.0))
 """
 
+from __future__ import annotations
+
+from typing import Any, Sequence
+
 import numpy as np
 
-_ZERO = (0.0, 0.0, 0.0)
+from orthoglide_ros.model.mechanics import ZERO
+from orthoglide_ros.model.types import Rows, Triple
 
 
 class JointPlan:
@@ -49,8 +54,9 @@ class JointPlan:
     that held it), at ``accepted`` (s, the same clock as ``start``).
     """
 
-    def __init__(self, start, times, positions, velocities, efforts, state,
-                 accepted):
+    def __init__(self, start: float, times: Sequence[float], positions: Rows,
+                 velocities: Rows, efforts: Rows, state: Any,
+                 accepted: float) -> None:
         """Keep the plan; see the class docstring."""
         self.start = float(start)
         self.times = np.asarray(times, dtype=float)
@@ -64,7 +70,7 @@ class JointPlan:
                                          side='right'))
         self.end = self.start + self.times[-1]
 
-    def sample(self, now):
+    def sample(self, now: float) -> tuple[Triple, Triple, Triple]:
         """
         Return ``(position, velocity, effort)`` 3-tuples at ``now`` (s).
 
@@ -72,7 +78,7 @@ class JointPlan:
         """
         segment = self._segment(now)
         if segment is None:
-            return (_floats(self.positions[-1]), _ZERO,
+            return (_floats(self.positions[-1]), ZERO,
                     _floats(self.efforts[-1]))
         s, h, p0, v0, e0, p1, v1, e1 = segment
         s2, s3 = s * s, s * s * s
@@ -83,11 +89,11 @@ class JointPlan:
         effort = e0 + s * (e1 - e0)
         return _floats(position), _floats(velocity), _floats(effort)
 
-    def acceleration(self, now):
+    def acceleration(self, now: float) -> Triple:
         """Return the cubic's second derivative (m/s^2, a 3-tuple) at ``now``."""
         segment = self._segment(now)
         if segment is None:
-            return _ZERO
+            return ZERO
         s, h, p0, v0, _, p1, v1, _ = segment
         return _floats(((12 * s - 6) * (p0 - p1) + (6 * s - 4) * h * v0
                         + (6 * s - 2) * h * v1) / (h * h))
@@ -114,7 +120,7 @@ class JointPlan:
         return ((t - t0) / h, h, p0, v0, e0, self.positions[i],
                 self.velocities[i], self.efforts[i])
 
-    def peak_velocity(self):
+    def peak_velocity(self) -> tuple[float, int]:
         """
         Return ``(speed, joint)``: the largest |velocity| the plan samples.
 
@@ -140,7 +146,7 @@ class JointPlan:
         row, joint = np.unravel_index(np.argmax(speeds), speeds.shape)
         return float(speeds[row, joint]), int(joint)
 
-    def finished(self, now):
+    def finished(self, now: float) -> bool:
         """Whether ``now`` (s, node clock) is past the last point."""
         return bool(now >= self.end)
 

@@ -24,8 +24,14 @@ are finite and reachable before calling it, and check the conditioning and
 the finiteness of what it returns.
 """
 
+from __future__ import annotations
+
+from typing import Any, Callable, Optional, TYPE_CHECKING
 from collections import namedtuple
 from math import sin
+
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.model.robot import Robot
 
 # Constants of the kernel derived once from a Robot (see kernel_constants).
 KernelConstants = namedtuple('KernelConstants', (
@@ -33,7 +39,7 @@ KernelConstants = namedtuple('KernelConstants', (
     'h4', 'p5', 'q5', 'gx', 'gy', 'gz', 'ja', 'jb', 'jc'))
 
 
-def kernel_constants(robot):
+def kernel_constants(robot: Robot) -> 'KernelConstants':
     """
     Pack the robot's values the kernel uses (lengths m, masses kg).
 
@@ -53,7 +59,9 @@ def kernel_constants(robot):
         -robot.l / 2.0, gx, gy, gz, *robot.armature)
 
 
-def solve(k, x, y, z, vx, vy, vz, ax, ay, az, sqrt, record=None):
+def solve(k: 'KernelConstants', x: Any, y: Any, z: Any, vx: Any, vy: Any,
+          vz: Any, ax: Any, ay: Any, az: Any, sqrt: Callable[[Any], Any],
+          record: Optional[dict[str, Any]] = None) -> Optional[tuple]:
     """
     Inverse kinematics and dynamics of the whole robot (eqs. 9-25).
 
@@ -108,7 +116,8 @@ def solve(k, x, y, z, vx, vy, vz, ax, ay, az, sqrt, record=None):
             inverse_condition)
 
 
-def jacobian_cofactors(x, y, z, al_a, al_b, al_c, sqrt):
+def jacobian_cofactors(x: Any, y: Any, z: Any, al_a: Any, al_b: Any, al_c: Any,
+                       sqrt: Callable[[Any], Any]) -> tuple:
     """
     Cofactors and determinant of ``J_lambda = J1^-1 J2`` (eqs. 15-17).
 

@@ -8,15 +8,15 @@ Plain numpy, no ROS. Every function takes a validated :class:`Robot` first.
 - :func:`solve_batch`: N samples as arrays, vectorised, the same numbers.
 - :func:`forward_dynamics`: platform state and actuator forces -> platform
   acceleration (one sample); :func:`forward_dynamics_batch`: N samples.
-- :func:`elements`: position, velocity and acceleration of every body.
-- :func:`leg_joints`: every leg's joint variables and rates, one sample
-  or N (lighter than :func:`elements`).
 - :func:`forward_kinematics`: actuator displacements -> platform centre
   (:func:`forward_kinematics_rows` without refusals);
   :func:`platform_velocity`: actuator rates -> platform velocity.
 - :func:`payload_force`: what carrying a payload adds, at a joint state.
 - :func:`workspace_status`: reachability and distance to singularity.
 - :func:`jacobians`: J1 and J2 of eq. (16).
+
+Every body's state (:func:`bodies.elements`) and every joint's
+(:func:`bodies.leg_joints`) are in :mod:`orthoglide_ros.model.bodies`.
 
 Units: m, m/s, m/s^2, N, W; vectors in the base frame 0. An input that is
 not finite, not reachable or nearer a singularity than the margin raises
@@ -29,6 +29,9 @@ holds a NaN or an infinity.
 [0.0, 0.0, 256.532]
 """
 
+from __future__ import annotations
+
+from typing import Any, Optional, TYPE_CHECKING
 from collections import namedtuple
 import math
 from types import SimpleNamespace
@@ -36,6 +39,10 @@ from types import SimpleNamespace
 import numpy as np
 
 from orthoglide_ros.model import kernel
+from orthoglide_ros.model.types import Array, Rows, Triple, Vector
+
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.model.robot import Robot
 
 # Smallest accepted singularity distance (see workspace_status): below it a
 # point is refused as too near a singularity of J1 or J2.
@@ -64,17 +71,6 @@ Per actuator (A, B, C): ``lambda_`` (m), ``lambdadot`` (m/s),
 3-tuples of floats and floats; a batch holds (N, 3) and (N,) arrays.
 """
 
-LegJoints = namedtuple('LegJoints', (
-    'lambda_', 'phi21', 'phi32', 'lambdadot', 'omega21', 'omega32'))
-LegJoints.__doc__ = """One leg's joint variables and their rates.
-
-``lambda_`` (m) and ``lambdadot`` (m/s) of the slider; ``phi21``,
-``phi32`` (rad) of eq. (9) and their rates ``omega21``, ``omega32``
-(rad/s) of eq. (13), in the passive convention of ``a^phi`` (a rate about
-the child frame's ``u3``). By eq. (5) ``phi54 = phi21`` and ``phi43 =
-phi62 = phi32``. Floats for one sample, (N,) arrays for N.
-"""
-
 WorkspaceStatus = namedtuple('WorkspaceStatus', (
     'reachable', 'alpha_ratio', 'conditioning', 'singularity_distance',
     'ok'))
@@ -92,18 +88,23 @@ class WorkspaceError(ValueError):
     """
     An input the mechanics refuse: ``reason`` is one of REASONS.
 
-    ``row`` is the 0-based sample index for batch calls, else None.
+    ``row`` is the 0-based sample index for batch calls, else None;
+    ``detail`` the message without it.
     """
 
-    def __init__(self, reason, message, row=None):
+    def __init__(self, reason: str, message: str,
+                 row: Optional[int] = None) -> None:
         where = '' if row is None else f'sample {row}: '
         super().__init__(where + message)
+        self.detail = message
         self.reason = reason
         self.row = row
 
 
-def solve(robot, position, velocity=ZERO, acceleration=ZERO,
-          margin=DEFAULT_SINGULARITY_MARGIN, record=None):
+def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
+          acceleration: Vector = ZERO,
+          margin: float = DEFAULT_SINGULARITY_MARGIN,
+          record: Optional[dict[str, Any]] = None) -> 'Solution':
     """
     Solve one sample: eqs. (9), (13), (18) and (25) on Python floats.
 
@@ -155,8 +156,10 @@ def solve(robot, position, velocity=ZERO, acceleration=ZERO,
                     min(min(ratio), conditioning))
 
 
-def solve_batch(robot, positions, velocities=None, accelerations=None,
-                margin=DEFAULT_SINGULARITY_MARGIN):
+def solve_batch(robot: Robot, positions: Rows,
+                velocities: Optional[Rows] = None,
+                accelerations: Optional[Rows] = None,
+                margin: float = DEFAULT_SINGULARITY_MARGIN) -> 'Solution':
     """
     Solve N samples at once, vectorised (the same kernel on arrays).
 
@@ -231,7 +234,7 @@ def solve_batch(robot, positions, velocities=None, accelerations=None,
                     np.minimum(ratio.min(1), conditioning))
 
 
-def friction_force(robot, lambdadot):
+def friction_force(robot: Robot, lambdadot: Any) -> Any:
     """
     Friction the actuators overcome on their sliders (N), per actuator.
 
@@ -288,8 +291,9 @@ def _friction(robot, la, lb, lc, ops):
                                  robot.friction_stribeck))
 
 
-def forward_dynamics(robot, position, velocity, force,
-                     margin=DEFAULT_SINGULARITY_MARGIN):
+def forward_dynamics(robot: Robot, position: Vector, velocity: Vector,
+                     force: Vector,
+                     margin: float = DEFAULT_SINGULARITY_MARGIN) -> Triple:
     """
     Platform acceleration (m/s^2, frame 0) from its state and the forces.
 
@@ -356,8 +360,9 @@ def forward_dynamics(robot, position, velocity, force,
     return acceleration
 
 
-def forward_dynamics_batch(robot, positions, velocities, forces,
-                           margin=DEFAULT_SINGULARITY_MARGIN):
+def forward_dynamics_batch(robot: Robot, positions: Rows, velocities: Rows,
+                           forces: Rows,
+                           margin: float = DEFAULT_SINGULARITY_MARGIN) -> Array:
     """
     Forward dynamics of N samples at once (see :func:`forward_dynamics`).
 
@@ -397,7 +402,8 @@ def forward_dynamics_batch(robot, positions, velocities, forces,
     return acceleration
 
 
-def workspace_status(robot, position, margin=DEFAULT_SINGULARITY_MARGIN):
+def workspace_status(robot: Robot, position: Vector,
+                     margin: float = DEFAULT_SINGULARITY_MARGIN) -> 'WorkspaceStatus':
     """
     Reachability and distance to the singularities of J1 and J2.
 
@@ -429,7 +435,7 @@ def workspace_status(robot, position, margin=DEFAULT_SINGULARITY_MARGIN):
     return WorkspaceStatus(reachable, ratio, conditioning, distance, ok)
 
 
-def forward_kinematics(robot, lam):
+def forward_kinematics(robot: Robot, lam: Rows) -> Array:
     """
     Platform centre G (m) from the actuator displacements (m), eq. (14).
 
@@ -450,7 +456,7 @@ def forward_kinematics(robot, lam):
     return r
 
 
-def forward_kinematics_rows(robot, lam):
+def forward_kinematics_rows(robot: Robot, lam: Rows) -> tuple[Array, Array]:
     """
     Forward kinematics without refusals: ``(positions, found)``.
 
@@ -481,7 +487,8 @@ def forward_kinematics_rows(robot, lam):
     return r, found
 
 
-def platform_velocity(robot, position, lambdadot):
+def platform_velocity(robot: Robot, position: Vector,
+                      lambdadot: Vector) -> Triple:
     """
     Platform velocity ``rdot_G`` (m/s, frame 0) from the actuator rates.
 
@@ -515,7 +522,8 @@ def platform_velocity(robot, position, lambdadot):
     return tuple(velocity.tolist())
 
 
-def payload_force(robot, payload, lambda_, lambdadot, lambdaddot):
+def payload_force(robot: Robot, payload: float, lambda_: Any, lambdadot: Any,
+                  lambdaddot: Any) -> Any:
     """
     Return the forces (N, A, B, C) that carrying ``payload`` (kg) adds.
 
@@ -547,46 +555,7 @@ def payload_force(robot, payload, lambda_, lambdadot, lambdaddot):
     return tuple(force.tolist())
 
 
-def leg_joints(robot, position, velocity=ZERO,
-               margin=DEFAULT_SINGULARITY_MARGIN):
-    """
-    Every leg's joint variables and rates (eqs. 9 and 13).
-
-    ``position``, ``velocity``: the platform centre G and its velocity in
-    frame 0 (m, m/s), 3-sequences for one sample (through :func:`solve`)
-    or (N, 3) arrays for N (checked by :func:`solve_batch`; a
-    ``velocity`` of shape (3,) is that of every sample, None is zero).
-    Returns ``{'A': LegJoints, 'B': ..., 'C': ...}`` (:class:`LegJoints`).
-    Refuses what :func:`solve` and :func:`solve_batch` refuse
-    (:class:`WorkspaceError`).
-
-    >>> from orthoglide_ros.model.robot import Robot
-    >>> leg = leg_joints(Robot(), (0.0, 0.0, -0.425))['A']
-    >>> round(math.degrees(leg.phi32), 9), leg.phi21
-    (30.0, 0.0)
-    """
-    record = {}
-    p = np.asarray(position, dtype=float)
-    if p.ndim == 1:
-        solve(robot, position, velocity, ZERO, margin, record)
-        atan2 = math.atan2
-    else:
-        v = np.broadcast_to(np.asarray(
-            ZERO if velocity is None else velocity, dtype=float), p.shape)
-        solve_batch(robot, p, v, None, margin)
-        columns = (*p.T, *v.T, *np.zeros((3, len(p))))
-        kernel.solve(robot.constants, *columns, np.sqrt, record)
-        atan2 = np.arctan2
-    return {leg: _leg_joints(record[leg], atan2) for leg in 'ABC'}
-
-
-def _leg_joints(rec, atan2):
-    """One leg's :class:`LegJoints` from the kernel's record."""
-    return LegJoints(rec['lam'], atan2(*rec['phi21']), atan2(*rec['phi32']),
-                     rec['lamd'], rec['omega21'], rec['omega32'])
-
-
-def jacobians(robot, position):
+def jacobians(robot: Robot, position: Vector) -> tuple[Array, Array]:
     """
     Return ``(J1, J2)`` of eq. (16) at a position (m) in frame 0.
 
@@ -606,91 +575,6 @@ def jacobians(robot, position):
     j2 = np.broadcast_to(p[..., None, :], j1.shape).copy()
     j2[..., [0, 1, 2], [0, 1, 2]] = alpha
     return j1, j2
-
-
-def elements(robot, position, velocity=ZERO, acceleration=ZERO,
-             margin=DEFAULT_SINGULARITY_MARGIN):
-    """
-    Position, velocity and acceleration of every element (section 2).
-
-    Returns ``{'A': leg, 'B': leg, 'C': leg}`` for one sample. Each leg is a
-    dict with ``phi21``, ``phi32`` (rad), ``omega21``, ``omega32`` (rad/s),
-    ``epsilon21``, ``epsilon32`` (rad/s^2), ``lambda``, ``lambdadot``,
-    ``lambdaddot``, the joint centres ``joints`` (``'A1'`` ... ``'A7'`` and
-    ``'G'``, the platform centre reached through this leg's chain, eq. 7)
-    in frame 0 (m), and ``bodies``: for k in 1..6, a dict with ``rotation``
-    (``a_k0``, 3x3, frame 0 -> frame k), ``origin`` (joint A_k, frame 0, m),
-    ``omega``, ``epsilon`` (rad/s, rad/s^2) and ``velocity``,
-    ``acceleration`` of A_k (m/s, m/s^2), all four in frame 0. Bodies 1 to 6
-    follow doc/model.md (5 is the platform as seen from this leg; 6 the second
-    bar A6A7). The rates come from the kernel's recursion (10)-(12), (19).
-    """
-    record = {}
-    solve(robot, position, velocity, acceleration, margin, record)
-    return {leg: _leg_elements(robot, leg, record[leg]) for leg in 'ABC'}
-
-
-# Constant matrices of eq. (1)-(2); a1 = a10 of leg A.
-A1 = np.array([[0, 0, -1], [0, 1, 0], [1, 0, 0]], dtype=float)
-A2 = np.array([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], dtype=float)
-A3 = np.array([[0, 0, -1], [-1, 0, 0], [0, 1, 0]], dtype=float)
-A4 = np.array([[-1, 0, 0], [0, 1, 0], [0, 0, -1]], dtype=float)
-# Leg coordinates: P_leg r_G is the point a leg sees (b10 = a1 P, c10 = a1 P^2).
-LEG_PERMUTATION = {
-    'A': np.eye(3),
-    'B': np.array([[0, 1, 0], [0, 0, 1], [1, 0, 0]], dtype=float),
-    'C': np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0]], dtype=float),
-}
-
-
-def rotation_z(sin_phi, cos_phi):
-    """Return ``a^phi`` of eq. (2), the passive rotation about z."""
-    return np.array([[cos_phi, sin_phi, 0.0], [-sin_phi, cos_phi, 0.0],
-                     [0.0, 0.0, 1.0]])
-
-
-def _leg_elements(robot, leg, rec):
-    """Frame-0 elements of one leg from the kernel's record (eqs. 1-8)."""
-    s1, c1 = rec['phi21']
-    s2, c2 = rec['phi32']
-    a21 = rotation_z(s1, c1) @ A2
-    a32 = rotation_z(s2, c2) @ A3
-    a43 = rotation_z(s2, c2) @ A4
-    a10 = A1 @ LEG_PERMUTATION[leg]
-    rot = {1: a10}
-    rot[2] = a21 @ rot[1]
-    rot[3] = a32 @ rot[2]
-    rot[6] = rot[3]
-    rot[4] = a43 @ rot[3]
-    rot[5] = a21 @ rot[4]           # a54 = a^phi21 a2 = a21
-    ca, sa = math.cos(robot.alpha), math.sin(robot.alpha)
-    u3 = np.array([0.0, 0.0, 1.0])
-    joints = {'A1': (rec['lam'] - robot.l1 * ca - robot.l3 - robot.l / 2)
-              * rot[1].T @ u3}
-    joints['A2'] = joints['A1'] + rot[1].T @ [0.0, robot.l1 * sa,
-                                              robot.l1 * ca]
-    joints['A3'] = joints['A2'] + rot[2].T @ [0.0, 0.0, -robot.l2 / 2]
-    joints['A6'] = joints['A2'] + rot[2].T @ [0.0, 0.0, robot.l2 / 2]
-    joints['A4'] = joints['A3'] + rot[3].T @ [0.0, -robot.l3, 0.0]
-    joints['A7'] = joints['A6'] + rot[6].T @ [0.0, -robot.l3, 0.0]
-    joints['A5'] = joints['A4'] + rot[4].T @ [robot.l2 / 2, 0.0, 0.0]
-    joints['G'] = joints['A5'] + rot[5].T @ [robot.l1 * sa, -robot.l / 2,
-                                             0.0]
-    origin = {1: 'A1', 2: 'A2', 3: 'A3', 4: 'A4', 5: 'A5', 6: 'A6'}
-    bodies = {
-        b: {'rotation': rot[b], 'origin': joints[origin[b]],
-            'omega': rot[b].T @ rec['omega'][b],
-            'epsilon': rot[b].T @ rec['epsilon'][b],
-            'velocity': rot[b].T @ rec['v'][b],
-            'acceleration': rot[b].T @ rec['gamma'][b]}
-        for b in (1, 2, 3, 4, 5, 6)}
-    variables = _leg_joints(rec, math.atan2)
-    return {
-        'phi21': variables.phi21, 'phi32': variables.phi32,
-        'omega21': variables.omega21, 'omega32': variables.omega32,
-        'epsilon21': rec['epsilon21'], 'epsilon32': rec['epsilon32'],
-        'lambda': variables.lambda_, 'lambdadot': variables.lambdadot,
-        'lambdaddot': rec['lamdd'], 'joints': joints, 'bodies': bodies}
 
 
 def _as_samples(name, values, n=None):
@@ -782,6 +666,6 @@ def _leg_error(robot, position, margin, row=None):
         f'{math.sqrt(1.0 - rho / (l3 * l3)):.3g}'), row)
 
 
-def format_vector(vec):
+def format_vector(vec: Optional[Vector]) -> str:
     """Return a vector as ``[x, y, z]`` with 6 significant digits."""
     return '[' + ', '.join(f'{float(v):.6g}' for v in vec) + ']'

@@ -2,7 +2,7 @@
 The Orthoglide as MJCF: MuJoCo's model, with the loops closed, without ROS.
 
 The same bodies, frames, masses, centres and inertias as :mod:`urdf`
-(:func:`urdf.inertials`, frames from :func:`mechanics.elements` at home,
+(:func:`urdf.inertials`, frames from :func:`bodies.elements` at home,
 full precision), nested as a tree that MuJoCo closes with ``connect``
 equality constraints where :mod:`mechanics` cuts the mechanism:
 
@@ -38,17 +38,25 @@ about a micrometre and an open-loop run follows the rigid model; MuJoCo's
 defaults let them sag by millimetres (doc/mujoco.md has the figures).
 """
 
+from __future__ import annotations
+
+from typing import Any, Optional, Sequence, TYPE_CHECKING
 import functools
 import xml.etree.ElementTree as ET
 
 import numpy as np
 
 from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.bodies import elements, LEG_LABELS
 from orthoglide_ros.model.mechanics import ZERO
 from orthoglide_ros.model.robot import JOINT_NAMES
 from orthoglide_ros.model.urdf import (CHAIN, GREY, header_comment,
-                                       inertials, LEG_COLOURS,
-                                       LEGS, link_name, PLATFORM)
+                                       inertials, LEG_COLOURS, link_name,
+                                       PLATFORM)
+from orthoglide_ros.model.types import Triple, Vector
+
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.model.robot import Robot
 
 MIN_INERTIA = 1e-9          # kg m^2: a principal inertia the model has 0
 TIMESTEP = 0.001            # s
@@ -57,13 +65,13 @@ SOLREF = (0.002, 1.0)       # the stiffest MuJoCo allows at TIMESTEP (2 dt)
 SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 
 
-def coulomb_mean(robot):
+def coulomb_mean(robot: Robot) -> Triple:
     """Return the sliders' mean Coulomb friction of both directions (N)."""
     return tuple(0.5 * (f + g) for f, g in zip(
         robot.friction_coulomb, robot.friction_coulomb_negative))
 
 
-def friction_beyond(robot, lambdadot):
+def friction_beyond(robot: Robot, lambdadot: Any) -> Any:
     """
     Return the friction MuJoCo's joints leave out (N, 3-tuple), at speeds.
 
@@ -87,14 +95,15 @@ def _held_by_mujoco(robot):
                          friction_stribeck=ZERO)
 
 
-def equality_names(leg):
+def equality_names(leg: str) -> tuple[str, ...]:
     """Return the names of ``leg``'s loop closures (A7; A5 for B, C)."""
     prefix = leg.lower()
     return (f'{prefix}_a7',) + (() if leg == 'A' else (
         f'{prefix}_a5', f'{prefix}_a5_axis'))
 
 
-def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None):
+def mjcf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
+         force_limit: Optional[float] = None) -> str:
     """
     Return the MJCF (XML text) of ``robot``; sliders named ``joint_names``.
 
@@ -104,7 +113,7 @@ def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None):
     it; ``robot.payload`` rides in the platform's mass. Plain text, the
     same for the same arguments.
     """
-    home = mechanics.elements(robot, ZERO)
+    home = elements(robot, ZERO)
     masses = inertials(robot)
     radius = robot.l2 / 8.0
     root = ET.Element('mujoco', model='orthoglide')
@@ -130,17 +139,17 @@ def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None):
     world = ET.SubElement(root, 'worldbody')
     ET.SubElement(world, 'light', pos='1 1 2', dir='-0.5 -0.5 -1',
                   directional='true')
-    for leg in LEGS:
+    for leg in LEG_LABELS:
         axis = home[leg]['bodies'][1]['rotation'].T[:, 2]
         a1 = home[leg]['joints']['A1']
         ET.SubElement(world, 'geom', type='cylinder', material='rail',
                       size=_number(radius), fromto=_vector(np.concatenate(
                           (a1 - robot.l3 * axis, a1 + robot.l3 * axis))))
-    for leg, name, rotor in zip(LEGS, joint_names, robot.armature):
+    for leg, name, rotor in zip(LEG_LABELS, joint_names, robot.armature):
         _leg(world, robot, leg, name, home, masses, radius, rotor)
 
     equality = ET.SubElement(root, 'equality')
-    for leg in LEGS:
+    for leg in LEG_LABELS:
         bodies, joints = home[leg]['bodies'], home[leg]['joints']
         prefix = leg.lower()
         ET.SubElement(equality, 'connect', name=f'{prefix}_a7',
@@ -159,7 +168,7 @@ def mjcf(robot, joint_names=JOINT_NAMES, force_limit=None):
         attributes = {'name': name, 'joint': name, 'gear': '1'}
         if force_limit:
             attributes['ctrlrange'] = _vector((-force_limit, force_limit))
-        ET.SubElement(actuator, 'motor', **attributes)
+        ET.SubElement(actuator, 'motor', attributes)
     ET.indent(root, '  ')
     return ET.tostring(root, encoding='unicode') + '\n'
 
@@ -179,9 +188,9 @@ def _leg(world, robot, leg, slider_joint, home, masses, radius, armature):
         if body == 1:
             ET.SubElement(element, 'joint', name=slider_joint, type='slide',
                           axis='0 0 1', damping=_number(
-                              robot.friction_viscous[LEGS.index(leg)]),
+                              robot.friction_viscous[LEG_LABELS.index(leg)]),
                           frictionloss=_number(
-                              coulomb_mean(robot)[LEGS.index(leg)]),
+                              coulomb_mean(robot)[LEG_LABELS.index(leg)]),
                           armature=_number(armature))
         else:
             ET.SubElement(element, 'joint', name=f'{prefix}_{suffix}',
@@ -199,7 +208,7 @@ def _leg(world, robot, leg, slider_joint, home, masses, radius, armature):
         _inertial(platform, masses[5])
         ET.SubElement(platform, 'geom', type='box', material='platform',
                       size=_vector((robot.l / 2.0,) * 3))
-        for other in LEGS:
+        for other in LEG_LABELS:
             mount = home[other]['joints']['A5'] - home[other]['joints']['G']
             ET.SubElement(platform, 'geom', type='cylinder',
                           material='platform', size=_number(radius),
@@ -209,7 +218,7 @@ def _leg(world, robot, leg, slider_joint, home, masses, radius, armature):
 
 
 def _body(parent, name, frame, parent_frame, inertial):
-    """Add a body at ``frame`` (of mechanics.elements), seen from its parent."""
+    """Add a body at ``frame`` (of bodies.elements), seen from its parent."""
     if parent_frame is None:
         pos, rotation = frame['origin'], frame['rotation'].T
     else:
@@ -258,7 +267,7 @@ def _shapes(body, number, frame, joints, colour, radius):
 
 
 def _local(frame, point):
-    """Return a point of frame 0 in ``frame`` (of mechanics.elements)."""
+    """Return a point of frame 0 in ``frame`` (of bodies.elements)."""
     return frame['rotation'] @ (np.asarray(point) - frame['origin'])
 
 
@@ -278,19 +287,21 @@ def _vector(values):
     return ' '.join(_number(v) for v in values)
 
 
-def joint_values(robot, position, velocity=ZERO, acceleration=ZERO,
-                 joint_names=JOINT_NAMES):
+def joint_values(robot: Robot, position: Vector, velocity: Vector = ZERO,
+                 acceleration: Vector = ZERO,
+                 joint_names: Sequence[str] = JOINT_NAMES
+                 ) -> dict[str, tuple[float, float, float]]:
     """
     Return every MJCF joint's ``{name: (q, qdot, qddot)}`` at a platform state.
 
-    From :func:`mechanics.elements` (eqs. 9, 13 and their derivatives):
+    From :func:`bodies.elements` (eqs. 9, 13 and their derivatives):
     the sliders' lambda, the hinges' phi21 (``x_phi21``, ``a_phi54``) and
     phi32 (``x_phi32``, ``x_phi62``, ``x_phi43``), by eq. (5); m, rad and
     their rates.
     """
-    legs = mechanics.elements(robot, position, velocity, acceleration)
+    legs = elements(robot, position, velocity, acceleration)
     values = {}
-    for leg, name in zip(LEGS, joint_names):
+    for leg, name in zip(LEG_LABELS, joint_names):
         e, prefix = legs[leg], leg.lower()
         values[name] = (e['lambda'], e['lambdadot'], e['lambdaddot'])
         angle = {n: (e[f'phi{n}'], e[f'omega{n}'], e[f'epsilon{n}'])

@@ -15,6 +15,9 @@ and constraint settings, at the largest sub-step of at most
 Units: m, m/s, N, s; vectors in the base frame 0.
 """
 
+from __future__ import annotations
+
+from typing import Optional, Union
 import math
 
 import numpy as np
@@ -24,9 +27,10 @@ from orthoglide_ros.model.mechanics import (DEFAULT_SINGULARITY_MARGIN,
                                             WorkspaceError, ZERO)
 from orthoglide_ros.model.plant import clipped, force_limits, PlantStep
 from orthoglide_ros.model.robot import JOINT_NAMES, Robot
+from orthoglide_ros.model.types import Triple, Vector
 
 
-def check_model(text):
+def check_model(text: str) -> None:
     """
     Refuse an MJCF that is not ``orthoglide mjcf``'s (ValueError, the reason).
 
@@ -52,7 +56,7 @@ def check_model(text):
             f'platform body {"present" if "platform" in bodies else "absent"}')
 
 
-def unavailable():
+def unavailable() -> Optional[str]:
     """Return why MuJoCo cannot be used here, '' if it can."""
     try:
         import mujoco  # noqa: F401
@@ -73,9 +77,11 @@ class MujocoPlant:
     # Its sliders are MuJoCo's slide joints (:meth:`joint_state`).
     closed_form = False
 
-    def __init__(self, robot, position=ZERO, velocity=ZERO, time=0.0,
-                 force_limit=math.inf, margin=DEFAULT_SINGULARITY_MARGIN,
-                 model_text=None):
+    def __init__(self, robot: Robot, position: Vector = ZERO,
+                 velocity: Vector = ZERO, time: float = 0.0,
+                 force_limit: Union[float, Vector] = math.inf,
+                 margin: float = DEFAULT_SINGULARITY_MARGIN,
+                 model_text: Optional[str] = None) -> None:
         """
         Build the model of ``robot``; check and set the initial state.
 
@@ -118,12 +124,12 @@ class MujocoPlant:
         self._mujoco.mj_forward(self.model, self.data)
 
     @property
-    def position(self):
+    def position(self) -> Triple:
         """Return the platform centre G (m, frame 0)."""
         return tuple(float(c) for c in self.data.xpos[self._platform])
 
     @property
-    def velocity(self):
+    def velocity(self) -> Triple:
         """Return the platform centre's speed vector (m/s, frame 0)."""
         twist = np.zeros(6)
         self._mujoco.mj_objectVelocity(
@@ -132,15 +138,15 @@ class MujocoPlant:
         return tuple(float(c) for c in twist[3:])
 
     @velocity.setter
-    def velocity(self, velocity):
+    def velocity(self, velocity: Vector) -> None:
         self._set(self.position, velocity)
 
     @property
-    def time(self):
+    def time(self) -> float:
         """Return the simulated seconds since the start."""
         return float(self.data.time)
 
-    def step(self, force, dt):
+    def step(self, force: Vector, dt: float) -> 'PlantStep':
         """
         Apply ``force`` (N) held over ``dt`` (s) and advance the state.
 
@@ -177,7 +183,7 @@ class MujocoPlant:
             tuple((v - w) / dt for v, w in zip(velocity, before)), applied,
             tuple(a != c for a, c in zip(applied, command)))
 
-    def carry(self, payload):
+    def carry(self, payload: float) -> None:
         """
         Carry ``payload`` (kg) on the platform from the next step on.
 
@@ -190,7 +196,7 @@ class MujocoPlant:
             (mass + payload) / mass)
         self.robot = self.robot.replace(payload=payload)
 
-    def joint_state(self):
+    def joint_state(self) -> tuple[Triple, Triple]:
         """Return ``(lambda, lambdadot)`` (m, m/s) of the slide joints."""
         qpos, qvel = self.data.qpos, self.data.qvel
         slots = [self._dofs[name] for name in JOINT_NAMES]

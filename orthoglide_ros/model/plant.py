@@ -35,12 +35,19 @@ with start samples; a 1 N disturbance, 0.1 m).
 Units: m, m/s, m/s^2, N, s; vectors in the base frame 0.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Union
 from collections import namedtuple
 import math
 
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.mechanics import (
     DEFAULT_SINGULARITY_MARGIN, WorkspaceError, ZERO)
+from orthoglide_ros.model.types import Triple, Vector
+
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.model.robot import Robot
 
 PlantStep = namedtuple('PlantStep', ('acceleration', 'force', 'clipped'))
 PlantStep.__doc__ = """What one :meth:`Plant.step` did.
@@ -51,8 +58,9 @@ PlantStep.__doc__ = """What one :meth:`Plant.step` did.
 """
 
 
-def rk4_step(robot, position, velocity, force, dt,
-             margin=DEFAULT_SINGULARITY_MARGIN):
+def rk4_step(robot: Robot, position: Vector, velocity: Vector, force: Vector,
+             dt: float,
+             margin: float = DEFAULT_SINGULARITY_MARGIN) -> tuple[Triple, Triple, Triple]:
     """
     Advance ``(r_G, rdot_G)`` by ``dt`` (s) with the classic RK4 method.
 
@@ -108,7 +116,8 @@ def rk4_step(robot, position, velocity, force, dt,
     return end[0], end[1], (a1x, a1y, a1z)
 
 
-def force_limits(force_limit, time=0.0):
+def force_limits(force_limit: Union[float, Vector],
+                 time: float = 0.0) -> Triple:
     """
     Return a plant's force limits as three floats (N); check its time.
 
@@ -126,7 +135,8 @@ def force_limits(force_limit, time=0.0):
     return limits
 
 
-def clipped(force, limits):
+def clipped(force: Vector,
+            limits: Vector) -> tuple[Triple, tuple[bool, bool, bool]]:
     """
     Return a force command as floats, and the same clipped to limits (N).
 
@@ -163,8 +173,10 @@ class Plant:
     # Its sliders are the closed form of the platform's state (eq. 9, 15).
     closed_form = True
 
-    def __init__(self, robot, position=ZERO, velocity=ZERO, time=0.0,
-                 force_limit=math.inf, margin=DEFAULT_SINGULARITY_MARGIN):
+    def __init__(self, robot: Robot, position: Vector = ZERO,
+                 velocity: Vector = ZERO, time: float = 0.0,
+                 force_limit: Union[float, Vector] = math.inf,
+                 margin: float = DEFAULT_SINGULARITY_MARGIN) -> None:
         """Check and set the initial state (see the class docstring)."""
         self.robot = robot
         self.force_limit = force_limits(force_limit, time)
@@ -174,7 +186,7 @@ class Plant:
         self.time = float(time)
         mechanics.solve(robot, self.position, self.velocity, ZERO, margin)
 
-    def step(self, force, dt):
+    def step(self, force: Vector, dt: float) -> 'PlantStep':
         """
         Apply ``force`` (N) held over ``dt`` (s) and advance the state.
 
@@ -192,11 +204,11 @@ class Plant:
         return PlantStep(acceleration, applied,
                          tuple(a != c for a, c in zip(applied, command)))
 
-    def carry(self, payload):
+    def carry(self, payload: float) -> None:
         """Carry ``payload`` (kg) on the platform from the next step on."""
         self.robot = self.robot.replace(payload=payload)
 
-    def joint_state(self):
+    def joint_state(self) -> tuple[Triple, Triple]:
         """Return ``(lambda, lambdadot)`` (m, m/s, 3-tuples), eq. (9), (15)."""
         s = mechanics.solve(self.robot, self.position, self.velocity,
                             ZERO, self.margin)

@@ -10,16 +10,20 @@ The parameter names are the paper's (section 2) and those of the
 for the bodies they describe.
 """
 
+from __future__ import annotations
+
 from collections import namedtuple
 from dataclasses import dataclass, fields
 import math
-from typing import Optional, Tuple
+from typing import Any, Tuple
 
 from orthoglide_ros.model.kernel import kernel_constants
 
+# The legs' suffixes, in the order of every per-actuator triple.
+LEGS = ('a', 'b', 'c')
 # The prismatic joints of actuators A, B, C: the default joint_names of
 # every node, of the URDF and of the logs.
-JOINT_NAMES = ('slider_a', 'slider_b', 'slider_c')
+JOINT_NAMES = tuple(f'slider_{leg}' for leg in LEGS)
 # Friction on the sliders (not in the paper, which neglects it): none by
 # default, so that the paper's figures stand. The smoothing speed of the
 # Coulomb term: tanh(1) = 76 % of the Coulomb force at 1 mm/s. The Stribeck
@@ -104,7 +108,7 @@ ROWS = (
 ROW = {row.name: row for row in ROWS}
 
 
-def is_vector(row):
+def is_vector(row: 'Row') -> bool:
     """Whether ``row``'s value is a 3-vector (its own or its leader's)."""
     return isinstance(ROW[row.follows].default if row.follows
                       else row.default, tuple)
@@ -123,7 +127,7 @@ class ParameterError(ValueError):
     a node's parameter (``rate_hz``).
     """
 
-    def __init__(self, name, rule):
+    def __init__(self, name: str, rule: str) -> None:
         """Keep ``name`` and ``rule``; the message is ``name: rule``."""
         super().__init__(f'{name}: {rule}')
         self.name = name
@@ -172,14 +176,14 @@ class Robot:
     m1: float = ROW['m1'].default
     m2: float = ROW['m2'].default
     m3: float = ROW['m3'].default
-    m4: Optional[float] = ROW['m4'].default
+    m4: float = ROW['m4'].default       # None given: follows m2
     m5: float = ROW['m5'].default
-    m6: Optional[float] = ROW['m6'].default
+    m6: float = ROW['m6'].default       # None given: follows m3
     gravity: Vector = ROW['gravity'].default
     friction_viscous: Vector = ROW['friction_viscous'].default
     friction_coulomb: Vector = ROW['friction_coulomb'].default
     friction_velocity: float = ROW['friction_velocity'].default
-    friction_coulomb_negative: Optional[Vector] = \
+    friction_coulomb_negative: Vector = \
         ROW['friction_coulomb_negative'].default
     friction_stribeck: Vector = ROW['friction_stribeck'].default
     friction_stribeck_velocity: float = \
@@ -209,11 +213,11 @@ class Robot:
                                          == self.friction_coulomb))
 
     @classmethod
-    def parameter_names(cls):
+    def parameter_names(cls) -> tuple[str, ...]:
         """Names of the parameters, in declaration order (``robot.`` less)."""
         return tuple(f.name for f in fields(cls))
 
-    def as_parameters(self):
+    def as_parameters(self) -> dict[str, Any]:
         """
         Return the description as a ``{name: value}`` dict.
 
@@ -225,7 +229,7 @@ class Robot:
                 for name, value in ((name, getattr(self, name))
                                     for name in self.parameter_names())}
 
-    def replace(self, **changes):
+    def replace(self, **changes: Any) -> 'Robot':
         """
         Return a validated copy with some parameters changed.
 
@@ -240,7 +244,7 @@ class Robot:
         values.update(changes)
         return Robot(**values)
 
-    def frictionless(self):
+    def frictionless(self) -> 'Robot':
         """Return a copy with no friction (every FRICTION_FORCES zero)."""
         return self.replace(**dict.fromkeys(FRICTION_FORCES, NO_FRICTION))
 

@@ -10,6 +10,9 @@ Platform trajectories: the paper's, eq. (6), the way back, an excitation.
   (``doc/identification.md``), a finite Fourier series per axis.
 """
 
+from __future__ import annotations
+
+from typing import Any, Callable, Optional
 from collections import namedtuple
 import math
 
@@ -17,6 +20,7 @@ import numpy as np
 
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.types import Array, Triple, Vector
 
 # Eq. (6): r_G(t) = r* (1 - cos(pi t / 3)), over 2 s from rest at home.
 PAPER_TARGET = (0.05, 0.10, -0.20)
@@ -28,7 +32,8 @@ PAPER_OMEGA = math.pi / 3.0
 RETURN_DURATION = 4.0
 
 
-def paper_sample(t, target=PAPER_TARGET, omega=PAPER_OMEGA):
+def paper_sample(t: float, target: Vector = PAPER_TARGET,
+                 omega: float = PAPER_OMEGA) -> tuple[Triple, Triple, Triple]:
     """
     Position (m), velocity (m/s), acceleration (m/s^2) of eq. (6) at t (s).
 
@@ -45,7 +50,8 @@ def paper_sample(t, target=PAPER_TARGET, omega=PAPER_OMEGA):
             tuple(r * a for r in target))
 
 
-def paper_batch(times, target=PAPER_TARGET, omega=PAPER_OMEGA):
+def paper_batch(times: Any, target: Vector = PAPER_TARGET,
+                omega: float = PAPER_OMEGA) -> tuple[Array, Array, Array]:
     """Eq. (6) at an array of times (s): three (N, 3) arrays (m, m/s, m/s^2)."""
     t = np.asarray(times, dtype=float)[:, None]
     r = np.asarray(target, dtype=float)
@@ -53,14 +59,15 @@ def paper_batch(times, target=PAPER_TARGET, omega=PAPER_OMEGA):
             r * omega * omega * np.cos(omega * t))
 
 
-def paper_times(samples, duration=PAPER_DURATION):
+def paper_times(samples: int, duration: float = PAPER_DURATION) -> Array:
     """Return ``samples`` instants over [0, duration] s, ends included."""
     if samples < 2:
         raise ValueError(f'samples must be at least 2, got {samples}')
     return np.linspace(0.0, duration, samples)
 
 
-def quintic(start, end, duration):
+def quintic(start: Vector, end: Vector,
+            duration: float) -> Callable[[float], tuple[Triple, Triple, Triple]]:
     """
     Return the quintic from ``start`` to ``end`` in ``duration`` s.
 
@@ -118,10 +125,12 @@ t) + cosines[i, k-1] cos(k w t))``, ``w = 2 pi / period`` (m, s);
 """
 
 
-def excitation(seed, period, harmonics=EXCITATION_HARMONICS,
-               box=EXCITATION_BOX, max_velocity=EXCITATION_MAX_VELOCITY,
-               max_acceleration=EXCITATION_MAX_ACCELERATION, robot=None,
-               margin=mechanics.DEFAULT_SINGULARITY_MARGIN):
+def excitation(seed: int, period: float, harmonics: int = EXCITATION_HARMONICS,
+               box: float = EXCITATION_BOX,
+               max_velocity: float = EXCITATION_MAX_VELOCITY,
+               max_acceleration: float = EXCITATION_MAX_ACCELERATION,
+               robot: Optional[Robot] = None,
+               margin: float = mechanics.DEFAULT_SINGULARITY_MARGIN) -> 'Excitation':
     """
     Return an :class:`Excitation`: a finite Fourier series per axis.
 
@@ -159,11 +168,13 @@ def excitation(seed, period, harmonics=EXCITATION_HARMONICS,
                              margin, seed)
 
 
-def shaped_excitation(sines, cosines, period, box=EXCITATION_BOX,
-                      max_velocity=EXCITATION_MAX_VELOCITY,
-                      max_acceleration=EXCITATION_MAX_ACCELERATION,
-                      robot=None, margin=mechanics.DEFAULT_SINGULARITY_MARGIN,
-                      seed=None):
+def shaped_excitation(sines: Any, cosines: Any, period: float,
+                      box: float = EXCITATION_BOX,
+                      max_velocity: float = EXCITATION_MAX_VELOCITY,
+                      max_acceleration: float = EXCITATION_MAX_ACCELERATION,
+                      robot: Optional[Robot] = None,
+                      margin: float = mechanics.DEFAULT_SINGULARITY_MARGIN,
+                      seed: Optional[int] = None) -> 'Excitation':
     """
     Return the :class:`Excitation` of given coefficients, shaped.
 
@@ -209,13 +220,15 @@ def shaped_excitation(sines, cosines, period, box=EXCITATION_BOX,
     return motion
 
 
-def excitation_sample(motion, t):
+def excitation_sample(motion: 'Excitation',
+                      t: float) -> tuple[Triple, Triple, Triple]:
     """Position (m), velocity (m/s), acceleration (m/s^2) at t (s): 3-tuples."""
     p, v, a = excitation_batch(motion, np.array([float(t)]))
     return tuple(p[0].tolist()), tuple(v[0].tolist()), tuple(a[0].tolist())
 
 
-def excitation_batch(motion, times):
+def excitation_batch(motion: 'Excitation',
+                     times: Any) -> tuple[Array, Array, Array]:
     """Return the excitation at an array of times (s): three (N, 3) arrays."""
     w = 2.0 * math.pi / motion.period
     k = w * np.arange(1, motion.sines.shape[1] + 1)

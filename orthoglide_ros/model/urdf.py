@@ -33,7 +33,7 @@ Names (fixed; tools and users rely on them), with ``x`` in ``a, b, c``:
 - fixed joints are named after their child: ``platform_joint``,
   ``x_platform_mount_joint``, ``x_a7_bar_joint``, ``x_a7_rod_joint``.
 
-Every frame comes from :func:`mechanics.elements` at home, where every
+Every frame comes from :func:`bodies.elements` at home, where every
 joint variable is zero: a joint's origin is its child's frame seen from
 its parent's. The inertials are the bodies table of doc/model.md (the
 platform once, on ``platform``; links that are no body of the model carry
@@ -41,17 +41,24 @@ none). Joint limits are the ranges over the workspace within the
 singularity margin (:func:`joint_limits`). Shapes are boxes and cylinders.
 """
 
+from __future__ import annotations
+
+from typing import Any, Callable, Sequence, TYPE_CHECKING
 import functools
 import math
 import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from orthoglide_ros.model import mechanics
+from orthoglide_ros.model import bodies, mechanics
+from orthoglide_ros.model.bodies import LEG_LABELS
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
 from orthoglide_ros.model.robot import JOINT_NAMES
+from orthoglide_ros.model.types import Array, Triple
 
-LEGS = ('A', 'B', 'C')
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.model.robot import Robot
+
 BASE_LINK = 'base_link'
 PLATFORM = 'platform'
 # A leg's bodies in the tree: (body, link suffix, parent body, joint suffix,
@@ -87,7 +94,7 @@ GREY = {'rail': (0.55, 0.55, 0.55, 1.0), 'steel': (0.3, 0.3, 0.35, 1.0),
         'platform': (0.8, 0.8, 0.8, 1.0)}
 
 
-def link_name(leg, body):
+def link_name(leg: str, body: int) -> str:
     """Return the URDF link of ``body`` (1-6) of ``leg`` ('A', 'B', 'C')."""
     for number, suffix, _, _, _ in CHAIN:
         if number == body:
@@ -95,27 +102,29 @@ def link_name(leg, body):
     raise ValueError(f'no body {body}')
 
 
-def moving_joints(joint_names=JOINT_NAMES):
+def moving_joints(joint_names: Sequence[str] = JOINT_NAMES
+                  ) -> tuple[tuple[str, str, str], ...]:
     """
     Every non-fixed joint of the URDF, in the order a joint state lists it.
 
     The three sliders (``joint_names``, actuators A, B, C), then for legs
     a, b, c their revolute joints ``x_phi21, x_phi32, x_phi62, x_phi43,
     x_phi54``. Returns ``(name, leg, variable)`` triples: ``variable`` is
-    the :class:`mechanics.LegJoints` field of ``leg`` that the joint takes
+    the :class:`bodies.LegJoints` field of ``leg`` that the joint takes
     (its rate is ``RATES[variable]``).
 
     >>> [name for name, _, _ in moving_joints()][:4]
     ['slider_a', 'slider_b', 'slider_c', 'a_phi21']
     """
-    joints = [(name, leg, 'lambda_') for name, leg in zip(joint_names, LEGS)]
-    for leg in LEGS:
+    joints = [(name, leg, 'lambda_') for name, leg in zip(joint_names, LEG_LABELS)]
+    for leg in LEG_LABELS:
         joints += [(f'{leg.lower()}_{suffix}', leg, variable)
                    for _, _, _, suffix, variable in CHAIN if suffix]
     return tuple(joints)
 
 
-def joint_limits(robot, margin=DEFAULT_SINGULARITY_MARGIN):
+def joint_limits(robot: Robot,
+                 margin: float = DEFAULT_SINGULARITY_MARGIN) -> dict[str, tuple[float, float]]:
     """
     Range of each joint variable over the workspace within ``margin``.
 
@@ -158,11 +167,11 @@ def _extreme(robot, margin, variable, sign):
             return points, np.empty(0)
         # Inside the margin by workspace_status: solved without it, so a
         # point on the margin's very edge is not refused by rounding.
-        legs = mechanics.leg_joints(robot, points, None, 0.0)
+        legs = bodies.leg_joints(robot, points, None, 0.0)
         # Only the home branch: the positions the forward kinematics gives
         # back (the others lie beyond a singularity of J2).
         back, found = mechanics.forward_kinematics_rows(
-            robot, np.column_stack([legs[leg].lambda_ for leg in LEGS]))
+            robot, np.column_stack([legs[leg].lambda_ for leg in LEG_LABELS]))
         home = found & (np.abs(back - points).max(-1) <= 1e-9 * robot.l3)
         return points[home], sign * getattr(legs['A'], variable)[home]
 
@@ -191,7 +200,7 @@ def _grid(centre, offsets):
     return np.stack(mesh, -1).reshape(-1, 3) + np.asarray(centre)
 
 
-def inertials(robot):
+def inertials(robot: Robot) -> dict[int, Any]:
     """
     Return doc/model.md's bodies table: ``{body: (mass, centre, inertia)}``.
 
@@ -219,7 +228,8 @@ def inertials(robot):
     }
 
 
-def urdf(robot, joint_names=JOINT_NAMES, margin=DEFAULT_SINGULARITY_MARGIN):
+def urdf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
+         margin: float = DEFAULT_SINGULARITY_MARGIN) -> str:
     """
     Return the URDF (XML text) of ``robot``, sliders named ``joint_names``.
 
@@ -227,7 +237,7 @@ def urdf(robot, joint_names=JOINT_NAMES, margin=DEFAULT_SINGULARITY_MARGIN):
     docstring for the tree and its names). Plain text, the same for the
     same arguments.
     """
-    home = mechanics.elements(robot, ZERO)
+    home = bodies.elements(robot, ZERO)
     limits = joint_limits(robot, margin)
     masses = inertials(robot)
     radius = robot.l2 / 8.0
@@ -246,13 +256,13 @@ def urdf(robot, joint_names=JOINT_NAMES, margin=DEFAULT_SINGULARITY_MARGIN):
                       rgba=_vector(rgba))
 
     base = _link(root, BASE_LINK)
-    for leg, name in zip(LEGS, joint_names):
+    for leg, name in zip(LEG_LABELS, joint_names):
         low, high = limits['lambda_']
         axis = home[leg]['bodies'][1]['rotation'].T[:, 2]     # z1, frame 0
         a1 = home[leg]['joints']['A1']
         _shape(base, 'cylinder', 'rail', radius,
                a1 + low * axis, a1 + high * axis)
-    for leg, name in zip(LEGS, joint_names):
+    for leg, name in zip(LEG_LABELS, joint_names):
         _leg(root, robot, leg, name, home[leg], limits, masses, radius)
 
     platform = _link(root, PLATFORM, masses[5])
@@ -262,7 +272,7 @@ def urdf(robot, joint_names=JOINT_NAMES, margin=DEFAULT_SINGULARITY_MARGIN):
            a_end['rotation'] @ (home['A']['joints']['G'] - a_end['origin']),
            a_end['rotation'])
     centre = home['A']['joints']['G']
-    for leg in LEGS:
+    for leg in LEG_LABELS:
         end = home[leg]['bodies'][5]
         mount = f'{leg.lower()}_platform_mount'
         _link(root, mount)
@@ -391,7 +401,7 @@ def _z_towards(direction):
     return np.column_stack((x, np.cross(z, x), z))
 
 
-def rpy(rotation):
+def rpy(rotation: Array) -> Triple:
     """
     Return URDF's roll, pitch and yaw (rad) of a rotation matrix.
 
@@ -410,7 +420,8 @@ def rpy(rotation):
     return (math.atan2(r[2, 1], r[2, 2]), pitch, math.atan2(r[1, 0], r[0, 0]))
 
 
-def header_comment(robot, command, number, tail):
+def header_comment(robot: Robot, command: str,
+                   number: Callable[[float], str], tail: str) -> ET.Element[Any]:
     """
     Return the comment that opens a model file: its robot, how it was made.
 

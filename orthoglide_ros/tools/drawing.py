@@ -1,7 +1,7 @@
 """
 Pictures of the Orthoglide, without ROS: a still (PNG) and an animation (GIF).
 
-Every body is drawn where :func:`mechanics.elements` puts it (the joint
+Every body is drawn where :func:`bodies.elements` puts it (the joint
 centres A1 ... A7 and G of each leg, eqs. 1-8), with the actuator axes, the
 paper's tested workspace cube and the actuator forces as arrows along the
 sliders' axes (their colour and length by the force, N). Pictures are
@@ -23,6 +23,7 @@ import tempfile
 import numpy as np
 
 from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.bodies import elements
 from orthoglide_ros.model.urdf import LEG_COLOURS
 
 # Half side of the paper's tested workspace, |x|, |y|, |z| <= 0.3 m.
@@ -31,7 +32,7 @@ WORKSPACE_CUBE = 0.3
 ARROW = 0.35
 DPI = 100
 # The segments drawn per leg: (from, to, what) with joint centres of
-# mechanics.elements; 'bar' in the leg's colour, 'rod' in steel grey.
+# bodies.elements; 'bar' in the leg's colour, 'rod' in steel grey.
 SEGMENTS = (('A1', 'A2', 'rod'), ('A3', 'A6', 'rod'), ('A3', 'A4', 'bar'),
             ('A6', 'A7', 'bar'), ('A4', 'A7', 'rod'), ('A5', 'G', 'rod'))
 STEEL = (0.3, 0.3, 0.35)
@@ -115,7 +116,7 @@ class _Scene:
         FigureCanvasAgg(self.figure)
         ax = self.figure.add_axes((0.0, 0.0, 1.0, 0.93), projection='3d')
         self.ax = ax
-        home = mechanics.elements(robot, mechanics.ZERO)
+        home = elements(robot, mechanics.ZERO)
         low = min(float(home[leg]['joints']['A1'].min()) for leg in 'ABC')
         span = (low - 0.1, WORKSPACE_CUBE + 0.15)
         ax.set_xlim(*span)
@@ -165,7 +166,7 @@ class _Scene:
 
     def update(self, position, force, title):
         """Move every body to ``position`` (m); show ``force`` (N)."""
-        legs = mechanics.elements(self.robot, position)
+        legs = elements(self.robot, position)
         for leg, f in zip('ABC', force):
             joints = legs[leg]['joints']
             for start, end, _ in SEGMENTS:

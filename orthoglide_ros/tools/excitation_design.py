@@ -44,6 +44,10 @@ numbers computed.
 """
 
 
+class _BudgetSpent(Exception):
+    """The search used every evaluation it was given."""
+
+
 def measure(robot, motion, base=None, rate=CONDITION_RATE):
     """Return the condition number and the peak |force| (N) of a motion."""
     times = np.arange(0.0, motion.period, 1.0 / rate)
@@ -82,6 +86,8 @@ def optimize(robot, period, seed=0, max_force=math.inf,
     count = [0]
 
     def cost(x):
+        if count[0] >= evaluations:     # the budget is a bound, not a hint
+            raise _BudgetSpent
         count[0] += 1
         try:
             motion = trajectory.shaped_excitation(
@@ -96,8 +102,14 @@ def optimize(robot, period, seed=0, max_force=math.inf,
             best[:] = condition, motion, force
         return math.log(condition)
 
-    minimize(cost, np.concatenate((start.sines.ravel(),
-                                   start.cosines.ravel())),
-             method='L-BFGS-B', options={'maxfun': evaluations})
+    # L-BFGS-B checks maxfun once an iteration (its finite-difference
+    # gradient alone costs 2 x harmonics x 3 + 1 evaluations): the cost
+    # itself stops the search at the budget.
+    try:
+        minimize(cost, np.concatenate((start.sines.ravel(),
+                                       start.cosines.ravel())),
+                 method='L-BFGS-B', options={'maxfun': evaluations})
+    except _BudgetSpent:
+        pass
     condition, motion, force = best
     return Design(motion, condition, force, start_condition, count[0])

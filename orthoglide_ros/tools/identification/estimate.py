@@ -25,18 +25,27 @@ the platform's column), and the drives' armature when the law does not
 identify it.
 """
 
+from __future__ import annotations
+
+from typing import Optional, TYPE_CHECKING
 from collections import namedtuple
 import math
 
 import numpy as np
 
 from orthoglide_ros.tools.identification.laws import (
-    LAWS, law_name, LOWER, MASSES, standard_names, standard_parameters,
+    Law, LAWS, law_name, LOWER, MASSES, standard_names, standard_parameters,
     UNITS, with_parameters)
 from orthoglide_ros.tools.identification.motion import (
     check_lag, DEFAULT_CUTOFF, estimate_lag, Motion)
 from orthoglide_ros.tools.identification.regressor import base_of
 from orthoglide_ros.formats.logs import LogError
+from orthoglide_ros.model.types import Array
+
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.formats.logs import Log
+    from orthoglide_ros.model.robot import Robot
+    from orthoglide_ros.tools.identification.regressor import Base
 
 # Fewest samples the least squares may use, per base parameter.
 MIN_SAMPLES_PER_PARAMETER = 10
@@ -113,9 +122,12 @@ class Held(tuple):
         return held
 
 
-def identify(robot, log, cutoff=DEFAULT_CUTOFF, base=None, force_lag=None,
-             max_relative_std=MAX_RELATIVE_STD, friction=None,
-             stribeck_velocity=None, payload=None):
+def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
+             base: Optional[Base] = None, force_lag: Optional[float] = None,
+             max_relative_std: float = MAX_RELATIVE_STD,
+             friction: Optional[Law] = None,
+             stribeck_velocity: Optional[float] = None,
+             payload: Optional[float] = None) -> 'Identification':
     """
     Identify the base parameters from a :class:`Log` (an Identification).
 
@@ -418,13 +430,17 @@ def _least_squares(a, y, lower, names=None, units=None):
             name = names[i] if names else f'parameter {i}'
             unit = units[i] if units else ''
             bounded.append(
-                f'{name} was found {found[i]:.4g} {unit} by '
-                f'ordinary least squares: held at its bound {lower[i]:.4g} '
-                f'{unit} (bounded least squares)')
+                f'{name} was found {found[i]:.4g} {unit} by ordinary least '
+                f'squares, below its bound: held at {lower[i]:.4g} {unit} '
+                '(bounded least squares)' if found[i] < lower[i] else
+                f'{name} was found {found[i]:.4g} {unit} by ordinary least '
+                f'squares; with the parameters below their bounds held '
+                f'there, it comes to its bound {lower[i]:.4g} {unit} too '
+                '(bounded least squares)')
     return values, std, singular, bounded
 
 
-def bounds(base):
+def bounds(base: Base) -> Array:
     """
     Return the lowest value (n_base,) each base parameter of a robot has.
 
@@ -436,7 +452,9 @@ def bounds(base):
                      for row in base.matrix])
 
 
-def split(robot, base, values, stribeck_velocity=None):
+def split(robot: Robot, base: Base, values: Array,
+          stribeck_velocity: Optional[float] = None
+          ) -> tuple[Robot, list[str]]:
     """
     Return ``(robot, notes)``: a complete robot with base parameters ``values``.
 

@@ -12,25 +12,30 @@ gives their friction columns (the law of
 :func:`mechanics.friction_force` with one coefficient 1).
 """
 
+from __future__ import annotations
+
+from typing import Any, Optional, TYPE_CHECKING
 from collections import namedtuple
 
 import numpy as np
 
 from orthoglide_ros.model import mechanics
-from orthoglide_ros.model.robot import ROW
+from orthoglide_ros.model.robot import LEGS, ROW
+from orthoglide_ros.model.types import Array
+
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.model.robot import Robot
 
 MASSES = ('m1', 'm2', 'm3', 'm4', 'm5', 'm6')
-LEGS = ('a', 'b', 'c')
 # The drives' reflected inertia (kg), one per actuator: robot.armature.
 ARMATURES = tuple(f'armature_{leg}' for leg in LEGS)
-# The friction coefficients by kind: the Robot field each sets, its unit,
-# its meaning.
+# The friction coefficients by kind: the Robot field each sets, its meaning.
 FRICTION_KINDS = {
-    'viscous': ('friction_viscous', 'N s/m', 'viscous friction'),
-    'coulomb': ('friction_coulomb', 'N', 'Coulomb friction'),
-    'coulomb_negative': ('friction_coulomb_negative', 'N',
+    'viscous': ('friction_viscous', 'viscous friction'),
+    'coulomb': ('friction_coulomb', 'Coulomb friction'),
+    'coulomb_negative': ('friction_coulomb_negative',
                          'Coulomb friction moving -lambda'),
-    'stribeck': ('friction_stribeck', 'N', 'Stribeck excess'),
+    'stribeck': ('friction_stribeck', 'Stribeck excess'),
 }
 
 Law = namedtuple('Law', ('direction', 'stribeck', 'armature'),
@@ -46,13 +51,13 @@ LAWS = tuple(sorted((Law(d, s, a) for d in (False, True)
                     key=lambda law: (sum(law), law.armature, law.stribeck)))
 
 
-def law_name(law):
+def law_name(law: 'Law') -> str:
     """Name a :class:`Law`: ``coulomb``, ``coulomb+direction``, ..."""
     return 'coulomb' + '+direction' * law.direction \
         + '+stribeck' * law.stribeck + '+armature' * law.armature
 
 
-def parse_law(text):
+def parse_law(text: str) -> 'Law':
     """Return the :class:`Law` named ``text`` (ValueError if none is)."""
     for law in LAWS:
         if law_name(law) == text:
@@ -61,13 +66,13 @@ def parse_law(text):
                      + ', '.join(law_name(law) for law in LAWS))
 
 
-def friction_kinds(law):
+def friction_kinds(law: 'Law') -> tuple[str, ...]:
     """Return the friction coefficients' kinds of ``law``, in order."""
     return ('viscous', 'coulomb') + ('coulomb_negative',) * law.direction \
         + ('stribeck',) * law.stribeck
 
 
-def standard_names(law=PLAIN):
+def standard_names(law: 'Law' = PLAIN) -> tuple[str, ...]:
     """Return the standard parameters' names of ``law`` (``m1``, ...)."""
     return MASSES + ARMATURES * law.armature + tuple(
         f'{kind}_{leg}' for kind in friction_kinds(law) for leg in LEGS)
@@ -75,24 +80,26 @@ def standard_names(law=PLAIN):
 
 # The standard parameters of the plain law.
 STANDARD = standard_names(PLAIN)
-UNITS = dict.fromkeys(MASSES + ARMATURES, 'kg') | {
-    f'{kind}_{leg}': unit for kind, (_, unit, _) in FRICTION_KINDS.items()
-    for leg in LEGS}
+# Each standard parameter's unit, its Robot field's.
+UNITS = {m: ROW[m].unit for m in MASSES} | dict.fromkeys(
+    ARMATURES, ROW['armature'].unit) | {
+    f'{kind}_{leg}': ROW[field].unit
+    for kind, (field, _) in FRICTION_KINDS.items() for leg in LEGS}
 # What each standard parameter is, in words (the masses' from the robot's
 # parameter descriptions).
 MEANINGS = {m: ROW[m].description.split(';')[0] for m in MASSES} | {
     f'armature_{leg}': f'drive inertia reflected onto slider {leg.upper()}'
     for leg in LEGS} | {
     f'{kind}_{leg}': f'{words} of slider {leg.upper()}'
-    for kind, (_, _, words) in FRICTION_KINDS.items() for leg in LEGS}
+    for kind, (_, words) in FRICTION_KINDS.items() for leg in LEGS}
 # Lowest value of each standard parameter (a Robot's bound).
 LOWER = dict.fromkeys(MASSES, ROW['m1'].limits[0]) | dict.fromkeys(
     ARMATURES, ROW['armature'].limits[0]) | {
     f'{kind}_{leg}': ROW[field].limits[0]
-    for kind, (field, _, _) in FRICTION_KINDS.items() for leg in LEGS}
+    for kind, (field, _) in FRICTION_KINDS.items() for leg in LEGS}
 
 
-def standard_parameters(robot, law=PLAIN):
+def standard_parameters(robot: Robot, law: 'Law' = PLAIN) -> Array:
     """
     Return ``theta`` of ``robot``: its values of :func:`standard_names`.
 
@@ -114,7 +121,8 @@ def standard_parameters(robot, law=PLAIN):
     return np.array(values, dtype=float)
 
 
-def with_parameters(robot, theta, law=PLAIN, stribeck_velocity=None):
+def with_parameters(robot: Robot, theta: Array, law: 'Law' = PLAIN,
+                    stribeck_velocity: Optional[float] = None) -> Robot:
     """
     Return ``robot`` with the standard parameters ``theta`` of ``law``.
 
@@ -124,7 +132,7 @@ def with_parameters(robot, theta, law=PLAIN, stribeck_velocity=None):
     (m/s), if given, sets its speed.
     """
     values = dict(zip(standard_names(law), (float(v) for v in theta)))
-    changes = {m: values[m] for m in MASSES}
+    changes: dict[str, Any] = {m: values[m] for m in MASSES}
     if law.armature:
         changes['armature'] = tuple(values[a] for a in ARMATURES)
     for kind in ('viscous', 'coulomb', 'coulomb_negative', 'stribeck'):
@@ -137,7 +145,8 @@ def with_parameters(robot, theta, law=PLAIN, stribeck_velocity=None):
     return robot.replace(**changes)
 
 
-def friction_columns(robot, lambdadot, law=PLAIN):
+def friction_columns(robot: Robot, lambdadot: Array,
+                     law: 'Law' = PLAIN) -> Array:
     """
     Return the friction part of ``W`` (N, 3, k) at slider speeds (m/s).
 
@@ -152,7 +161,8 @@ def friction_columns(robot, lambdadot, law=PLAIN):
                            for kind in friction_kinds(law)], axis=2)
 
 
-def kind_columns(robot, lambdadot, kind, direction):
+def kind_columns(robot: Robot, lambdadot: Array, kind: str,
+                 direction: bool) -> Array:
     """Return the columns (N, 3, 3) of ``kind``'s three coefficients."""
     bare = robot.frictionless()
     out = np.empty(lambdadot.shape + (3,))

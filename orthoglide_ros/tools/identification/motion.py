@@ -13,6 +13,9 @@ any Stribeck speed, a robot's forces. :func:`prepare` gives the
 states. ``doc/identification.md`` gives the reasons for each choice.
 """
 
+from __future__ import annotations
+
+from typing import Callable, Optional, Sequence, TYPE_CHECKING
 from collections import namedtuple
 import math
 
@@ -24,6 +27,12 @@ from orthoglide_ros.tools.identification.laws import (
     friction_kinds, kind_columns, PLAIN)
 from orthoglide_ros.tools.identification.regressor import (
     rigid_columns, rigid_of)
+from orthoglide_ros.model.types import Array
+
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.formats.logs import Log
+    from orthoglide_ros.model.robot import Robot
+    from orthoglide_ros.tools.identification.laws import Law
 
 # The log's processing (doc/identification.md): a 4th-order Butterworth
 # low-pass at DEFAULT_CUTOFF (Hz) run forwards and backwards (zero phase,
@@ -100,7 +109,8 @@ class Motion:
     (:meth:`model_forces`).
     """
 
-    def __init__(self, robot, log, cutoff=DEFAULT_CUTOFF):
+    def __init__(self, robot: Robot, log: Log,
+                 cutoff: float = DEFAULT_CUTOFF) -> None:
         """Check and cut ``log``; raises :class:`LogError` (see prepare)."""
         import scipy.signal
         self._signal = scipy.signal
@@ -184,29 +194,31 @@ class Motion:
         self.rigid = self.filtered([p.rigid for p in self.pieces])
         self._kinds = {}
 
-    def kept(self, arrays):
+    def kept(self, arrays: Sequence[Array]) -> Array:
         """Return the samples kept of per-piece arrays, joined."""
         return np.concatenate([a[i] for a, i in zip(arrays, self.inner)])
 
-    def filtered(self, arrays):
+    def filtered(self, arrays: Sequence[Array]) -> Array:
         """Return per-piece arrays (n, ...) low-passed, trimmed, decimated."""
         return self.kept([self._signal.sosfiltfilt(
             self.sos, a.reshape(len(a), -1), axis=0).reshape(a.shape)
             for a in arrays])
 
-    def forces(self, lag=0.0):
+    def forces(self, lag: float = 0.0) -> Array:
         """Return the forces taken as applied ``lag`` s before their stamps."""
         return self.filtered([np.column_stack([
             np.interp(p.grid, p.stamps - lag, p.forces[:, j])
             for j in range(3)]) for p in self.pieces])
 
-    def columns(self, law, stribeck_velocity=None):
+    def columns(self, law: Law,
+                stribeck_velocity: Optional[float] = None) -> Array:
         """Return ``W`` (M, 3, n) of ``law`` along the motion (kept)."""
         return np.concatenate((rigid_of(self.rigid, law),
                                self.friction(law, stribeck_velocity)),
                               axis=2)
 
-    def friction(self, law, stribeck_velocity=None):
+    def friction(self, law: Law,
+                 stribeck_velocity: Optional[float] = None) -> Array:
         """Return the friction columns of ``law`` (at that Stribeck speed)."""
         return np.concatenate([self._kind(kind, law.direction,
                                           stribeck_velocity)
@@ -234,13 +246,14 @@ class Motion:
             self._kinds[key] = columns
         return self._kinds[key]
 
-    def model_forces(self, robot):
+    def model_forces(self, robot: Robot) -> Array:
         """Return ``robot``'s forces along the motion (the full model)."""
         return self.filtered([mechanics.solve_batch(
             robot, p.position, p.velocity, p.acceleration).force
             for p in self.pieces])
 
-    def samples(self, regressor, forces, law=PLAIN):
+    def samples(self, regressor: Optional[Array], forces: Array,
+                law: Law = PLAIN) -> 'Samples':
         """Return the :class:`Samples` of a regressor and forces."""
         return Samples(self.times, regressor, forces, len(self.pieces),
                        self.rate, law,
@@ -249,7 +262,8 @@ class Motion:
                        self.coverage)
 
 
-def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0, law=PLAIN):
+def prepare(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
+            force_lag: float = 0.0, law: Law = PLAIN) -> 'Samples':
     """
     Turn a :class:`Log` into :class:`Samples` for the least squares.
 
@@ -295,14 +309,14 @@ def prepare(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=0.0, law=PLAIN):
     return motion.samples(motion.columns(law), motion.forces(force_lag), law)
 
 
-def check_lag(source, force_lag, cutoff):
+def check_lag(source: str, force_lag: float, cutoff: float) -> None:
     """Refuse a force lag (s) not shorter than 1 / cutoff (LogError)."""
     if not (math.isfinite(force_lag) and abs(force_lag) < 1.0 / cutoff):
         raise LogError(f'{source}: the force lag {force_lag:g} s must be '
                        f'shorter than 1 / cutoff = {1.0 / cutoff:g} s')
 
 
-def estimate_lag(motion, residual):
+def estimate_lag(motion: Motion, residual: Callable[[Array], float]) -> float:
     """
     Return the lag (s) of the forces that minimizes ``residual(forces)``.
 

@@ -16,6 +16,9 @@ states: the base parameters ``beta = P theta`` are those a log can
 identify. :func:`condition_number` says how well a motion excites them.
 """
 
+from __future__ import annotations
+
+from typing import Optional, TYPE_CHECKING
 from collections import namedtuple
 import math
 
@@ -25,6 +28,11 @@ from orthoglide_ros.model import mechanics
 from orthoglide_ros.tools.identification.laws import (
     ARMATURES, friction_columns, MASSES, MEANINGS, PLAIN, standard_names,
     standard_parameters)
+from orthoglide_ros.model.types import Array, Rows
+
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.model.robot import Robot
+    from orthoglide_ros.tools.identification.laws import Law
 
 # The columns of the rigid part of W, whatever the law: the masses, then
 # the drives' armature (a law without it leaves those out).
@@ -57,8 +65,9 @@ one); ``names``: each as a combination, e.g. ``'m5 + 3 m4'``;
 """
 
 
-def regressor(robot, positions, velocities, accelerations, law=PLAIN,
-              margin=mechanics.DEFAULT_SINGULARITY_MARGIN):
+def regressor(robot: Robot, positions: Rows, velocities: Rows,
+              accelerations: Rows, law: Law = PLAIN,
+              margin: float = mechanics.DEFAULT_SINGULARITY_MARGIN) -> Array:
     """
     Return ``W`` (N, 3, n): ``force = W @ theta`` per sample and actuator.
 
@@ -76,13 +85,15 @@ def regressor(robot, positions, velocities, accelerations, law=PLAIN,
         robot, reference.lambdadot, law)), axis=2)
 
 
-def rigid_of(rigid, law):
+def rigid_of(rigid: Array, law: Law) -> Array:
     """Return the columns of ``rigid`` (..., 9) that ``law`` holds."""
     return rigid if law.armature else rigid[..., :len(MASSES)]
 
 
-def rigid_columns(robot, positions, velocities, accelerations,
-                  margin=mechanics.DEFAULT_SINGULARITY_MARGIN):
+def rigid_columns(robot: Robot, positions: Rows, velocities: Rows,
+                  accelerations: Rows,
+                  margin: float = mechanics.DEFAULT_SINGULARITY_MARGIN
+                  ) -> tuple[Array, mechanics.Solution]:
     """
     Return the columns (N, 3, 9) of RIGID and the kinematics.
 
@@ -107,7 +118,8 @@ def rigid_columns(robot, positions, velocities, accelerations,
     return out, reference
 
 
-def base_parameters(robot, law=PLAIN, samples=BASE_SAMPLES, seed=0):
+def base_parameters(robot: Robot, law: Law = PLAIN,
+                    samples: int = BASE_SAMPLES, seed: int = 0) -> 'Base':
     """
     Find the base parameters of ``robot``'s regressor (a :class:`Base`).
 
@@ -183,7 +195,7 @@ def _combination(row, carrier, names, words, times):
 _BASES = {}
 
 
-def base_of(robot, law):
+def base_of(robot: Robot, law: Law) -> 'Base':
     """Return :func:`base_parameters` of ``robot`` and ``law`` (kept)."""
     key = (robot, law)
     if key not in _BASES:
@@ -193,7 +205,7 @@ def base_of(robot, law):
     return _BASES[key]
 
 
-def design_law(robot):
+def design_law(robot: Robot) -> Law:
     """
     Return the law an excitation for ``robot`` is designed for.
 
@@ -204,8 +216,9 @@ def design_law(robot):
     return PLAIN._replace(armature=any(robot.armature))
 
 
-def condition_number(robot, positions, velocities, accelerations,
-                     base=None):
+def condition_number(robot: Robot, positions: Rows, velocities: Rows,
+                     accelerations: Rows,
+                     base: Optional['Base'] = None) -> float:
     """
     Condition number of the base regressor along a motion (no noise).
 

@@ -10,14 +10,25 @@ does not explain (a ripple periodic in position, a friction law it lacks)
 shows. No ROS, no matplotlib import of its own.
 """
 
+from __future__ import annotations
+
+from typing import Any, Optional, TYPE_CHECKING
+
 import numpy as np
 
 from orthoglide_ros.tools import identification
+from orthoglide_ros.model.types import Array
+
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.formats.logs import Log
+    from orthoglide_ros.tools.identification.estimate import Identification
+    from orthoglide_ros.tools.identification.motion import Coverage
+    from orthoglide_ros.tools.identification.validate import Validation
 
 ACTUATORS = 'ABC'
 
 
-def coverage_line(coverage):
+def coverage_line(coverage: Coverage) -> str:
     """Describe what of a log was used (a :class:`identification.Coverage`)."""
     share = 100.0 * coverage.used_s / coverage.log_s if coverage.log_s else 0
     parts = [f'used {coverage.used_s:.4g} s of {coverage.log_s:.4g} s '
@@ -32,14 +43,15 @@ def coverage_line(coverage):
     return '; '.join(parts)
 
 
-def lag_text(lag, estimated):
+def lag_text(lag: float, estimated: bool) -> str:
     """Describe the force lag (s) and where it came from."""
     return (f'force lag {lag * 1e3:.4g} ms '
             + ('(estimated: the least residual)' if estimated
                else '(given)'))
 
 
-def identification_lines(source, log, window, result, cutoff):
+def identification_lines(source: str, log: Log, window: tuple[float, float],
+                         result: Identification, cutoff: float) -> list[str]:
     """
     Return the report's lines: samples, lag, law, base parameters, fit.
 
@@ -85,7 +97,8 @@ def identification_lines(source, log, window, result, cutoff):
     return lines
 
 
-def validation_lines(validation, reference=None):
+def validation_lines(validation: Validation,
+                     reference: Optional[Validation] = None) -> list[str]:
     """
     Return the lines of a validation: lag, used, RMS, max, share explained.
 
@@ -107,10 +120,11 @@ def validation_lines(validation, reference=None):
             text = f'{label}: {what}' if reference is not None else what
             lines.append(f'{text:<34}' + ''.join(
                 f'{value:>10{form}}' for value in values))
+    lines += [f'warning: {w}' for w in validation.warnings]
     return lines
 
 
-def span(times):
+def span(times: Array) -> str:
     """Describe a span of times (s): ``[0, 29.999] s (29.999 s)``."""
     return f'[{times[0]:.6g}, {times[-1]:.6g}] s ({times[-1] - times[0]:.6g} s)'
 
@@ -123,7 +137,8 @@ def _broken(samples, *arrays):
             for a in (samples.times,) + arrays]
 
 
-def draw_identification(figure, source, result):
+def draw_identification(figure: Any, source: str,
+                        result: Identification) -> None:
     """Draw measured vs predicted forces and the residuals into ``figure``."""
     axes = figure.subplots(2, 3, sharex=True)
     times, measured, predicted = _broken(
@@ -146,7 +161,7 @@ def draw_identification(figure, source, result):
                     ' friction)')
 
 
-def draw_validation(figure, validation):
+def draw_validation(figure: Any, validation: Validation) -> None:
     """
     Draw a validation into ``figure``: 3 rows of 3 actuators.
 

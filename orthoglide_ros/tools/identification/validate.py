@@ -8,6 +8,9 @@ low-pass; :func:`predict` gives a robot's forces from prepared samples'
 regressor.
 """
 
+from __future__ import annotations
+
+from typing import Optional, TYPE_CHECKING
 from collections import namedtuple
 
 import numpy as np
@@ -15,10 +18,23 @@ import numpy as np
 from orthoglide_ros.tools.identification.laws import standard_parameters
 from orthoglide_ros.tools.identification.motion import (
     check_lag, DEFAULT_CUTOFF, estimate_lag, Motion)
+from orthoglide_ros.model.types import Array
+
+if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.formats.logs import Log
+    from orthoglide_ros.model.robot import Robot
+    from orthoglide_ros.tools.identification.motion import Samples
+
+# A log whose sliders all moved slower than this (RMS, m/s) shows mostly
+# the static load: its share explained says little of the dynamics.
+STILL_SPEED = 0.005
+# The error is a transient's (start-up, a collision) when the worst
+# TRANSIENT_SHARE of the samples carry more than half of it.
+TRANSIENT_SHARE = 0.01
 
 Validation = namedtuple('Validation', (
     'source', 'samples', 'measured', 'predicted', 'rms', 'max', 'explained',
-    'force_lag', 'lag_estimated'))
+    'force_lag', 'lag_estimated', 'warnings'), defaults=((),))
 Validation.__doc__ = """A robot's forces against a log's (:func:`validate`).
 
 ``samples``: the log's :class:`Samples` (their regressor unused: None);
@@ -26,11 +42,13 @@ Validation.__doc__ = """A robot's forces against a log's (:func:`validate`).
 low-pass; per actuator ``rms`` and ``max`` of the error (N) and
 ``explained``: the share of the force explained, ``1 - sum(e^2) /
 sum(f^2)``; ``force_lag`` (s) and ``lag_estimated`` as in
-:class:`estimate.Identification`.
+:class:`estimate.Identification`; ``warnings``: sentences on what makes
+the figures say little (a robot standing still, an error that is a
+transient's).
 """
 
 
-def predict(robot, samples):
+def predict(robot: Robot, samples: Samples) -> Array:
     """
     Return the forces (N, 3) ``robot`` needs for the prepared samples.
 
@@ -42,8 +60,9 @@ def predict(robot, samples):
     return samples.regressor @ standard_parameters(robot, samples.law)
 
 
-def validate(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=None,
-             payload=None):
+def validate(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
+             force_lag: Optional[float] = None,
+             payload: Optional[float] = None) -> 'Validation':
     """
     Compare ``robot``'s forces with a log's (a :class:`Validation`).
 
@@ -71,7 +90,32 @@ def validate(robot, log, cutoff=DEFAULT_CUTOFF, force_lag=None,
     # (No force at all on an actuator: nothing to explain, NaN.)
     explained = 1.0 - np.divide(np.sum(error ** 2, axis=0), squares,
                                 out=np.full(3, np.nan), where=squares > 0.0)
+    samples = motion.samples(None, measured)
     return Validation(
-        log.source, motion.samples(None, measured), measured, predicted,
+        log.source, samples, measured, predicted,
         np.sqrt(np.mean(error ** 2, axis=0)), np.abs(error).max(axis=0),
-        explained, float(force_lag), lag_estimated)
+        explained, float(force_lag), lag_estimated,
+        _warnings(samples, error))
+
+
+def _warnings(samples, error):
+    """Say what makes a validation's figures say little (see Validation)."""
+    warnings = []
+    speed = np.sqrt(np.mean(np.asarray(samples.lambdadots) ** 2, axis=0))
+    if (speed < STILL_SPEED).all():
+        warnings.append(
+            'the sliders hardly moved (RMS speed ' + ', '.join(
+                f'{1e3 * s:.2g}' for s in speed) + ' mm/s): the forces are '
+            'mostly the static load, and the share explained says little '
+            'of the dynamics; record the robot following a motion')
+    squares = np.sum(error ** 2, axis=1)
+    worst = max(1, int(TRANSIENT_SHARE * len(squares)))
+    top = np.argsort(squares)[-worst:]
+    if squares.sum() > 0.0 and squares[top].sum() > 0.5 * squares.sum():
+        times = np.asarray(samples.times)[top]
+        warnings.append(
+            f'half of the error comes from {worst} sample(s) between '
+            f'{times.min():.3g} s and {times.max():.3g} s: a transient '
+            '(start-up, a collision) the model does not have; --start and '
+            '--end keep the part of the log to compare')
+    return tuple(warnings)
