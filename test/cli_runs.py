@@ -1,13 +1,28 @@
 """
 The ``orthoglide`` tool run in the test's process, and its inputs.
 
-:func:`run` calls ``cli.main`` and returns the exit code and the output;
+:func:`run` calls ``cli.main`` and returns the exit code and the output,
+:func:`read_csv` parses what it wrote (:data:`HEADER`: batch's columns);
 :func:`assert_bad_input` checks a refusal's one line; :func:`write_trajectory`
 writes a trajectory CSV; :func:`identification_log` an identification log.
 """
 
+import csv
+import io
+
 from orthoglide_ros.tools import cli
 from synthetic_logs import synthetic_log, TRUE, write_csv
+
+HEADER = ('t,x,y,z,lambda_a,lambda_b,lambda_c,lambdadot_a,lambdadot_b,'
+          'lambdadot_c,lambdaddot_a,lambdaddot_b,lambdaddot_c,force_a,'
+          'force_b,force_c,power_a,power_b,power_c')
+PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
+
+
+def read_csv(text):
+    """Parse CSV text into (header, rows of dicts)."""
+    reader = csv.DictReader(io.StringIO(text))
+    return ','.join(reader.fieldnames), list(reader)
 
 
 def run(capsys, *argv):

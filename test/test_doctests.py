@@ -16,7 +16,8 @@ import pytest
 import orthoglide_ros
 
 MODULES = sorted(m.name for m in pkgutil.walk_packages(
-    orthoglide_ros.__path__, 'orthoglide_ros.') if not m.ispkg)
+    orthoglide_ros.__path__, 'orthoglide_ros.')
+    if not m.ispkg and not m.name.endswith('.__main__'))
 
 
 @pytest.mark.parametrize('name', MODULES)

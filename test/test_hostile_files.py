@@ -1,5 +1,5 @@
 """
-Hostile files and paths against the ``orthoglide`` tool (issue 16).
+Hostile files and paths against the ``orthoglide`` tool.
 
 Every case is a file or a path a user (or an attacker) can hand the tool;
 the rule for each: exit 2 with one line ``orthoglide: error: ...``, no

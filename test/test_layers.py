@@ -49,8 +49,9 @@ def run_without_ros(code, *args, cwd=None):
 
 
 def ros_free_modules():
+    """Return the modules that must import without ROS (not the scripts)."""
     return [name for name, layer in modules_by_layer()
-            if layer in ROS_FREE]
+            if layer in ROS_FREE and not name.endswith('.__main__')]
 
 
 def modules_by_layer():

@@ -1,0 +1,108 @@
+"""
+The ``orthoglide`` command-line tool: the mechanics without ROS.
+
+Subcommands (``orthoglide SUBCOMMAND --help`` for details):
+
+- ``paper``: the paper's figures 3-8 over the trajectory of eq. (6), as a
+  summary table, a CSV file (``--csv``) and a PNG figure (``--plot``).
+- ``solve``: inverse kinematics and dynamics of one sample.
+- ``batch``: the same for every row of a trajectory CSV file.
+- ``excitation``: a periodic trajectory for identification (a ``batch``
+  input file), its peaks and the condition number of its regressor.
+- ``identify``: the robot's masses and friction from a log (a CSV file or
+  a rosbag2 bag), written as a parameters file (``--output``), with a
+  report on standard output (and ``--report``, a PNG).
+- ``validate``: a robot's forces against another log's: the error per
+  actuator, the share explained (and ``--report``, a PNG).
+- ``record``: joint states into a rosbag2 bag (MCAP or sqlite3); the one
+  subcommand that needs ROS (rclpy).
+- ``urdf``: the robot's URDF (a cut tree, see :mod:`orthoglide_ros.model.urdf`).
+- ``mjcf``: the robot's MJCF for MuJoCo, loops closed (:mod:`orthoglide_ros.model.mjcf`).
+- ``render``: a picture of the robot from MuJoCo's offscreen renderer.
+- ``draw``: a picture of the robot at one platform position (PNG).
+- ``animate``: the robot moving along a trajectory, with its actuator
+  forces (GIF).
+
+One module per job, each subcommand's parser beside its ``run_``:
+:mod:`.solving` (paper, solve, batch), :mod:`.identifying` (excitation,
+record, identify, validate), :mod:`.models` (urdf, mjcf),
+:mod:`.pictures` (draw, render, animate); :mod:`.common` what they share.
+
+Units are SI throughout: m, m/s, m/s^2, N, W, s. Bad input exits with code 2
+and one line ``orthoglide: error: ...`` on standard error; output files are
+written atomically, only once every sample is solved. scipy and rosbags
+are imported by the subcommands that use them, rclpy by ``record`` alone.
+"""
+
+import argparse
+import sys
+
+from orthoglide_ros.formats.params_file import load_robot, ParametersFileError
+from orthoglide_ros.model.robot import ParameterError, Robot
+from orthoglide_ros.tools.cli import identifying, models, pictures, solving
+from orthoglide_ros.tools.cli.common import (check_output, CliError,
+                                             CSV_COLUMNS, fail,
+                                             OUTPUT_OPTIONS, PROG)
+
+__all__ = ('CliError', 'CSV_COLUMNS', 'main')
+
+
+def main(argv=None):
+    """Run the tool on ``argv`` (default: sys.argv[1:]); return the code."""
+    parser = _parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as stop:      # --help, --version or a usage error
+        return 0 if stop.code is None else stop.code
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return 2
+    try:
+        if args.command != 'record':    # a bag: the recorder's own checks
+            for option in OUTPUT_OPTIONS:
+                check_output(getattr(args, option, None), option)
+        # Every subcommand but record reads the robot (--params).
+        robot = _robot(args.params) if 'params' in args else None
+        return args.run(robot, args)
+    except CliError as error:
+        fail(str(error))
+        return error.code
+    except (ParametersFileError, ParameterError) as error:
+        where = f'{args.params}: ' if isinstance(
+            error, ParameterError) else ''
+        fail(where + str(error))
+        return 2
+
+
+def _robot(path):
+    return Robot() if path is None else load_robot(path)
+
+
+def _version():
+    try:
+        from importlib.metadata import version
+        return version('orthoglide_ros')
+    except Exception:       # not installed: running from a source tree
+        return 'unknown'
+
+
+def _parser():
+    """Return the tool's parser: the options every subcommand shares once."""
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument(
+        '--params', metavar='FILE',
+        help='ROS 2 parameters file with the robot.* parameters (as '
+             'config/orthoglide.yaml: lengths m, angle rad, masses kg, '
+             'gravity m/s^2, slider friction N s/m and N); default: the '
+             'paper\'s robot')
+    parser = argparse.ArgumentParser(
+        prog=PROG, description='Inverse kinematics and dynamics of the '
+        'Orthoglide, without ROS. Units: m, m/s, m/s^2, N, W, s. Bad input '
+        'exits with code 2 and one line on standard error.')
+    parser.add_argument('--version', action='version',
+                        version=f'%(prog)s {_version()}')
+    sub = parser.add_subparsers(dest='command', metavar='COMMAND')
+    for module in (solving, identifying, models, pictures):
+        for add in module.PARSERS:
+            add(sub, common)
+    return parser

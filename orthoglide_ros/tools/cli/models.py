@@ -1,0 +1,81 @@
+"""``urdf``, ``mjcf``: the robot as a URDF and as a MuJoCo model."""
+
+from orthoglide_ros.cores.parameters import joint_names
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.tools.cli.common import (
+    add_joint_names, add_output, CliError, command, non_negative_float,
+    positive_float, within, write_output)
+
+_margin = within(float, 0.0, 0.99)
+
+
+def add_urdf(sub, common):
+    """Add ``urdf``: the robot's URDF."""
+    urdf = command(
+        sub, [common], 'urdf', run_urdf, help='write the robot\'s URDF',
+        description='Write the URDF of the robot (lengths m, masses kg, '
+        'inertias kg m^2, angles rad): a cut tree of the closed mechanism '
+        'for robot_state_publisher, whose every moving joint the '
+        'mechanism_state_publisher node publishes. Joint limits are the '
+        'ranges over the workspace within the singularity margin.')
+    add_output(urdf, 'URDF file')
+    add_joint_names(urdf, 'the prismatic joints')
+    urdf.add_argument('--singularity-margin', type=_margin,
+                      default=mechanics.DEFAULT_SINGULARITY_MARGIN,
+                      metavar='D', help='the workspace of the joint limits: '
+                      'singularity distance at least D, in [0, 0.99] '
+                      f'(default {mechanics.DEFAULT_SINGULARITY_MARGIN:g})')
+    return urdf
+
+
+def run_urdf(robot, args):
+    """Write the robot's URDF (standard output or ``--output``)."""
+    from orthoglide_ros.model import urdf
+    names = _joint_names(args)
+    text = urdf.urdf(robot, names, args.singularity_margin)
+    write_output(args.output, text.encode('utf-8'))
+    return 0
+
+
+def add_mjcf(sub, common):
+    """Add ``mjcf``: the robot's MJCF."""
+    mjcf = command(
+        sub, [common], 'mjcf', run_mjcf, help='write the robot\'s MJCF (MuJoCo)',
+        description='Write the robot as a MuJoCo model (MJCF): the URDF\'s '
+        'bodies, masses and inertias, the loops closed by equality '
+        'constraints, three force actuators named as the sliders (N); '
+        'see doc/mujoco.md.')
+    add_output(mjcf, 'MJCF file')
+    add_joint_names(mjcf, 'the slide joints and actuators')
+    mjcf.add_argument('--force-limit', type=positive_float, default=None,
+                      metavar='N', help='the actuators\' control range '
+                      '+-N (newton; default: none)')
+    mjcf.add_argument('--armature', type=non_negative_float, nargs=3,
+                      default=None, metavar=('A', 'B', 'C'),
+                      help='the drives\' inertia reflected to each slider '
+                      '(kg; MuJoCo\'s armature): sets robot.armature '
+                      '(default: the parameters file\'s, 0 in the paper\'s '
+                      'robot)')
+    return mjcf
+
+
+def run_mjcf(robot, args):
+    """Write the robot's MJCF (standard output or ``--output``)."""
+    from orthoglide_ros.model import mjcf
+    names = _joint_names(args)
+    if args.armature is not None:
+        robot = robot.replace(armature=tuple(args.armature))
+    text = mjcf.mjcf(robot, names, args.force_limit)
+    write_output(args.output, text.encode('utf-8'))
+    return 0
+
+
+PARSERS = (add_urdf, add_mjcf)
+
+
+def _joint_names(args):
+    """Return ``--joint-names`` checked as the nodes check them."""
+    try:
+        return joint_names(args.joint_names)
+    except ValueError as error:
+        raise CliError(f'--joint-names: {error}') from None
