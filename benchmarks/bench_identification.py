@@ -9,7 +9,7 @@ seed 0, period 6 s, of a robot unlike the paper's, lambda quantised to
 a fresh process each time (so the import of scipy counts, as it does for
 ``orthoglide identify``). Prints the wall times of the steps (``prepare``
 alone; ``identify`` with the friction law and the lag given, as before
-issue 20; ``identify`` choosing the law among four, the Stribeck speed
+the robot unlike the model; ``identify`` choosing the law among four, the Stribeck speed
 among 12 and estimating the lag, as ``orthoglide identify`` does by
 default) and the total (imports and the default identify, its base
 parameters included) against the target: 30,000 samples identified within

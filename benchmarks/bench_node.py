@@ -84,7 +84,7 @@ EXECUTORS = {'echo-single': 'single', 'echo-events': 'events'}
 BASELINES = ('echo-single', 'echo-events')
 SUSTAINED_LOSS = 0.001      # fraction of the setpoints sent
 SUSTAINED_P99_MS = 20.0
-ISSUE_RATE, ISSUE_DURATION = 1000, 10.0
+TARGET_RATE, TARGET_DURATION = 1000, 10.0
 SEGMENT_S = 10000           # stamps of run k start at (k + 1) * SEGMENT_S s
 DRAIN_S = 0.5
 PREROLL_S = 0.5
@@ -458,12 +458,12 @@ def ratios(results, nodes, kinds, qoses, rate, duration):
 
 
 def checks(results, nodes, args):
-    """Issue targets for the trajectory input: (lines, verdicts)."""
+    """Check the targets for the trajectory input: (lines, verdicts)."""
     lines, verdicts = [], {}
-    full = args.rate == ISSUE_RATE and args.duration >= ISSUE_DURATION
+    full = args.rate == TARGET_RATE and args.duration >= TARGET_DURATION
     lines.append(
-        f'Issue target (trajectory, reliable): {ISSUE_RATE} Hz sustained '
-        f'for {ISSUE_DURATION:g} s, loss <= echo, p99 <= 2x echo'
+        f'Target (trajectory, reliable): {TARGET_RATE} Hz sustained '
+        f'for {TARGET_DURATION:g} s, loss <= echo, p99 <= 2x echo'
         + ('' if full else f' [INDICATIVE: this run is {args.rate} Hz for '
            f'{args.duration:g} s]'))
     for node_target in nodes:
@@ -573,9 +573,9 @@ def main():
     """Run the benchmark; return the exit code."""
     parser = argparse.ArgumentParser(
         description=__doc__.strip().split('\n')[0])
-    parser.add_argument('--rate', type=int, default=ISSUE_RATE,
+    parser.add_argument('--rate', type=int, default=TARGET_RATE,
                         help='setpoints per second (default 1000)')
-    parser.add_argument('--duration', type=float, default=ISSUE_DURATION,
+    parser.add_argument('--duration', type=float, default=TARGET_DURATION,
                         help='seconds per run (default 10)')
     parser.add_argument('--inputs', default='trajectory,topics')
     parser.add_argument('--targets', default=','.join(TARGETS))

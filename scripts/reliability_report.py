@@ -2,7 +2,7 @@
 """
 Run the full reliability cases of the feedforward node and print a report.
 
-Issue 4's "how it is shown": the full versions of the flood, reliable,
+How the reliability targets are shown: the full versions of the flood, reliable,
 restart and fuzz tests, with the figures doc/measurements.md quotes. The runs are
 those of ``orthoglide_ros/harness/reliability`` (the tests run them shorter):
 
@@ -20,7 +20,7 @@ those of ``orthoglide_ros/harness/reliability`` (the tests run them shorter):
 - ``test/test_fuzz_node.py`` and ``test/test_fuzz_mechanics.py`` (when
   present) through pytest, with ``--hypothesis-seed`` and
   ``ORTHOGLIDE_FUZZ_EXAMPLES`` when the files read it;
-- the hostile peers and stalls of issue 13 (``orthoglide_ros/harness/hostile``
+- the hostile peers and stalls (``orthoglide_ros/harness/hostile``
   and ``harness.big_messages``), every node, one line each with its
   figures against the target (``--hostile-only`` runs just these).
 
@@ -212,8 +212,8 @@ def report(results, fuzz, args, elapsed):
 
 
 def hostile_report():
-    """Run the issue-13 cases; return the report's lines and a failure."""
-    lines, hard = ['', 'Hostile peers and stalls (issues 13, 16):'], False
+    """Run the hostile-peer cases; return the report's lines and a failure."""
+    lines, hard = ['', 'Hostile peers and stalls:'], False
 
     def line(ok, text):
         nonlocal hard

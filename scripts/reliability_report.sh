@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The reliability report (issues 4 and 13): set up .venv, keep DDS on this host, pick a
+# The reliability report: set up .venv, keep DDS on this host, pick a
 # ROS domain (see scripts/ros_env.sh) and run scripts/reliability_report.py
 # (--help for options; about 7 minutes plus the fuzz tests;
 # --hostile-only: the hostile peers and stalls alone, about 2 minutes).

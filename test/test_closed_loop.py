@@ -1,5 +1,5 @@
 """
-The closed loop over DDS (issue 5): the feedforward does its job.
+The closed loop over DDS: the feedforward does its job.
 
 ``setpoint_publisher`` -> ``feedforward`` -> ``tracking_controller`` ->
 ``simulator`` -> back, all processes on real Fast DDS (loopback, the

@@ -1,5 +1,5 @@
 """
-Flood tests of the feedforward node as a process (issue 4, item 2).
+Flood tests of the feedforward node as a process: bursts it must survive.
 
 A producer process publishes setpoints on ``setpoint/trajectory`` as fast
 as it can, or at a steady 1 kHz, to the node started from its console
@@ -22,7 +22,7 @@ from node_checks import needs_scripts  # noqa: E402
 from orthoglide_ros.harness import reliability as harness  # noqa: E402
 
 SHORT = 2.5         # s of flood / stream in the default run
-FULL = 10.0         # s in the soak run (the issue's)
+FULL = 10.0         # s in the soak run (the target's)
 RATE = 1000         # Hz: half of what the node sustains (bench_node.py)
 pytestmark = [pytest.mark.ros, needs_scripts()]
 
@@ -70,7 +70,7 @@ def test_flood_best_effort_responsive_bounded(short_flood):
 
 @pytest.mark.soak
 def test_flood_best_effort_soak(full_flood):
-    """Run the best-effort flood for the issue's 10 s."""
+    """Run the best-effort flood for the target's 10 s."""
     check(full_flood, skip=('backlog',))
 
 
@@ -89,7 +89,7 @@ def test_reliable_every_setpoint_one_output():
 
 @pytest.mark.soak
 def test_reliable_every_setpoint_one_output_soak():
-    """Run the reliable stream for the issue's 10 s."""
+    """Run the reliable stream for the target's 10 s."""
     result = harness.reliable_stream(RATE, FULL)
     check(result)
     assert result['sent'] >= RATE * FULL * 0.9

@@ -1,5 +1,5 @@
 """
-Isolation of the feedforward node (issue 4, item 6).
+Isolation of the feedforward node: its graph apart from others on the host.
 
 The node runs with discovery limited to this host and in the session's own
 ROS domain (``test/conftest.py`` sets both for everything the tests start):

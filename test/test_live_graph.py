@@ -1,5 +1,5 @@
 """
-The feedforward in a live graph, on real DDS in network namespaces (issue 18).
+The feedforward in a live graph, on real DDS in network namespaces.
 
 Every process here that is not on plain LOCALHOST settings runs inside a
 network namespace the test makes with nothing but loopback (or two joined
@@ -12,7 +12,7 @@ namespaces cannot be made (not root). The runs are in
   On plain settings the run shows the shared-memory stall (a third of a
   second, random: each join adds eight participants, and up to three
   rounds of 8 joins are run until one shows); with ``config/fastdds_one_host.xml`` on the node,
-  its producer and its recorder no join makes one. The figure of the issue,
+  its producer and its recorder no join makes one. The figure asked for,
   no gap above 50 ms, is a property of an idle machine (measured 40 ms at
   most: doc/measurements.md); on a busy one the CPU a joining process takes
   makes gaps of tens of ms whatever the transport, so the test asserts the

@@ -1,5 +1,5 @@
 """
-Restart tests of the feedforward node as a process (issue 4, item 4).
+Restart tests of the feedforward node as a process: peers that restart.
 
 - The node is SIGKILLed while a reliable producer streams at 500 Hz and is
   started again: every restart's first output comes within 2 s of its
