@@ -67,6 +67,12 @@ DRAIN = 5.0             # s at most for the last outputs and diagnostics
 DRAIN_IDLE = 1.5        # s without an output that end the drain early
 STOP_TIMEOUT = 5.0      # s a process gets to exit after SIGINT
 TOLERANCE = 1e-9        # largest accepted |node - mechanics.solve|
+# A run spoiled by the machine (load, a stall), said FAILED, not OK: fewer
+# setpoints sent than SENT_SHARE of duration x rate, a gap between two
+# longer than GAP_PERIODS periods, more outputs lost than LOSS_SHARE.
+SENT_SHARE = 0.95
+GAP_PERIODS = 10.0
+LOSS_SHARE = 0.005
 CURVE_SAMPLES = 401
 # The animation of the run: frames at most, size (pixels).
 ANIMATION_FRAMES = 30
@@ -198,6 +204,8 @@ def main(argv=None):
               f'{now - stopped:.1f} s')
     for failure in failures:
         print(f'demo: error: {failure}', file=sys.stderr)
+    if failures:
+        print('verdict    FAILED (see above)', file=sys.stderr)
     return 1 if failures else 0
 
 
@@ -365,10 +373,11 @@ def _tail(logs, name, lines=20):
 
 def _report(args, robot, record, logs):
     """Check, summarise, plot; raise DemoError on a failed check."""
-    match = re.search(r'published (\d+) setpoints.*: (mean .* ms)',
-                      logs['setpoint_publisher'])
-    sent, pace = (int(match.group(1)), f' ({match.group(2)})') if match \
-        else (None, '')
+    match = re.search(r'published (\d+) setpoints.*: (mean .* gap '
+                      r'([0-9.]+) ms)', logs['setpoint_publisher'])
+    sent, pace, gap_ms = (int(match.group(1)), f' ({match.group(2)})',
+                          float(match.group(3))) if match \
+        else (None, '', None)
     joints = record.joints
     if not joints:
         raise DemoError(
@@ -478,6 +487,31 @@ def _report(args, robot, record, logs):
     if worst > TOLERANCE:
         raise DemoError(f'the node differs from mechanics.solve by '
                         f'{worst:.3g} (tolerance {TOLERANCE:g})')
+    spoiled = _spoiled(args, sent, gap_ms, lost)
+    if spoiled:
+        raise DemoError('the run was spoiled, its figures do not show the '
+                        'node: ' + '; '.join(spoiled) + ' (another load on '
+                        'this machine? see --realtime)')
+    print('verdict    OK: every output matches mechanics.solve, the stream '
+          'kept its rate')
+
+
+def _spoiled(args, sent, gap_ms, lost):
+    """Return why the stream did not keep its rate (empty: it did)."""
+    expected = args.duration * args.rate
+    period_ms = 1e3 / args.rate
+    reasons = []
+    if sent is None:
+        reasons.append('the setpoint publisher did not say what it sent')
+    elif sent < SENT_SHARE * expected:
+        reasons.append(f'{sent} of {expected:.0f} setpoints sent '
+                       f'({sent / args.duration:.0f} of {args.rate:g} Hz)')
+    if gap_ms is not None and gap_ms > GAP_PERIODS * period_ms:
+        reasons.append(f'a gap of {gap_ms:.1f} ms between two setpoints '
+                       f'({gap_ms / period_ms:.0f} periods)')
+    if sent and lost is not None and lost > LOSS_SHARE * sent:
+        reasons.append(f'{lost} of {sent} outputs lost')
+    return reasons
 
 
 def _diagnosis(diagnostics):

@@ -22,17 +22,34 @@ pytest.importorskip('rclpy')
 ROOT = Path(__file__).resolve().parents[1]
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
 TIMEOUT = 90.0
+ATTEMPTS = 3
+
+
+def run_demo(plot, table):
+    """
+    Run the demo at real-time priority; again if the machine spoiled it.
+
+    A run the demo itself calls spoiled (rate, gaps, loss: another load on
+    the machine) says nothing of the package: up to ATTEMPTS runs.
+    """
+    for _ in range(ATTEMPTS):
+        result = subprocess.run(
+            [sys.executable, str(ROOT / 'scripts' / 'demo.py'), '--duration',
+             '0.5', '--realtime', '--plot', str(plot), '--csv', str(table)],
+            stdin=subprocess.DEVNULL, capture_output=True, text=True,
+            timeout=TIMEOUT)
+        if 'the run was spoiled' not in result.stderr:
+            break
+        print(result.stderr, file=sys.stderr)
+    return result
 
 
 def test_demo_runs_end_to_end(tmp_path):
     plot, table = tmp_path / 'demo.png', tmp_path / 'demo.csv'
-    result = subprocess.run(
-        [sys.executable, str(ROOT / 'scripts' / 'demo.py'), '--duration',
-         '0.5', '--plot', str(plot), '--csv', str(table)],
-        stdin=subprocess.DEVNULL, capture_output=True, text=True,
-        timeout=TIMEOUT)
+    result = run_demo(plot, table)
     report = result.stdout + result.stderr
     assert result.returncode == 0, report
+    assert 'verdict    OK' in result.stdout, report
     lines = result.stdout.splitlines()
     for start in ('Orthoglide feedforward demo: eq. (6) for 0.5 s at 500 Hz',
                   'setpoints  sent ', 'outputs    received ',

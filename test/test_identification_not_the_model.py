@@ -228,7 +228,7 @@ def test_a_friction_no_robot_has_is_held_at_zero_and_said():
     assert result.values[i] == 0.0
     assert result.robot.friction_coulomb[2] == 0.0
     (note,) = result.bounded
-    assert note.startswith('coulomb_c was found -0.5') and 'bound 0 N' in note
+    assert note.startswith('coulomb_c was found -0.5') and 'held at 0 N' in note
     others = [k for k in range(len(ordinary)) if k != i]
     assert np.allclose(result.values[others], ordinary[others], rtol=0.05)
 

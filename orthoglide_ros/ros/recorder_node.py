@@ -105,7 +105,8 @@ class Recorder(ManagedNode):
                  wait=10.0):
         self._request = (output, topics, storage, wait)
         self._bag = None
-        self._end = None if duration is None else time.monotonic() + duration
+        self._duration = duration
+        self._end = None        # set once recording: the wait is not in it
         super().__init__()
 
     def build(self, settings):
@@ -126,6 +127,8 @@ class Recorder(ManagedNode):
         self._bag = bag
         self._index = {topic: i for i, topic in enumerate(found)}
         self.core = Recording(found, time.monotonic())
+        if self._duration is not None:
+            self._end = time.monotonic() + self._duration
         self.log('info', (
             f'recording {", ".join(f"{t} ({n})" for t, n in found.items())}'
             f' into {output} ({storage})'))
