@@ -120,6 +120,15 @@ def main(argv=None):
         print_pickups(pickups, names, args)
     plot(runs, names, args.plot)
     print(f'plot: {args.plot}')
+    spoiled = [f'{run.label}: {harness.spoiled_by(run)}' for run in (
+        *runs.values(), *(run for run, _ in pickups.values()))
+        if harness.spoiled_by(run)]
+    if spoiled:
+        print('verdict: FAILED, every pass of these rows was spoiled by a '
+              'stall (their figures measure the stall, not the loop; try '
+              '--realtime): ' + '; '.join(spoiled), file=sys.stderr)
+        return 1
+    print('verdict: OK, no pass spoiled')
     return 0
 
 
@@ -138,9 +147,11 @@ def print_table(runs, names, args):
         for mass in (1.0, harness.MISMATCH):
             pd, ff = runs[name, False, mass], runs[name, True, mass]
             plant = 'exact' if mass == 1.0 else f'm5 x{mass:g}'
+            mark = ' spoiled' if (harness.spoiled_by(pd)
+                                  or harness.spoiled_by(ff)) else ''
             print(f'{name:<10} {plant:<16} {pd.rms_mm:8.3f} {pd.max_mm:8.3f} '
                   f'{ff.rms_mm:10.3f} {ff.max_mm:10.3f} '
-                  f'{pd.rms_mm / ff.rms_mm:9.1f}x')
+                  f'{pd.rms_mm / ff.rms_mm:9.1f}x{mark}')
 
 
 def print_pickups(pickups, names, args):

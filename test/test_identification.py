@@ -578,3 +578,17 @@ def test_validation_warns_of_an_error_made_by_a_transient():
                for w in result.warnings), result.warnings
     text = '\n'.join(report.validation_lines(result))
     assert 'warning: half of the error comes from' in text
+
+
+def test_a_refusal_of_a_gapped_log_names_the_gaps_first():
+    """A log the recording cut into pieces: the gaps lead the refusal."""
+    log = synthetic_log(TRUE, 0, 5.0, 11, duration=6.0)
+    keep = (log.times % 1.0) < 0.45     # 0.45 s of every second
+    gapped = Log(log.times[keep], log.lambdas[keep], log.forces[keep],
+                 'gapped')
+    with pytest.raises((LogError, IdentificationError)) as refused:
+        identification.identify(TRUE, gapped)
+    assert str(refused.value).startswith('gapped: '), refused.value
+    assert str(refused.value).split(': ', 1)[1].split(' gap(s)')[0] \
+        .isdigit(), refused.value
+    assert 'gap(s) split the log' in str(refused.value), refused.value

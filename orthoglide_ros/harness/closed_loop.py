@@ -345,7 +345,7 @@ class ClosedLoop:
         return _tracking(label, self.recorder, motion, duration,
                          1.0 / self.plant_rate)
 
-    def run_unspoiled(self, *args, report=None, **kwargs):
+    def run_unspoiled(self, *args, report=None, case=None, **kwargs):
         """
         :meth:`run` until a pass is not spoiled by a stall, ATTEMPTS at most.
 
@@ -355,7 +355,7 @@ class ClosedLoop:
         longer than the command timeout, which busy cores do now and then,
         and the pass measured the stall, not the loop. Returns the first
         unspoiled pass, else the last. ``report(text)`` (optional) hears
-        about every spoiled pass.
+        about every spoiled pass, named ``case`` (default the run's label).
         """
         for attempt in range(1, ATTEMPTS + 1):
             run = self.run(*args, **kwargs)
@@ -363,7 +363,7 @@ class ClosedLoop:
             if spoiled is None:
                 return run
             if report:
-                report(f'{run.label}: {spoiled} (a process stalled longer '
+                report(f'{case or run.label}: {spoiled} (a process stalled longer '
                        f'than the command timeout), pass {attempt} of '
                        f'{ATTEMPTS}')
         return run
@@ -511,7 +511,8 @@ def median_runs(loop, name, cases, plant, repeats=3, report=None,
     for _ in range(repeats * (2 if enough else 1)):
         for label, (feedforward, model) in cases.items():
             run = loop.run_unspoiled(name, feedforward, plant=plant,
-                                     model=model, report=report)
+                                     model=model, report=report,
+                                     case=f'{name}, {label}')
             if report:
                 report(f'{name}, {label}: {run.samples} samples, position '
                        f'error RMS {run.rms_mm:.3f} mm, max {run.max_mm:.3f}'

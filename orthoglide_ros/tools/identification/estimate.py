@@ -72,6 +72,9 @@ STRIBECK_VELOCITIES = tuple(np.geomspace(0.002, 0.1, 12).tolist())
 # log does not excite are held at their nominal values.
 FOLDS = 5
 SELECTION_MARGIN = 0.02
+# A refusal of a log whose gaps left less than this share usable names the
+# gaps first.
+GAP_LOSS = 0.8
 # The index of the platform's mass among the rigid columns.
 _M5 = MASSES.index('m5')
 
@@ -160,7 +163,8 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
                >= MIN_SAMPLES_PER_PARAMETER * parameters(law)]
     if not fitting:
         count = parameters(laws[0])
-        raise LogError(f'{log.source}: {len(motion.times)} usable '
+        raise LogError(f'{log.source}: {_gaps_first(motion)}'
+                       f'{len(motion.times)} usable '
                        f'samples, at least {MIN_SAMPLES_PER_PARAMETER * count}'
                        f' needed ({MIN_SAMPLES_PER_PARAMETER} per base '
                        f'parameter, at {motion.rate:.4g} Hz after the '
@@ -218,7 +222,8 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
               if names[j].startswith('viscous_')]
     if moving and all(i in unexcited for i in moving):
         raise IdentificationError(
-            f'{log.source}: the log shows no motion to identify from: no '
+            f'{log.source}: {_gaps_first(motion)}the log shows no motion '
+            'to identify from: no '
             'slider\'s friction is excited (relative standard deviations '
             + ', '.join(f'{base.names[i]} {relative[i]:.3g} %'
                         for i in moving)
@@ -515,3 +520,20 @@ def split(robot: Robot, base: Base, values: Array,
     except ValueError as error:
         raise IdentificationError(f'the identified robot is refused: '
                                   f'{error}') from None
+
+
+def _gaps_first(motion):
+    """
+    Name the log's gaps when they lost much of it, to lead a refusal.
+
+    A log the recording split (a stalled recorder, lost messages) is the
+    cause to fix before its motion: the refusal says so first.
+    """
+    coverage = motion.coverage
+    if not coverage.gaps or coverage.used_s >= GAP_LOSS * coverage.log_s:
+        return ''
+    return (f'{coverage.gaps} gap(s) split the log (the longest '
+            f'{coverage.longest_gap_s:.3g} s) and '
+            f'{100.0 * coverage.used_s / coverage.log_s:.3g} % of it is '
+            'usable: record it again without gaps (another load on the '
+            'machine?); ')
