@@ -61,7 +61,7 @@ import numpy as np  # noqa: E402
 import rclpy  # noqa: E402
 
 from orthoglide_ros.harness import closed_loop as harness  # noqa: E402
-from orthoglide_ros.harness.load import (add_load_options,  # noqa: E402
+from orthoglide_ros.harness.load import (add_load_options, REALTIME,  # noqa: E402
                                          busy_loops, check_load_options,
                                          elevate)
 from orthoglide_ros.harness.processes import (node_executable,  # noqa: E402
@@ -94,6 +94,10 @@ SETUPS = {
     'mujoco': Setup(CASES[:3], ('PD + identified FF', 'PD + nominal FF',
                                 0.2), 'MJCF'),
 }
+# Below this difference of RMS errors (mm) the criterion holds whatever
+# the ratio: passes of the same case differ by about 0.07 mm over DDS
+# (doc/measurements.md), and 0.14 against 0.07 mm is a ratio of noise.
+NOISE_FLOOR_MM = 0.1
 
 
 def main(argv=None):
@@ -118,6 +122,14 @@ def main(argv=None):
                         'model family, default) or mujoco (its MJCF, with '
                         'MuJoCo\'s friction: a robot that is not the model)')
     add_load_options(parser)
+    # At normal scheduling a 500 Hz recording loses messages to any other
+    # load (gaps the identification then works around): real time where
+    # the OS grants it, unless --no-realtime.
+    parser.set_defaults(realtime=REALTIME)
+    parser.add_argument('--no-realtime', dest='realtime',
+                        action='store_false', help='the nodes and the '
+                        'recorder at normal scheduling (default: real time '
+                        'where the OS grants it)')
     parser.add_argument('--out', default=str(ROOT / 'out' / 'identification'),
                         metavar='DIR', help='bag, parameters file and PNG '
                         '(default out/identification in the repository)')
@@ -331,10 +343,13 @@ def print_tracking(runs, names, setup):
     for name in names:
         rms = [runs[name, c].rms_mm for c in setup.cases]
         ratio = runs[name, case].rms_mm / runs[name, reference].rms_mm
-        ok &= ratio <= factor
+        ok &= ratio <= factor or (runs[name, case].rms_mm
+                                  - runs[name, reference].rms_mm
+                                  <= NOISE_FLOOR_MM)
         print(f'{name:<12}' + ''.join(f'{r:20.3f}' for r in rms)
               + f'{ratio:19.2f}x')
-    print(f'criterion: {case} at most {factor:g}x {reference} (RMS): '
+    print(f'criterion: {case} at most {factor:g}x {reference} (RMS), or '
+          f'within {NOISE_FLOOR_MM:g} mm of it: '
           f'{"met" if ok else "MISSED"}')
     return ok
 
