@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parents[1]
 import rclpy  # noqa: E402
 
 from orthoglide_ros.harness import closed_loop as harness  # noqa: E402
-from orthoglide_ros.harness.load import (add_load_options,  # noqa: E402
+from orthoglide_ros.harness.load import (add_load_options, REALTIME,  # noqa: E402
                                          busy_loops, check_load_options)
 
 CASES = ((False, 1.0), (True, 1.0), (False, harness.MISMATCH),
@@ -69,7 +69,7 @@ def main(argv=None):
                         help='payload picked up halfway through a pass, the '
                         'feedforward told and not told (default 5; 0: no '
                         'pick-up cases)')
-    add_load_options(parser)
+    add_load_options(parser, realtime_default=REALTIME)
     parser.add_argument('--plot', default=str(ROOT / 'out' /
                                               'closed_loop.png'),
                         metavar='FILE', help='PNG of the tracking errors '

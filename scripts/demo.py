@@ -52,7 +52,7 @@ from orthoglide_ros.model import mechanics  # noqa: E402
 from orthoglide_ros.tools import drawing  # noqa: E402
 from orthoglide_ros.tools.cli import CSV_COLUMNS  # noqa: E402
 from orthoglide_ros.formats.params_file import load_robot  # noqa: E402
-from orthoglide_ros.harness.load import (add_load_options,  # noqa: E402
+from orthoglide_ros.harness.load import (add_load_options, REALTIME,  # noqa: E402
                                          busy_loops, check_load_options,
                                          realtime_args, realtime_client)
 from orthoglide_ros.harness.processes import interrupt  # noqa: E402
@@ -231,7 +231,7 @@ def _parser():
     parser.add_argument('--animation', metavar='FILE', help=(
         'GIF of the robot along the run, with the forces the node '
         'published (default: the plot\'s name with .gif)'))
-    add_load_options(parser)
+    add_load_options(parser, realtime_default=REALTIME)
     parser.add_argument('--csv', metavar='FILE', help=(
         'write the recorded samples: ' + ','.join(CSV_COLUMNS) + ' (SI '
         'units; t in s since the first setpoint; lambdaddot is not '

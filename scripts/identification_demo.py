@@ -121,15 +121,10 @@ def main(argv=None):
                         'builtin (the unknown robot in the package\'s '
                         'model family, default) or mujoco (its MJCF, with '
                         'MuJoCo\'s friction: a robot that is not the model)')
-    add_load_options(parser)
     # At normal scheduling a 500 Hz recording loses messages to any other
     # load (gaps the identification then works around): real time where
     # the OS grants it, unless --no-realtime.
-    parser.set_defaults(realtime=REALTIME)
-    parser.add_argument('--no-realtime', dest='realtime',
-                        action='store_false', help='the nodes and the '
-                        'recorder at normal scheduling (default: real time '
-                        'where the OS grants it)')
+    add_load_options(parser, realtime_default=REALTIME)
     parser.add_argument('--out', default=str(ROOT / 'out' / 'identification'),
                         metavar='DIR', help='bag, parameters file and PNG '
                         '(default out/identification in the repository)')

@@ -81,13 +81,26 @@ def busy_loops(count):
             proc.wait()
 
 
-def add_load_options(parser):
-    """Add a demo's ``--realtime`` and ``--load N`` to its ``parser``."""
-    parser.add_argument('--realtime', action='store_true', help=(
-        'run every thread of the loop\'s nodes SCHED_FIFO '
-        f'{NODE_PRIORITY} (their thread_priority) and this '
-        f'recorder SCHED_FIFO {CLIENT_PRIORITY}: '
-        'doc/deployment.md#real-time'))
+def add_load_options(parser, realtime_default=False):
+    """
+    Add a demo's ``--realtime`` and ``--load N`` to its ``parser``.
+
+    ``realtime_default``: real time unless ``--no-realtime`` (a loop demo
+    on a machine where it is granted: on two cores the loop's own five
+    processes stall one another past the simulator's command timeout).
+    """
+    parser.add_argument('--realtime', action='store_true',
+                        default=realtime_default, help=(
+                            'run every thread of the loop\'s nodes '
+                            f'SCHED_FIFO {NODE_PRIORITY} (their '
+                            'thread_priority) and this recorder SCHED_FIFO '
+                            f'{CLIENT_PRIORITY}: doc/deployment.md#real-time'
+                            + (' (the default here)' if realtime_default
+                               else '')))
+    if realtime_default:
+        parser.add_argument('--no-realtime', dest='realtime',
+                            action='store_false', help='the nodes and the '
+                            'recorder at normal scheduling')
     parser.add_argument('--load', type=int, default=0, metavar='N',
                         help='run N busy loops meanwhile, a loaded machine '
                         '(default 0)')
