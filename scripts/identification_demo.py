@@ -341,8 +341,11 @@ def print_tracking(runs, names, setup):
         ok &= ratio <= factor or (runs[name, case].rms_mm
                                   - runs[name, reference].rms_mm
                                   <= NOISE_FLOOR_MM)
+        spoiled = [c for c in setup.cases
+                   if harness.spoiled_by(runs[name, c])]
         print(f'{name:<12}' + ''.join(f'{r:20.3f}' for r in rms)
-              + f'{ratio:19.2f}x')
+              + f'{ratio:19.2f}x' + (' spoiled: ' + ', '.join(spoiled)
+                                     if spoiled else ''))
     print(f'criterion: {case} at most {factor:g}x {reference} (RMS), or '
           f'within {NOISE_FLOOR_MM:g} mm of it: '
           f'{"met" if ok else "MISSED"}')
