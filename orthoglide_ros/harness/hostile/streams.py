@@ -180,9 +180,11 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
     command: more would be spurious, but for the ``stall_brakes`` of a
     simulator that itself stood still longer than its command timeout),
     and the level, message and step rate
-    of a status made while it was commanded.
+    of a status made while it was commanded. The simulator and this
+    process run at real-time priority where the OS grants it: a stall
+    of the machine's other work is not a silence of the peer.
     """
-    with Nodes() as nodes, Peer() as peer:
+    with Nodes(REALTIME) as nodes, Peer(realtime=REALTIME) as peer:
         nodes.start('simulator', '-p', f'rate_hz:={rate_hz}')
         pub = peer.publisher(Float64MultiArray, 'commands')
         states = peer.record('joint_states', JointState)
