@@ -6,11 +6,13 @@ process (the installed console script): every message published reaches
 the bag (reliable QoS, acknowledged before the stop), with its bytes
 unchanged, in MCAP (the default, on the default topic ``/joint_states``)
 or sqlite3, and ``identification.read_bag`` reads the positions and
-efforts back in the joint order asked for. The recorder stops at the end
+efforts back in the joint order asked for. A stop drains into the bag what
+the recorder had received but not handled yet. The recorder stops at the end
 of ``--duration`` or on SIGINT before it, exit code 0 either way; without
 a publisher it gives up after ``--wait`` with exit code 2.
 """
 
+import threading
 import time
 
 import numpy as np
@@ -42,13 +44,17 @@ def record(args):
 
 
 def publish_states(node, publisher, proc):
-    """Publish MESSAGES joint states once the recorder listens; return them."""
+    """
+    Publish MESSAGES joint states once the recorder listens; return them.
+
+    ``proc``: the recorder's process (None: in this process).
+    """
     deadline = time.monotonic() + MATCH_TIMEOUT
     # The recorder makes its reader only once it sees this publisher, so
     # its reader matches this writer as it is made: once this writer sees
     # the reader, both sides are matched.
     while publisher.get_subscription_count() < 1:
-        assert proc.poll() is None, stop_process(proc)
+        assert proc is None or proc.poll() is None, stop_process(proc)
         assert time.monotonic() < deadline, 'the recorder never subscribed'
         time.sleep(0.05)
     sent = []
@@ -97,9 +103,43 @@ def record_a_source(ros_context, tmp_path, arguments, finish, suffix):
 
 def test_record_writes_every_joint_state_into_an_mcap_bag(ros_context,
                                                           tmp_path):
-    # Stopped by SIGINT long before its duration: a complete bag.
+    # Stopped by SIGINT long before its duration, as soon as its reader
+    # has acknowledged the last message: a complete bag all the same (what
+    # its input thread had not handled yet is drained into it).
     record_a_source(ros_context, tmp_path, ['--duration', '600'],
-                    lambda proc: time.sleep(0.2), '.mcap')
+                    lambda proc: None, '.mcap')
+
+
+def test_a_stop_drains_what_the_recorder_had_not_handled(
+        ros_context, tmp_path):
+    """
+    The messages received but not handled at the stop go into the bag.
+
+    The recorder in this process, its lock held while the states are
+    published: its input thread takes the first and waits to handle it,
+    the rest wait in its reader's history (acknowledged). The stop comes
+    before the lock is free: what the thread holds and what the history
+    holds are drained into the bag, not dropped.
+    """
+    from orthoglide_ros.ros.recorder_node import Recorder
+    node = rclpy.create_node('joint_state_source', context=ros_context)
+    recorder = None
+    try:
+        publisher = node.create_publisher(JointState, 'joint_states', QOS)
+        recorder = Recorder(str(tmp_path / 'bag'), ['joint_states'],
+                            context=ros_context)
+        stopping = threading.Thread(target=recorder.on_stop, args=(True,))
+        with recorder.lock:
+            publish_states(node, publisher, None)
+            stopping.start()
+            time.sleep(0.2)     # the stop asked (a flag) before the lock is free
+        stopping.join(timeout=MATCH_TIMEOUT)
+        assert not stopping.is_alive()
+        check_bag(tmp_path / 'bag')
+    finally:
+        if recorder is not None:
+            recorder.destroy_node()
+        node.destroy_node()
 
 
 def test_record_stops_by_itself_into_a_sqlite3_bag(ros_context, tmp_path):

@@ -157,6 +157,7 @@ class _Group(_Thread):
         self.key = key
         self.readers = []
         self.events = []
+        self.pending = []   # taken, not handled when a stop came
         self.wake = GuardCondition(None, None, context=context)
 
 
@@ -231,6 +232,22 @@ class InputThreads:
         fields, rejection = _decoded(reader, data)
         with self._node.lock:
             self._node.take(reader.row, fields, arrival, rejection)
+
+    def drain(self):
+        """
+        Handle every message the inputs still hold, once :meth:`stop` ran.
+
+        What the threads had taken but not handled when the stop came,
+        then what waits in the subscriptions' histories, in arrival order:
+        for a node that must lose nothing it received (the recorder).
+        """
+        for group in self._groups.values():
+            pending, group.pending = group.pending, []
+            ready = [(r, r.subscription.handle) for r in group.readers]
+            with ExitStack() as stack:
+                for _, handle in ready:
+                    stack.enter_context(handle)
+                self._deliver_all(pending + self._take(ready)[0])
 
     def periodic(self, period, work, name, lasting=False):
         """
@@ -370,7 +387,20 @@ class InputThreads:
         subscription. Each message is checked against its input's byte
         limit and decoded before the lock is taken. Returns whether a
         subscription held its whole history depth (it may have dropped
-        messages: a flood, or a stall of this thread).
+        messages: a flood, or a stall of this thread). A stop keeps what
+        is not handled yet for :meth:`drain`.
+        """
+        batch, full = self._take(ready)
+        group.pending = self._deliver_all(batch, group.stop)
+        return full
+
+    @staticmethod
+    def _take(ready):
+        """
+        Take every message the ``(reader, handle)`` pairs hold.
+
+        Returns them in arrival order, and whether a subscription held its
+        whole history depth.
         """
         batch, full = [], False
         for reader, handle in ready:
@@ -386,17 +416,21 @@ class InputThreads:
             depth = subscription.qos_profile.depth     # 0: keep-all
             full |= 0 < depth <= taken_here
         batch.sort(key=lambda entry: entry[:2])
+        return batch, full
+
+    def _deliver_all(self, batch, stop=None):
+        """Deliver a taken ``batch``; return what a set ``stop`` left."""
         # Reception (system clock, ns) to the monotonic clock; never later
         # than now, and now when the middleware gives no reception time.
         monotonic_now = time.monotonic()
         offset = monotonic_now - time.time_ns() * 1e-9
-        for received, _, reader, data in batch:
-            if group.stop.is_set():
-                return full
+        for index, (received, _, reader, data) in enumerate(batch):
+            if stop is not None and stop.is_set():
+                return batch[index:]
             self.deliver(reader.row.source, data,
                          min(received * 1e-9 + offset, monotonic_now)
                          if received > 0 else monotonic_now)
-        return full
+        return []
 
 
 def _decoded(reader, data):

@@ -102,12 +102,12 @@ class Recorder(ManagedNode):
     PARAMETERS = Table('RecorderSettings', ())
 
     def __init__(self, output, topics, storage='mcap', duration=None,
-                 wait=10.0):
+                 wait=10.0, **kwargs):
         self._request = (output, topics, storage, wait)
         self._bag = None
         self._duration = duration
         self._end = None        # set once recording: the wait is not in it
-        super().__init__()
+        super().__init__(**kwargs)
 
     def build(self, settings):
         """Configure: find the topics' types, open the bag; the inputs."""
@@ -182,10 +182,16 @@ class Recorder(ManagedNode):
         return self._end is not None and time.monotonic() >= self._end
 
     def on_stop(self, interrupted):
-        """Close the bag (complete, whatever stopped the recording)."""
+        """
+        Close the bag (complete, whatever stopped the recording).
+
+        Every message received goes in: those the input thread had not
+        handled yet, and those still in the subscriptions' histories.
+        """
         if self._bag is None:
             return
         self.inputs.stop()
+        self.inputs.drain()
         self._bag.queue.put(None)
         self._bag.join()
         failed = f'; {self._bag.failed} write(s) failed' \
