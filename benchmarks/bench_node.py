@@ -476,20 +476,41 @@ def checks(results, nodes, args):
             if node is None or echo is None:
                 lines.append(row + 'no result')
                 continue
-            if node['status'] != 'ok':
-                verdict, why = 'MISS', node['status']
-            else:
-                parts = {
-                    'sustained': node['sustained'],
-                    'loss<=echo': node['lost'] <= echo['lost'],
-                    'p99<=2x': ('p99_ms' in node and 'p99_ms' in echo
-                                and node['p99_ms'] <= 2 * echo['p99_ms'])}
-                verdict = 'PASS' if all(parts.values()) else 'MISS'
-                why = ', '.join(f'{k} {"ok" if v else "NO"}'
-                                for k, v in parts.items())
+            verdict, why = _judge(node, lambda: {
+                'sustained': node['sustained'],
+                'loss<=echo': node['lost'] <= echo['lost'],
+                'p99<=2x': ('p99_ms' in node and 'p99_ms' in echo
+                            and node['p99_ms'] <= 2 * echo['p99_ms'])})
             verdicts[f'{node_target} vs {base}'] = verdict
             lines.append(row + f'{verdict}  ({why})')
     return lines, verdicts
+
+
+def _judge(node, parts):
+    """
+    Return (verdict, why) of one ``node`` result.
+
+    ``parts()`` gives its named checks (called only for a result whose
+    run ended ``ok``): PASS when all hold, else MISS.
+    """
+    if node['status'] != 'ok':
+        return 'MISS', node['status']
+    checks = parts()
+    return ('PASS' if all(checks.values()) else 'MISS',
+            ', '.join(f'{k} {"ok" if v else "NO"}' for k, v in checks.items()))
+
+
+def _realtime_parts(node, echo):
+    """Return the real-time checks of a node result against the echo's."""
+    fifo, threads = node['fifo_threads']
+    p99 = node.get('p99_ms', math.inf)
+    return {
+        f'p99 {p99:.2f} ms <= {RT_P99_FACTOR:g}x '
+        f'{echo.get("p99_ms", math.nan):.2f}':
+            p99 <= RT_P99_FACTOR * echo.get('p99_ms', 0.0),
+        f'<= {RT_P99_MS:g} ms': p99 <= RT_P99_MS,
+        f'loss {node["loss"]:.2%}': node['loss'] <= RT_LOSS,
+        f'threads FIFO {fifo} of {threads}': fifo == threads}
 
 
 def realtime_checks(results, nodes, kinds, qoses, args):
@@ -518,22 +539,8 @@ def realtime_checks(results, nodes, kinds, qoses, args):
                 if node is None or echo is None:
                     lines.append(row + 'no result')
                     continue
-                if node['status'] != 'ok':
-                    verdict, why = 'MISS', node['status']
-                else:
-                    fifo, threads = node['fifo_threads']
-                    p99 = node.get('p99_ms', math.inf)
-                    parts = {
-                        f'p99 {p99:.2f} ms <= {RT_P99_FACTOR:g}x '
-                        f'{echo.get("p99_ms", math.nan):.2f}':
-                            p99 <= RT_P99_FACTOR * echo.get('p99_ms', 0.0),
-                        f'<= {RT_P99_MS:g} ms': p99 <= RT_P99_MS,
-                        f'loss {node["loss"]:.2%}': node['loss'] <= RT_LOSS,
-                        f'threads FIFO {fifo} of {threads}':
-                            fifo == threads}
-                    verdict = 'PASS' if all(parts.values()) else 'MISS'
-                    why = ', '.join(f'{k} {"ok" if v else "NO"}'
-                                    for k, v in parts.items())
+                verdict, why = _judge(node, lambda: _realtime_parts(
+                    node, echo))
                 verdicts[f'{node_target} {kind} {qos} fifo {priority}'] = \
                     verdict
                 lines.append(row + f'{verdict}  ({why})')

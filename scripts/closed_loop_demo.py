@@ -33,11 +33,9 @@ os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
 
 ROOT = Path(__file__).resolve().parents[1]
 
-import rclpy  # noqa: E402
-
 from orthoglide_ros.harness import closed_loop as harness  # noqa: E402
 from orthoglide_ros.harness.load import (add_load_options, REALTIME,  # noqa: E402
-                                         busy_loops, check_load_options)
+                                         check_load_options)
 
 CASES = ((False, 1.0), (True, 1.0), (False, harness.MISMATCH),
          (True, harness.MISMATCH))      # (feedforward, plant mass factor)
@@ -84,12 +82,11 @@ def main(argv=None):
     if not 0.0 <= args.payload <= 1000.0:
         parser.error('--payload must lie in [0, 1000] kg')
 
-    context = rclpy.context.Context()
-    rclpy.init(context=context)
     runs, pickups = {}, {}
     try:
-        with busy_loops(args.load), harness.ClosedLoop(
-                context, args.loop_rate, args.plant_rate, args.engine,
+        with harness.demo_loop(
+                args.load, loop_rate=args.loop_rate,
+                plant_rate=args.plant_rate, engine=args.engine,
                 realtime=args.realtime) as loop:
             for name in names:
                 for feedforward, mass in CASES:
@@ -109,12 +106,9 @@ def main(argv=None):
                     print(f'  {run.label}: position error RMS '
                           f'{run.rms_mm:.3f} mm', flush=True)
                     pickups[name, told] = (run, at)
-        loop.check_exits()
     except harness.LoopError as error:
         print(f'closed_loop_demo: error: {error}', file=sys.stderr)
         return 1
-    finally:
-        rclpy.try_shutdown(context=context)
     print_table(runs, names, args)
     if pickups:
         print_pickups(pickups, names, args)

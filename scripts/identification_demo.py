@@ -58,12 +58,10 @@ os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
 ROOT = Path(__file__).resolve().parents[1]
 
 import numpy as np  # noqa: E402
-import rclpy  # noqa: E402
 
 from orthoglide_ros.harness import closed_loop as harness  # noqa: E402
 from orthoglide_ros.harness.load import (add_load_options, REALTIME,  # noqa: E402
-                                         busy_loops, check_load_options,
-                                         elevate)
+                                         check_load_options, elevate)
 from orthoglide_ros.harness.processes import (node_executable,  # noqa: E402
                                               start_node_process, stop_process)
 from orthoglide_ros.formats import params_file  # noqa: E402
@@ -152,11 +150,9 @@ def main(argv=None):
         model_file = out / 'unknown_robot.xml'
         model_file.write_text(mjcf.mjcf(plant))
         print(f'MuJoCo plant: {model_file}')
-    context = rclpy.context.Context()
-    rclpy.init(context=context)
     try:
-        with busy_loops(args.load), harness.ClosedLoop(
-                context, engine=args.engine, mjcf_file=str(model_file),
+        with harness.demo_loop(
+                args.load, engine=args.engine, mjcf_file=str(model_file),
                 realtime=args.realtime) as loop:
             excitation = excite(loop, args.seed, args.period, args.passes,
                                 bag, nominal, plant)
@@ -171,12 +167,9 @@ def main(argv=None):
             identified = params_file.load_robot(identified_file)
             runs = validate(loop, names, nominal, identified, plant,
                             args.repeats, setup)
-        loop.check_exits()
     except harness.LoopError as error:
         print(f'identification_demo: error: {error}', file=sys.stderr)
         return 1
-    finally:
-        rclpy.try_shutdown(context=context)
     print('\n' + identify_output)
     print_parameters(nominal, identified, truth, setup.truth)
     ok = print_tracking(runs, names, setup)

@@ -298,9 +298,11 @@ def hostile_report():
                          for n, g in r.joining.items()))
     r = run('simulator at 10 kHz', hostile.fast_simulator)
     if r is not None:
-        line(r.received == r.sent and r.timeouts == 1,
+        spurious = r.timeouts - 1 - r.stall_brakes
+        line(r.received == r.sent and spurious == 0,
              f'simulator rate_hz 10000, commands at 500 Hz: {r.received}'
-             f'/{r.sent} taken, {r.timeouts - 1} spurious timeouts, '
+             f'/{r.sent} taken, {spurious} spurious timeouts '
+             f'({r.stall_brakes} after its own stalls), '
              f'{r.step_rate:.0f} steps/s, status {r.message!r}')
     r = run('setpoint loop', hostile.setpoint_loop)
     if r is not None:

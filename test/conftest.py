@@ -48,6 +48,20 @@ def ros_context():
         yield context
 
 
+@pytest.fixture(scope='session', params=['paper', 'other'])
+def robot(request):
+    """
+    Give a test of the model each robot in turn: the paper's, then another.
+
+    The other (``mechanics_reference.OTHER_ROBOT_VALUES``) differs in every
+    length and angle and in m4, m6. Session-scoped, so that hypothesis
+    draws its examples for each (a Robot is immutable).
+    """
+    from mechanics_reference import OTHER_ROBOT_VALUES
+    from orthoglide_ros.model.robot import Robot
+    return Robot(**(OTHER_ROBOT_VALUES if request.param == 'other' else {}))
+
+
 @pytest.fixture(scope='module')
 def closed_loop():
     """
@@ -57,10 +71,8 @@ def closed_loop():
     must have exited 0.
     """
     harness = pytest.importorskip('orthoglide_ros.harness.closed_loop')
-    with _fresh_context() as context:
-        with harness.ClosedLoop(context) as running:
-            yield running
-        running.check_exits()
+    with harness.demo_loop() as running:
+        yield running
 
 
 def pytest_collection_modifyitems(config, items):

@@ -9,33 +9,27 @@ over the workspace (eq. 3), or the platform would not translate.
 
 from hypothesis import given, settings
 from mechanics_reference import (
-    CUBE, cube_points, leg_geometry, LEGS, OTHER_ROBOT_VALUES, U1)
+    CUBE, cube_points, leg_geometry, LEGS, U1)
 import numpy as np
 from orthoglide_ros.model.bodies import elements
 from orthoglide_ros.model.robot import Robot
-import pytest
 
-ROBOTS = {'paper': Robot(), 'other': Robot(**OTHER_ROBOT_VALUES)}
 # Closure tolerance (m) of doc/model.md: rounding of a chain of ~1 m vectors.
 CLOSURE_TOLERANCE = 1e-12
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
 @settings(deadline=None, max_examples=40)
 @given(position=cube_points())
-def test_every_leg_chain_reaches_the_platform_centre(name, position):
-    robot = ROBOTS[name]
+def test_every_leg_chain_reaches_the_platform_centre(robot, position):
     legs = elements(robot, position)
     for leg in LEGS:
         reached = legs[leg]['joints']['G']
         assert np.abs(reached - position).max() <= CLOSURE_TOLERANCE, leg
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
 @settings(deadline=None, max_examples=40)
 @given(position=cube_points())
-def test_platform_orientation_a50_is_constant(name, position):
-    robot = ROBOTS[name]
+def test_platform_orientation_a50_is_constant(robot, position):
     home = elements(robot, (0.0, 0.0, 0.0))
     here = elements(robot, position)
     for leg in LEGS:
@@ -53,11 +47,9 @@ def test_platform_orientation_of_leg_c_is_the_corrected_eq4():
         assert np.abs(a50 - c50).max() <= 1e-12
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
 @settings(deadline=None, max_examples=30)
 @given(position=cube_points())
-def test_parallelogram_and_rods_keep_their_lengths(name, position):
-    robot = ROBOTS[name]
+def test_parallelogram_and_rods_keep_their_lengths(robot, position):
     legs = elements(robot, position)
     for leg in LEGS:
         j = legs[leg]['joints']
@@ -82,12 +74,10 @@ def test_parallelogram_and_rods_keep_their_lengths(name, position):
         assert np.abs(off_axis).max() <= CLOSURE_TOLERANCE
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
 @settings(deadline=None, max_examples=30)
 @given(position=cube_points(CUBE))
-def test_joint_centres_and_rotations_match_an_independent_chain(name,
+def test_joint_centres_and_rotations_match_an_independent_chain(robot,
                                                                 position):
-    robot = ROBOTS[name]
     legs = elements(robot, position)
     for leg in LEGS:
         geometry = leg_geometry(robot, leg, position)

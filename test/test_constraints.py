@@ -19,14 +19,12 @@ from the rotations ``a_k0`` that ``elements`` returns:
 
 from hypothesis import given, settings
 from mechanics_reference import (
-    cube_points, LEGS, OTHER_ROBOT_VALUES, skew, U2, U3, vectors)
+    cube_points, LEGS, skew, U2, U3, vectors)
 import numpy as np
 from orthoglide_ros.model.bodies import elements
 from orthoglide_ros.model.mechanics import solve
 from orthoglide_ros.model.robot import Robot
-import pytest
 
-ROBOTS = {'paper': Robot(), 'other': Robot(**OTHER_ROBOT_VALUES)}
 U3_SKEW = skew(U3)
 # Rounding of sums of a few terms of order 1 (relative).
 ROUNDING = 1e-12
@@ -57,11 +55,9 @@ def connectivity_terms(robot, leg):
     return slider, turn21, turn32, quad21, quad32, cross
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
 @settings(deadline=None, max_examples=40)
 @given(position=cube_points())
-def test_spheres_eq14_hold(name, position):
-    robot = ROBOTS[name]
+def test_spheres_eq14_hold(robot, position):
     lam = solve(robot, position).lambda_
     x, y, z = position
     l3 = robot.l3
@@ -71,11 +67,9 @@ def test_spheres_eq14_hold(name, position):
     assert np.abs(residuals).max() <= ROUNDING
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
 @settings(deadline=None, max_examples=40)
 @given(position=cube_points(), velocity=vectors(3.0))
-def test_j1_lambdadot_equals_j2_rdot(name, position, velocity):
-    robot = ROBOTS[name]
+def test_j1_lambdadot_equals_j2_rdot(robot, position, velocity):
     s = solve(robot, position, velocity)
     j1, j2 = jacobians_eq16(robot, position, s.lambda_)
     lhs = j1 @ np.array(s.lambdadot)
@@ -84,13 +78,11 @@ def test_j1_lambdadot_equals_j2_rdot(name, position, velocity):
     assert np.abs(lhs - rhs).max() <= ROUNDING * scale
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
 @settings(deadline=None, max_examples=40)
 @given(position=cube_points(), velocity=vectors(3.0),
        acceleration=vectors(30.0))
 def test_connectivity_eq13_and_eq18_hold_for_every_leg(
-        name, position, velocity, acceleration):
-    robot = ROBOTS[name]
+        robot, position, velocity, acceleration):
     legs = elements(robot, position, velocity, acceleration)
     for leg_name in LEGS:
         leg = legs[leg_name]

@@ -82,6 +82,14 @@ def wait_outputs(g, count, timeout=WAIT):
                 f'states, {len(p.forces)} forces, {len(p.power)} powers')
 
 
+def send_paper(g, t, count):
+    """Send eq. (6) at ``t`` s, stamped ``t``; wait for ``count`` outputs."""
+    sample = paper_sample(t)
+    g.probe.send(stamp_of(t), *sample)
+    wait_outputs(g, count)
+    return sample
+
+
 def wait_diagnostics(g, predicate, timeout=WAIT):
     """Spin until a diagnostics message satisfies ``predicate(values)``."""
     return harness_wait_diagnostics(g.executor, g.probe.diagnostics,
@@ -320,8 +328,7 @@ def test_diagnostics(graph):
     # Five setpoints, then one refused: the period's status is WARN.
     times = (0.2, 0.6, 1.0, 1.4, 1.8)
     for k, t in enumerate(times):
-        probe.send(stamp_of(t), *paper_sample(t))
-        wait_outputs(g, k + 1)
+        send_paper(g, t, k + 1)
     probe.send(stamp_of(3.0), UNREACHABLE)
     # The period of the fifth computation: its compute time and rate.
     msg = wait_diagnostics(g, lambda d: d['setpoints computed'] == '5')
@@ -385,9 +392,7 @@ def test_fixed_rate_stale_and_resume(graph):
     assert msg.status[0].message.startswith('stale')
     assert len(probe.joint_states) == n
     # A fresh setpoint resumes; a newer one replaces it at the next tick.
-    p2, v2, a2 = paper_sample(1.0)
-    probe.send(stamp_of(1.0), p2, v2, a2)
-    wait_outputs(g, n + 3)
+    p2, v2, a2 = send_paper(g, 1.0, n + 3)
     p3, v3, a3 = paper_sample(1.5)
     probe.send(stamp_of(1.5), p3, v3, a3)
     assert spin_until(g.executor, lambda: stamp_of(1.5) in
@@ -442,9 +447,7 @@ def test_invalid_parameter_changes_refused(graph):
     assert values[5].double_value == 0.0
     assert values[6].double_value == Robot().alpha
     assert g.node.core.settings.robot == Robot()
-    p, v, a = paper_sample(1.2)
-    probe.send(stamp_of(1.2), p, v, a)
-    wait_outputs(g, 1)
+    p, v, a = send_paper(g, 1.2, 1)
     assert_output(probe, 0, stamp_of(1.2), solve(p, v, a))
 
 
@@ -453,9 +456,7 @@ def test_valid_atomic_change_applies_to_next_setpoint(graph):
     g = graph()
     probe = g.probe
     client = parameter_client(g, 'feedforward')
-    p, v, a = paper_sample(1.2)
-    probe.send(stamp_of(1.2), p, v, a)
-    wait_outputs(g, 1)
+    p, v, a = send_paper(g, 1.2, 1)
     assert_output(probe, 0, stamp_of(1.2), solve(p, v, a))
     result = call(g, client.set_parameters_atomically([
         Parameter('robot.m5', value=18.0),
@@ -474,9 +475,7 @@ def test_a_payload_set_over_dds_is_the_next_setpoints_and_shown(graph):
     g = graph()
     probe = g.probe
     client = parameter_client(g, 'feedforward')
-    p, v, a = paper_sample(0.7)
-    probe.send(stamp_of(0.7), p, v, a)
-    wait_outputs(g, 1)
+    p, v, a = send_paper(g, 0.7, 1)
     result = call(g, client.set_parameters([
         Parameter('robot.payload', value=5.0)])).results[0]
     assert result.successful, result.reason

@@ -11,7 +11,7 @@ import itertools
 
 from hypothesis import given, settings
 from mechanics_reference import (
-    actuator_displacements, CUBE, cube_points, OTHER_ROBOT_VALUES)
+    actuator_displacements, CUBE, cube_points)
 import numpy as np
 from orthoglide_ros.model.mechanics import (
     forward_kinematics, solve, solve_batch, WorkspaceError)
@@ -19,15 +19,12 @@ from orthoglide_ros.model.robot import Robot
 import pytest
 
 TOLERANCE = 1e-12  # m
-ROBOTS = {'paper': Robot(), 'other': Robot(**OTHER_ROBOT_VALUES)}
 CORNERS = np.array(list(itertools.product((-CUBE, CUBE), repeat=3)))
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
 @settings(deadline=None, max_examples=60)
 @given(position=cube_points())
-def test_round_trip_single_point(name, position):
-    robot = ROBOTS[name]
+def test_round_trip_single_point(robot, position):
     lam = solve(robot, position).lambda_
     back = forward_kinematics(robot, lam)
     assert back.shape == (3,)
@@ -37,9 +34,7 @@ def test_round_trip_single_point(name, position):
                   - position).max() <= TOLERANCE
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
-def test_round_trip_batch_over_the_cube_and_its_corners(name):
-    robot = ROBOTS[name]
+def test_round_trip_batch_over_the_cube_and_its_corners(robot):
     rng = np.random.default_rng(14)
     grid = np.array(list(itertools.product(np.linspace(-CUBE, CUBE, 7),
                                            repeat=3)))

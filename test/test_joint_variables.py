@@ -10,14 +10,12 @@ reference's complex-step ``J_lambda``); both refuse what ``solve`` refuses.
 from hypothesis import given, settings
 from mechanics_reference import (
     COMPLEX_STEP, cube_points, lambda_jacobian, leg_geometry, LEGS,
-    OTHER_ROBOT_VALUES, vectors)
+    vectors)
 import numpy as np
 from orthoglide_ros.model.bodies import leg_joints
 from orthoglide_ros.model.mechanics import platform_velocity, WorkspaceError
 from orthoglide_ros.model.robot import Robot
 import pytest
-
-ROBOTS = {'paper': Robot(), 'other': Robot(**OTHER_ROBOT_VALUES)}
 
 
 def reference(robot, position, velocity):
@@ -32,11 +30,9 @@ def reference(robot, position, velocity):
     return out
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
 @settings(deadline=None, max_examples=60)
 @given(position=cube_points(), velocity=vectors(1.0))
-def test_leg_joints_are_eq9_and_its_derivative(name, position, velocity):
-    robot = ROBOTS[name]
+def test_leg_joints_are_eq9_and_its_derivative(robot, position, velocity):
     legs = leg_joints(robot, position, velocity)
     for leg, (values, rates) in reference(robot, position, velocity).items():
         got = legs[leg]
@@ -69,11 +65,9 @@ def test_refusals_are_those_of_solve():
     assert error.value.reason == 'singular' and error.value.row == 1
 
 
-@pytest.mark.parametrize('name', sorted(ROBOTS))
 @settings(deadline=None, max_examples=60)
 @given(position=cube_points(), velocity=vectors(1.0))
-def test_platform_velocity_inverts_j_lambda(name, position, velocity):
-    robot = ROBOTS[name]
+def test_platform_velocity_inverts_j_lambda(robot, position, velocity):
     rates = lambda_jacobian(robot, position) @ velocity
     back = platform_velocity(robot, position, rates)
     assert np.abs(np.subtract(back, velocity)).max() <= 1e-12

@@ -61,7 +61,7 @@ from orthoglide_ros.formats.params_file import load_robot
 from orthoglide_ros.model.trajectory import paper_sample
 
 from node_checks import close, needs_scripts  # noqa: E402
-from orthoglide_ros.harness.probe import PROBE_QOS  # noqa: E402
+from orthoglide_ros.harness.probe import paced, PROBE_QOS  # noqa: E402
 from orthoglide_ros.harness.processes import (start_node_process,  # noqa: E402
                                               stop_process)
 
@@ -177,23 +177,8 @@ class LoadRig:
 
         Behind schedule it does not burst: one setpoint, then a spin.
         """
-        period = 1.0 / RATE
-        start = time.monotonic()
-        if self._due is None:
-            self._due = start
-        while True:
-            now = time.monotonic()
-            if until is not None:
-                if until():
-                    return
-                assert now - start < timeout, 'timed out while streaming'
-            elif now - start >= duration:
-                return
-            if now >= self._due:
-                self._publish()
-                self._due = max(self._due + period, now)
-            self.executor.spin_once(
-                timeout_sec=max(0.0, min(self._due - now, period)))
+        self._due = paced(self.executor, RATE, self._publish, duration,
+                          until, timeout, self._due)
 
     def drain(self, quiet=0.5):
         """Spin without publishing until no output came for ``quiet`` s."""

@@ -31,7 +31,7 @@ from orthoglide_ros.model.trajectory import paper_sample
 
 from orthoglide_ros.harness.messages import (diagnostic_values, header_stamp,
                                              stamp_of)
-from orthoglide_ros.harness.probe import Probe, spin_for, spin_until
+from orthoglide_ros.harness.probe import paced, Probe, spin_for, spin_until
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 
@@ -95,25 +95,15 @@ def stream(g, form, first_t, duration=STREAM, until=None, sent_at=None):
     (a list, optional) gets each setpoint's ``time.monotonic()``.
     """
     period = 1.0 / PRODUCER_HZ
-    start = time.monotonic()
-    due = start
     sent = []
-    while True:
-        now = time.monotonic()
-        if until is not None:
-            if until():
-                break
-            assert now - start < WAIT, 'stream: condition not reached'
-        elif now - start >= duration:
-            break
-        if now >= due:
-            t = first_t + len(sent) * period
-            send(g, form, t)
-            sent.append(t)
-            if sent_at is not None:
-                sent_at.append(time.monotonic())
-            due = max(due + period, now)
-        g.executor.spin_once(timeout_sec=max(0.0, min(due - now, period)))
+
+    def publish():
+        t = first_t + len(sent) * period
+        send(g, form, t)
+        sent.append(t)
+        if sent_at is not None:
+            sent_at.append(time.monotonic())
+    paced(g.executor, PRODUCER_HZ, publish, duration, until, WAIT)
     return sent
 
 

@@ -39,10 +39,12 @@ machine's two cores (see doc/measurements.md).
 """
 
 from collections import namedtuple
+from contextlib import contextmanager
 import math
 import time
 
 import numpy as np
+import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -54,8 +56,8 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
-from orthoglide_ros.harness.load import (REALTIME, realtime_args,
-                                         realtime_client)
+from orthoglide_ros.harness.load import (busy_loops, REALTIME,
+                                         realtime_args, realtime_client)
 from orthoglide_ros.harness.messages import cartesian_message
 from orthoglide_ros.harness.processes import (node_executable,
                                               start_node_process, stop_process)
@@ -489,6 +491,24 @@ class ClosedLoop:
                     0.02, max(end - time.monotonic(), 0.0)))
         except ExternalShutdownException:
             raise LoopError('the ROS context was shut down') from None
+
+
+@contextmanager
+def demo_loop(load=0, **options):
+    """
+    Give a demo its closed loop: an rclpy context of its own, ``load`` busy loops.
+
+    ``options`` go to :class:`ClosedLoop`; every node must have exited 0
+    afterwards (:meth:`ClosedLoop.check_exits`: a :class:`LoopError`).
+    """
+    context = rclpy.context.Context()
+    rclpy.init(context=context)
+    try:
+        with busy_loops(load), ClosedLoop(context, **options) as loop:
+            yield loop
+        loop.check_exits()
+    finally:
+        rclpy.try_shutdown(context=context)
 
 
 def median_runs(loop, name, cases, plant, repeats=3, report=None,

@@ -213,6 +213,35 @@ def spin_until(executor, predicate, timeout):
     return True
 
 
+def paced(executor, rate, publish, duration=None, until=None, timeout=10.0,
+          due=None):
+    """
+    Call ``publish()`` at ``rate`` Hz, spinning ``executor`` in between.
+
+    For ``duration`` s, or (if given) until ``until()`` holds, a
+    TimeoutError after ``timeout`` s. Behind schedule it does not burst:
+    one call, then at least one spin. ``due``: when the first call is due
+    (monotonic s, default now); returns when the next one is, for a
+    caller that streams on.
+    """
+    period = 1.0 / rate
+    start = time.monotonic()
+    due = start if due is None else due
+    while True:
+        now = time.monotonic()
+        if until is not None:
+            if until():
+                return due
+            if now - start >= timeout:
+                raise TimeoutError(f'streaming: not reached in {timeout:g} s')
+        elif now - start >= duration:
+            return due
+        if now >= due:
+            publish()
+            due = max(due + period, now)
+        executor.spin_once(timeout_sec=max(0.0, min(due - now, period)))
+
+
 def wait_diagnostics(executor, messages, predicate, timeout):
     """
     Spin until a DiagnosticArray in ``messages`` satisfies ``predicate``.

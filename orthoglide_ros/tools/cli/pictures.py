@@ -55,14 +55,18 @@ def add_render(sub, common):
     add_position(render, False, '; for a PNG')
     add_output(render, 'PNG file, or GIF (animation) to write', True,
                'FILE.png|.gif')
-    render.add_argument('--frames', type=_frames, default=DEFAULT_FRAMES,
-                        help=f'GIF frames along eq. (6) (default '
-                        f'{DEFAULT_FRAMES})')
-    render.add_argument('--fps', type=_fps, default=DEFAULT_FPS,
-                        help=f'GIF frames per second (default '
-                        f'{DEFAULT_FPS:g})')
+    _add_gif(render, 'GIF frames along eq. (6)', 'GIF frames per second')
     add_size(render, (800, 600), _pixels)
     return render
+
+
+def _add_gif(parser, frames_help, fps_help, fps_note=''):
+    """Add a GIF's ``--frames`` and ``--fps``, their defaults in the help."""
+    parser.add_argument('--frames', type=_frames, default=DEFAULT_FRAMES,
+                        metavar='N',
+                        help=f'{frames_help} (default {DEFAULT_FRAMES})')
+    parser.add_argument('--fps', type=_fps, default=DEFAULT_FPS, metavar='F',
+                        help=f'{fps_help} (default {DEFAULT_FPS:g}{fps_note})')
 
 
 def run_render(robot, args):
@@ -110,12 +114,8 @@ def add_animate(sub, common):
                          'file, - for standard input (default: the paper\'s '
                          'trajectory, eq. (6))')
     add_output(animate, 'GIF file to write', True, 'FILE.gif')
-    animate.add_argument('--frames', type=_frames, default=DEFAULT_FRAMES,
-                         metavar='N', help='frames at most, evenly spread '
-                         f'over the trajectory (default {DEFAULT_FRAMES})')
-    animate.add_argument('--fps', type=_fps, default=DEFAULT_FPS,
-                         metavar='F', help='frames per second of the GIF '
-                         f'(default {DEFAULT_FPS:g}: eq. (6) in real time)')
+    _add_gif(animate, 'frames at most, evenly spread over the trajectory',
+             'frames per second of the GIF', ': eq. (6) in real time')
     add_size(animate, (640, 640), _pixels)
     return animate
 
