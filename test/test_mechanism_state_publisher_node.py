@@ -31,7 +31,8 @@ from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 
 from node_checks import needs_scripts
-from orthoglide_ros.harness.probe import (node_graphs, PROBE_QOS, spin_until,
+from orthoglide_ros.harness.probe import (matched, node_graphs, PROBE_QOS,
+                                          spin_until,
                                           wait_diagnostics as harness_wait_diagnostics)
 from orthoglide_ros.harness.processes import node_executable, run_to_exit
 from urdf_harness import COMMITTED_URDF, cut_errors, load, TOLERANCE
@@ -63,9 +64,7 @@ class MechanismProbe(Node):
 
     def matched(self):
         """Whether the input and both outputs are matched."""
-        return (self.pub.get_subscription_count() > 0
-                and self.sub.get_publisher_count() > 0
-                and self.sub_diagnostics.get_publisher_count() > 0)
+        return matched((self.pub,), (self.sub, self.sub_diagnostics))
 
     def send(self, stamp, lam, lamd=None, names=NAMES, extra=True):
         """Publish the sliders shuffled by name, with an extra joint."""

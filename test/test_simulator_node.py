@@ -34,8 +34,8 @@ from orthoglide_ros.ros.simulator_node import SimulatorNode
 
 from node_checks import needs_scripts
 from orthoglide_ros.harness.messages import header_stamp
-from orthoglide_ros.harness.probe import (node_graphs, PROBE_QOS, spin_for,
-                                          spin_until,
+from orthoglide_ros.harness.probe import (matched, node_graphs, PROBE_QOS,
+                                          spin_for, spin_until,
                                           wait_diagnostics as harness_wait_diagnostics)
 from orthoglide_ros.harness.processes import node_executable, run_to_exit
 
@@ -85,8 +85,7 @@ class SimProbe(Node):
 
     def matched(self):
         """Whether the command topic and every output are matched."""
-        return (self.commands.get_subscription_count() > 0
-                and all(s.get_publisher_count() > 0 for s in self.inputs))
+        return matched((self.commands,), self.inputs)
 
     def clear(self):
         """Forget every message recorded so far."""

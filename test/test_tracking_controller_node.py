@@ -27,8 +27,9 @@ from orthoglide_ros.ros.tracking_controller_node import TrackingControllerNode
 
 from node_checks import assert_declared, needs_scripts
 from orthoglide_ros.harness.messages import diagnostic_values
-from orthoglide_ros.harness.probe import (call, node_graphs, parameter_client,
-                                          PROBE_QOS, spin_for, spin_until,
+from orthoglide_ros.harness.probe import (call, matched, node_graphs,
+                                          parameter_client, PROBE_QOS,
+                                          spin_for, spin_until,
                                           wait_diagnostics as harness_wait_diagnostics)
 from orthoglide_ros.harness.processes import node_executable, run_to_exit
 
@@ -70,11 +71,9 @@ class TrackingProbe(Node):
 
     def matched(self):
         """Whether both inputs and both outputs are matched."""
-        return (self.pub_desired.get_subscription_count() > 0
-                and self.pub_measured.get_subscription_count() > 0
-                and self.pub_trajectory.get_subscription_count() > 0
-                and self.sub_commands.get_publisher_count() > 0
-                and self.sub_diagnostics.get_publisher_count() > 0)
+        return matched(
+            (self.pub_desired, self.pub_measured, self.pub_trajectory),
+            (self.sub_commands, self.sub_diagnostics))
 
     def send(self, which, position, velocity=ZERO, effort=None,
              names=NAMES):

@@ -202,6 +202,12 @@ class Probe(Node):
         return sent
 
 
+def matched(publishers=(), subscriptions=()):
+    """Whether each publisher has a subscription and each one a publisher."""
+    return (all(p.get_subscription_count() > 0 for p in publishers)
+            and all(s.get_publisher_count() > 0 for s in subscriptions))
+
+
 def spin_until(executor, predicate, timeout):
     """Spin ``executor`` until ``predicate()`` holds; return whether it did."""
     deadline = time.monotonic() + timeout
