@@ -232,18 +232,25 @@ def setpoint_loop(duration=0.6, return_duration=0.6, rate_hz=500.0,
     Returns the largest change of position and velocity between two
     consecutive setpoints, next to what the motion's own peak speed and
     acceleration allow over the same interval (``*_bound``), and how many
-    passes were seen.
+    passes were seen. Recorded until the stamps span ``seconds``; the
+    publisher and this process at real-time priority where the OS grants
+    it, so that a stall of the machine's other work is not a gap.
     """
-    with Nodes() as nodes, Peer() as peer:
+    def stamp(entry):
+        return entry[1].header.stamp.sec + entry[1].header.stamp.nanosec * 1e-9
+
+    def spanned():
+        return len(log) > 1 and stamp(log[-1]) - stamp(log[0]) >= seconds
+
+    with Nodes(REALTIME) as nodes, Peer(realtime=REALTIME) as peer:
         log = peer.record('setpoint/trajectory', MultiDOFJointTrajectory)
         nodes.start('setpoint_publisher', '-p', 'loop:=true', '-p',
                     f'duration:={duration}', '-p',
                     f'return_duration:={return_duration}', '-p',
                     f'rate_hz:={rate_hz}', '-p', 'start_delay:=0.0')
         peer.wait(lambda: len(log) > 0, START_TIMEOUT)
-        time.sleep(seconds)
-        samples = [(m.header.stamp.sec + m.header.stamp.nanosec * 1e-9,
-                    m.points[0]) for _, m in list(log)]
+        peer.wait(spanned, seconds + START_TIMEOUT)
+        samples = [(stamp(entry), entry[1].points[0]) for entry in list(log)]
     t = np.array([s for s, _ in samples])
     p = np.array([[pt.transforms[0].translation.x,
                    pt.transforms[0].translation.y,
