@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """
-Replies to a departed client: how long they stop a node's other threads.
+Replies to clients that cannot take them: how long they stop a node.
 
 Two server processes in turn, each a node with one parameter on an
 EventsExecutor spun by ``spin_once`` and a thread that sleeps 1 ms in a
@@ -12,12 +12,15 @@ loop and records its gaps:
   are dropped when it has gone.
 
 For each, a client process sends ``--requests`` SetParameters requests and
-shuts down cleanly at once. The report: the gaps of the sleeping thread
-over 30 ms (count, total, longest) and the replies the guarded node
-dropped. rmw_fastrtps waits up to 100 ms, GIL held, for a departed
-client's reader before it gives up on a reply.
+shuts down cleanly at once (``--client departing``), or makes its client
+with a TRANSIENT_LOCAL reply reader, which the VOLATILE reply writer never
+matches, sends them and stays (``--client lingering``). The report: the
+gaps of the sleeping thread over 30 ms (count, total, longest) and the
+replies the guarded node dropped. rmw_fastrtps waits up to 100 ms, GIL
+held, for a client's reader before it gives up on a reply.
 
 Usage: python benchmarks/bench_replies.py [--requests 100]
+       [--client departing|lingering]
 """
 
 import argparse
@@ -84,25 +87,38 @@ def serve(kind, seconds):
     return 0
 
 
-def request(count):
-    """Child: send ``count`` SetParameters requests, then leave at once."""
+def request(count, kind, seconds):
+    """Child: send ``count`` SetParameters requests; leave, or stay."""
     import rclpy
+    from rclpy.qos import DurabilityPolicy, QoSProfile
     from rcl_interfaces.msg import Parameter, ParameterValue
     from rcl_interfaces.srv import SetParameters
     rclpy.init()
-    node = rclpy.create_node('departing_client')
-    client = node.create_client(SetParameters, '/victim/set_parameters')
-    if not client.wait_for_service(timeout_sec=20.0):
-        return 1
+    node = rclpy.create_node(f'{kind}_client')
+    if kind == 'departing':
+        client = node.create_client(SetParameters, '/victim/set_parameters')
+        if not client.wait_for_service(timeout_sec=20.0):
+            return 1
+    else:
+        # wait_for_service would wait for its reader to match: never.
+        client = node.create_client(
+            SetParameters, '/victim/set_parameters', qos_profile=QoSProfile(
+                depth=count, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+        while '/victim/set_parameters' not in dict(
+                node.get_service_names_and_types()):
+            time.sleep(0.1)
+        time.sleep(1.0)
     for i in range(count):
         client.call_async(SetParameters.Request(parameters=[Parameter(
             name='x', value=ParameterValue(type=3, double_value=float(i)))]))
+    if kind == 'lingering':
+        time.sleep(seconds)
     node.destroy_node()
     rclpy.shutdown()
     return 0
 
 
-def measure(kind, count):
+def measure(kind, count, client):
     """Run a server and a client; return the server's figures."""
     seconds = 3.0 + 0.15 * count
     server = subprocess.Popen(
@@ -110,8 +126,9 @@ def measure(kind, count):
         stdout=subprocess.PIPE, text=True)
     try:
         assert server.stdout.readline().startswith('ready')
-        subprocess.run([sys.executable, __file__, 'request', str(count)],
-                       check=True, timeout=60)
+        subprocess.run([sys.executable, __file__, 'request', str(count),
+                        client, str(seconds)], check=True,
+                       timeout=seconds + 60)
         fields = server.stdout.readline().split()
         server.wait(seconds + 30)
     finally:
@@ -126,14 +143,18 @@ def main():
     if len(sys.argv) > 1 and sys.argv[1] in ('serve', 'request'):
         if sys.argv[1] == 'serve':
             return serve(sys.argv[2], float(sys.argv[3]))
-        return request(int(sys.argv[2]))
+        return request(int(sys.argv[2]), sys.argv[3], float(sys.argv[4]))
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
     parser.add_argument('--requests', type=int, default=100)
+    parser.add_argument('--client', choices=('departing', 'lingering'),
+                        default='departing')
     args = parser.parse_args()
-    results = {kind: measure(kind, args.requests)
+    results = {kind: measure(kind, args.requests, args.client)
                for kind in ('bare', 'guarded')}
-    print(f'{args.requests} SetParameters requests from a client that left '
-          f'at once (ROS_DOMAIN_ID {os.environ["ROS_DOMAIN_ID"]}):')
+    what = {'departing': 'a client that left at once',
+            'lingering': 'a TRANSIENT_LOCAL client that stayed'}[args.client]
+    print(f'{args.requests} SetParameters requests from {what} '
+          f'(ROS_DOMAIN_ID {os.environ["ROS_DOMAIN_ID"]}):')
     for kind, r in results.items():
         print(f'  {kind:8} stalls over {STALL * 1e3:.0f} ms of the other '
               f'thread: {r["stalls"]}, {r["stalled"]:.2f} s in all, '

@@ -296,6 +296,14 @@ def hostile_report():
              f'joined (apart): '
              + ', '.join(f'{n} {g * 1e3:.0f} ms'
                          for n, g in r.joining.items()))
+    r = run('isolated clients', hostile.isolated_clients)
+    if r is not None:
+        line(all(n == r.fresh for n in r.answered.values())
+             and all(n == r.stalls for n in r.after_stalls.values()),
+             f'a TRANSIENT_LOCAL client stays: fresh clients answered '
+             f'{r.answered} of {r.fresh}; after {r.stalls} 150 ms stalls '
+             f'{r.after_stalls} of {r.stalls}; its requests carried out '
+             f'{r.carried_out}')
     r = run('simulator at 10 kHz', hostile.fast_simulator)
     if r is not None:
         spurious = r.timeouts - 1 - r.stall_brakes

@@ -15,7 +15,8 @@ that ``scripts/reliability_report.sh`` runs too:
 5. stamps whose nanosec is >= 1e9;
 6. SIGINT and SIGTERM while a node starts, and as a pass ends;
 7. long text inside messages, a flood of malformed ones;
-8. a client that sends 100 requests and leaves;
+8. a client that sends 100 requests and leaves; one whose reply reader can
+   never match, which stays; stalls of a node while it answers;
 9. the simulator at 10 kHz, commanded at 500 Hz;
 10. the looping setpoint publisher's way back.
 """
@@ -126,6 +127,27 @@ def test_departed_clients_pause_no_output_stream():
     assert result.client_exits == [0, 0, 0], result
     for stream, gap in result.gaps.items():
         assert gap <= 0.2, (stream, gap)
+
+
+def test_a_client_that_cannot_take_replies_costs_no_one_else_theirs():
+    """
+    A TRANSIENT_LOCAL client stays; three fresh ones are all answered.
+
+    Its own requests are carried out (rclpy answers after the work) but
+    their replies dropped at once; every fresh client of the feedforward's
+    ``~/change_state`` and the simulator's ``~/set_parameters`` gets its
+    reply, and after 150 ms stalls of the feedforward while it answered,
+    the same client and a fresh process are answered every time.
+    """
+    result = harness.isolated_clients()
+    print(result)
+    assert all(result.alive.values()), result
+    assert all(result.carried_out.values()), result
+    assert result.answered == dict.fromkeys(result.answered, result.fresh), \
+        result
+    assert result.after_stalls == {'same client': result.stalls,
+                                   'fresh process': result.stalls}, result
+    assert result.dropped['feedforward'] >= 1, result
 
 
 def test_simulator_at_10_khz_keeps_taking_commands_and_says_it_is_slow():

@@ -14,28 +14,37 @@ Upstream behaviour it works around:
   refused whole with the reason.
 - rmw_fastrtps holds a reply, up to 100 ms with the GIL held, while the
   requesting client's reply reader is not matched: a client that sent
-  requests and left stalled every thread of the process (100 requests,
-  6.3 s). A reply therefore waits, without the GIL, polling the graph,
-  until :class:`~orthoglide_ros.ros.service_replies.ReplyRoutes` says it
-  may go to rmw, and is dropped once its requester has gone. This reads
-  the DDS service topics (``rq<service>Request``, ``rr<service>Reply``:
-  rmw_fastrtps's naming) and the request's receive time from rclpy's
-  private ``_rclpy`` header.
+  requests and left, or one whose reader can never match (a
+  TRANSIENT_LOCAL client), stalled every thread of the process for each
+  reply (100 requests, 6.3 s). A reply therefore waits, without the GIL,
+  polling the graph, until :class:`~orthoglide_ros.ros.service_replies.
+  ReplyRoutes` says it may go to rmw, and is dropped if its own client
+  cannot take it. This reads the DDS service topics
+  (``rq<service>Request``, ``rr<service>Reply``: rmw_fastrtps's naming) and
+  the requesting client's reply reader from the request's header
+  (``request_id.writer_guid``, which rclpy 7.1 does not expose:
+  :func:`requester` reads it from the header's memory, checked against the
+  fields rclpy does expose).
 
 How to tell when it can go: when rclpy validates a request's parameter
 types (test_hostile_peers.py's malformed requests then pass without it),
-and when rmw_fastrtps drops a reply to a departed client at once
-(``benchmarks/bench_replies.py`` on a plain rclpy node shows no stall).
+and when rmw_fastrtps drops a reply to a departed or unmatched client at
+once (``benchmarks/bench_replies.py`` on a plain rclpy node shows no
+stall). If :func:`requester` stops finding the reader (a new rclpy or
+pybind11), ``test_service_replies.py`` fails and every reply is sent as
+plain rclpy would.
 """
 
+import ctypes
 import time
+
+from rclpy.qos import qos_check_compatible, QoSCompatibility
 
 from rcl_interfaces.msg import ParameterType, SetParametersResult
 from rcl_interfaces.srv import SetParameters, SetParametersAtomically
 
 from orthoglide_ros.ros.service_replies import (DROP, REPLY_POLL,
-                                                REPLY_TIMED_OUT, ReplyRoutes,
-                                                SEND)
+                                                ReplyRoutes, SEND)
 from orthoglide_ros.formats.text import clip
 
 # Parameter value types a request may carry (ParameterType's constants).
@@ -68,10 +77,11 @@ class ReplyGuard:
         answered with the default response.
 
         The reply waits, without the GIL, polling the graph, until
-        :class:`~orthoglide_ros.ros.service_replies.ReplyRoutes` (the rule)
-        says it may go to rmw, which would otherwise wait for a departed
-        client's reader up to 100 ms with the GIL held; a reply the rule
-        drops is counted in :attr:`replies_dropped`. Returns ``service``.
+        :class:`~orthoglide_ros.ros.service_replies.ReplyRoutes` (the rule,
+        for the requesting client alone) says it may go to rmw, which would
+        otherwise wait for a departed or unmatched client's reader up to
+        100 ms with the GIL held; a reply the rule drops is counted in
+        :attr:`replies_dropped`. Returns ``service``.
         """
         node = self._node
         callback, send = service.callback, service.send_response
@@ -97,21 +107,16 @@ class ReplyGuard:
             return response
 
         def guarded_send(response, header):
-            # An rmw_service_info_t says when the request was received.
-            received = getattr(header, 'received_timestamp', 0) * 1e-9 \
-                or None
+            reader = requester(header)
             begin = time.monotonic()
             while True:
                 now = time.monotonic()
-                routes.poll(
-                    time.time(), now,
-                    [info.endpoint_gid for info in
-                     node.get_publishers_info_by_topic(
-                         request_topic, no_mangle=True)],
-                    [info.endpoint_gid for info in
-                     node.get_subscriptions_info_by_topic(
-                         reply_topic, no_mangle=True)])
-                decision = routes.decide(received, now, begin)
+                routes.poll(now, [
+                    info.endpoint_gid for info in
+                    node.get_publishers_info_by_topic(
+                        request_topic, no_mangle=True)],
+                    _reply_readers(node, reply_topic))
+                decision = routes.decide(reader, now, begin)
                 if decision == SEND:
                     break
                 if decision == DROP:
@@ -120,8 +125,8 @@ class ReplyGuard:
                 time.sleep(REPLY_POLL)
             start = time.monotonic()
             send(response, header)
-            if time.monotonic() - start >= REPLY_TIMED_OUT:
-                routes.timed_out(received)
+            end = time.monotonic()
+            routes.sent(reader, end, end - start)
 
         service.callback = guarded_callback
         service.send_response = guarded_send
@@ -138,3 +143,61 @@ def _malformed_parameters(srv_type, request):
                     f' has value type {parameter.value.type}, which is not '
                     'a ParameterType; nothing set')
     return None
+
+
+def _reply_readers(node, reply_topic):
+    """
+    Return ``(gid, can_match)`` of each reader of a service's replies.
+
+    ``can_match``: whether the node's own reply writer (as the graph lists
+    it: the node's name and namespace) can match the reader's QoS (a
+    TRANSIENT_LOCAL reader never matches the VOLATILE writer).
+    """
+    writers = [info.qos_profile for info in node.get_publishers_info_by_topic(
+        reply_topic, no_mangle=True)
+        if info.node_name == node.get_name()
+        and info.node_namespace == node.get_namespace()]
+    return [(info.endpoint_gid, not writers or qos_check_compatible(
+        writers[0], info.qos_profile)[0] != QoSCompatibility.ERROR)
+        for info in node.get_subscriptions_info_by_topic(
+            reply_topic, no_mangle=True)]
+
+
+# rmw_service_info_t as rclpy 7.1's pybind11 object holds it: the source and
+# received timestamps (int64 ns), request_id's writer_guid (16 bytes) and
+# sequence_number (int64).
+class _ServiceInfo(ctypes.Structure):
+    _fields_ = [('source_timestamp', ctypes.c_int64),
+                ('received_timestamp', ctypes.c_int64),
+                ('writer_guid', ctypes.c_uint8 * 16),
+                ('sequence_number', ctypes.c_int64)]
+
+
+# Where a pybind11 instance keeps the pointer to its C++ value: just after
+# the object header (refcount and type).
+_VALUE_POINTER = ctypes.sizeof(ctypes.c_ssize_t) + ctypes.sizeof(
+    ctypes.c_void_p)
+
+
+def requester(header):
+    """
+    Return the gid of the reply reader that made a request (bytes), or None.
+
+    ``header``: the ``rmw_service_info_t`` rclpy hands to
+    ``send_response``. Its ``request_id.writer_guid`` is not exposed by
+    rclpy 7.1; it is read from the object's memory, and trusted only if
+    the three fields rclpy does expose read the same there. None when they
+    do not (another layout) or for any other header.
+    """
+    if type(header).__name__ != 'rmw_service_info_t':
+        return None
+    value = ctypes.c_void_p.from_address(id(header) + _VALUE_POINTER).value
+    if not value:
+        return None
+    info = _ServiceInfo.from_address(value)
+    if (info.source_timestamp, info.received_timestamp,
+            info.sequence_number) != (header.source_timestamp,
+                                      header.received_timestamp,
+                                      header.request_id.sequence_number):
+        return None
+    return bytes(info.writer_guid)

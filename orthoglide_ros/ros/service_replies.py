@@ -1,49 +1,52 @@
 """
-When a service reply may be handed to rmw: the rule, without ROS.
+When a service reply may be handed to rmw: the rule, per client, without ROS.
 
-rmw_fastrtps sends a reply only to the requesting client's reply reader
-once its reply writer has matched it, and waits up to 100 ms for that match
-with the Python GIL held: every thread of the node stops meanwhile. A reply
-to a client that has left would stop the node 100 ms each time, so the node
-(``managed_node.ManagedNode``'s ``reply_guard``) hands a reply to rmw only once
-:meth:`ReplyRoutes.decide` says ``SEND``, polling the ROS graph (the
-service's request writers and reply readers) while it says ``WAIT``, and
-drops the reply when it says ``DROP``.
+rmw_fastrtps (Jazzy, ``rmw_response.cpp``) sends a reply only once its
+reply writer has matched the requesting client's reply reader, and waits
+for that match up to the writer's ``max_blocking_time`` (100 ms) with the
+Python GIL held: every thread of the node stops meanwhile. A reader that
+will never match (a client made with a QoS the reply writer cannot serve:
+TRANSIENT_LOCAL against the VOLATILE writer), or one that has left while
+its requests are still being answered, would stop the node 100 ms per
+reply. So the node (``reply_guard.ReplyGuard``) hands a reply to rmw only
+once :meth:`ReplyRoutes.decide` says ``SEND``, polling the ROS graph while
+it says ``WAIT``, and drops the reply when it says ``DROP``.
 
-Whose reply it is. A client's request writer and reply reader belong to its
-participant and share the participant's GUID prefix (the first
-:data:`PREFIX` bytes of an endpoint's gid). rclpy does not give the
-requesting writer's GUID, but the request's header gives the instant it was
-received, and discovery lists a writer on the graph before any request of
-it can arrive: the requester is among the participants whose writers the
-first poll after that instant listed (:meth:`ReplyRoutes.requesters`). When
-none of them is on the graph any more, the requester has gone: the reply is
-dropped at once, whatever other clients are there (with "any reader listed"
-instead, a client that came while a departed one's requests were still
-being answered made each of those replies stop the node for 100 ms).
+Whose reply it is: rmw_fastrtps names the requesting client's reply reader
+in the request's header (``request_id.writer_guid``: the GUID the client
+sent as the related sample identity, which is the reader's gid on the
+graph). Each reply is therefore decided for its own client's reader, and
+nothing a client does costs another client its reply.
 
-The rules, for the requester's participants (all listed writers when the
-instant is unknown):
+The rules, for the reply reader ``R`` of the request:
 
-- its reply reader has been listed for :data:`REPLY_MATCH` s: ``SEND`` (the
-  reply writer has matched it by then);
-- after :data:`REPLY_WAIT` s with a reader listed: ``SEND``;
-- a writer listed whose reader is not yet (a new client on a loaded
-  machine: discovery brings the reader later): ``WAIT``, up to
-  :data:`REPLY_DISCOVERY` s in all;
-- otherwise, after REPLY_WAIT: ``DROP``;
-- a reader listed when a reply timed out in rmw all the same (the graph
-  still listed a client that had left: :meth:`ReplyRoutes.timed_out`) is
-  *stale*: no reply goes to it (``DROP`` after REPLY_WAIT) until a stale
-  reader has left the graph.
+- ``R`` listed with a QoS the reply writer can match, for :data:`REPLY_MATCH`
+  s (matched by then) or once the reply has waited :data:`REPLY_WAIT` s:
+  ``SEND``;
+- ``R`` listed with a QoS the writer can never match: ``DROP`` at once (its
+  client gets no reply, whatever the node does);
+- ``R``'s last :data:`STALE_AFTER` replies each timed out in rmw all the
+  same (a reader listed but never matched): ``DROP``, but for one reply
+  every :data:`STALE_RETRY` s, which clears it if it goes through. One slow
+  send (the node stalled while sending) marks nothing;
+- ``R`` not listed: ``WAIT`` while its client's request writer is listed (a
+  new client on a loaded machine: discovery brings the reader later), up to
+  :data:`REPLY_DISCOVERY` s, else up to :data:`REPLY_WAIT` s; then ``DROP``,
+  and ``R`` is counted as gone;
+- ``R`` seen on the graph and gone since: ``DROP`` at once;
+- the requester unknown (a header rclpy did not let us read): ``SEND``, as
+  rclpy itself would.
 
 >>> routes = ReplyRoutes()
->>> a, b = bytes(12) + bytes(4), bytes([7]) * 12 + bytes(4)
->>> routes.poll(10.0, 0.0, writers=[a], readers=[a])
->>> routes.decide(received=9.99, now=0.06, begin=0.0)
+>>> a_writer, a_reader = bytes(12) + b'wwww', bytes(12) + b'rrrr'
+>>> routes.poll(0.0, writers=[a_writer], readers=[(a_reader, True)])
+>>> routes.decide(a_reader, now=0.0, begin=0.0)
+'wait'
+>>> routes.poll(0.06, writers=[a_writer], readers=[(a_reader, True)])
+>>> routes.decide(a_reader, now=0.06, begin=0.0)
 'send'
->>> routes.poll(10.5, 0.5, writers=[b], readers=[b])   # a left, b came
->>> routes.decide(received=9.99, now=0.5, begin=0.5)   # a reply for a
+>>> routes.poll(0.5, writers=[], readers=[])              # a left
+>>> routes.decide(a_reader, now=0.5, begin=0.5)
 'drop'
 """
 
@@ -57,12 +60,15 @@ REPLY_WAIT, REPLY_POLL = 0.1, 0.005
 REPLY_MATCH = 0.05
 # A reply that took this long timed out in rmw (its wait is 100 ms).
 REPLY_TIMED_OUT = 0.09
+# Replies to one reader that must time out in a row before it is stale,
+# and how often a stale reader is tried again (s).
+STALE_AFTER, STALE_RETRY = 3, 5.0
 # How long a reply waits, in all, for the reader of a client whose request
 # writer is listed (s): discovery brings a new client's reader later on a
 # loaded machine.
 REPLY_DISCOVERY = 2.0
-# Seconds of polls kept to name a request's requesters.
-HISTORY = 60.0
+# Seconds a reader that left is remembered (its replies dropped at once).
+GONE_KEPT = 60.0
 
 SEND, WAIT, DROP = 'send', 'wait', 'drop'
 
@@ -73,73 +79,72 @@ def participant(gid):
 
 
 class ReplyRoutes:
-    """The graph of one service as its replies saw it, and the rule."""
+    """The reply readers of one service as its replies saw them, and the rule."""
 
     def __init__(self):
-        # [first poll, last poll (wall s), participants with a writer]
-        self._polls = []
-        self._writers = frozenset()
-        self._readers = {}      # reply reader gid -> monotonic s first seen
-        self._stale = set()
+        self._listed = {}       # reader gid -> (monotonic s first listed,
+        #                                        whether the writer can match)
+        self._writers = frozenset()     # participants with a request writer
+        self._gone = {}         # reader gid -> monotonic s it was found gone
+        self._timeouts = {}     # reader gid -> (replies timed out in a row,
+        #                                      monotonic s of the last)
 
-    def poll(self, wall, monotonic, writers, readers):
-        """Record a look at the graph: the gids of writers and readers."""
-        listed = frozenset(map(participant, writers))
-        if self._polls and self._polls[-1][2] == listed:
-            self._polls[-1][1] = wall
-        else:
-            self._polls.append([wall, wall, listed])
-        while len(self._polls) > 1 and self._polls[0][1] < wall - HISTORY:
-            del self._polls[0]
-        self._writers = listed
-        self._readers = {bytes(gid): self._readers.get(bytes(gid), monotonic)
-                         for gid in readers}
-        if not self._stale <= self._readers.keys():
-            self._stale.clear()     # a reader that had left is off the graph
-
-    def requesters(self, received):
+    def poll(self, now, writers, readers):
         """
-        Return the participants a request received at ``received`` came from.
+        Record a look at the graph at monotonic ``now`` (s).
 
-        ``received`` is wall time (s); the writers listed by the first poll
-        after it. None when unknown (no instant, or that poll listed none).
+        ``writers``: the gids of the service's request writers; ``readers``:
+        ``(gid, can_match)`` of its reply readers.
         """
-        if received is None:
-            return None
-        for _, last, listed in self._polls:
-            if last >= received:
-                return listed or None
-        return None
+        listed = {}
+        for gid, can_match in readers:
+            gid = bytes(gid)
+            listed[gid] = (self._listed.get(gid, (now,))[0], can_match)
+        for gid in self._listed.keys() - listed.keys():
+            self._left(gid, now)
+        self._gone = {gid: left for gid, left in self._gone.items()
+                      if left >= now - GONE_KEPT and gid not in listed}
+        self._listed = listed
+        self._writers = frozenset(map(participant, writers))
 
-    def decide(self, received, now, begin):
+    def decide(self, reader, now, begin):
         """
-        ``SEND``, ``WAIT`` or ``DROP`` a reply after the latest :meth:`poll`.
+        ``SEND``, ``WAIT`` or ``DROP`` a reply to ``reader`` (its gid).
 
-        ``received``: when its request arrived (wall s, None if unknown);
-        ``now`` and ``begin`` (monotonic s): now, and when the reply began
-        waiting.
+        After the latest :meth:`poll`; ``now`` and ``begin`` (monotonic s):
+        now, and when the reply began waiting. ``reader`` None: unknown.
         """
-        requesters = self.requesters(received)
-        clients = self._writers if requesters is None \
-            else requesters & self._writers
-        if requesters is not None and not clients:
-            return DROP     # the requester has gone
-        seen = {gid: first for gid, first in self._readers.items()
-                if participant(gid) in clients}
-        blocked = bool(self._stale & seen.keys())
-        waited = now - begin >= REPLY_WAIT
-        if seen and not blocked and (
-                waited or now - max(seen.values()) >= REPLY_MATCH):
+        if reader is None:
             return SEND
-        discovering = bool(clients - set(map(participant, seen)))
-        if waited and (blocked or not discovering
-                       or now - begin >= REPLY_DISCOVERY):
+        if reader in self._gone:
+            return DROP
+        listed = self._listed.get(reader)
+        if listed is not None:
+            first, can_match = listed
+            timeouts, last = self._timeouts.get(reader, (0, None))
+            if not can_match or (timeouts >= STALE_AFTER
+                                 and now - last < STALE_RETRY):
+                return DROP
+            if now - first >= REPLY_MATCH or now - begin >= REPLY_WAIT:
+                return SEND
+            return WAIT
+        patience = REPLY_DISCOVERY if participant(reader) in self._writers \
+            else REPLY_WAIT
+        if now - begin >= patience:
+            self._left(reader, now)
             return DROP
         return WAIT
 
-    def timed_out(self, received):
-        """Mark stale the readers a reply timed out on in rmw (after SEND)."""
-        requesters = self.requesters(received)
-        self._stale.update(
-            gid for gid in self._readers if requesters is None
-            or participant(gid) in requesters)
+    def sent(self, reader, now, seconds):
+        """Record that a reply to ``reader`` took ``seconds`` until ``now``."""
+        if reader is None:
+            return
+        if seconds >= REPLY_TIMED_OUT:
+            timeouts = self._timeouts.get(reader, (0, now))[0]
+            self._timeouts[reader] = (timeouts + 1, now)
+        else:
+            self._timeouts.pop(reader, None)
+
+    def _left(self, reader, now):
+        self._gone[reader] = now
+        self._timeouts.pop(reader, None)

@@ -17,6 +17,8 @@ the tests assert on and the report prints:
 - :func:`log_amplification`: long text inside messages, and a flood of
   malformed ones;
 - :func:`departed_clients`: 100 requests from a client that then leaves;
+- :func:`isolated_clients`: a client whose reply reader can never match
+  stays, fresh clients call beside it; 150 ms stalls while answering;
 - :func:`fast_simulator`: the simulator at 10 kHz with commands at 500 Hz;
 - :func:`stall_resume`: the closed loop, one process stopped for 2 s;
 - :func:`setpoint_loop`: the looping setpoint publisher's way back;
@@ -35,7 +37,7 @@ the streams: :mod:`.streams`.
 from orthoglide_ros.harness.hostile.peer import (  # noqa: F401
     HarnessError, HOLD, LOG_LINE_LIMIT, NODES, Nodes, Peer, START_TIMEOUT)
 from orthoglide_ros.harness.hostile.services import (  # noqa: F401
-    absurd_parameters, departed_clients, log_amplification,
+    absurd_parameters, departed_clients, isolated_clients, log_amplification,
     malformed_parameters, quiet, startup_signals)
 from orthoglide_ros.harness.hostile.streams import (  # noqa: F401
     absurd_values, fast_simulator, setpoint_loop, stall_resume, stamps,

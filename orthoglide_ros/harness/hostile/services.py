@@ -3,8 +3,10 @@ Hostile peers of the nodes' services and processes.
 
 Malformed and absurd parameter requests, clients that leave with requests
 in flight (``burst``: this module run as a child process, ``python -m
-orthoglide_ros.harness.hostile.services burst ...``), signals while a node
-starts, text in messages that would make long or many log lines.
+orthoglide_ros.harness.hostile.services burst ...``), a client whose reply
+reader can never match and stays (``linger``), stalls of a node while it
+answers, signals while a node starts, text in messages that would make
+long or many log lines.
 """
 
 import argparse
@@ -20,12 +22,15 @@ import numpy as np
 import rclpy
 from rclpy.duration import Duration
 from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.serialization import serialize_message
 
 from rcl_interfaces.msg import Parameter as ParameterMsg
 from rcl_interfaces.msg import ParameterValue
 from rcl_interfaces.srv import (GetParameters, SetParameters,
                                 SetParametersAtomically)
+from lifecycle_msgs.msg import Transition
+from lifecycle_msgs.srv import ChangeState, GetState
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import MultiDOFJointTrajectory
@@ -414,6 +419,190 @@ def departed_clients(requests=100):
             alive={n: nodes.alive(n) for n in ('simulator', 'feedforward')})
 
 
+@dataclass
+class Isolated:
+    """:func:`isolated_clients`: fresh clients beside a hostile one."""
+
+    fresh: int              # fresh clients per service
+    answered: dict          # service -> fresh clients answered (successful)
+    carried_out: dict       # service -> the hostile request took effect
+    stalls: int             # 150 ms stops of the feedforward, one a reply
+    after_stalls: dict      # 'same client', 'fresh process' -> answered
+    dropped: dict           # node -> replies dropped
+    alive: dict
+
+
+def isolated_clients(fresh=3, stalls=5):
+    """
+    Call beside a client that can never take a reply and stays.
+
+    A child process (``linger``) makes its clients of the feedforward's
+    ``~/change_state`` and the simulator's ``~/set_parameters`` with a
+    TRANSIENT_LOCAL reply reader (the VOLATILE reply writer never matches
+    it: a user's QoS mistake is enough), sends one request to each
+    (deactivate; ``force_limit`` 999 N) and stays. Then ``fresh`` new
+    clients of this process call each service in turn (5 s each). Then the
+    feedforward is stopped (SIGSTOP) for 150 ms as each of ``stalls``
+    get_state requests of one client is being answered, and that client
+    and a fresh process ask ``stalls`` more times.
+    """
+    with Nodes() as nodes, Peer() as peer:
+        nodes.start('simulator')
+        node = nodes.start('feedforward')
+        _running(peer, ('simulator', 'feedforward'))
+        hostile = start_node_process([], command=[
+            sys.executable, '-m', __spec__.name, 'linger'])
+        try:
+            return _beside(peer, nodes, node, hostile, fresh, stalls)
+        finally:
+            stop_process(hostile)
+
+
+def _beside(peer, nodes, node, hostile, fresh, stalls):
+    """:func:`isolated_clients` once the nodes run and ``hostile`` started."""
+    if not _await_line(hostile, LINGERING, START_TIMEOUT):
+        raise HarnessError('the lingering client did not send')
+    state = '/feedforward/get_state'
+    carried_out = {
+        'feedforward change_state': peer.wait(lambda: _state(
+            peer, state) == 'inactive', 5.0),
+        'simulator set_parameters': peer.wait(lambda: _parameter(
+            peer, 'simulator', 'force_limit') == 999.0, 5.0)}
+    answered = {'feedforward change_state': 0, 'simulator set_parameters': 0}
+    for k in range(fresh):
+        transition = (Transition.TRANSITION_ACTIVATE if k % 2 == 0
+                      else Transition.TRANSITION_DEACTIVATE)
+        reply = peer.call(ChangeState, '/feedforward/change_state',
+                          ChangeState.Request(transition=Transition(
+                              id=transition)), timeout=5.0)
+        answered['feedforward change_state'] += bool(
+            reply is not None and reply.success)
+        results = peer.set_parameters(
+            'simulator', {'force_limit': 1000.0 + k}, timeout=5.0)
+        answered['simulator set_parameters'] += bool(
+            results and results[0].successful)
+    client = peer.node.create_client(GetState, state)
+    answers = 0
+    for _ in range(stalls):
+        future = client.call_async(GetState.Request())
+        time.sleep(0.002)
+        os.kill(node.pid, signal.SIGSTOP)
+        time.sleep(0.15)
+        os.kill(node.pid, signal.SIGCONT)
+        answers += peer.wait(future.done, 5.0)
+    after = {'same client': 0}
+    for _ in range(stalls):
+        future = client.call_async(GetState.Request())
+        after['same client'] += peer.wait(future.done, 5.0)
+    asker = start_node_process([state, str(stalls)], command=[
+        sys.executable, '-m', __spec__.name, 'ask'])
+    after['fresh process'] = int(_await_line(
+        asker, ANSWERED, 5.0 * stalls + START_TIMEOUT) or -1)
+    stop_process(asker)
+    dropped = {}
+    for name in ('simulator', 'feedforward'):
+        status = peer.status(name, timeout=3.0)
+        dropped[name] = int(status[2].get(
+            'replies dropped (client gone)', -1)) if status else -1
+    return Isolated(
+        fresh=fresh, answered=answered, carried_out=carried_out,
+        stalls=stalls, after_stalls=after, dropped=dropped,
+        alive={n: nodes.alive(n) for n in ('simulator', 'feedforward')})
+
+
+def _state(peer, service):
+    """Return the label of a node's lifecycle state (None: no answer)."""
+    reply = peer.call(GetState, service, GetState.Request(), timeout=2.0)
+    return None if reply is None else reply.current_state.label
+
+
+def _parameter(peer, node, name):
+    """Return a double parameter of ``node`` (None: no answer)."""
+    reply = peer.call(GetParameters, f'/{node}/get_parameters',
+                      GetParameters.Request(names=[name]), timeout=2.0)
+    return None if reply is None else reply.values[0].double_value
+
+
+def _await_line(proc, prefix, timeout):
+    """
+    Wait for a child's stdout line beginning ``prefix``; return its rest.
+
+    None when the child ended or ``timeout`` s passed first.
+    """
+    out = proc.output_files[0]
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        out.seek(0)
+        for line in out.read().decode(errors='replace').splitlines():
+            if line.startswith(prefix):
+                return line[len(prefix):].strip() or prefix
+        if proc.poll() is not None:
+            return None
+        time.sleep(0.05)
+    return None
+
+
+# What the lingering client prints once its requests are sent, and what
+# the asking one prints at its end.
+LINGERING, ANSWERED = 'lingering', 'answered'
+
+
+def linger(args):
+    """Child: one request each from TRANSIENT_LOCAL clients, then stay."""
+    rclpy.init()
+    node = Node(f'lingering_client_{os.getpid()}')
+    qos = QoSProfile(depth=10, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    change = node.create_client(ChangeState, '/feedforward/change_state',
+                                qos_profile=qos)
+    parameters = node.create_client(SetParameters,
+                                    '/simulator/set_parameters',
+                                    qos_profile=qos)
+    try:
+        # Not wait_for_service: it waits for the reply reader to match too,
+        # which this one never does. The services on the graph, then time
+        # for the request writers to match.
+        deadline = time.monotonic() + START_TIMEOUT
+        while not {'/feedforward/change_state', '/simulator/set_parameters'} \
+                <= {name for name, _ in node.get_service_names_and_types()}:
+            if time.monotonic() > deadline:
+                return 1
+            time.sleep(0.1)
+        time.sleep(1.0)
+        change.call_async(ChangeState.Request(transition=Transition(
+            id=Transition.TRANSITION_DEACTIVATE)))
+        parameters.call_async(SetParameters.Request(parameters=[
+            ParameterMsg(name='force_limit', value=ParameterValue(
+                type=3, double_value=999.0))]))
+        print(LINGERING, flush=True)
+        while True:
+            time.sleep(0.1)
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+def ask(args):
+    """Child: ``requests`` get_state calls to ``target``; print answered."""
+    rclpy.init()
+    node = Node(f'asking_client_{os.getpid()}')
+    client = node.create_client(GetState, args.target)
+    answered = 0
+    try:
+        if client.wait_for_service(timeout_sec=START_TIMEOUT):
+            for _ in range(args.requests):
+                future = client.call_async(GetState.Request())
+                rclpy.spin_until_future_complete(node, future,
+                                                 timeout_sec=5.0)
+                answered += future.done()
+        print(ANSWERED, answered, flush=True)
+        return 0
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
 # What a departing client prints (with its monotonic time) as its requests
 # begin.
 REQUESTS_BEGIN = 'requests begin at'
@@ -451,13 +640,23 @@ def burst(args):
 
 
 def main(argv=None):
-    """Entry point of the child process: ``burst WHAT TARGET REQUESTS``."""
+    """
+    Entry point of the child processes.
+
+    ``burst WHAT TARGET REQUESTS``, ``linger``, ``ask TARGET REQUESTS``.
+    """
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
-    parser.add_argument('role', choices=('burst',))
-    parser.add_argument('what', choices=('set', 'reset'))
-    parser.add_argument('target')
-    parser.add_argument('requests', type=int)
-    return burst(parser.parse_args(argv))
+    roles = parser.add_subparsers(dest='role', required=True)
+    role = roles.add_parser('burst')
+    role.add_argument('what', choices=('set', 'reset'))
+    role.add_argument('target')
+    role.add_argument('requests', type=int)
+    roles.add_parser('linger')
+    role = roles.add_parser('ask')
+    role.add_argument('target')
+    role.add_argument('requests', type=int)
+    args = parser.parse_args(argv)
+    return {'burst': burst, 'linger': linger, 'ask': ask}[args.role](args)
 
 
 if __name__ == '__main__':
