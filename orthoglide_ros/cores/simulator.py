@@ -21,7 +21,7 @@ States (``doc/simulator.md`` states them for users):
   ``held`` with the velocity set to zero, flagged ``timed_out`` until the
   next valid command resumes ``running``.
 - ``stopped``: a step that the workspace limits refuse (out of reach, nearer
-  a singularity than ``singularity_margin``, or a state that is not finite:
+  a singularity than ``singularity_margin``:
   :class:`mechanics.WorkspaceError`) freezes the platform at the last good
   step with the velocity set to zero. Commands are counted and ignored until
   :meth:`Simulator.reset`.
