@@ -13,6 +13,7 @@ it and stopped with SIGINT, as Ctrl-C does.
 """
 
 import math
+import os
 import time
 
 import pytest
@@ -37,7 +38,9 @@ from orthoglide_ros.harness.messages import header_stamp
 from orthoglide_ros.harness.probe import (matched, node_graphs, PROBE_QOS,
                                           spin_for, spin_until,
                                           wait_diagnostics as harness_wait_diagnostics)
-from orthoglide_ros.harness.processes import node_executable, run_to_exit
+from orthoglide_ros.harness.processes import (node_executable, run_to_exit,
+                                              start_node_process,
+                                              stop_process)
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 
@@ -48,6 +51,7 @@ DT = 1e-3           # s: one step at the default rate_hz
 STAMP_SLACK = 1e5   # ns: two clock reads per stamp, microseconds apart
 JOINT_NAMES = ['slider_a', 'slider_b', 'slider_c']
 HOLD = mechanics.solve(Robot(), ZERO).force     # the weight, held at home
+ERROR = DiagnosticStatus.ERROR[0]   # a level as the harness's Peer keeps it
 DIAGNOSTIC_NAME = 'simulator: Orthoglide simulator'
 
 
@@ -456,3 +460,75 @@ def test_process_invalid_parameter_exits_2(argument, word):
     assert code == 2, f'exit code {code}; stderr:\n{stderr}'
     assert 'FATAL' in stderr and word in stderr, stderr
     assert 'Traceback' not in stderr, stderr
+
+
+@needs_script
+@pytest.mark.skipif(bool(mujoco_plant.unavailable()),
+                    reason=mujoco_plant.unavailable() or 'ok')
+def test_process_mujoco_divergence_is_an_error_and_publishes_nothing(
+        tmp_path):
+    """
+    Issue 33's attack on the node: MuJoCo diverges, the node says so.
+
+    ``engine:=mujoco``, every mass 1e-6 kg, ``force_limit`` 1e6 N, +-1e6 N
+    commands every 10 ms, the process in an empty working directory:
+    diagnostics ERROR ``diverged: ...`` with MuJoCo's reason, no step
+    counted, no state published from the push on (none ever with its
+    effort), one ERROR log line, no ``MUJOCO_LOG.TXT`` and no MuJoCo
+    warning on the output; ``~/reset`` brings the states back, held.
+    """
+    from orthoglide_ros.harness.hostile.peer import Peer
+    light = [arg for i in range(1, 7) for arg in ('-p', f'robot.m{i}:=1e-6')]
+    proc = start_node_process(
+        ['--ros-args', '-p', 'engine:=mujoco', '-p', 'force_limit:=1e6',
+         *light], command=simulator_command(), cwd=str(tmp_path))
+    try:
+        with Peer() as peer:
+            states = peer.record('joint_states', JointState)
+            commands = peer.publisher(Float64MultiArray, 'commands')
+            assert peer.wait(lambda: len(states) > 10, START_WAIT)
+            end = time.monotonic() + START_WAIT
+            found, k = None, 0
+            while time.monotonic() < end:
+                sign = 1.0 if k % 2 == 0 else -1.0
+                commands.publish(Float64MultiArray(
+                    data=[sign * 1e6, -sign * 1e6, sign * 1e6]))
+                k += 1
+                time.sleep(0.01)
+                found = peer.diagnostics.get('simulator')
+                if found and found[2].get('state') == 'diverged':
+                    break
+            assert found and found[2].get('state') == 'diverged', found
+            level, message, v = found[:3]
+            assert level == ERROR
+            assert message.startswith('diverged: the mujoco engine diverged')
+            assert 'Nan, Inf or huge value in QACC' in message, message
+            assert '~/reset' in message
+            assert (v['steps'], v['divergences'], v['sim time (s)']) == (
+                '0', '1', '0'), v
+            # Nothing published since the push: commands go on for 1 s.
+            time.sleep(0.2)
+            published = len(states)
+            end = time.monotonic() + 1.0
+            while time.monotonic() < end:
+                commands.publish(Float64MultiArray(data=[1e6, -1e6, 1e6]))
+                time.sleep(0.01)
+            assert len(states) == published, (len(states), published)
+            assert not any(any(m.effort) for _, m in states)
+            status = peer.status('simulator', timeout=WAIT)
+            assert status[0] == ERROR
+            assert int(status[2]['commands ignored (stopped)']) > 0
+            # The way out: ~/reset, held at home, states published again.
+            answer = peer.call(Trigger, '/simulator/reset', Trigger.Request(),
+                               WAIT)
+            assert answer is not None and answer.success, answer
+            assert peer.wait(lambda: len(states) > published + 10, WAIT)
+            status = peer.status('simulator', timeout=WAIT)
+            assert status[2]['state'] == 'held', status
+    finally:
+        code, stderr = stop_process(proc)
+    assert code == 0, stderr
+    assert stderr.count('[ERROR]') == 1, stderr
+    assert stderr.count('diverged after time') == 1, stderr
+    assert 'WARNING: Nan' not in stderr, stderr
+    assert os.listdir(tmp_path) == []

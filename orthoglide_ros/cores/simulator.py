@@ -21,10 +21,17 @@ States (``doc/simulator.md`` states them for users):
   ``held`` with the velocity set to zero, flagged ``timed_out`` until the
   next valid command resumes ``running``.
 - ``stopped``: a step that the workspace limits refuse (out of reach, nearer
-  a singularity than ``singularity_margin``, or a state that is not finite:
+  a singularity than ``singularity_margin``:
   :class:`mechanics.WorkspaceError`) freezes the platform at the last good
   step with the velocity set to zero. Commands are counted and ignored until
   :meth:`Simulator.reset`.
+- ``diverged``: a step the engine could not integrate
+  (:class:`plant.Diverged`: the builtin's state not finite, MuJoCo's
+  warnings, e.g. a huge acceleration after which MuJoCo resets its own
+  state) stops the simulation as ``stopped`` does, and more: the plant
+  has no state of the robot to show, so no state is published
+  (:meth:`Simulator.publish_due`) until :meth:`Simulator.reset`; the
+  status is ERROR with the engine's reason. One rule for both engines.
 
 A command is exactly three finite forces (N, actuators A, B, C); any other
 is rejected and counted by reason (``length``, ``non_finite``; a message
@@ -72,11 +79,11 @@ from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, \
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import joint_names_spec, ParameterError, \
     Spec, Table, triple
-from orthoglide_ros.model.plant import Plant
+from orthoglide_ros.model.plant import Diverged, Plant
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.status import ERROR, OK, WARN
 
-HELD, RUNNING, STOPPED = 'held', 'running', 'stopped'
+HELD, RUNNING, STOPPED, DIVERGED = 'held', 'running', 'stopped', 'diverged'
 # Why a command was rejected: the keys of Simulator.rejected.
 COMMAND_REASONS = ('length', 'non_finite', 'malformed', 'oversize',
                    'missing_joint')
@@ -209,7 +216,8 @@ Tick.__doc__ = """What one :meth:`Simulator.tick` publishes.
 ``position``: G (m, frame 0); ``lambda_`` (m) and ``lambdadot`` (m/s): the
 joint state; ``effort``: the forces applied over the step after clipping
 (N), zeros when no step was made; ``event``: None, ``'timeout'`` (this tick
-went back to held) or ``'stopped'`` (this tick's step was refused).
+went back to held), ``'stopped'`` (this tick's step was refused) or
+``'diverged'`` (this tick's step could not be integrated).
 """
 
 
@@ -221,16 +229,18 @@ class Simulator(Core):
     and returns what to publish, :meth:`reset` starts over; every method
     that needs the time takes ``now``, a monotonic time in seconds, so
     tests drive time. ``plant`` is the :class:`plant.Plant`; ``state``
-    one of ``held``, ``running``, ``stopped``; ``timed_out`` says that the
-    last ``running`` ended by the command timeout; ``stop_reason`` and
-    ``stop_message`` why the simulation stopped.
+    one of ``held``, ``running``, ``stopped``, ``diverged``; ``timed_out``
+    says that the last ``running`` ended by the command timeout;
+    ``stop_reason`` and ``stop_message`` why the simulation stopped or
+    diverged.
 
     The core of :mod:`orthoglide_ros.cores.core`; inactive, it holds
     (brakes on, no step, nothing published) and takes no command.
 
     Counters: ``received`` messages per input, ``valid`` commands taken,
-    ``rejected`` by reason, ``ignored`` (valid, while stopped),
-    ``withheld`` (valid, while inactive), ``steps`` (since start),
+    ``rejected`` by reason, ``ignored`` (valid, while stopped or
+    diverged), ``withheld`` (valid, while inactive), ``steps`` (since
+    start), ``divergences`` (since start),
     ``clipped`` (steps with at least one force clipped), ``timeouts``
     (``stall_brakes`` of them after this process stood still),
     ``step_ns_total`` / ``step_ns_max`` (CPU of :meth:`Plant.step`).
@@ -255,6 +265,7 @@ class Simulator(Core):
         self.ignored = 0
         self.withheld = 0
         self.steps = 0
+        self.divergences = 0
         self.clipped = 0
         self.timeouts = 0
         self.stall_brakes = 0       # of the timeouts, by this process's stall
@@ -312,8 +323,9 @@ class Simulator(Core):
 
         Raises :class:`Rejected` (counted) unless it is three finite
         numbers. A valid command becomes the one held over the next steps
-        and starts (or resumes) ``running``; while ``stopped`` it is counted
-        in ``ignored``, refused (``stopped``) and changes nothing; while
+        and starts (or resumes) ``running``; while ``stopped`` or
+        ``diverged`` it is counted in ``ignored``, refused (reason the
+        state) and changes nothing; while
         inactive it is counted in ``withheld``. Returns None (a command
         publishes nothing).
         """
@@ -353,10 +365,10 @@ class Simulator(Core):
         if not math.isfinite(fa + fb + fc):
             self.refuse(source, 'non_finite',
                         f'command {[fa, fb, fc]} N is not finite')
-        if self.state == STOPPED:
+        if self.state in (STOPPED, DIVERGED):
             self.ignored += 1
-            raise Rejected('stopped', 'command ignored: the simulation is '
-                           'stopped (call ~/reset)')
+            raise Rejected(self.state, 'command ignored: the simulation '
+                           f'{self.state} (call ~/reset)')
         if not self.active:
             self.withheld += 1
             return
@@ -373,8 +385,9 @@ class Simulator(Core):
         First the timeout: ``running`` with no valid command for more than
         ``command_timeout`` goes back to ``held`` (velocity zero, no step).
         A step the plant refuses stops the simulation (the state stays the
-        last good one, velocity zero). The time step is always
-        ``1 / rate_hz``, however late the tick.
+        last good one, velocity zero); one it cannot integrate
+        (:class:`plant.Diverged`) the same, as ``diverged``. The time step
+        is always ``1 / rate_hz``, however late the tick.
         """
         event = None
         effort = ZERO
@@ -392,6 +405,9 @@ class Simulator(Core):
             except mechanics.WorkspaceError as error:
                 self._stop(error)
                 event = 'stopped'
+            except Diverged as error:
+                self._diverge(error)
+                event = 'diverged'
             else:
                 spent = time.perf_counter_ns() - start
                 self.steps += 1
@@ -459,8 +475,9 @@ class Simulator(Core):
         gap where the process was late); else the first state at or after
         each instant of the publish grid (period 1/publish_rate_hz,
         instants a late wake-up skipped are dropped); always a state that
-        ends in an event (a timeout, a stop). A state to publish is
-        counted as published.
+        ends in an event (a timeout, a stop); never a state once
+        ``diverged`` (no state of the robot: the last good one is not
+        where it would be). A state to publish is counted as published.
         """
         due = self._publish_due(tick, instant)
         self.published += due
@@ -468,6 +485,8 @@ class Simulator(Core):
 
     def _publish_due(self, tick, instant):
         settings = self.settings
+        if tick.state == DIVERGED:
+            return False
         if settings.publish_rate_hz == 0.0 or tick.event is not None:
             return True
         # Half a step of slack: the two grids' float sums drift apart.
@@ -487,8 +506,8 @@ class Simulator(Core):
         Start over: initial_position, at rest, ``held``, time 0.
 
         Applies the pending plant parameters (robot, initial position,
-        margin) and clears ``stopped``; the counters go on. Returns a
-        message saying what was done.
+        margin) and clears ``stopped`` and ``diverged`` (a new plant); the
+        counters go on. Returns a message saying what was done.
         """
         settings = self.settings
         applied = self._model not in (None, _plant_model(settings))
@@ -516,11 +535,11 @@ class Simulator(Core):
         """Return the singularity distance of the current position."""
         return self._solution.singularity_distance
 
-    # Status: ERROR after an internal error or when stopped; WARN when the
-    # steps fell behind real time (more than SLOW_FRACTION of the period
-    # dropped: a sustained lag, not one hiccup), when held by the command
-    # timeout or when commands were rejected in the period; else OK
-    # (``held: waiting for a command`` or ``running``).
+    # Status: ERROR after an internal error or when stopped or diverged;
+    # WARN when the steps fell behind real time (more than SLOW_FRACTION of
+    # the period dropped: a sustained lag, not one hiccup), when held by
+    # the command timeout or when commands were rejected in the period;
+    # else OK (``held: waiting for a command`` or ``running``).
     def period_counters(self):
         """Return the counters of the period's rates."""
         return dict(published=self.published, steps=self.steps,
@@ -530,6 +549,8 @@ class Simulator(Core):
         """Return the stop, lag, timeout, rejections and state steps."""
         return (
             (self.state == STOPPED, ERROR, f'stopped: {self.stop_message}'),
+            (self.state == DIVERGED, ERROR,
+             f'diverged: {self.stop_message}'),
             (new['dropped'] > SLOW_FRACTION * seconds, WARN,
              f'slower than real time: {new["steps"] / seconds:.0f} of '
              f'{self.settings.rate_hz:g} steps/s, '
@@ -554,6 +575,7 @@ class Simulator(Core):
                 plant, mujoco_plant.MujocoPlant) else 'builtin'),
             ('sim time (s)', plant.time),
             ('steps', self.steps),
+            ('divergences', self.divergences),
             ('step rate (Hz)', new['steps'] / seconds),
             ('outputs rate (Hz)', new['published'] / seconds),
             ('step compute time mean (us)', mean_us),
@@ -595,6 +617,17 @@ class Simulator(Core):
             f'step under force {format_vector(self._command)} N was refused '
             f'({error.reason}): {error}; call ~/reset to start again')
         self._brake(STOPPED)
+
+    def _diverge(self, error):
+        position = self.plant.position
+        self.divergences += 1
+        self.stop_reason = error.reason
+        self.stop_message = (
+            f'the {self.settings.engine} engine diverged after time '
+            f'{self.plant.time:.6g} s at position {format_vector(position)} '
+            f'm (the last good state): {error}; no state is published '
+            'until ~/reset')
+        self._brake(DIVERGED)
 
     def _refresh(self):
         """

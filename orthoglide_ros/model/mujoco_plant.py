@@ -6,7 +6,14 @@ MuJoCo as the plant: the Orthoglide of :mod:`mjcf`, stepped by MuJoCo.
 position and velocity in frame 0, a step applies actuator forces held over
 it (MuJoCo's ``ctrl``, clipped to the force limits) and refuses, leaving
 the state unchanged, what the builtin plant refuses (a non-finite force, an
-end state out of reach or nearer a singularity than the margin). The
+end state out of reach or nearer a singularity than the margin). A step
+in which MuJoCo raised any of its warnings (``mjData.warning``: a bad
+QPOS, QVEL, QACC or CTRL, after which MuJoCo resets its own state to
+qpos0; a singular inertia; constraint or contact memory full) or whose
+end state is not finite raises :class:`plant.Diverged`, state unchanged.
+MuJoCo's warning handler is taken over (:func:`quiet_warnings`): nothing
+printed, no ``MUJOCO_LOG.TXT``; the text reaches the caller in the
+exception. The
 model is :func:`mjcf.mjcf` of the plant's robot: its own integrator (RK4)
 and constraint settings, at the largest sub-step of at most
 :data:`mjcf.TIMESTEP` that divides the step. Friction is MuJoCo's (slider
@@ -25,7 +32,8 @@ import numpy as np
 from orthoglide_ros.model import mechanics, mjcf
 from orthoglide_ros.model.mechanics import (DEFAULT_SINGULARITY_MARGIN,
                                             WorkspaceError, ZERO)
-from orthoglide_ros.model.plant import clipped, force_limits, PlantStep
+from orthoglide_ros.model.plant import (clipped, Diverged, force_limits,
+                                        PlantStep)
 from orthoglide_ros.model.robot import JOINT_NAMES, Robot
 from orthoglide_ros.model.types import Triple, Vector
 
@@ -65,13 +73,43 @@ def unavailable() -> Optional[str]:
     return ''
 
 
+class _Heard:
+    """MuJoCo's warnings since the process took over its handler."""
+
+    count = 0
+    last = ''
+
+
+def _hear(text: str) -> None:
+    """Keep MuJoCo's warning (count, last text): no file, no print."""
+    _Heard.count += 1
+    _Heard.last = str(text)[:500]
+
+
+def quiet_warnings() -> None:
+    """
+    Take MuJoCo's warnings over for this process: no file, no print.
+
+    MuJoCo's default handler prints each warning and appends it to
+    ``MUJOCO_LOG.TXT`` in the working directory; a simulation that
+    diverges warns at every step (MuJoCo resets its state and warns
+    again). A :class:`MujocoPlant` reads its step's warnings from
+    ``mjData.warning`` and raises them; the text MuJoCo gives its handler
+    is kept only as :attr:`_Heard.last`.
+    """
+    import mujoco
+    if mujoco.get_mju_user_warning() is not _hear:
+        mujoco.set_mju_user_warning(_hear)
+
+
 class MujocoPlant:
     """
     The simulated robot in MuJoCo, with :class:`plant.Plant`'s interface.
 
     ``position``, ``velocity`` (3-tuples) and ``time`` (s) are read from
     MuJoCo; setting ``velocity`` (the simulator's brake sets it to zero)
-    puts every joint at the closed form's rates for it.
+    puts every joint at the closed form's rates for it. Building one
+    takes MuJoCo's warnings over (:func:`quiet_warnings`).
     """
 
     # Its sliders are MuJoCo's slide joints (:meth:`joint_state`).
@@ -91,6 +129,7 @@ class MujocoPlant:
         ``robot.payload`` (:meth:`carry`).
         """
         import mujoco
+        quiet_warnings()
         self._mujoco = mujoco
         self.robot = robot
         self.force_limit = force_limits(force_limit, time)
@@ -98,6 +137,7 @@ class MujocoPlant:
         self.model = mujoco.MjModel.from_xml_string(
             model_text or mjcf.mjcf(robot.replace(payload=0.0)))
         self.data = mujoco.MjData(self.model)
+        self._warnings = self.data.warning.number   # a view, per warning
         self._platform = self.model.body('platform').id
         # The platform without a payload: its mass and inertia.
         self._own = (float(self.model.body_mass[self._platform]),
@@ -151,7 +191,8 @@ class MujocoPlant:
         Apply ``force`` (N) held over ``dt`` (s) and advance the state.
 
         As :meth:`plant.Plant.step`; the acceleration reported is the
-        platform's mean over the step.
+        platform's mean over the step. A step in which MuJoCo warned, or
+        whose end state is not finite, raises :class:`plant.Diverged`.
         """
         if not (math.isfinite(dt) and dt > 0.0):
             raise ValueError(f'dt must be finite and positive, got {dt!r} s')
@@ -163,6 +204,11 @@ class MujocoPlant:
         model.opt.timestep = dt / substeps
         data.ctrl[:] = applied      # the actuators, in JOINT_NAMES order
         slots = [self._dofs[name][1] for name in JOINT_NAMES]
+        # MuJoCo counts each warning in data.warning (and clears the
+        # counts when it resets a diverged state): zero them, then any
+        # count after the step is this step's.
+        self._warnings[:] = 0
+        heard = _Heard.count
         for _ in range(substeps):
             if self._extra_friction:
                 data.qfrc_applied[slots] = np.negative(mjcf.friction_beyond(
@@ -171,17 +217,36 @@ class MujocoPlant:
         mujoco.mj_forward(model, data)  # positions and velocities at the end
         position, velocity = self.position, self.velocity
         try:
-            if not all(math.isfinite(c) for c in position + velocity):
-                raise WorkspaceError('overflow', 'the state is not finite')
+            warned = self._warned(heard) if self._warnings.any() \
+                or _Heard.count != heard else ''
+            if warned or not all(math.isfinite(c)
+                                 for c in position + velocity):
+                raise Diverged(
+                    f'MuJoCo: the step of {dt:g} s from time {saved[2]:.6g} '
+                    f's under force {mechanics.format_vector(applied)} N: '
+                    + (warned or 'the end state is not finite'))
             mechanics.solve(self.robot, position, velocity, ZERO,
                             self.margin)
-        except WorkspaceError:
+        except (WorkspaceError, Diverged):
             data.qpos[:], data.qvel[:], data.time = saved
             mujoco.mj_forward(model, data)
             raise
         return PlantStep(
             tuple((v - w) / dt for v, w in zip(velocity, before)), applied,
             tuple(a != c for a, c in zip(applied, command)))
+
+    def _warned(self, heard):
+        """Return MuJoCo's warnings of a step, joints named ('' if none)."""
+        mujoco, model = self._mujoco, self.model
+        texts = []
+        for index in np.flatnonzero(self._warnings):
+            kind = mujoco.mjtWarning(int(index))
+            info = int(self.data.warning[int(index)].lastinfo)
+            texts.append(mujoco.mju_warningText(kind, info)
+                         + _joint_of(model, kind, info))
+        if not texts and _Heard.count != heard:
+            texts.append(_Heard.last)
+        return ' '.join(texts)
 
     def carry(self, payload: float) -> None:
         """
@@ -202,3 +267,18 @@ class MujocoPlant:
         slots = [self._dofs[name] for name in JOINT_NAMES]
         return (tuple(float(qpos[q]) for q, _ in slots),
                 tuple(float(qvel[d]) for _, d in slots))
+
+
+def _joint_of(model, kind, info):
+    """Name the joint or actuator a MuJoCo warning's ``info`` indexes."""
+    import mujoco
+    warning = mujoco.mjtWarning
+    if kind in (warning.mjWARN_INERTIA, warning.mjWARN_BADQVEL,
+                warning.mjWARN_BADQACC) and 0 <= info < model.nv:
+        return f' (joint {model.joint(model.dof_jntid[info]).name})'
+    if kind == warning.mjWARN_BADQPOS and 0 <= info < model.nq:
+        joint = int(np.searchsorted(model.jnt_qposadr, info, 'right')) - 1
+        return f' (joint {model.joint(joint).name})'
+    if kind == warning.mjWARN_BADCTRL and 0 <= info < model.nu:
+        return f' (actuator {model.actuator(info).name})'
+    return ''

@@ -7,6 +7,9 @@ Plain Python floats on top of :func:`mechanics.forward_dynamics`, no ROS.
   forces held over the step.
 - :class:`Plant`: a mutable state (position, velocity, time) with force
   limits, stepped by :func:`rk4_step`, that reports its joint state.
+- :class:`Diverged`: what a plant raises for a step it could not
+  integrate (a state that is not finite, an engine's own alarm), as
+  opposed to a step the workspace refuses (:class:`mechanics.WorkspaceError`).
 
 Why RK4 with a zero-order hold. A drive holds its last command until the
 next one, so the force is piecewise constant: over one step the equations
@@ -49,6 +52,19 @@ from orthoglide_ros.model.types import Triple, Vector
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.robot import Robot
 
+
+class Diverged(ArithmeticError):
+    """
+    A step whose integration failed: its result is no state of the robot.
+
+    Raised by a plant's ``step`` (the builtin's state not finite,
+    MuJoCo's warnings of the step) with the state left as it was; the
+    simulator stops on it (``diverged``). ``reason`` is ``'diverged'``.
+    """
+
+    reason = 'diverged'
+
+
 PlantStep = namedtuple('PlantStep', ('acceleration', 'force', 'clipped'))
 PlantStep.__doc__ = """What one :meth:`Plant.step` did.
 
@@ -74,8 +90,9 @@ def rk4_step(robot: Robot, position: Vector, velocity: Vector, force: Vector,
     the end state is checked by :func:`mechanics.solve`: a stage or an end
     out of reach or nearer a singularity than ``margin`` raises
     :class:`mechanics.WorkspaceError` (so a step never integrates into or
-    past a singularity), and a non-finite end state raises it with the
-    reason ``overflow``. ``dt`` must be finite and positive (ValueError).
+    past a singularity), as does a non-finite input (``non_finite``). A
+    stage or an end state that is not finite from finite inputs raises
+    :class:`Diverged`. ``dt`` must be finite and positive (ValueError).
 
     >>> from orthoglide_ros.model.robot import Robot
     >>> robot = Robot(gravity=(0.0, 0.0, 0.0))
@@ -88,11 +105,24 @@ def rk4_step(robot: Robot, position: Vector, velocity: Vector, force: Vector,
     x, y, z = (float(c) for c in position)
     u, v, w = (float(c) for c in velocity)
     force = tuple(float(f) for f in force)
+    start = (x, y, z, u, v, w, *force)
+    if not all(math.isfinite(c) for c in start):
+        raise WorkspaceError('non_finite', (
+            f'position {mechanics.format_vector(position)} m, velocity '
+            f'{mechanics.format_vector(velocity)} m/s or force '
+            f'{mechanics.format_vector(force)} N is not finite'))
     h = 0.5 * dt
 
     def accel(px, py, pz, vx, vy, vz):
-        return mechanics.forward_dynamics(
-            robot, (px, py, pz), (vx, vy, vz), force, margin)
+        try:
+            return mechanics.forward_dynamics(
+                robot, (px, py, pz), (vx, vy, vz), force, margin)
+        except WorkspaceError as error:
+            # From finite inputs, a stage that is not finite: divergence.
+            if error.reason not in ('overflow', 'non_finite'):
+                raise
+            raise Diverged(_diverged(dt, position, velocity, force,
+                                     error)) from None
 
     a1x, a1y, a1z = accel(x, y, z, u, v, w)
     u2, v2, w2 = u + h * a1x, v + h * a1y, w + h * a1z
@@ -109,11 +139,18 @@ def rk4_step(robot: Robot, position: Vector, velocity: Vector, force: Vector,
             v + s * (a1y + 2.0 * (a2y + a3y) + a4y),
             w + s * (a1z + 2.0 * (a2z + a3z) + a4z)))
     if not all(math.isfinite(c) for c in (*end[0], *end[1])):
-        raise WorkspaceError('overflow', (
-            f'the step of {dt:g} s from position {position} m, velocity '
-            f'{velocity} m/s under force {force} N is not finite'))
+        raise Diverged(_diverged(dt, position, velocity, force,
+                                 'the end state is not finite'))
     mechanics.solve(robot, end[0], end[1], ZERO, margin)
     return end[0], end[1], (a1x, a1y, a1z)
+
+
+def _diverged(dt, position, velocity, force, why):
+    """Return the message of a step that diverged."""
+    return (f'RK4: the step of {dt:g} s from position '
+            f'{mechanics.format_vector(position)} m, velocity '
+            f'{mechanics.format_vector(velocity)} m/s under force '
+            f'{mechanics.format_vector(force)} N is not finite ({why})')
 
 
 def force_limits(force_limit: Union[float, Vector],
@@ -192,8 +229,9 @@ class Plant:
 
         Returns a :class:`PlantStep`. A non-finite force raises
         :class:`mechanics.WorkspaceError` (``non_finite``) before any
-        clipping; a step that :func:`rk4_step` refuses raises its error. On
-        any refusal the state and the time stay unchanged.
+        clipping; a step that :func:`rk4_step` refuses raises its error
+        (:class:`mechanics.WorkspaceError` or :class:`Diverged`). On any
+        refusal the state and the time stay unchanged.
         """
         command, applied = clipped(force, self.force_limit)
         position, velocity, acceleration = rk4_step(
