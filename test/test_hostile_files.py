@@ -10,7 +10,10 @@ atomically).
 """
 
 import os
+from pathlib import Path
 import stat
+import subprocess
+import sys
 import threading
 
 import pytest
@@ -97,6 +100,159 @@ def test_every_output_is_checked_before_any_is_written(capsys, tmp_path):
     code, stdout, err = run(capsys, 'identify', '--input', source,
                             '--output', tmp_path / 'nowhere' / 'out.yaml')
     assert_bad_input(code, stdout, err, '--output', 'no such directory')
+
+
+# -- an output that is an input or another output ------------------------------
+
+# '@name' is a file of the case's directory: log.csv and other.csv (logs),
+# traj.csv and traj.gif (trajectories), params.yaml and params.png
+# (parameters files), bag (a bag directory); others do not exist.
+SAME_FILE = {
+    'identify_output_is_input': (
+        ['identify', '--input', '@log.csv', '--output', '@log.csv'],
+        '--output', '--input'),
+    'identify_output_is_validate': (
+        ['identify', '--input', '@log.csv', '--validate', '@other.csv',
+         '--output', '@other.csv'], '--output', '--validate'),
+    'identify_output_is_params': (
+        ['identify', '--input', '@log.csv', '--params', '@params.yaml',
+         '--output', '@params.yaml'], '--output', '--params'),
+    'identify_report_is_output': (
+        ['identify', '--input', '@log.csv', '--output', '@new.yaml',
+         '--report', '@new.yaml'], '--report', '--output'),
+    'identify_validate_report_is_report': (
+        ['identify', '--input', '@log.csv', '--output', '@new.yaml',
+         '--report', '@new.png', '--validate', '@other.csv',
+         '--validate-report', '@sub/../new.png'],
+        '--validate-report', '--report'),
+    'identify_output_inside_an_input_bag': (
+        ['identify', '--input', '@bag', '--output', '@bag/metadata.yaml'],
+        '--output', 'inside the directory --input'),
+    'validate_report_is_input': (
+        ['validate', '--input', '@log.csv', '--report', '@log.csv'],
+        '--report', '--input'),
+    'validate_report_is_params': (
+        ['validate', '--input', '@log.csv', '--params', '@params.png',
+         '--report', '@params.png'], '--report', '--params'),
+    'mjcf_output_is_params': (
+        ['mjcf', '--params', '@params.yaml', '--output', '@params.yaml'],
+        '--output', '--params'),
+    'urdf_output_is_params': (
+        ['urdf', '--params', '@params.yaml', '--output', '@params.yaml'],
+        '--output', '--params'),
+    'batch_output_is_input': (
+        ['batch', '--input', '@traj.csv', '--output', '@traj.csv'],
+        '--output', '--input'),
+    'batch_output_is_input_through_a_link': (
+        ['batch', '--input', '@link.csv', '--output', '@traj.csv'],
+        '--output', '--input'),
+    'batch_output_is_a_hard_link_of_input': (
+        ['batch', '--input', '@traj.csv', '--output', '@hard.csv'],
+        '--output', '--input'),
+    'animate_output_is_input': (
+        ['animate', '--input', '@traj.gif', '--output', '@traj.gif'],
+        '--output', '--input'),
+    'paper_plot_is_csv': (
+        ['paper', '--csv', '@new.csv', '--plot', '@./new.csv'],
+        '--plot', '--csv'),
+    'excitation_output_is_params': (
+        ['excitation', '--duration', '1', '--params', '@params.yaml',
+         '--output', '@params.yaml'], '--output', '--params'),
+    'draw_output_is_params': (
+        ['draw', '--position', '0', '0', '0', '--params', '@params.png',
+         '--output', '@params.png'], '--output', '--params'),
+    'render_output_is_params': (
+        ['render', '--position', '0', '0', '0', '--params', '@params.png',
+         '--output', '@params.png'], '--output', '--params'),
+}
+
+
+@pytest.fixture(scope='module')
+def case_files(tmp_path_factory):
+    """Every file a SAME_FILE case names, valid for its command."""
+    from cli_runs import identification_log
+    from synthetic_logs import write_bag
+    root = tmp_path_factory.mktemp('same_file')
+    source, log = identification_log(root, duration=2.0)
+    params = (Path(__file__).parents[1] / 'config'
+              / 'orthoglide.yaml').read_bytes()
+    trajectory = write_trajectory(root / 'traj.csv', ('t', 'x', 'y', 'z'),
+                                  TRAJECTORY).read_bytes()
+    write_bag(root / 'bag', log, 'mcap')
+    files = {'log.csv': source.read_bytes(), 'params.yaml': params,
+             'params.png': params, 'traj.csv': trajectory,
+             'traj.gif': trajectory}
+    files['other.csv'] = files['log.csv']
+    bag = {path.name: path.read_bytes() for path in (root / 'bag').iterdir()}
+    return files, bag
+
+
+def snapshot(directory):
+    """Every file under ``directory``: {relative path: bytes or link}."""
+    return {str(path.relative_to(directory)): (
+        os.readlink(path) if path.is_symlink() else path.read_bytes())
+        for path in sorted(directory.rglob('*')) if not path.is_dir()}
+
+
+@pytest.mark.parametrize('name', sorted(SAME_FILE))
+def test_an_output_that_is_an_input_or_another_output_is_refused(
+        capsys, tmp_path, case_files, name):
+    """`identify --input rec.csv --output rec.csv` once replaced the log."""
+    argv, option, other = SAME_FILE[name]
+    files, bag = case_files
+    for file, data in files.items():
+        (tmp_path / file).write_bytes(data)
+    (tmp_path / 'bag').mkdir()
+    for file, data in bag.items():
+        (tmp_path / 'bag' / file).write_bytes(data)
+    (tmp_path / 'link.csv').symlink_to(tmp_path / 'traj.csv')
+    os.link(tmp_path / 'traj.csv', tmp_path / 'hard.csv')
+    before = snapshot(tmp_path)
+    code, out, err = run(capsys, *(str(tmp_path / a[1:]) if a[0] == '@'
+                                   else a for a in argv))
+    assert_bad_input(code, out, err, option, other, 'nothing was written')
+    assert snapshot(tmp_path) == before
+
+
+def test_standard_input_and_output_count_as_files(tmp_path):
+    """`batch --input - --output X < X`; `paper --csv - --plot -`."""
+    path = write_trajectory(tmp_path / 'traj.csv', ('t', 'x', 'y', 'z'),
+                            TRAJECTORY)
+    before = path.read_bytes()
+    for argv, stdin, words in (
+            (['batch', '--input', '-', '--output', str(path)], path,
+             ('--output', 'the same file as --input -')),
+            (['paper', '--csv', '-', '--plot', '-'], os.devnull,
+             ('--plot -: the same file as --csv -',))):
+        with open(stdin, 'rb') as stream:
+            done = subprocess.run(
+                [sys.executable, '-m', 'orthoglide_ros.tools.cli', *argv],
+                stdin=stream, capture_output=True, text=True, timeout=60)
+        assert_bad_input(done.returncode, done.stdout, done.stderr, *words)
+    assert snapshot(tmp_path) == {'traj.csv': before}
+
+
+def test_a_character_device_may_be_named_by_two_outputs(capsys, tmp_path):
+    """/dev/null holds nothing to lose: `--csv /dev/null --plot /dev/null`."""
+    null = device(tmp_path / 'null', 3)
+    assert run(capsys, 'paper', '--samples', 3, '--csv', null,
+               '--plot', null)[0] == 0
+
+
+def test_every_file_option_is_declared_an_input_or_an_output():
+    """A new subcommand's file options get check_distinct for free."""
+    import argparse
+    from orthoglide_ros.tools import cli
+    from orthoglide_ros.tools.cli import common
+    sub = next(action for action in cli._parser()._actions
+               if isinstance(action, argparse._SubParsersAction))
+    declared = set(common.INPUT_OPTIONS) | set(common.OUTPUT_OPTIONS)
+    files = {(name, action.dest) for name, parser in sub.choices.items()
+             for action in parser._actions
+             if isinstance(action.metavar, str) and any(
+                 word in action.metavar for word in ('FILE', 'LOG', 'BAG'))}
+    assert {dest for _, dest in files} == declared
+    assert not set(common.INPUT_OPTIONS) & set(common.OUTPUT_OPTIONS)
 
 
 # -- parameters files -----------------------------------------------------------
