@@ -19,7 +19,7 @@ import threading
 import pytest
 
 from orthoglide_ros.formats import csvfile
-from cli_runs import assert_bad_input, run, write_trajectory
+from cli_runs import assert_bad_input, PNG_MAGIC, run, write_trajectory
 
 TRAJECTORY = [(0.0, 0.0, 0.0, 0.0), (0.1, 0.01, 0.0, 0.0)]
 
@@ -237,6 +237,15 @@ def test_a_character_device_may_be_named_by_two_outputs(capsys, tmp_path):
     null = device(tmp_path / 'null', 3)
     assert run(capsys, 'paper', '--samples', 3, '--csv', null,
                '--plot', null)[0] == 0
+
+
+def test_a_picture_goes_to_standard_output_as_bytes():
+    """`paper --plot -` was a UnicodeDecodeError traceback."""
+    done = subprocess.run(
+        [sys.executable, '-m', 'orthoglide_ros.tools.cli', 'paper',
+         '--samples', '3', '--plot', '-'], capture_output=True, timeout=60)
+    assert done.returncode == 0 and done.stderr == b''
+    assert done.stdout.startswith(PNG_MAGIC)
 
 
 def test_every_file_option_is_declared_an_input_or_an_output():
