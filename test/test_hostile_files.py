@@ -19,7 +19,8 @@ import threading
 import pytest
 
 from orthoglide_ros.formats import csvfile
-from cli_runs import assert_bad_input, PNG_MAGIC, run, write_trajectory
+from cli_runs import (assert_bad_input, PNG_MAGIC, run, run_measured,
+                      write_trajectory)
 
 TRAJECTORY = [(0.0, 0.0, 0.0, 0.0), (0.1, 0.01, 0.0, 0.0)]
 
@@ -305,7 +306,9 @@ def test_a_hostile_parameters_file_is_refused_in_one_line(capsys, tmp_path,
 
 # Each after the header of the command's input: its last column spoiled.
 CSV = {
-    'long_field': ('0,' * 3 + '1' * 140_000 + '\n',
+    'long_line': ('0,' * 3 + '1' * 140_000 + '\n',
+                  'line 2: longer than 131072 characters'),
+    'long_field': ('0,' * 3 + '"' + ('1' * 70_000 + '\n') * 2 + '"\n',
                    'field larger than field limit'),
     'unterminated_quote': ('0,' * 3 + '"0\n' + '1,' * 3 + '0\n',
                            'is not a finite number'),
@@ -347,6 +350,74 @@ def test_a_csv_beyond_the_row_limit_is_refused_without_reading_it_all(
     path = write_trajectory(tmp_path / 'ok.csv', ('t', 'x', 'y', 'z'),
                             rows[:100])
     assert run(capsys, 'batch', '--input', path)[0] == 0
+
+
+# Peak memory of a refusal: the interpreter, numpy and a line (about 40 MB
+# measured; the endless line once took 4 GB in 10 s).
+REFUSAL_RSS = 300 << 20
+ENDLESS = {  # command, its options: '@' the endless input, '+' an output
+    'validate': ['validate', '--input', '@'],
+    'identify': ['identify', '--input', '@', '--output', '+out.yaml'],
+    'batch': ['batch', '--input', '@', '--output', '+out.csv'],
+    'animate': ['animate', '--input', '@', '--output', '+out.gif'],
+}
+
+
+@pytest.mark.parametrize('source', ['/dev/zero', 'stdin', 'one_line'])
+@pytest.mark.parametrize('command', sorted(ENDLESS))
+def test_an_endless_line_is_refused_as_it_arrives(tmp_path, command, source):
+    """`validate --input /dev/zero` once grew by 700 MB/s until killed."""
+    stdin = None
+    if source == 'one_line':        # 300 MB without a line end (sparse)
+        path = tmp_path / 'one_line.csv'
+        with open(path, 'wb') as stream:
+            stream.write(b't,x,y,z,lambda_a,')
+            stream.truncate(300_000_000)
+    elif source == 'stdin':
+        path, stdin = '-', '/dev/zero'
+    else:
+        path = source
+    argv = [path if arg == '@' else tmp_path / arg[1:] if arg[0] == '+'
+            else arg for arg in ENDLESS[command]]
+    done = run_measured(*argv, stdin=stdin)
+    assert not done.killed
+    assert_bad_input(done.code, done.out, done.err,
+                     'line 1: longer than 131072 characters')
+    assert done.peak_rss < REFUSAL_RSS, done.peak_rss
+    assert not list(tmp_path.glob('out.*'))
+
+
+def test_a_line_is_bounded_at_its_limit_and_lines_are_counted(
+        capsys, tmp_path, monkeypatch):
+    """MAX_LINE (131072) and MAX_LINES (4,000,000), shown on 30 and 6."""
+    monkeypatch.setattr(csvfile, 'MAX_LINE', 30)
+    monkeypatch.setattr(csvfile, 'MAX_LINES', 6)
+    header = 't,x,y,z'
+    at_limit = '0.0,0.0,0.0,0.' + '0' * 16       # 30 characters
+    path = tmp_path / 'in.csv'
+    path.write_text(f'{header}\r\n{at_limit}\r\n\n\n\n{at_limit}\n')
+    code, out, _ = run(capsys, 'batch', '--input', path)
+    assert code == 0 and len(out.splitlines()) == 3
+    path.write_text(f'{header}\n{at_limit}0\n')
+    code, out, err = run(capsys, 'batch', '--input', path)
+    assert_bad_input(code, out, err, 'line 2: longer than 30 characters')
+    path.write_text(f'{header}\n{at_limit}\n' + '\n' * 5)
+    code, out, err = run(capsys, 'batch', '--input', path)
+    assert_bad_input(code, out, err, 'more than 6 lines')
+
+
+def test_a_bag_beyond_the_row_limit_is_refused_as_a_csv_is(
+        capsys, tmp_path, monkeypatch):
+    """The same MAX_ROWS for a bag's messages, shown on a limit of 10."""
+    from synthetic_logs import synthetic_log, TRUE, write_bag
+    monkeypatch.setattr(csvfile, 'MAX_ROWS', 10)
+    log = synthetic_log(TRUE, 0, 5.0, 1, duration=0.011)
+    write_bag(tmp_path / 'bag', log, 'mcap')
+    code, out, err = run(capsys, 'validate', '--input', tmp_path / 'bag')
+    assert_bad_input(code, out, err, 'more than 10 messages on /joint_states')
+    monkeypatch.setattr(csvfile, 'MAX_ROWS', len(log.times))
+    code, out, err = run(capsys, 'validate', '--input', tmp_path / 'bag')
+    assert 'messages' not in err
 
 
 # -- record's topics ---------------------------------------------------------------
