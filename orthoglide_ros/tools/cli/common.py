@@ -32,6 +32,8 @@ QUANTITIES = ('lambda', 'lambdadot', 'lambdaddot', 'force', 'power')
 # Columns of every CSV the tool writes (SI units).
 CSV_COLUMNS = ('t', 'x', 'y', 'z') + tuple(
     f'{q}_{leg}' for q in QUANTITIES for leg in LEGS)
+# Rows of a CSV file formatted at a time (about 2 MB of text).
+CSV_CHUNK_ROWS = 10_000
 # Columns of a trajectory file read by ``batch``: (group, names, required).
 INPUT_GROUPS = (('time', ('t',), False),
                 ('position', ('x', 'y', 'z'), True),
@@ -140,21 +142,23 @@ def _inside(path, directory):
 
 def write_output(path, data):
     """
-    Write bytes to ``path``; atomically where it is a regular file.
+    Write bytes, or an iterable of bytes, to ``path``; atomically if it can.
 
     A regular file (or a new one) is written to a temporary file renamed
     over it (os.replace); a symbolic link is followed to its target; a
     device or a FIFO is written through, as any Unix tool does, never
-    replaced.
+    replaced. Chunks (:func:`table_csv`'s) are written as they come.
     """
+    chunks = (data,) if isinstance(data, bytes) else data
     if path is None or path == '-':     # bytes as given (a PNG too)
         sys.stdout.flush()
         binary = getattr(sys.stdout, 'buffer', None)
-        if binary is None:
-            sys.stdout.write(data.decode('utf-8', 'replace'))
-        else:
-            binary.write(data)
-            binary.flush()
+        for chunk in chunks:
+            if binary is None:
+                sys.stdout.write(chunk.decode('utf-8', 'replace'))
+            else:
+                binary.write(chunk)
+        (binary or sys.stdout).flush()
         return
     target = os.path.realpath(path)
     try:
@@ -166,7 +170,8 @@ def write_output(path, data):
     if special:
         try:
             with open(target, 'wb') as stream:
-                stream.write(data)
+                for chunk in chunks:
+                    stream.write(chunk)
         except OSError as error:
             raise CliError(f'cannot write {path}: {error.strerror}') \
                 from None
@@ -186,7 +191,8 @@ def write_output(path, data):
         raise CliError(f'cannot write {path}: {error.strerror}') from None
     try:
         with os.fdopen(fd, 'wb') as stream:
-            stream.write(data)
+            for chunk in chunks:
+                stream.write(chunk)
         os.chmod(tmp, mode)
         os.replace(tmp, path)
     except OSError as error:
@@ -201,13 +207,21 @@ def csv_text(times, positions, sol):
 
 
 def table_csv(columns, times, table):
-    """Format ``t`` and the (N, k) ``table`` as CSV bytes (full precision)."""
-    out = [','.join(columns)]
-    t_cells = [''] * len(table) if times is None else map(
-        repr, np.asarray(times, dtype=float).tolist())
-    for t, row in zip(t_cells, table.tolist()):
-        out.append(t + ',' + ','.join(map(repr, row)))
-    return ('\n'.join(out) + '\n').encode('utf-8')
+    """
+    Format ``t`` and the (N, k) ``table`` as CSV (full precision, repr).
+
+    Yields the bytes in chunks of CSV_CHUNK_ROWS rows, for
+    :func:`write_output`: the text of a large table is never held whole.
+    ``times`` may be None (an empty ``t`` cell).
+    """
+    yield (','.join(columns) + '\n').encode('utf-8')
+    times = None if times is None else np.asarray(times, dtype=float)
+    for start in range(0, len(table), CSV_CHUNK_ROWS):
+        rows = table[start:start + CSV_CHUNK_ROWS].tolist()
+        t_cells = [''] * len(rows) if times is None else map(
+            repr, times[start:start + CSV_CHUNK_ROWS].tolist())
+        yield ''.join(t + ',' + ','.join(map(repr, row)) + '\n'
+                      for t, row in zip(t_cells, rows)).encode('utf-8')
 
 
 def new_figure(size, option):
