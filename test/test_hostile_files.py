@@ -1,7 +1,8 @@
 """
 Hostile files and paths against the ``orthoglide`` tool.
 
-Every case is a file or a path a user (or an attacker) can hand the tool;
+Every case is a file, a path or a size a user (or an attacker) can hand
+the tool;
 the rule for each: exit 2 with one line ``orthoglide: error: ...``, no
 traceback, nothing written, memory bounded; and an output path is never
 replaced by something else (a device or a FIFO is written through, a
@@ -9,6 +10,7 @@ symbolic link followed to its target, a regular file replaced
 atomically).
 """
 
+import math
 import os
 from pathlib import Path
 import stat
@@ -16,9 +18,11 @@ import subprocess
 import sys
 import threading
 
+import numpy as np
 import pytest
 
 from orthoglide_ros.formats import csvfile
+from orthoglide_ros.model.robot import Robot
 from cli_runs import (assert_bad_input, PNG_MAGIC, run, run_measured,
                       write_trajectory)
 
@@ -418,6 +422,73 @@ def test_a_bag_beyond_the_row_limit_is_refused_as_a_csv_is(
     monkeypatch.setattr(csvfile, 'MAX_ROWS', len(log.times))
     code, out, err = run(capsys, 'validate', '--input', tmp_path / 'bag')
     assert 'messages' not in err
+
+
+# -- excitation's size ------------------------------------------------------------
+
+EXCITATION = {  # its arguments beyond --output: words of the refusal
+    'duration_1e9': (['--duration', '1e9'], ['above 1000 s']),
+    'rate_1e9': (['--duration', '2', '--rate', '1e9'],
+                 ['2e+09 rows', 'above the 2000000 rows']),
+    'at_the_row_limit_too_long': (['--duration', '2000', '--rate', '1000'],
+                                  ['duration 2000 s: above 1000 s']),
+    'rate_1e7': (['--duration', '1e-3', '--rate', '1e7'],
+                 ['rate 1e+07 Hz: above 1e+06 Hz']),
+    'short_optimized': (['--duration', '1e-3', '--optimize'],
+                        ['1 row(s), fewer than 10']),
+    'degenerate_optimized': (['--duration', '1e-3', '--rate', '1e6',
+                              '--optimize', '--evaluations', '2'],
+                             ['optimized from seed 0', 'unexcited',
+                              'condition number inf']),
+}
+
+
+@pytest.mark.parametrize('name', sorted(EXCITATION))
+def test_an_excitation_beyond_its_bounds_is_refused_before_it_is_made(
+        tmp_path, name):
+    """`--duration 1e9` once died of a 745 GiB ArrayMemoryError (exit 1)."""
+    argv, words = EXCITATION[name]
+    done = run_measured('excitation', *argv, '--output', tmp_path / 'e.csv')
+    # One line: no numpy RuntimeWarning either.
+    assert_bad_input(done.code, done.out, done.err, *words)
+    assert done.peak_rss < REFUSAL_RSS, done.peak_rss
+    assert not list(tmp_path.iterdir())
+
+
+def test_the_excitation_rows_are_the_readers_limit(capsys, tmp_path,
+                                                   monkeypatch):
+    """One MAX_ROWS: what excitation may write, batch reads (limit 1000)."""
+    monkeypatch.setattr(csvfile, 'MAX_ROWS', 1000)
+    path = tmp_path / 'e.csv'
+    code, out, err = run(capsys, 'excitation', '--duration', 2,
+                         '--rate', 1000.0001, '--output', path)
+    assert_bad_input(code, out, err, '2000 rows, above the 1000 rows')
+    assert run(capsys, 'excitation', '--duration', 2, '--rate', 500,
+               '--output', path)[0] == 0
+    assert len(path.read_text().splitlines()) == 1 + 1000
+    assert run(capsys, 'batch', '--input', path, '--output',
+               tmp_path / 'solved.csv')[0] == 0
+
+
+@pytest.mark.parametrize('period, rate', [
+    (6.0, 1000.0), (0.14, 100.0), (0.3, 100.0), (1000.0, 2000.0),
+    (2.5, 333.3), (1e-5, 1e6)])
+def test_the_excitation_rows_are_numpys(period, rate):
+    """check_size counts the rows numpy.arange(0, period, 1 / rate) makes."""
+    from orthoglide_ros.tools import excitation_design
+    assert excitation_design.check_size(period, rate) == len(
+        np.arange(0.0, period, 1.0 / rate))
+
+
+def test_an_unexcited_regressor_column_is_infinite_without_a_warning():
+    """A motion at rest: every speed column zero, checked, not divided."""
+    import warnings
+    from orthoglide_ros.tools import identification
+    rest = np.zeros((50, 3))
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        assert identification.condition_number(
+            Robot(), rest, rest, rest) == math.inf
 
 
 # -- record's topics ---------------------------------------------------------------
