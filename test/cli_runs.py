@@ -2,13 +2,22 @@
 The ``orthoglide`` tool run in the test's process, and its inputs.
 
 :func:`run` calls ``cli.main`` and returns the exit code and the output,
+:func:`run_measured` runs the tool as a process and measures its peak
+memory,
 :func:`read_csv` parses what it wrote (:data:`HEADER`: batch's columns);
 :func:`assert_bad_input` checks a refusal's one line; :func:`write_trajectory`
 writes a trajectory CSV; :func:`identification_log` an identification log.
 """
 
+from collections import namedtuple
 import csv
 import io
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import threading
 
 from orthoglide_ros.tools import cli
 from synthetic_logs import synthetic_log, TRUE, write_csv
@@ -30,6 +39,44 @@ def run(capsys, *argv):
     code = cli.main([str(a) for a in argv])
     out, err = capsys.readouterr()
     return code, out, err
+
+
+Measured = namedtuple('Measured', 'code out err peak_rss killed')
+# Address space of a measured run: a reader that regressed fails here
+# rather than take the machine's memory.
+ADDRESS_SPACE = 2 << 30
+
+
+def run_measured(*argv, stdin=None, timeout=60.0):
+    """
+    Run the tool as a process; return its code, output and peak memory.
+
+    ``peak_rss`` in bytes (the process's own ru_maxrss, from wait4);
+    ``stdin`` a path (default /dev/null); the process is killed after
+    ``timeout`` s (``killed``) and limited to ADDRESS_SPACE bytes.
+    """
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS,
+                           (ADDRESS_SPACE, ADDRESS_SPACE))
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err, \
+            open(stdin or os.devnull, 'rb') as source:
+        proc = subprocess.Popen(
+            [sys.executable, '-m', 'orthoglide_ros.tools.cli',
+             *map(str, argv)], stdin=source, stdout=out, stderr=err,
+            preexec_fn=limit)
+        timer = threading.Timer(timeout, proc.kill)
+        timer.start()
+        try:
+            _, status, usage = os.wait4(proc.pid, 0)
+        finally:
+            killed = not timer.is_alive()
+            timer.cancel()
+        proc.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        err.seek(0)
+        return Measured(proc.returncode, out.read().decode(errors='replace'),
+                        err.read().decode(errors='replace'),
+                        usage.ru_maxrss * 1024, killed)
 
 
 def write_trajectory(path, columns, rows):

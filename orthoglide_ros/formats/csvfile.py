@@ -14,9 +14,12 @@ The one reader of the package's CSV inputs: the trajectories of
   rows are counted from 1 after the header, and errors name the row, its
   line in the file and the column;
 - the file is read as a stream into arrays of doubles (8 bytes per value
-  read), at most MAX_ROWS data rows; a file that is not UTF-8 text, or
-  that the csv module cannot split (an unterminated quote, a field longer
-  than its 131072-character limit), is refused with its line.
+  read), at most MAX_ROWS data rows and MAX_LINES lines; a line is
+  refused once it is longer than MAX_LINE characters, as its characters
+  arrive, before it is held whole (``/dev/zero`` is one endless line); a
+  file that is not UTF-8 text, or that the csv module cannot split (an
+  unterminated quote, a field longer than its 131072-character limit), is
+  refused with its line.
 """
 
 from __future__ import annotations
@@ -36,6 +39,11 @@ from orthoglide_ros.model.types import Array, Path
 # Most data rows read: 33 minutes at 1 kHz (about 200 MB of doubles for
 # the widest input, 13 columns).
 MAX_ROWS = 2_000_000
+# Longest line (characters, its end not counted): the csv module's field
+# limit, applied to a line as it is read.
+MAX_LINE = 131_072
+# Most lines read, blank ones included: an endless run of blank lines ends.
+MAX_LINES = 2 * MAX_ROWS
 
 
 class CsvError(ValueError):
@@ -58,7 +66,7 @@ def read_columns(path: Path, groups: Sequence[tuple[str, Sequence[str], bool]],
         with contextlib.ExitStack() as stack:
             stream = sys.stdin if path == '-' else stack.enter_context(
                 open(path, encoding='utf-8-sig', newline=''))
-            reader = csv.reader(stream)
+            reader = csv.reader(_lines(stream, name))
             try:
                 return _read(reader, groups, name)
             except csv.Error as error:
@@ -68,6 +76,26 @@ def read_columns(path: Path, groups: Sequence[tuple[str, Sequence[str], bool]],
         raise CsvError(f'cannot read {name}: {error.strerror}') from None
     except UnicodeDecodeError:
         raise CsvError(f'{name}: not a UTF-8 text file') from None
+
+
+def _lines(stream, name):
+    """
+    Yield the lines of ``stream``; refuse one of over MAX_LINE characters.
+
+    Each line is read at most MAX_LINE + 2 characters at a time (its end
+    included), so a longer one is refused before it is held whole; at most
+    MAX_LINES lines.
+    """
+    for number in range(1, MAX_LINES + 1):
+        line = stream.readline(MAX_LINE + 2)
+        if not line:
+            return
+        if len(line) > MAX_LINE and len(line.rstrip('\r\n')) > MAX_LINE:
+            raise CsvError(f'{name}: line {number}: longer than {MAX_LINE} '
+                           'characters: not a CSV file of numbers')
+        yield line
+    if stream.readline(1):
+        raise CsvError(f'{name}: more than {MAX_LINES} lines: split the file')
 
 
 def _read(reader, groups, name):

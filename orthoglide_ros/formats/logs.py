@@ -20,7 +20,7 @@ import os
 
 import numpy as np
 
-from orthoglide_ros.formats import cdr
+from orthoglide_ros.formats import cdr, csvfile
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
 from orthoglide_ros.model.robot import JOINT_NAMES, LEGS
 from orthoglide_ros.model.types import Path
@@ -163,7 +163,8 @@ def read_bag(path: Path, topic: str = DEFAULT_TOPIC,
     joints ignored). Time is each message's header stamp (the
     measurement's time), in s from the earliest (``origin``, ns); position
     is lambda (m), effort the force (N); the velocity is not read (a
-    drive's is often a lagging difference of its own). Checked by
+    drive's is often a lagging difference of its own); at most
+    ``csvfile.MAX_ROWS`` messages, as a CSV log's rows. Checked by
     :func:`check_log`. Raises :class:`LogError`.
     """
     try:
@@ -191,6 +192,9 @@ def read_bag(path: Path, topic: str = DEFAULT_TOPIC,
                                    f'{connection.msgtype}, not '
                                    f'{JOINT_STATE_TYPE}')
             for _, _, raw in reader.messages(connections=connections):
+                if len(times) == csvfile.MAX_ROWS:
+                    raise LogError(f'{source}: more than {len(times)} '
+                                   f'messages on {name}: crop the bag')
                 stamp, names, position, effort = _joint_state(raw)
                 order = orders.get(names)
                 if order is None:

@@ -15,6 +15,10 @@ forces (the robot's, friction included) exceed ``max_force`` is refused.
 The search is scipy's L-BFGS-B on the logarithm of the condition number
 with finite differences; it keeps the best candidate met and never
 returns one worse than the seed's.
+
+:func:`check_size` bounds an excitation file before anything is computed:
+its period, its rate and its rows, the last by the readers' own limit
+(:data:`orthoglide_ros.formats.csvfile.MAX_ROWS`).
 """
 
 from collections import namedtuple
@@ -22,6 +26,7 @@ import math
 
 import numpy as np
 
+from orthoglide_ros.formats import csvfile
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools import identification
 
@@ -32,6 +37,11 @@ CONDITION_RATE = 100.0
 DEFAULT_EVALUATIONS = 400
 # What a refused candidate costs (the log of a condition number).
 _REFUSED = 1e3
+# Longest period (s): a log of two periods at 1 kHz within the readers'
+# row limit (2,000,000 rows: 1000 s).
+MAX_PERIOD = csvfile.MAX_ROWS / 2000.0
+# Highest rate of an excitation file (Hz): a sample a microsecond.
+MAX_RATE = 1e6
 
 Design = namedtuple('Design', ('motion', 'condition', 'peak_force',
                                'start_condition', 'evaluations'))
@@ -46,6 +56,43 @@ numbers computed.
 
 class _BudgetSpent(Exception):
     """The search used every evaluation it was given."""
+
+
+def check_size(period, rate, harmonics=trajectory.EXCITATION_HARMONICS):
+    """
+    Refuse an excitation file of one ``period`` s at ``rate`` Hz too big.
+
+    Before anything is allocated: ``period`` at most MAX_PERIOD; its rows
+    (those of ``numpy.arange(0, period, 1 / rate)``) at most the readers'
+    ``csvfile.MAX_ROWS`` and at least two per cycle of the highest of
+    ``harmonics`` harmonics of ``1 / period``; ``rate`` at most MAX_RATE.
+    Raises ValueError naming the bound; returns the rows.
+
+    >>> check_size(6.0, 1000.0)
+    6000
+    """
+    limit = csvfile.MAX_ROWS
+    if not period <= MAX_PERIOD:
+        raise ValueError(f'duration {period:g} s: above {MAX_PERIOD:g} s, '
+                         'the longest excitation period (a log of two '
+                         f'periods at 1 kHz within the readers\' {limit} '
+                         'rows)')
+    rows = period / (1.0 / rate) if rate > 0.0 else 0.0
+    if not rows <= limit:
+        raise ValueError(f'duration {period:g} s at {rate:g} Hz: {rows:.4g} '
+                         f'rows, above the {limit} rows the package\'s '
+                         'readers take: lower --rate or --duration')
+    if not rate <= MAX_RATE:
+        raise ValueError(f'rate {rate:g} Hz: above {MAX_RATE:g} Hz, a '
+                         'sample a microsecond')
+    rows = math.ceil(rows)
+    if rows < 2 * harmonics:
+        raise ValueError(f'duration {period:g} s at {rate:g} Hz: {rows} '
+                         f'row(s), fewer than {2 * harmonics}: the file '
+                         f'would not sample its highest harmonic '
+                         f'({harmonics / period:.4g} Hz) twice a cycle: '
+                         'raise --rate or --duration')
+    return rows
 
 
 def measure(robot, motion, base=None, rate=CONDITION_RATE):

@@ -30,7 +30,9 @@ record, identify, validate), :mod:`.models` (urdf, mjcf),
 
 Units are SI throughout: m, m/s, m/s^2, N, W, s. Bad input exits with code 2
 and one line ``orthoglide: error: ...`` on standard error; output files are
-written atomically, only once every sample is solved. scipy and rosbags
+checked first (none the same file as an input or another output: see
+:func:`.common.check_distinct`) and written atomically, only once every
+sample is solved. scipy and rosbags
 are imported by the subcommands that use them, rclpy by ``record`` alone.
 """
 
@@ -40,8 +42,8 @@ import sys
 from orthoglide_ros.formats.params_file import load_robot, ParametersFileError
 from orthoglide_ros.model.robot import ParameterError, Robot
 from orthoglide_ros.tools.cli import identifying, models, pictures, solving
-from orthoglide_ros.tools.cli.common import (check_output, CliError,
-                                             CSV_COLUMNS, fail,
+from orthoglide_ros.tools.cli.common import (check_distinct, check_output,
+                                             CliError, CSV_COLUMNS, fail,
                                              OUTPUT_OPTIONS, PROG)
 
 __all__ = ('CliError', 'CSV_COLUMNS', 'main')
@@ -58,6 +60,7 @@ def main(argv=None):
         parser.print_help(sys.stderr)
         return 2
     try:
+        check_distinct(args)
         if args.command != 'record':    # a bag: the recorder's own checks
             for option in OUTPUT_OPTIONS:
                 check_output(getattr(args, option, None), option)

@@ -3,8 +3,10 @@ What the ``orthoglide`` subcommands share: errors, columns, outputs, types.
 
 - :class:`CliError`: bad input, printed as one line and exit code 2;
 - the columns the tool writes and the trajectory files it reads;
-- :func:`check_output` and :func:`write_output`: output files checked
-  before anything is computed, written atomically once all is;
+- :func:`check_output`, :func:`check_distinct` and :func:`write_output`:
+  output files checked before anything is read or computed (none the
+  same file as an input or as another output), written atomically once
+  all is;
 - argparse types of finite numbers in range (:func:`within`), and the
   options several subcommands take (:func:`command`, :func:`add_output`,
   :func:`add_joint_names`, :func:`add_position`, :func:`add_size`);
@@ -30,13 +32,17 @@ QUANTITIES = ('lambda', 'lambdadot', 'lambdaddot', 'force', 'power')
 # Columns of every CSV the tool writes (SI units).
 CSV_COLUMNS = ('t', 'x', 'y', 'z') + tuple(
     f'{q}_{leg}' for q in QUANTITIES for leg in LEGS)
+# Rows of a CSV file formatted at a time (about 2 MB of text).
+CSV_CHUNK_ROWS = 10_000
 # Columns of a trajectory file read by ``batch``: (group, names, required).
 INPUT_GROUPS = (('time', ('t',), False),
                 ('position', ('x', 'y', 'z'), True),
                 ('velocity', ('vx', 'vy', 'vz'), False),
                 ('acceleration', ('ax', 'ay', 'az'), False))
-# The output options of every subcommand, checked before anything is
+# The options that name files, by role, the same in every subcommand (a
+# new file option goes in one of the two): checked before anything is read,
 # computed or written.
+INPUT_OPTIONS = ('params', 'input', 'validate')
 OUTPUT_OPTIONS = ('output', 'report', 'csv', 'plot', 'validate_report')
 
 
@@ -47,6 +53,11 @@ class CliError(Exception):
         """Keep ``message`` and the exit ``code``."""
         super().__init__(message)
         self.code = code
+
+
+def flag(option):
+    """Return the command-line spelling of the option ``dest``."""
+    return '--' + option.replace('_', '-')
 
 
 def check_output(path, option):
@@ -61,26 +72,93 @@ def check_output(path, option):
         return
     target = os.path.realpath(path)
     if os.path.isdir(target):
-        raise CliError(f'--{option} {path}: is a directory')
+        raise CliError(f'{flag(option)} {path}: is a directory')
     directory = os.path.dirname(target)
     if not os.path.isdir(directory):
-        raise CliError(f'--{option} {path}: no such directory: {directory}')
+        raise CliError(f'{flag(option)} {path}: no such directory: '
+                       f'{directory}')
     if not os.path.exists(target) and not os.access(directory, os.W_OK):
-        raise CliError(f'--{option} {path}: cannot write in {directory}')
+        raise CliError(f'{flag(option)} {path}: cannot write in {directory}')
+
+
+def check_distinct(args):
+    """
+    Refuse an output that is the same file as an input or another output.
+
+    The options of INPUT_OPTIONS and OUTPUT_OPTIONS that ``args`` has, before
+    anything is read or written. The same file: symbolic links resolved,
+    the same inode (:func:`os.path.samestat`, so hard links too) where both
+    exist, the same resolved path otherwise; ``-`` is standard input or
+    output. An output inside an input directory (a bag) is refused too. A
+    character device (a terminal, ``/dev/null``) holds nothing to lose and
+    may be named twice, except standard output (``-``) by two outputs.
+    """
+    seen = [(option, path, 0) for option in INPUT_OPTIONS
+            for path in [getattr(args, option, None)] if path is not None]
+    for option, path in [(o, p) for o in OUTPUT_OPTIONS
+                         for p in [getattr(args, o, None)] if p is not None]:
+        for other, other_path, fd in seen:
+            where = _clash(path, other_path, fd)
+            if where:
+                why = ('an output must not replace an input' if fd == 0
+                       else 'each output needs a file of its own')
+                raise CliError(f'{flag(option)} {path}: {where} '
+                               f'{flag(other)} {other_path}: {why}; nothing '
+                               'was written')
+        seen.append((option, path, 1))
+
+
+def _clash(output, other, fd):
+    """
+    Return how ``output`` clashes with ``other`` (see check_distinct), or ''.
+
+    ``fd``: 0 if ``other`` is an input (``-``: standard input), 1 if it is
+    an output (``-``: standard output).
+    """
+    same, inside = 'the same file as', 'inside the directory'
+    if output == other == '-':
+        return same if fd == 1 else ''
+    try:
+        mine = os.fstat(1) if output == '-' else os.stat(output)
+        theirs = os.fstat(fd) if other == '-' else os.stat(other)
+    except OSError:     # one does not exist (yet): compare the paths
+        if '-' in (output, other):
+            return ''
+        if os.path.realpath(output) == os.path.realpath(other):
+            return same
+        return inside if fd == 0 and os.path.isdir(other) and _inside(
+            output, other) else ''
+    if os.path.samestat(mine, theirs):
+        return '' if stat.S_ISCHR(mine.st_mode) else same
+    return inside if (fd == 0 and other != '-' and stat.S_ISDIR(
+        theirs.st_mode) and _inside(output, other)) else ''
+
+
+def _inside(path, directory):
+    """Tell whether ``path`` resolves to a place inside ``directory``."""
+    path, directory = os.path.realpath(path), os.path.realpath(directory)
+    return os.path.commonpath((path, directory)) == directory
 
 
 def write_output(path, data):
     """
-    Write bytes to ``path``; atomically where it is a regular file.
+    Write bytes, or an iterable of bytes, to ``path``; atomically if it can.
 
     A regular file (or a new one) is written to a temporary file renamed
     over it (os.replace); a symbolic link is followed to its target; a
     device or a FIFO is written through, as any Unix tool does, never
-    replaced.
+    replaced. Chunks (:func:`table_csv`'s) are written as they come.
     """
-    if path is None or path == '-':
-        sys.stdout.write(data.decode('utf-8'))
+    chunks = (data,) if isinstance(data, bytes) else data
+    if path is None or path == '-':     # bytes as given (a PNG too)
         sys.stdout.flush()
+        binary = getattr(sys.stdout, 'buffer', None)
+        for chunk in chunks:
+            if binary is None:
+                sys.stdout.write(chunk.decode('utf-8', 'replace'))
+            else:
+                binary.write(chunk)
+        (binary or sys.stdout).flush()
         return
     target = os.path.realpath(path)
     try:
@@ -92,7 +170,8 @@ def write_output(path, data):
     if special:
         try:
             with open(target, 'wb') as stream:
-                stream.write(data)
+                for chunk in chunks:
+                    stream.write(chunk)
         except OSError as error:
             raise CliError(f'cannot write {path}: {error.strerror}') \
                 from None
@@ -112,7 +191,8 @@ def write_output(path, data):
         raise CliError(f'cannot write {path}: {error.strerror}') from None
     try:
         with os.fdopen(fd, 'wb') as stream:
-            stream.write(data)
+            for chunk in chunks:
+                stream.write(chunk)
         os.chmod(tmp, mode)
         os.replace(tmp, path)
     except OSError as error:
@@ -127,13 +207,21 @@ def csv_text(times, positions, sol):
 
 
 def table_csv(columns, times, table):
-    """Format ``t`` and the (N, k) ``table`` as CSV bytes (full precision)."""
-    out = [','.join(columns)]
-    t_cells = [''] * len(table) if times is None else map(
-        repr, np.asarray(times, dtype=float).tolist())
-    for t, row in zip(t_cells, table.tolist()):
-        out.append(t + ',' + ','.join(map(repr, row)))
-    return ('\n'.join(out) + '\n').encode('utf-8')
+    """
+    Format ``t`` and the (N, k) ``table`` as CSV (full precision, repr).
+
+    Yields the bytes in chunks of CSV_CHUNK_ROWS rows, for
+    :func:`write_output`: the text of a large table is never held whole.
+    ``times`` may be None (an empty ``t`` cell).
+    """
+    yield (','.join(columns) + '\n').encode('utf-8')
+    times = None if times is None else np.asarray(times, dtype=float)
+    for start in range(0, len(table), CSV_CHUNK_ROWS):
+        rows = table[start:start + CSV_CHUNK_ROWS].tolist()
+        t_cells = [''] * len(rows) if times is None else map(
+            repr, times[start:start + CSV_CHUNK_ROWS].tolist())
+        yield ''.join(t + ',' + ','.join(map(repr, row)) + '\n'
+                      for t, row in zip(t_cells, rows)).encode('utf-8')
 
 
 def new_figure(size, option):

@@ -96,6 +96,10 @@ def add_excitation(sub, common):
 
 def run_excitation(robot, args):
     """Write an excitation (the best of --seeds) as a trajectory; describe it."""
+    try:
+        excitation_design.check_size(args.duration, args.rate)
+    except ValueError as error:
+        raise CliError(str(error)) from None
     base = identification.base_parameters(
         robot, identification.design_law(robot))
     bounds = dict(box=args.box, max_velocity=args.max_velocity,
@@ -136,6 +140,10 @@ def run_excitation(robot, args):
         motion, condition, force = (design.motion, design.condition,
                                     design.peak_force)
         made = f'optimized from seed {seed}'
+    if not math.isfinite(condition):
+        raise CliError(f'the excitation {made}, period {args.duration:g} s, '
+                       'leaves a base parameter unexcited (condition number '
+                       f'{condition:g}): choose a longer --duration')
     times = np.arange(0.0, args.duration, 1.0 / args.rate)
     p, v, a = trajectory.excitation_batch(motion, times)
     harmonics = motion.sines.shape[1]

@@ -230,9 +230,12 @@ def condition_number(robot: Robot, positions: Rows, velocities: Rows,
     base = base or base_of(robot, design_law(robot))
     w = regressor(robot, positions, velocities, accelerations, base.law)
     a = w[:, :, list(base.independent)].reshape(-1, len(base.independent))
+    norms = np.linalg.norm(a, axis=0)
+    if not (np.isfinite(norms).all() and norms.min() > 0.0):
+        return math.inf     # a column the motion does not excite at all
     # The singular values' ratio, from the eigenvalues of the small Gram
     # matrix (exact to about 1e-16 times the condition number squared).
-    scaled = a / np.linalg.norm(a, axis=0)
+    scaled = a / norms
     eigenvalues = np.linalg.eigvalsh(scaled.T @ scaled)
     return float(math.sqrt(eigenvalues[-1] / max(eigenvalues[0], 0.0))) \
         if eigenvalues[0] > 0.0 else math.inf
