@@ -15,11 +15,12 @@ private pages, locked pages) at the end, and the page faults of the
 window (``/proc/PID/stat`` minflt, majflt): a loop whose pages stay
 locked takes none once it runs. It counts the feedforward's outputs over
 the window (the rate it served) and stops every process (SIGINT) at the
-end.
+end. ``--scripts DIR`` runs the console scripts of another checkout's
+environment (``/path/.venv/bin``: its figures before a change).
 
 Usage: python benchmarks/bench_memory.py [--rate 1000] [--settle 5]
        [--window 10] [--rounds lock,plain] [--engine builtin|mujoco]
-       [--json FILE]
+       [--scripts DIR] [--json FILE]
 """
 
 import argparse
@@ -82,7 +83,7 @@ def run_round(label, extra, args, counter, executor, say):
         for name in NODES:
             procs[name] = start_node_process(
                 ['--ros-args', *node_args(name, args.rate, args.engine),
-                 *extra], command=[node_executable(name)])
+                 *extra], command=[os.path.join(args.scripts, name)])
         counter.count = 0
         if not spin_until(executor, lambda: counter.count > 100,
                           START_TIMEOUT):
@@ -149,6 +150,9 @@ def main():
     parser.add_argument('--engine', default='builtin',
                         choices=('builtin', 'mujoco'),
                         help="the simulator's engine (default builtin)")
+    parser.add_argument('--scripts', metavar='DIR', default=os.path.dirname(
+        node_executable()), help="the nodes' console scripts (default: "
+        "this Python's)")
     parser.add_argument('--json', metavar='FILE', help='save the figures')
     args = parser.parse_args()
     rounds = [r for r in args.rounds.split(',') if r]
@@ -179,7 +183,7 @@ def main():
           f'Linux {platform.release()}, Python '
           f'{platform.python_version()}; setpoints at {args.rate:g} Hz, '
           f'simulator engine {args.engine}; peaks over {args.window:g} s '
-          f'after {args.settle:g} s of flow')
+          f'after {args.settle:g} s of flow; nodes from {args.scripts}')
     print('\n'.join(table(results, args.window)))
     if args.json:
         with open(args.json, 'w') as f:
