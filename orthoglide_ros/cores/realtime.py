@@ -17,10 +17,11 @@ read-only parameters of :data:`SPECS`, as ros2_control's
   ``realtime_tools::lock_memory()`` calls ``mlockall(MCL_CURRENT |
   MCL_FUTURE)``, which also reads in and pins every page mapped and never
   touched: for a Python node, libraries' unused code and reserved buffers,
-  twice the resident memory (doc/deployment.md#memory-locked). A kernel
-  without MCL_ONFAULT (before Linux 4.4) gets ros2_control's call. What
-  there is to lock is bounded before the imports
-  (:mod:`orthoglide_ros.cores.memory`).
+  twice the resident memory, three times the private
+  (doc/deployment.md#memory-locked). A kernel without MCL_ONFAULT (before
+  Linux 4.4) gets ros2_control's call. What there is to lock is bounded
+  before the imports (:mod:`orthoglide_ros.cores.memory`); without
+  CAP_IPC_LOCK an RLIMIT_MEMLOCK below :data:`MEMLOCK_NEEDED` is refused.
 
 :func:`apply` makes them hold for every thread of the process (every task
 of ``/proc/self/task``, Fast DDS's receive and event threads included);
@@ -28,8 +29,8 @@ threads made afterwards inherit the policy and the CPUs of the thread
 that makes them. The node calls it once, as it is made, before any
 thread of its own starts and before its first input. What the OS refuses
 (SCHED_FIFO without CAP_SYS_NICE and with an RLIMIT_RTPRIO below the
-priority, mlockall with an RLIMIT_MEMLOCK below the process's size, CPUs
-its cpuset excludes) comes back as one warning line each, naming the
+priority, mlockall without CAP_IPC_LOCK and with an RLIMIT_MEMLOCK below
+MEMLOCK_NEEDED, CPUs its cpuset excludes) comes back as one warning line each, naming the
 limit and its fix; that setting is then left as it was, and the node
 runs on. :func:`in_effect` reads back, from ``/proc``, what holds; the
 diagnostics report that (:func:`status_values`), not what was asked.
