@@ -19,12 +19,14 @@ import os
 import resource
 import subprocess
 import sys
+import time
 
 import pytest
 
 from orthoglide_ros.cores import memory
 
 MiB = 1 << 20
+THREADS = ('native', 'python0', 'python1', 'python2')
 # A child: bounds (argv[1] == 'bound') or not, then a thread made by C code
 # and three made by Python, all allocating and then sleeping, named by
 # prctl; prints "ready" and waits for stdin to close.
@@ -92,6 +94,16 @@ def arenas(pid):
                if not name and perms == '---p' and end - start >= 32 * MiB)
 
 
+def settled_stacks(pid, names, timeout=10.0):
+    """Return :func:`stacks` once every thread of ``names`` is in a call."""
+    deadline = time.monotonic() + timeout
+    while True:
+        sizes = stacks(pid)
+        if set(names) <= set(sizes) or time.monotonic() > deadline:
+            return sizes
+        time.sleep(0.01)
+
+
 def run_child(mode, env=None, stack_limit=None):
     """Run CHILD; return (its report, stacks by thread name, arenas)."""
     def limits():
@@ -106,7 +118,7 @@ def run_child(mode, env=None, stack_limit=None):
                             text=True, env=child_env, preexec_fn=limits)
     try:
         report = json.loads(proc.stdout.readline())
-        found = stacks(proc.pid), arenas(proc.pid)
+        found = settled_stacks(proc.pid, THREADS), arenas(proc.pid)
     finally:
         proc.stdin.close()
         proc.wait(10)
