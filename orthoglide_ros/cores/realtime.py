@@ -30,10 +30,11 @@ that makes them. The node calls it once, as it is made, before any
 thread of its own starts and before its first input. What the OS refuses
 (SCHED_FIFO without CAP_SYS_NICE and with an RLIMIT_RTPRIO below the
 priority, mlockall without CAP_IPC_LOCK and with an RLIMIT_MEMLOCK below
-MEMLOCK_NEEDED, CPUs its cpuset excludes) comes back as one warning line each, naming the
-limit and its fix; that setting is then left as it was, and the node
-runs on. :func:`in_effect` reads back, from ``/proc``, what holds; the
-diagnostics report that (:func:`status_values`), not what was asked.
+MEMLOCK_NEEDED, CPUs its cpuset excludes) comes back as one warning line
+each, naming the limit and its fix; that setting is then left as it was,
+and the node runs on. :func:`in_effect` reads back, from ``/proc``, what
+holds; the diagnostics report that (:func:`status_values`), not what was
+asked.
 
 The values a node cannot have are refused as every bad parameter is: a
 priority outside [0, 99], a CPU this machine does not have.
@@ -54,7 +55,8 @@ from orthoglide_ros.cores.parameters import Spec
 
 # SCHED_FIFO priorities (sched_get_priority_min/max on Linux).
 PRIORITY_RANGE = (0, 99)
-# mlockall(2) flags; the capability that lets a process take SCHED_FIFO.
+# mlockall(2) flags; the capabilities that lift RLIMIT_RTPRIO (SCHED_FIFO)
+# and RLIMIT_MEMLOCK.
 MCL_CURRENT, MCL_FUTURE, MCL_ONFAULT = 1, 2, 4
 CAP_SYS_NICE, CAP_IPC_LOCK = 23, 14
 # The RLIMIT_MEMLOCK a node needs locked, without CAP_IPC_LOCK (bytes): with
