@@ -97,7 +97,7 @@ def test_a_kernel_cpu_list_reads_and_writes_back(text, cpus, written):
 
 def effect(**changes):
     values = dict(policy='SCHED_FIFO', priority=50, cpus=(1,), threads=12,
-                  alike=12, locked_kb=900000)
+                  alike=12, locked_kb=200000, resident_kb=80000)
     values.update(changes)
     return realtime.Effect(**values)
 

@@ -10,8 +10,18 @@ read-only parameters of :data:`SPECS`, as ros2_control's
   runs every thread SCHED_FIFO at that priority;
 - ``cpu_affinity``: the CPUs every thread may run on; empty leaves the
   affinity the process was started with (any CPU, unless ``taskset``);
-- ``lock_memory``: ``mlockall(MCL_CURRENT | MCL_FUTURE)``, so the loop
-  never waits for a page to be read back in.
+- ``lock_memory``: ``mlockall(MCL_CURRENT | MCL_FUTURE | MCL_ONFAULT)``:
+  every page of the process, now and later, is locked from the first time
+  it is touched and never paged out, so the loop, whose pages its first
+  cycles touch, never waits for one to be read back in. ros2_control's
+  ``realtime_tools::lock_memory()`` calls ``mlockall(MCL_CURRENT |
+  MCL_FUTURE)``, which also reads in and pins every page mapped and never
+  touched: for a Python node, libraries' unused code and reserved buffers,
+  twice the resident memory, three times the private
+  (doc/deployment.md#memory-locked). A kernel without MCL_ONFAULT (before
+  Linux 4.4) gets ros2_control's call. What there is to lock is bounded
+  before the imports (:mod:`orthoglide_ros.cores.memory`); without
+  CAP_IPC_LOCK an RLIMIT_MEMLOCK below :data:`MEMLOCK_NEEDED` is refused.
 
 :func:`apply` makes them hold for every thread of the process (every task
 of ``/proc/self/task``, Fast DDS's receive and event threads included);
@@ -19,11 +29,12 @@ threads made afterwards inherit the policy and the CPUs of the thread
 that makes them. The node calls it once, as it is made, before any
 thread of its own starts and before its first input. What the OS refuses
 (SCHED_FIFO without CAP_SYS_NICE and with an RLIMIT_RTPRIO below the
-priority, mlockall with an RLIMIT_MEMLOCK below the process's size, CPUs
-its cpuset excludes) comes back as one warning line each, naming the
-limit and its fix; that setting is then left as it was, and the node
-runs on. :func:`in_effect` reads back, from ``/proc``, what holds; the
-diagnostics report that (:func:`status_values`), not what was asked.
+priority, mlockall without CAP_IPC_LOCK and with an RLIMIT_MEMLOCK below
+MEMLOCK_NEEDED, CPUs its cpuset excludes) comes back as one warning line
+each, naming the limit and its fix; that setting is then left as it was,
+and the node runs on. :func:`in_effect` reads back, from ``/proc``, what
+holds; the diagnostics report that (:func:`status_values`), not what was
+asked.
 
 The values a node cannot have are refused as every bad parameter is: a
 priority outside [0, 99], a CPU this machine does not have.
@@ -36,6 +47,7 @@ priority outside [0, 99], a CPU this machine does not have.
 
 from collections import namedtuple
 import ctypes
+import errno
 import os
 import resource
 
@@ -43,9 +55,15 @@ from orthoglide_ros.cores.parameters import Spec
 
 # SCHED_FIFO priorities (sched_get_priority_min/max on Linux).
 PRIORITY_RANGE = (0, 99)
-# mlockall(2) flags; the capability that lets a process take SCHED_FIFO.
-MCL_CURRENT, MCL_FUTURE = 1, 2
-CAP_SYS_NICE = 23
+# mlockall(2) flags; the capabilities that lift RLIMIT_RTPRIO (SCHED_FIFO)
+# and RLIMIT_MEMLOCK.
+MCL_CURRENT, MCL_FUTURE, MCL_ONFAULT = 1, 2, 4
+CAP_SYS_NICE, CAP_IPC_LOCK = 23, 14
+# The RLIMIT_MEMLOCK a node needs locked, without CAP_IPC_LOCK (bytes): with
+# MCL_FUTURE a mapping that would take the locked memory beyond the limit
+# fails (an allocation error in the node, mlockall(2)), and a node's
+# mappings reach 210-300 MB as it runs (doc/deployment.md#memory-locked).
+MEMLOCK_NEEDED = 512 << 20
 POLICIES = {os.SCHED_OTHER: 'SCHED_OTHER', os.SCHED_FIFO: 'SCHED_FIFO',
             os.SCHED_RR: 'SCHED_RR', os.SCHED_BATCH: 'SCHED_BATCH',
             os.SCHED_IDLE: 'SCHED_IDLE'}
@@ -94,8 +112,9 @@ SPECS = (
          'CPUs every thread of the node\'s process may run on; empty: as '
          'started (any CPU)', check=_cpus, read_only=True),
     Spec('lock_memory', 'bool', False,
-         'lock every page of the process in memory (mlockall current and '
-         'future): the loop never waits for a page', read_only=True),
+         'lock every page of the process in memory from its first use '
+         '(mlockall current, future, on fault): the loop never waits for a '
+         'page', read_only=True),
 )
 NAMES = tuple(s.name for s in SPECS)
 
@@ -189,10 +208,15 @@ def granted(priority):
     if _limit(resource.RLIMIT_RTPRIO) == 'unlimited' or \
             _limit(resource.RLIMIT_RTPRIO) >= priority:
         return True
+    return _capable(CAP_SYS_NICE)
+
+
+def _capable(capability):
+    """Whether this process holds ``capability`` (its effective set)."""
     with open('/proc/self/status') as f:
         effective = next(int(line.split()[1], 16) for line in f
                          if line.startswith('CapEff:'))
-    return bool(effective >> CAP_SYS_NICE & 1)
+    return bool(effective >> capability & 1)
 
 
 def _every_thread(change, read, restore, refused, pid='self'):
@@ -256,19 +280,34 @@ def _affinity_refused(cpus, error):
 
 
 def _lock_memory():
-    libc = ctypes.CDLL(None, use_errno=True)
-    if libc.mlockall(MCL_CURRENT | MCL_FUTURE) == 0:
-        return []
-    error = ctypes.get_errno()
     limit = _limit(resource.RLIMIT_MEMLOCK)
+    if limit != 'unlimited' and limit < MEMLOCK_NEEDED and \
+            not _capable(CAP_IPC_LOCK):
+        return [_memory_refused(
+            f'(RLIMIT_MEMLOCK {limit // 1024} kiB, no CAP_IPC_LOCK): it '
+            f'needs {MEMLOCK_NEEDED >> 20} MiB, room for what a node maps as '
+            'it runs, since once locked an allocation beyond the limit '
+            'fails')]
+    libc = ctypes.CDLL(None, use_errno=True)
+    if libc.mlockall(MCL_CURRENT | MCL_FUTURE | MCL_ONFAULT) == 0:
+        return []
+    if ctypes.get_errno() == errno.EINVAL:     # before Linux 4.4
+        if libc.mlockall(MCL_CURRENT | MCL_FUTURE) == 0:
+            return []
+    error = ctypes.get_errno()
     limit = limit if limit == 'unlimited' else f'{limit // 1024} kiB'
-    return [
-        f'lock_memory refused by the OS ({os.strerror(error)}): mlockall '
-        'needs CAP_IPC_LOCK or an RLIMIT_MEMLOCK above the process\'s '
-        f'{_status_kb("VmSize") // 1024} MiB (it is {limit}); allow it '
-        'with "<user> - memlock unlimited" in /etc/security/limits.conf, '
-        'LimitMEMLOCK=infinity in a systemd unit, or docker run --ulimit '
-        'memlock=-1; memory not locked']
+    return [_memory_refused(
+        f'by the OS ({os.strerror(error)}): mlockall needs CAP_IPC_LOCK or '
+        f'an RLIMIT_MEMLOCK above the process\'s '
+        f'{_status_kb("VmSize") // 1024} MiB (it is {limit})')]
+
+
+def _memory_refused(reason):
+    return (
+        f'lock_memory refused {reason}; allow it with "<user> - memlock '
+        'unlimited" in /etc/security/limits.conf, LimitMEMLOCK=infinity in '
+        'a systemd unit, or docker run --ulimit memlock=-1; memory not '
+        'locked')
 
 
 def _status_kb(key):
@@ -281,14 +320,16 @@ def _status_kb(key):
 
 
 Effect = namedtuple('Effect', 'policy priority cpus threads alike '
-                    'locked_kb')
+                    'locked_kb resident_kb')
 Effect.__doc__ = """What holds for the process, read from ``/proc``.
 
 ``policy`` (a name of :data:`POLICIES`), ``priority`` (its real-time
 priority, 0 for SCHED_OTHER) and ``cpus`` (a sorted tuple) of the main
 thread; ``threads``: how many the process has; ``alike``: how many of them
 run at that policy, priority and CPUs; ``locked_kb``: VmLck, the memory
-locked (kB)."""
+under the lock (kB: every mapping whole, reserved or touched, as
+RLIMIT_MEMLOCK counts it); ``resident_kb``: VmRSS, the memory in RAM (kB;
+locked, the pages the lock holds)."""
 
 
 def in_effect():
@@ -307,7 +348,8 @@ def in_effect():
     mine = next((r for r in rows if r[0] == main), rows[0])
     alike = sum(1 for r in rows if r[1:] == mine[1:])
     return Effect(POLICIES.get(mine[1], str(mine[1])), mine[2], mine[3],
-                  len(rows), alike, _status_kb('VmLck'))
+                  len(rows), alike, _status_kb('VmLck'),
+                  _status_kb('VmRSS'))
 
 
 def status_values(effect):
@@ -316,7 +358,8 @@ def status_values(effect):
             ('thread priority', effect.priority),
             ('cpu affinity', format_cpus(effect.cpus)),
             ('threads at that policy', f'{effect.alike} of {effect.threads}'),
-            ('memory locked (kB)', effect.locked_kb)]
+            ('memory locked (kB)', effect.locked_kb),
+            ('memory resident (kB)', effect.resident_kb)]
 
 
 def shortfall(thread_priority, cpu_affinity, lock_memory, effect):

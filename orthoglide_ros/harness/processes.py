@@ -8,7 +8,7 @@ then SIGKILL after a timeout) and gives back its exit code and what it
 wrote; :func:`interrupt` is the SIGINT-then-kill rule alone;
 :func:`run_to_exit` waits for a process that ends by itself. And what
 ``/proc`` says of a process: :func:`cpu_seconds`, :func:`rss_mb`,
-:func:`process_environment`.
+:func:`memory_kb`, :func:`page_faults`, :func:`process_environment`.
 """
 
 import os
@@ -137,6 +137,45 @@ def rss_mb(pid):
     except OSError:
         pass
     return None
+
+
+def memory_kb(pid):
+    """
+    Return the memory of a process (kB) as the kernel counts it, or None.
+
+    A dict: ``locked`` (VmLck: every locked mapping whole, as
+    RLIMIT_MEMLOCK counts it), ``resident`` (VmRSS), ``mapped`` (VmSize),
+    ``threads``, and from ``smaps_rollup`` ``proportional`` (Pss: shared
+    pages divided among the processes that map them), ``private`` (pages
+    of this process alone) and ``locked_resident`` (its locked pages,
+    counted as Pss is).
+    """
+    keys = {'VmLck': 'locked', 'VmRSS': 'resident', 'VmSize': 'mapped',
+            'Threads': 'threads', 'Pss': 'proportional',
+            'Private_Clean': 'private', 'Private_Dirty': 'private',
+            'Locked': 'locked_resident'}
+    held = dict.fromkeys(keys.values(), 0)
+    try:
+        for name in ('status', 'smaps_rollup'):
+            with open(f'/proc/{pid}/{name}') as f:
+                for line in f:
+                    key, _, value = line.partition(':')
+                    if key in keys and value.split():
+                        held[keys[key]] += int(value.split()[0])
+    except OSError:
+        return None
+    return held
+
+
+def page_faults(pid):
+    """Return (minor, major) page faults of a process so far, or None."""
+    try:
+        with open(f'/proc/{pid}/stat') as f:
+            fields = f.read().rsplit(')', 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    # stat(5): field 10 minflt, 12 majflt; fields[0] is field 3.
+    return int(fields[7]), int(fields[9])
 
 
 def process_environment(pid):

@@ -1,9 +1,12 @@
 """
-The nodes' console scripts: signals first, then the imports.
+The nodes' console scripts: signals and memory bounds first, then imports.
 
 ``ros2 run orthoglide_ros feedforward`` runs :func:`feedforward`, and so on
-for each node. The first thing each does, before any import of rclpy, numpy
-or the node's module (about 0.3 s), is :func:`install_signal_handlers`:
+for each node. The first things each does, before any import of rclpy,
+numpy or the node's module (about 0.3 s), are
+:func:`orthoglide_ros.cores.memory.bound` (one malloc arena, small thread
+stacks, one OpenBLAS thread: what ``lock_memory`` would lock is bounded
+before the first thread is made) and :func:`install_signal_handlers`:
 from then on SIGINT (Ctrl-C) and SIGTERM only record that a stop was asked.
 The node's ``run()`` (``node_runtime.run``) looks at :data:`STOP` before it
 starts and while it spins, so a signal at any moment, during the imports
@@ -14,11 +17,14 @@ finalization puts the default action back for any other handler, and a
 signal during the exit (Fast DDS's teardown: tens of
 milliseconds) would kill the process with -2 or -15 instead of its code.
 
-This module imports only the standard library.
+This module imports only the standard library (and the standard-library
+module :mod:`orthoglide_ros.cores.memory`).
 """
 
 import importlib
 import signal
+
+from orthoglide_ros.cores import memory
 
 # The signals received so far (their numbers): a stop was asked if any.
 STOP = []
@@ -37,6 +43,7 @@ def _record(number, frame):
 
 def _run(module):
     install_signal_handlers()
+    memory.bound()
     try:
         return importlib.import_module(f'orthoglide_ros.ros.{module}').main()
     finally:
