@@ -213,8 +213,9 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     nominal = base.matrix @ standard_parameters(robot, law)
     lower = bounds(base)
     units = [UNITS[names[j]] for j in base.independent]
-    values, std, singular, bounded = _least_squares(a, y, lower, base.names,
-                                                    units)
+    values, std, singular, bounded, found = _least_squares(
+        a, y, lower, base.names, units)
+    _check_payload(log.source, base, payload, found, std, lower)
     resolution = [RESOLUTION[unit] for unit in units]
     relative = 100.0 * std / np.maximum(np.abs(values), resolution)
     unexcited = np.flatnonzero(~(relative <= max_relative_std))
@@ -276,7 +277,7 @@ def _held(a, y, lower, base, values, bounded, nominal, unexcited, relative,
     if held:
         held = sorted(held)
         free = np.setdiff1d(np.arange(len(values)), held)
-        some, _, _, bounded = _least_squares(
+        some, _, _, bounded, _ = _least_squares(
             a[:, free], y - a[:, held] @ nominal[held], lower[free],
             [base.names[i] for i in free],
             [UNITS[names[base.independent[i]]] for i in free])
@@ -398,7 +399,10 @@ def _held_out_rms(a, y, folds=FOLDS):
 
 def _least_squares(a, y, lower, names=None, units=None):
     """
-    Solve ``a beta = y``: (values, std, singular values, bounded notes).
+    Solve ``a beta = y``: values, std, singular values, notes, ordinary.
+
+    Returned in that order: the values, their standard deviations, the
+    singular values, the bounded notes and the ordinary values.
 
     By the SVD of ``a`` with unit-norm columns; a direction the log does
     not excite (a singular value below numpy's rank tolerance) adds
@@ -421,7 +425,7 @@ def _least_squares(a, y, lower, names=None, units=None):
     std = np.full(count, np.inf)
     std[excited] = np.sqrt(variance * ((vt.T / np.maximum(singular, floor))
                                        ** 2).sum(axis=1)) / norms[excited]
-    bounded = []
+    bounded, found = [], values
     if (values < lower).any():
         from scipy.optimize import lsq_linear
         found = values
@@ -442,7 +446,27 @@ def _least_squares(a, y, lower, names=None, units=None):
                 f'squares; with the parameters below their bounds held '
                 f'there, it comes to its bound {lower[i]:.4g} {unit} too '
                 '(bounded least squares)')
-    return values, std, singular, bounded
+    return values, std, singular, bounded, found
+
+
+def _check_payload(source, base, payload, found, std, lower):
+    """
+    Refuse a payload the log's forces do not carry (IdentificationError).
+
+    With its forces taken off, the platform's own mass (the base parameter
+    ``m5`` carries) must not come out below what any robot has by more
+    than three of its standard deviations: a payload larger than the one
+    the log was recorded with (or in another unit) leaves a platform of
+    negative mass, and every other parameter bent to make up for it.
+    """
+    (i,) = [i for i, j in enumerate(base.independent) if j == _M5]
+    if payload > 0.0 and found[i] + 3.0 * std[i] < lower[i]:
+        raise IdentificationError(
+            f'{source}: with a payload of {payload:g} kg the platform\'s '
+            f'own mass ({base.names[i]}) comes out at {found[i]:.4g} kg '
+            f'(standard deviation {std[i]:.2g} kg), which no robot has: '
+            'the log\'s forces do not carry that payload; give the one it '
+            'was recorded with (kg)')
 
 
 def bounds(base: Base) -> Array:
