@@ -330,10 +330,10 @@ def add_identify(sub, common):
                           type=robot_range('friction_stribeck_velocity'),
                           default=None, metavar='M/S',
                           help='the Stribeck speed v_b of a law with '
-                          '+stribeck (default: the best of '
-                          f'{len(identification.STRIBECK_VELOCITIES)} from '
-                          f'{identification.STRIBECK_VELOCITIES[0]:g} to '
-                          f'{identification.STRIBECK_VELOCITIES[-1]:g} m/s)')
+                          '+stribeck (default: the best of speeds '
+                          f'{identification.STRIBECK_STEP:.3g} times apart '
+                          'from the robot\'s friction_velocity to the '
+                          'log\'s largest slider speed, refined)')
     identify.add_argument('--max-relative-std', type=positive_float,
                           default=identification.MAX_RELATIVE_STD,
                           metavar='PCT', help='a base parameter whose '
