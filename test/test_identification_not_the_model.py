@@ -352,10 +352,9 @@ def test_drives_predict_another_motion_within_10_percent_of_the_best(
 # log's, not the robot's). No model holds the ripple: its RMS,
 # RIPPLE / sqrt(2) = 0.354 N, is the floor no identification goes below.
 # The targets 0.55 N per actuator and 0.46 N in the mean were set for a
-# robot of this kind with this ripple: 1.55 and 1.30 times its floor.
+# robot of this kind with this ripple: 1.55 and 1.30 times its floor
+# (harness.rough_guideways: EACH, MEAN).
 FLOOR = RIPPLE / math.sqrt(2.0)
-EACH = 1.55             # each actuator within 1.55 FLOOR (0.55 N)
-MEAN = 1.30             # their mean within 1.30 FLOOR (0.46 N)
 SEEDS = (0, 1, 2, 3)    # (identified on excitation 2 s, validated on 2 s + 1)
 
 
@@ -391,6 +390,7 @@ def test_plain_identify_then_batch_is_within_the_floor(
     stall); another motion validates.
     """
     from cli_runs import run
+    from orthoglide_ros.harness import rough_guideways as rough
     from synthetic_logs import write_csv
     log = write_csv(tmp_path / 'log.csv', robot_log(2 * seed, 30.0,
                                                     100 + seed))
@@ -405,69 +405,8 @@ def test_plain_identify_then_batch_is_within_the_floor(
     with capsys.disabled():
         print(f'\nseed {seed}: batch RMS error (N) {errors.round(3)}, '
               f'mean {errors.mean():.3f}, floor {FLOOR:.3f} N')
-    assert (errors <= EACH * FLOOR).all(), errors
-    assert errors.mean() <= MEAN * FLOOR, errors
-
-
-def drawn_robot(seed):
-    """
-    Return a robot of this kind and its log's defects, drawn from ``seed``.
-
-    Masses, friction (a Coulomb level per direction up to 3 N apart, a
-    Stribeck excess of 0.5-6 N at 2-100 mm/s), a ripple of 0.2-0.6 N with
-    a pitch of 5-100 mm, a lag of 0.5-5 ms, 0.1-0.4 N of noise, up to 10 %
-    of the samples dropped, a stall of 0.2-3 s, an excitation of 4-10 s
-    logged at 250, 500 or 1000 Hz.
-    """
-    rng = np.random.default_rng(7000 + seed)
-
-    def u(low, high, n=3):
-        return tuple(float(x) for x in rng.uniform(low, high, n))
-    coulomb = np.array(u(2.0, 8.0))
-    negative = np.abs(coulomb + np.array(u(-3.0, 3.0)))
-    robot = Robot(
-        m5=float(rng.uniform(14.0, 22.0)), m3=float(rng.uniform(2.2, 3.0)),
-        friction_viscous=u(20.0, 60.0), friction_coulomb=tuple(coulomb),
-        friction_coulomb_negative=tuple(negative),
-        friction_stribeck=u(0.5, 6.0),
-        friction_stribeck_velocity=float(np.exp(rng.uniform(
-            np.log(0.002), np.log(0.1)))))
-    defects = dict(
-        ripple=float(rng.uniform(0.2, 0.6)),
-        pitch=float(np.exp(rng.uniform(np.log(0.005), np.log(0.1)))),
-        lag=float(rng.uniform(0.0005, 0.005)),
-        noise=float(rng.uniform(0.1, 0.4)), phases=u(0.0, 2.0 * math.pi),
-        drops=float(rng.uniform(0.0, 0.1)),
-        stall=(float(rng.uniform(3.0, 25.0)), float(rng.uniform(0.2, 3.0))),
-        period=float(rng.choice([4.0, 6.0, 8.0, 10.0])),
-        rate=float(rng.choice([250.0, 500.0, 1000.0])))
-    return robot, defects
-
-
-def drawn_forces(robot, defects, times, motion):
-    """Return ``lambda`` and the forces along ``motion``, the ripple too."""
-    solution = mechanics.solve_batch(
-        robot, *trajectory.excitation_batch(motion, times))
-    return solution.lambda_, solution.force + defects['ripple'] * np.sin(
-        2.0 * math.pi * solution.lambda_ / defects['pitch']
-        + np.array(defects['phases']))
-
-
-def drawn_log(robot, defects, seed, noise_seed):
-    """Return 30 s of a drawn robot along excitation ``seed``, every defect."""
-    motion = trajectory.excitation(seed, defects['period'])
-    times = np.arange(0.0, 30.0, 1.0 / defects['rate'])
-    lambdas, _ = drawn_forces(robot, defects, times, motion)
-    _, forces = drawn_forces(robot, defects, times - defects['lag'], motion)
-    rng = np.random.default_rng(noise_seed)
-    stamps = times + rng.normal(0.0, JITTER, len(times))
-    start, length = defects['stall']
-    keep = (rng.uniform(size=len(times)) > defects['drops']) \
-        & ~((times >= start) & (times < start + length))
-    keep &= np.r_[True, np.diff(stamps) > 0.0]
-    return Log(stamps[keep], np.round(lambdas[keep] / QUANTUM) * QUANTUM,
-               forces[keep] + rng.normal(0.0, defects['noise'],
-                                         (keep.sum(), 3)), f'drawn {seed}')
+    assert (errors <= rough.EACH * FLOOR).all(), errors
+    assert errors.mean() <= rough.MEAN * FLOOR, errors
 
 
 # Drawn robots on which identify once went wrong: 1, the split rule kept
@@ -483,19 +422,19 @@ def test_drawn_robots_of_this_kind_are_within_their_floor(capsys, tmp_path,
                                                           seed):
     """The limits above, each robot against its own ripple's floor."""
     from orthoglide_ros.formats.params_file import robot_file_text
-    robot, defects = drawn_robot(seed)
-    found = identification.identify(NOMINAL, drawn_log(robot, defects,
-                                                       2 * seed, 10 + seed))
+    from orthoglide_ros.harness import rough_guideways as rough
+    robot, defects = rough.drawn_robot(seed)
+    found = identification.identify(
+        NOMINAL, rough.log(robot, defects, 2 * seed, 10 + seed))
     params = tmp_path / 'identified.yaml'
     params.write_text(robot_file_text(found.robot, ['drawn']))
-    motion = trajectory.excitation(2 * seed + 1, defects['period'])
-    times = np.arange(0.0, 12.0, 1.0 / defects['rate'])
-    errors = rms(batch_forces(capsys, tmp_path, params, motion, times)
-                 - drawn_forces(robot, defects, times, motion)[1])
-    floor = defects['ripple'] / math.sqrt(2.0)
+    motion, times = rough.validation_motion(defects, 2 * seed + 1)
+    errors = rough.errors(batch_forces(capsys, tmp_path, params, motion,
+                                       times), robot, defects, motion, times)
+    floor = rough.floor(defects)
     with capsys.disabled():
         print(f'\ndrawn {seed}: {identification.law_name(found.law)}, '
               f'batch RMS error / floor {(errors / floor).round(2)}, mean '
               f'{errors.mean() / floor:.2f}')
-    assert (errors <= EACH * floor).all(), errors / floor
-    assert errors.mean() <= MEAN * floor, errors / floor
+    assert (errors <= rough.EACH * floor).all(), errors / floor
+    assert errors.mean() <= rough.MEAN * floor, errors / floor
