@@ -80,6 +80,9 @@ SELECTION_MARGIN = 0.02
 # An unexcited base parameter is held at its nominal value only where the
 # log is consistent with it: within this many standard deviations.
 NOMINAL_SIGMAS = 3.0
+# A payload is refused when the platform's own mass comes out this many
+# standard deviations below its bound (see _check_payload).
+PAYLOAD_SIGMAS = 3.0
 # A refusal of a log whose gaps left less than this share usable names the
 # gaps first.
 GAP_LOSS = 0.8
@@ -466,6 +469,8 @@ def _bounded_normal(gram, b, lower=None):
     from scipy.optimize import lsq_linear
     values, vectors = np.linalg.eigh(gram)
     keep = values > values[-1] * np.finfo(float).eps * len(values)
+    if not keep.any():      # nothing excited: no fit, the bounds
+        return np.maximum(x, lower)
     root = np.sqrt(values[keep])
     return lsq_linear((vectors[:, keep] * root).T,
                       (vectors[:, keep].T @ b) / root,
@@ -529,13 +534,17 @@ def _check_payload(source, base, payload, found, std, lower):
     Refuse a payload the log's forces do not carry (IdentificationError).
 
     With its forces taken off, the platform's own mass (the base parameter
-    ``m5`` carries) must not come out below what any robot has by more
-    than three of its standard deviations: a payload larger than the one
-    the log was recorded with (or in another unit) leaves a platform of
-    negative mass, and every other parameter bent to make up for it.
+    ``m5`` is in) must not come out below what any robot has by more
+    than PAYLOAD_SIGMAS of its standard deviations: a payload larger than
+    the one the log was recorded with (or in another unit) leaves a
+    platform of negative mass, and every other parameter bent to make up
+    for it.
     """
-    (i,) = [i for i, j in enumerate(base.independent) if j == _M5]
-    if payload > 0.0 and found[i] + 3.0 * std[i] < lower[i]:
+    rows = np.flatnonzero(base.matrix[:, _M5])
+    if payload <= 0.0 or len(rows) != 1:
+        return
+    i = int(rows[0])
+    if found[i] + PAYLOAD_SIGMAS * std[i] < lower[i]:
         raise IdentificationError(
             f'{source}: with a payload of {payload:g} kg the platform\'s '
             f'own mass ({base.names[i]}) comes out at {found[i]:.4g} kg '
