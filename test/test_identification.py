@@ -49,7 +49,7 @@ from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools import identification
 from orthoglide_ros.tools.identification import (
     IdentificationError, Log, LogError, report, STANDARD)
-from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.robot import Robot, ROW
 import pytest
 
 NOMINAL = Robot()
@@ -302,6 +302,25 @@ def test_split_scales_or_keeps_what_its_carrier_cannot_take(base):
     values[2] = 2e6                     # beyond the robot's bounds
     with pytest.raises(IdentificationError, match='robot.m5'):
         identification.split(NOMINAL, base, values)
+
+
+def test_split_gives_a_combination_held_at_its_bound_its_bound(base):
+    """
+    m1 + m2 held at its bound 2e-6 kg (1e-6 kg each): the robot has it.
+
+    Neither the plain rule (m2 nominal) nor scaling (m2 below 1e-6 kg) can
+    give it: m2 goes to its bound and m1 takes the rest. The nominal 0.55
+    kg once kept here added 5.4 N of weight on C that the fit did not have.
+    """
+    values = base.matrix @ identification.standard_parameters(NOMINAL)
+    lowest = identification.bounds(base)
+    values[0] = lowest[0] * (1.0 - 1e-12)   # as BVLS rounds its bound
+    robot, notes = identification.split(NOMINAL, base, values)
+    assert robot.m1 + robot.m2 == pytest.approx(lowest[0], rel=1e-9)
+    assert robot.m2 == ROW['m2'].limits[0]
+    assert len(notes) == 1 and 'set to their bounds' in notes[0]
+    assert base.matrix @ identification.standard_parameters(robot) \
+        == pytest.approx(values, rel=1e-9)
 
 
 def test_prepare_splits_at_gaps_and_interpolates_jitter():

@@ -30,6 +30,15 @@ law reaches on the same motion without noise. A simulator's log (the force held 
 comes out with a lag near half a step. A friction no robot has (a drive
 pushing along the motion) is held at its bound by the bounded least
 squares, and said; an actuator without force is explained by NaN.
+
+Plain ``orthoglide identify``, then ``orthoglide batch`` on another
+motion, against the forces the robot needs there: each actuator within
+1.55 and the mean within 1.30 times the floor no model goes below (the
+ripple's RMS), for this robot over several seeds and for robots of the
+kind drawn at random (masses, friction, ripple, lag, noise, drops,
+stall, rate). A Stribeck speed beyond the former search's 2-100 mm/s is
+found; a law is scored by the robot it would give, never by a negative
+armature.
 """
 
 import math
@@ -123,6 +132,59 @@ def test_the_law_chosen_holds_both_terms(found):
     assert found.law == Law(True, True)
     assert found.stribeck_velocity == pytest.approx(
         TRUE.friction_stribeck_velocity, rel=0.5)
+
+
+@pytest.mark.parametrize('speed', [0.0015, 0.15, 0.3])
+def test_the_stribeck_speed_is_found_beyond_the_former_grid(speed):
+    """
+    A Stribeck speed of 1.5 mm/s, 150 or 300 mm/s, found within 5 %.
+
+    The search once ran over 2-100 mm/s and its refinement stayed inside
+    (found 2, 100 and 54 mm/s); it now runs from the Coulomb smoothing
+    speed (1 mm/s) to the log's largest slider speed (388 mm/s here).
+    """
+    robot = TRUE.replace(friction_stribeck_velocity=speed)
+    motion = trajectory.excitation(0, PERIOD)
+    times = np.arange(0.0, 20.0, 1.0 / RATE)
+    solution = mechanics.solve_batch(
+        robot, *trajectory.excitation_batch(motion, times))
+    rng = np.random.default_rng(3)
+    log = Log(times, np.round(solution.lambda_ / QUANTUM) * QUANTUM,
+              solution.force + rng.normal(0.0, NOISE, solution.force.shape),
+              f'v_b {speed}')
+    found = identification.identify(NOMINAL, log)
+    print(f'v_b {speed} m/s: found {found.stribeck_velocity:.5g} m/s, '
+          f'{identification.law_name(found.law)}')
+    assert found.law == Law(True, True)
+    assert found.stribeck_velocity == pytest.approx(speed, rel=0.05)
+
+
+def test_a_law_is_scored_by_the_robot_it_would_give():
+    """
+    Forces less 0.5 kg times each slider's acceleration: no drive gives that.
+
+    The armature's column fits it with a negative armature, which no robot
+    has and the identified one cannot keep (it is bounded at 0): the law
+    with the armature once won the held-out error by 7 % so, and the robot
+    written had none. Each fold's prediction is now the bounded estimate,
+    so a law with the armature scores as the law without it.
+    """
+    motion = trajectory.excitation(0, PERIOD)
+    times = np.arange(0.0, 20.0, 1.0 / RATE)
+    solution = mechanics.solve_batch(
+        TRUE, *trajectory.excitation_batch(motion, times))
+    rng = np.random.default_rng(3)
+    forces = solution.force - 0.5 * solution.lambdaddot
+    log = Log(times, np.round(solution.lambda_ / QUANTUM) * QUANTUM,
+              forces + rng.normal(0.0, NOISE, forces.shape), 'pulling')
+    found = identification.identify(NOMINAL, log, force_lag=0.0)
+    scores = {c.law: c.held_out_rms for c in found.candidates}
+    print(found.law_chosen, scores)
+    assert found.law == Law(True, True)
+    for law, score in scores.items():
+        if law.armature:
+            assert score >= scores[law._replace(armature=False)] * (
+                1.0 - 1e-6), law
 
 
 def validation_rms(log, force_lag, **results):
@@ -282,3 +344,97 @@ def test_drives_predict_another_motion_within_10_percent_of_the_best(
     # The drives matter: without them the masses cannot make up for them
     # (measured: 0.33, 0.28, 0.37 N against 1.33, 0.38, 0.76 N).
     assert (rms['found'] <= (1.0 - DRIVES_BETTER) * rms['no armature']).all(), rms
+
+
+# Plain identify, then batch on another motion: the forces the identified
+# robot gives (orthoglide batch) against those the robot needs there (its
+# rigid dynamics, friction and ripple; the noise and the lag are the
+# log's, not the robot's). No model holds the ripple: its RMS,
+# RIPPLE / sqrt(2) = 0.354 N, is the floor no identification goes below.
+# The targets 0.55 N per actuator and 0.46 N in the mean were set for a
+# robot of this kind with this ripple: 1.55 and 1.30 times its floor
+# (harness.rough_guideways: EACH, MEAN).
+FLOOR = RIPPLE / math.sqrt(2.0)
+SEEDS = (0, 1, 2, 3)    # (identified on excitation 2 s, validated on 2 s + 1)
+
+
+def batch_forces(capsys, tmp_path, params, motion, times):
+    """Return ``orthoglide batch``'s forces (N, 3) along ``motion``."""
+    from cli_runs import read_csv, run, write_trajectory
+    source = write_trajectory(
+        tmp_path / 'motion.csv',
+        ('t', 'x', 'y', 'z', 'vx', 'vy', 'vz', 'ax', 'ay', 'az'),
+        np.column_stack((times, *trajectory.excitation_batch(
+            motion, times))).tolist())
+    out = tmp_path / 'batch.csv'
+    code, _, err = run(capsys, 'batch', '--params', params, '--input',
+                       source, '--output', out)
+    assert code == 0, err
+    _, rows = read_csv(out.read_text())
+    return np.array([[float(row[f'force_{leg}']) for leg in 'abc']
+                     for row in rows])
+
+
+def rms(error):
+    """Return the RMS (N) per actuator of an (N, 3) error."""
+    return np.sqrt(np.mean(np.square(error), axis=0))
+
+
+@pytest.mark.parametrize('seed', SEEDS)
+def test_plain_identify_then_batch_is_within_the_floor(
+        capsys, tmp_path, seed):
+    """
+    `orthoglide identify`, every choice its own, then `orthoglide batch`.
+
+    The log has every defect (lag, noise, quantisation, jitter, drops, the
+    stall); another motion validates.
+    """
+    from cli_runs import run
+    from orthoglide_ros.harness import rough_guideways as rough
+    from synthetic_logs import write_csv
+    log = write_csv(tmp_path / 'log.csv', robot_log(2 * seed, 30.0,
+                                                    100 + seed))
+    params = tmp_path / 'identified.yaml'
+    code, out, err = run(capsys, 'identify', '--input', log, '--output',
+                         params)
+    assert code == 0, err
+    motion = trajectory.excitation(2 * seed + 1, PERIOD)
+    times = np.arange(0.0, 12.0, 1.0 / RATE)
+    errors = rms(batch_forces(capsys, tmp_path, params, motion, times)
+                 - true_forces(TRUE, times, motion)[1])
+    with capsys.disabled():
+        print(f'\nseed {seed}: batch RMS error (N) {errors.round(3)}, '
+              f'mean {errors.mean():.3f}, floor {FLOOR:.3f} N')
+    assert (errors <= rough.EACH * FLOOR).all(), errors
+    assert errors.mean() <= rough.MEAN * FLOOR, errors
+
+
+# Drawn robots on which identify once went wrong: 1, the split rule kept
+# m1 + m2 at its nominal 0.55 kg where the fit held it at its bound
+# (12.8 times the floor on C); 6, a viscous friction of 28 N s/m the log
+# placed five deviations from the nominal 0 was held at 0 (3.7 times the
+# floor on A). Two others (0, 2) as they come.
+DRAWN = (0, 1, 2, 6)
+
+
+@pytest.mark.parametrize('seed', DRAWN)
+def test_drawn_robots_of_this_kind_are_within_their_floor(capsys, tmp_path,
+                                                          seed):
+    """The limits above, each robot against its own ripple's floor."""
+    from orthoglide_ros.formats.params_file import robot_file_text
+    from orthoglide_ros.harness import rough_guideways as rough
+    robot, defects = rough.drawn_robot(seed)
+    found = identification.identify(
+        NOMINAL, rough.log(robot, defects, 2 * seed, 10 + seed))
+    params = tmp_path / 'identified.yaml'
+    params.write_text(robot_file_text(found.robot, ['drawn']))
+    motion, times = rough.validation_motion(defects, 2 * seed + 1)
+    errors = rough.errors(batch_forces(capsys, tmp_path, params, motion,
+                                       times), robot, defects, motion, times)
+    floor = rough.floor(defects)
+    with capsys.disabled():
+        print(f'\ndrawn {seed}: {identification.law_name(found.law)}, '
+              f'batch RMS error / floor {(errors / floor).round(2)}, mean '
+              f'{errors.mean() / floor:.2f}')
+    assert (errors <= rough.EACH * floor).all(), errors / floor
+    assert errors.mean() <= rough.MEAN * floor, errors / floor

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from typing import Callable, Optional, Sequence
 from collections import namedtuple
+import math
 import os
 
 import numpy as np
@@ -31,6 +32,16 @@ LOG_GROUPS = (('time', ('t',), True),
               ('force', ('force_a', 'force_b', 'force_c'), True),
               ('lambdadot', ('lambdadot_a', 'lambdadot_b', 'lambdadot_c'),
                False))
+# The largest magnitude a log's value may have, by quantity: beyond it no
+# robot the package models has it, and the arithmetic of identification
+# (squares, sums over millions of samples) would leave the finite
+# numbers. Time: 1e10 s (a Unix time in s holds until the year 2286);
+# lambda: 1e3 m (ten times the longest length a robot may have,
+# robot.LENGTH_LIMITS); force: 1e7 N (the largest max_force the
+# feedforward accepts); lambdadot: 1e3 m/s (the largest max_speed it
+# accepts).
+LIMITS = {'t': (1e10, 's'), 'lambda': (1e3, 'm'), 'force': (1e7, 'N'),
+          'lambdadot': (1e3, 'm/s')}
 JOINT_STATE_TYPE = 'sensor_msgs/msg/JointState'
 DEFAULT_TOPIC = '/joint_states'
 BAG_SUFFIXES = ('.mcap', '.db3')
@@ -52,10 +63,11 @@ def check_log(log: 'Log',
     """
     Refuse a :class:`Log` that cannot be identified from (:class:`LogError`).
 
-    Shapes (``times`` (N,), the others (N, 3)), every value finite, times
-    strictly increasing, at least three samples. ``where(k)`` names the
-    0-based sample ``k`` in the message (default ``'sample k + 1'``; a
-    CSV file's data row, a bag's message).
+    Shapes (``times`` (N,), the others (N, 3)), every value finite and
+    within its quantity's LIMITS, times strictly increasing, at least
+    three samples. ``where(k)`` names the 0-based sample ``k`` in the
+    message (default ``'sample k + 1'``; a CSV file's data row, a bag's
+    message).
     """
     where = where or (lambda k: f'sample {k + 1}')
     times = np.asarray(log.times, dtype=float)
@@ -67,12 +79,17 @@ def check_log(log: 'Log',
         raise LogError(f'{log.source}: times (N,), lambdas, forces and '
                        'lambdadots (N, 3) expected')
     for quantity, values in [('t', times[:, None])] + arrays:
-        bad = ~np.isfinite(values)
+        limit, unit = LIMITS[quantity]
+        bad = ~(np.abs(values) <= limit)
         if bad.any():
             k, j = (int(i) for i in np.argwhere(bad)[0])
             column = 't' if quantity == 't' else f'{quantity}_{LEGS[j]}'
+            value = float(values[k, j])
             raise LogError(f'{log.source}: {where(k)}: {column} is '
-                           f'{float(values[k, j])!r}, not a finite number')
+                           f'{value!r}, ' + (
+                               f'outside [{-limit:g}, {limit:g}] {unit}, the '
+                               'range a log may hold' if math.isfinite(value)
+                               else 'not a finite number'))
     late = np.flatnonzero(np.diff(times) <= 0.0)
     if len(late):
         k = int(late[0]) + 1

@@ -71,14 +71,18 @@ def main(argv=None):
         fail(str(error))
         return error.code
     except (ParametersFileError, ParameterError) as error:
-        where = f'{args.params}: ' if isinstance(
-            error, ParameterError) else ''
-        fail(where + str(error))
+        fail(str(error))
         return 2
 
 
 def _robot(path):
-    return Robot() if path is None else load_robot(path)
+    """Return the robot of the --params file (its path names a bad value)."""
+    if path is None:
+        return Robot()
+    try:
+        return load_robot(path)
+    except ParameterError as error:
+        raise CliError(f'{path}: {error}') from None
 
 
 def _version():

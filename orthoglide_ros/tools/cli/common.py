@@ -25,7 +25,7 @@ import tempfile
 import numpy as np
 
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
-from orthoglide_ros.model.robot import JOINT_NAMES, LEGS
+from orthoglide_ros.model.robot import JOINT_NAMES, LEGS, ROW
 
 PROG = 'orthoglide'
 QUANTITIES = ('lambda', 'lambdadot', 'lambdaddot', 'force', 'power')
@@ -292,8 +292,9 @@ def within(kind, low, high=math.inf, above=False, unit=''):
     message of a refusal.
     """
     noun = 'an integer' if kind is int else 'a finite number'
-    span = (f'above {low:g}' if above else f'of at least {low:g}'
-            if high == math.inf else f'in [{low:g}, {high:g}]')
+    span = (f'above {low:g}' if above else f'in [{low:g}, {high:g}]'
+            if high < math.inf else f'of at least {low:g}'
+            if low > -math.inf else '')
 
     def parse(text):
         try:
@@ -303,9 +304,22 @@ def within(kind, low, high=math.inf, above=False, unit=''):
         if not (math.isfinite(value) and value <= high
                 and (value > low if above else value >= low)):
             raise argparse.ArgumentTypeError(
-                f'must be {noun} {span}{unit}, got {text!r}')
+                f'must be {" ".join(filter(None, (noun, span)))}{unit}, '
+                f'got {text!r}')
         return value
     return parse
+
+
+def robot_range(name):
+    """
+    Return the argparse type of an option that sets robot parameter ``name``.
+
+    A finite number within the parameter's own (closed) limits, in its
+    unit (:data:`robot.ROW`, the one home of both): what a ``--params``
+    file accepts for it.
+    """
+    row = ROW[name]
+    return within(float, *row.limits, unit=f' {row.unit}')
 
 
 positive_float = within(float, 0.0, above=True)

@@ -5,19 +5,22 @@ From the motion to design to the check of the result.
 """
 
 import argparse
+import contextlib
 import math
 import re
 import sys
+import warnings
 
 import numpy as np
 
 from orthoglide_ros.formats import cdr, params_file
 from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.model.robot import ROW
 from orthoglide_ros.tools import excitation_design, identification
 from orthoglide_ros.tools.cli.common import (
     add_joint_names, CliError, command, count, drawn_png, fail, finite_float,
-    INPUT_GROUPS, non_negative_float, positive_count, positive_float,
-    table_csv, table_row, write_output)
+    INPUT_GROUPS, positive_count, positive_float, robot_range, table_csv,
+    table_row, write_output)
 from orthoglide_ros.tools.identification import DEFAULT_CUTOFF, report
 
 TOPIC_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
@@ -248,10 +251,10 @@ def _log_options():
                          help='joint states topic in a bag (default '
                          f'{identification.DEFAULT_TOPIC})')
     add_joint_names(options, 'the joints in the joint states')
-    options.add_argument('--start', type=float, metavar='S',
+    options.add_argument('--start', type=finite_float, metavar='S',
                          help='use the log from S seconds after its first '
                          'sample (default: from the first)')
-    options.add_argument('--end', type=float, metavar='S',
+    options.add_argument('--end', type=finite_float, metavar='S',
                          help='use the log up to S seconds after its first '
                          'sample (default: to the last)')
     options.add_argument('--cutoff', type=positive_float,
@@ -261,11 +264,13 @@ def _log_options():
                          f'{DEFAULT_CUTOFF:g}; the motion\'s is '
                          f'{identification.STATE_CUTOFF_FACTOR:g} times it), '
                          'below half the log\'s sampling rate')
-    options.add_argument('--payload', type=non_negative_float, default=None,
-                         metavar='KG', help='the payload the log was '
-                         'recorded with (kg on the platform; default: '
+    options.add_argument('--payload', type=robot_range('payload'),
+                         default=None, metavar='KG', help='the payload the '
+                         'log was recorded with (kg on the platform, within '
+                         'robot.payload\'s limits [{:g}, {:g}]; default: '
                          'robot.payload of --params, 0 in the paper\'s '
-                         'robot): its forces are the model\'s')
+                         'robot): its forces are the model\'s'.format(
+                             *ROW['payload'].limits))
     return options
 
 
@@ -321,13 +326,14 @@ def add_identify(sub, common):
                           f'{100 * identification.SELECTION_MARGIN:g} %% of '
                           'the least RMS error on held-out parts of the '
                           'log')
-    identify.add_argument('--stribeck-velocity', type=positive_float,
+    identify.add_argument('--stribeck-velocity',
+                          type=robot_range('friction_stribeck_velocity'),
                           default=None, metavar='M/S',
                           help='the Stribeck speed v_b of a law with '
-                          '+stribeck (default: the best of '
-                          f'{len(identification.STRIBECK_VELOCITIES)} from '
-                          f'{identification.STRIBECK_VELOCITIES[0]:g} to '
-                          f'{identification.STRIBECK_VELOCITIES[-1]:g} m/s)')
+                          '+stribeck (default: the best of speeds '
+                          f'{identification.STRIBECK_STEP:.3g} times apart '
+                          'from the robot\'s friction_velocity to the '
+                          'log\'s largest slider speed, refined)')
     identify.add_argument('--max-relative-std', type=positive_float,
                           default=identification.MAX_RELATIVE_STD,
                           metavar='PCT', help='a base parameter whose '
@@ -351,7 +357,7 @@ def run_identify(robot, args):
     if args.validate_report is not None and args.validate is None:
         raise CliError('--validate-report needs --validate LOG')
     joints = tuple(args.joint_names)
-    try:
+    with _numbers_checked(args.input):
         log = identification.read_log(args.input, args.topic, joints)
         window = identification.crop(log, args.start, args.end)
         result = identification.identify(
@@ -360,16 +366,14 @@ def run_identify(robot, args):
             friction=None if args.friction == 'auto'
             else identification.parse_law(args.friction),
             stribeck_velocity=args.stribeck_velocity, payload=args.payload)
-        validation = None
-        if args.validate is not None:
+    validation = None
+    if args.validate is not None:
+        with _numbers_checked(args.validate):
             other = identification.read_log(args.validate, args.topic, joints)
             # The lag is the drive's: the one given or found.
             validation = [identification.validate(model, other, args.cutoff,
                                                   result.force_lag)
                           for model in (robot, result.robot)]
-    except (identification.LogError,
-            identification.IdentificationError) as error:
-        raise CliError(str(error)) from None
     images = []
     if args.report is not None:
         images.append((args.report, drawn_png(
@@ -426,14 +430,12 @@ def add_validate(sub, common):
 
 def run_validate(robot, args):
     """Compare the robot's forces with a log's; print, draw (--report)."""
-    try:
+    with _numbers_checked(args.input):
         log = identification.crop(identification.read_log(
             args.input, args.topic, tuple(args.joint_names)),
             args.start, args.end)
         validation = identification.validate(robot, log, args.cutoff,
                                              args.force_lag, args.payload)
-    except identification.LogError as error:
-        raise CliError(str(error)) from None
     image = None if args.report is None else drawn_png(
         lambda f: report.draw_validation(f, validation), (13, 10),
         '--report')
@@ -442,6 +444,30 @@ def run_validate(robot, args):
         write_output(args.report, image)
         print(f'written: {args.report}')
     return 0
+
+
+@contextlib.contextmanager
+def _numbers_checked(source):
+    """
+    Run identification's work on a log; its refusals become a CliError.
+
+    The log's values, its motion and every option are checked in range
+    before any arithmetic (formats.logs.LIMITS, motion.MOTION_LIMITS, the
+    options' types), so no numpy warning is expected: one that still
+    comes (a computation that left the finite numbers) is refused in one
+    line too, never shown as warnings and inf or nan figures.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter('error', RuntimeWarning)
+        try:
+            yield
+        except (identification.LogError,
+                identification.IdentificationError) as error:
+            raise CliError(str(error)) from None
+        except RuntimeWarning as warning:
+            raise CliError(f'{source}: the computation left the finite '
+                           f'numbers ({warning}): a value of the log or an '
+                           'option is beyond what it can use') from None
 
 
 PARSERS = (add_excitation, add_record, add_identify, add_validate)

@@ -35,7 +35,7 @@ from orthoglide_ros.formats.logs import (  # noqa: F401
 from orthoglide_ros.tools.identification.estimate import (  # noqa: F401
     bounds, Candidate, FOLDS, identify, Identification, IdentificationError,
     MAX_RELATIVE_STD, RESOLUTION, SELECTION_MARGIN, split,
-    STRIBECK_VELOCITIES)
+    STRIBECK_STEP, stribeck_velocities)
 from orthoglide_ros.tools.identification.laws import (  # noqa: F401
     ARMATURES, friction_columns, Law, LAWS, law_name, MASSES, MEANINGS,
     parse_law, PLAIN, STANDARD, standard_names, standard_parameters, UNITS,

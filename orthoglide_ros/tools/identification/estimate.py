@@ -40,6 +40,7 @@ from orthoglide_ros.tools.identification.motion import (
     check_lag, DEFAULT_CUTOFF, estimate_lag, Motion)
 from orthoglide_ros.tools.identification.regressor import base_of
 from orthoglide_ros.formats.logs import LogError
+from orthoglide_ros.model.robot import ROW
 from orthoglide_ros.model.types import Array
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
@@ -61,10 +62,14 @@ MAX_RELATIVE_STD = 10.0
 # excitation's 0.4 m/s) or a mass below 10 g hardly matters to forces of
 # tens to hundreds of N.
 RESOLUTION = {'kg': 0.01, 'N s/m': 1.0, 'N': 1.0}
-# The Stribeck speeds v_b searched (m/s): log-spaced over the speeds at
-# which guideways show a Stribeck rise; the best is refined between its
-# neighbours.
-STRIBECK_VELOCITIES = tuple(np.geomspace(0.002, 0.1, 12).tolist())
+# The Stribeck speeds v_b searched (m/s): log-spaced STRIBECK_STEP apart
+# (the density of the former 12 speeds from 2 to 100 mm/s), from the
+# nominal robot's Coulomb smoothing speed friction_velocity (below it a
+# Stribeck excess is one more Coulomb switch) to the log's largest slider
+# speed (above it the excess is a Coulomb level less a term in v^2 that
+# the log cannot tell from a larger v_b); the best is refined between its
+# neighbours (stribeck_velocities).
+STRIBECK_STEP = 50.0 ** (1.0 / 11.0)
 # The law is chosen by the RMS error on held-out parts of the log (FOLDS
 # contiguous blocks, each predicted from the others): a law with more
 # terms is chosen only when it lowers that error by more than
@@ -72,6 +77,12 @@ STRIBECK_VELOCITIES = tuple(np.geomspace(0.002, 0.1, 12).tolist())
 # log does not excite are held at their nominal values.
 FOLDS = 5
 SELECTION_MARGIN = 0.02
+# An unexcited base parameter is held at its nominal value only where the
+# log is consistent with it: within this many standard deviations.
+NOMINAL_SIGMAS = 3.0
+# A payload is refused when the platform's own mass comes out this many
+# standard deviations below its bound (see _check_payload).
+PAYLOAD_SIGMAS = 3.0
 # A refusal of a log whose gaps left less than this share usable names the
 # gaps first.
 GAP_LOSS = 0.8
@@ -179,9 +190,10 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
                 robot.armature)
         return forces
 
+    grid = stribeck_velocities(robot, motion)
     if force_lag is None:
         richest = laws[-1]
-        speeds = _speeds(richest, stribeck_velocity)
+        speeds = _speeds(richest, stribeck_velocity, grid)
         grams = [_residual_of(_base_columns(motion, richest, v))
                  for v in speeds]
         offset = known(richest)
@@ -194,7 +206,8 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     forces = motion.forces(force_lag)
     force_rms = np.sqrt(np.mean(forces ** 2, axis=0))
     candidates = [_candidate(motion, law, forces - known(law),
-                             stribeck_velocity) for law in laws]
+                             _speeds(law, stribeck_velocity, grid))
+                  for law in laws]
     if len(laws) > 1:
         chosen, why = _chosen(candidates)
     else:
@@ -202,7 +215,7 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     law, speed = chosen.law, chosen.stribeck_velocity
     target = forces - known(law)
     if law.stribeck and stribeck_velocity is None:
-        speed = _refined_speed(motion, law, target, speed)
+        speed = _refined_speed(motion, law, target, speed, grid)
     base = base or base_of(robot, law)
     count = len(base.independent)
     w = motion.columns(law, speed)
@@ -213,8 +226,9 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     nominal = base.matrix @ standard_parameters(robot, law)
     lower = bounds(base)
     units = [UNITS[names[j]] for j in base.independent]
-    values, std, singular, bounded = _least_squares(a, y, lower, base.names,
-                                                    units)
+    values, std, singular, bounded, found = _least_squares(
+        a, y, lower, base.names, units)
+    _check_payload(log.source, base, payload, found, std, lower)
     resolution = [RESOLUTION[unit] for unit in units]
     relative = 100.0 * std / np.maximum(np.abs(values), resolution)
     unexcited = np.flatnonzero(~(relative <= max_relative_std))
@@ -232,7 +246,7 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     held = Held()
     if len(unexcited):
         values, bounded, held = _held(a, y, lower, base, values, bounded,
-                                      nominal, unexcited, relative,
+                                      nominal, unexcited, std, relative,
                                       max_relative_std, names)
     residual = y - a @ values
     robot_out, notes = split(robot, base, values, speed)
@@ -246,26 +260,35 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
         bounded, held, payload)
 
 
-def _held(a, y, lower, base, values, bounded, nominal, unexcited, relative,
-          max_relative_std, names):
+def _held(a, y, lower, base, values, bounded, nominal, unexcited, std,
+          relative, max_relative_std, names):
     """
     Hold the unexcited base parameters at nominal, unless the log needs them.
 
-    One at a time, the least excited first (the essential-parameters
-    method's order): a parameter is held when the held-out error with it
-    (and those held before it) at the nominal value stays within
-    SELECTION_MARGIN of the error so far; else it is kept as found.
-    Returns ``(values, bounded, held)``.
+    A parameter the log places more than NOMINAL_SIGMAS of its standard
+    deviations from its nominal value is not held: the log does not pin
+    it down, but it does say that the nominal value is not the robot's
+    (a viscous friction of 28 +- 6 N s/m on a robot whose nominal has
+    none). The others one at a time, the least excited first (the
+    essential-parameters method's order): a parameter is held when the
+    held-out error with it (and those held before it) at the nominal value
+    stays within SELECTION_MARGIN of the error so far; else it is kept as
+    found. Returns ``(values, bounded, held)``.
     """
     def error(fixed):
         free = np.setdiff1d(np.arange(len(values)), fixed)
-        return _held_out_rms(a[:, free], y - a[:, fixed] @ nominal[fixed])
+        return _held_out_rms(a[:, free], y - a[:, fixed] @ nominal[fixed],
+                             lower[free])
+    away = [i for i in unexcited
+            if abs(values[i] - nominal[i]) > NOMINAL_SIGMAS * std[i]]
     held, current = [], error([])
     for i in sorted(unexcited, key=lambda i: -relative[i]):
+        if i in away:
+            continue
         trial = error(held + [i])
         if trial <= current * (1.0 + SELECTION_MARGIN):
             held, current = held + [i], min(current, trial)
-    kept = [i for i in unexcited if i not in held]
+    kept = [i for i in unexcited if i not in held and i not in away]
 
     def words(indices):
         return '; '.join(
@@ -276,7 +299,7 @@ def _held(a, y, lower, base, values, bounded, nominal, unexcited, relative,
     if held:
         held = sorted(held)
         free = np.setdiff1d(np.arange(len(values)), held)
-        some, _, _, bounded = _least_squares(
+        some, _, _, bounded, _ = _least_squares(
             a[:, free], y - a[:, held] @ nominal[held], lower[free],
             [base.names[i] for i in free],
             [UNITS[names[base.independent[i]]] for i in free])
@@ -292,22 +315,47 @@ def _held(a, y, lower, base, values, bounded, nominal, unexcited, relative,
             'kept as found since the held-out error needs it (more than '
             f'{100 * SELECTION_MARGIN:g} % higher at the nominal value): '
             + words(kept))
+    if away:
+        sentences.append(
+            f'poorly excited by the log (above {max_relative_std:g} %), '
+            f'kept as found since the log puts it more than '
+            f'{NOMINAL_SIGMAS:g} standard deviations from its nominal value: '
+            + words(away))
     return values, bounded, Held(sentences, held)
 
 
-def _speeds(law, stribeck_velocity):
+def stribeck_velocities(robot: Robot, motion: Motion) -> tuple[float, ...]:
+    """
+    Return the Stribeck speeds (m/s) searched along ``motion``.
+
+    Log-spaced about STRIBECK_STEP apart from ``robot``'s
+    ``friction_velocity`` to the largest slider speed of the samples used
+    (at least one step above; within the speed's limits,
+    ``robot.friction_stribeck_velocity``).
+    """
+    low = robot.friction_velocity
+    speed = float(np.abs(motion.kept([p.lambdadot
+                                      for p in motion.pieces])).max())
+    high = min(max(speed, low * STRIBECK_STEP),
+               ROW['friction_stribeck_velocity'].limits[1])
+    count = int(math.ceil(math.log(high / low) / math.log(STRIBECK_STEP)
+                          - 1e-9)) + 1
+    return tuple(np.geomspace(low, high, max(count, 2)).tolist())
+
+
+def _speeds(law, stribeck_velocity, grid):
     """Return the Stribeck speeds to try for ``law`` (None: no term)."""
     if not law.stribeck:
         return (None,)
-    return (stribeck_velocity,) if stribeck_velocity is not None \
-        else STRIBECK_VELOCITIES
+    return (stribeck_velocity,) if stribeck_velocity is not None else grid
 
 
-def _candidate(motion, law, target, stribeck_velocity):
-    """Return ``law``'s :class:`Candidate`: held-out RMS, best v_b."""
+def _candidate(motion, law, target, speeds):
+    """Return ``law``'s :class:`Candidate`: held-out RMS, best ``speeds``."""
     y = target.reshape(-1)
-    rms, speed = min((_held_out_rms(_base_columns(motion, law, v), y), v)
-                     for v in _speeds(law, stribeck_velocity))
+    lower = bounds(base_of(motion.robot, law))
+    rms, speed = min((_held_out_rms(_base_columns(motion, law, v), y,
+                                    lower), v) for v in speeds)
     return Candidate(law, speed, rms)
 
 
@@ -318,22 +366,23 @@ def _base_columns(motion, law, stribeck_velocity):
     return w[:, :, list(base.independent)].reshape(-1, len(base.independent))
 
 
-def _refined_speed(motion, law, target, speed):
+def _refined_speed(motion, law, target, speed, speeds):
     """
     Return the Stribeck speed of the least held-out error near ``speed``.
 
-    Between the neighbours of ``speed`` in STRIBECK_VELOCITIES, by
-    Brent's bounded search on its logarithm (the grid is log-spaced).
+    Between the neighbours of ``speed`` in ``speeds`` (the grid searched),
+    by Brent's bounded search on its logarithm (the grid is log-spaced).
     """
     from scipy.optimize import minimize_scalar
-    grid = np.log(STRIBECK_VELOCITIES)
+    grid = np.log(speeds)
     k = int(np.argmin(np.abs(grid - math.log(speed))))
     low, high = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
     y = target.reshape(-1)
+    lower = bounds(base_of(motion.robot, law))
 
     def error(log_speed):
         return _held_out_rms(_base_columns(motion, law,
-                                           math.exp(log_speed)), y)
+                                           math.exp(log_speed)), y, lower)
     found = minimize_scalar(error, bounds=(low, high), method='bounded',
                             options={'xatol': 1e-3})
     return float(math.exp(found.x)) if found.fun < error(math.log(speed)) \
@@ -381,24 +430,59 @@ def _residual_of(a):
     return residual
 
 
-def _held_out_rms(a, y, folds=FOLDS):
-    """RMS error (N) of each of ``folds`` blocks predicted from the others."""
+def _held_out_rms(a, y, lower=None, folds=FOLDS):
+    """
+    RMS error (N) of each of ``folds`` blocks predicted from the others.
+
+    Each prediction by the estimate identify would give from the other
+    blocks: within the bounds ``lower`` of the parameters (None: none),
+    so that no law scores by a robot no robot can be (a negative
+    armature or friction fitting what the law does not hold).
+    """
     rows = len(y) // 3
     edges = np.linspace(0, rows, folds + 1).astype(int) * 3
-    scaled, _ = _scaled(a)
+    scaled, norms = _scaled(a)
+    low = None if lower is None else np.where(
+        norms > 0.0, lower * norms, -np.inf)
     blocks = [(scaled[i:j], y[i:j]) for i, j in zip(edges[:-1], edges[1:])]
     grams = [(m.T @ m, m.T @ v) for m, v in blocks]
     gram, b = sum(g for g, _ in grams), sum(c for _, c in grams)
     squares = 0.0
     for (m, v), (g, c) in zip(blocks, grams):
-        x = np.linalg.lstsq(gram - g, b - c, rcond=None)[0]
+        x = _bounded_normal(gram - g, b - c, low)
         squares += float(np.sum((v - m @ x) ** 2))
     return math.sqrt(squares / len(y))
 
 
+def _bounded_normal(gram, b, lower=None):
+    """
+    Solve the normal equations ``gram x = b``, ``x >= lower`` where given.
+
+    Least squares on the small system first (lstsq: no failure on a
+    direction the data do not excite); where that breaks a bound, the
+    bounded least squares (BVLS) of the same problem written with the
+    square root of ``gram`` (its eigendecomposition), n_base rows.
+    """
+    x = np.linalg.lstsq(gram, b, rcond=None)[0]
+    if lower is None or (x >= lower).all():
+        return x
+    from scipy.optimize import lsq_linear
+    values, vectors = np.linalg.eigh(gram)
+    keep = values > values[-1] * np.finfo(float).eps * len(values)
+    if not keep.any():      # nothing excited: no fit, the bounds
+        return np.maximum(x, lower)
+    root = np.sqrt(values[keep])
+    return lsq_linear((vectors[:, keep] * root).T,
+                      (vectors[:, keep].T @ b) / root,
+                      bounds=(lower, np.inf), method='bvls').x
+
+
 def _least_squares(a, y, lower, names=None, units=None):
     """
-    Solve ``a beta = y``: (values, std, singular values, bounded notes).
+    Solve ``a beta = y``: values, std, singular values, notes, ordinary.
+
+    Returned in that order: the values, their standard deviations, the
+    singular values, the bounded notes and the ordinary values.
 
     By the SVD of ``a`` with unit-norm columns; a direction the log does
     not excite (a singular value below numpy's rank tolerance) adds
@@ -421,7 +505,7 @@ def _least_squares(a, y, lower, names=None, units=None):
     std = np.full(count, np.inf)
     std[excited] = np.sqrt(variance * ((vt.T / np.maximum(singular, floor))
                                        ** 2).sum(axis=1)) / norms[excited]
-    bounded = []
+    bounded, found = [], values
     if (values < lower).any():
         from scipy.optimize import lsq_linear
         found = values
@@ -442,7 +526,31 @@ def _least_squares(a, y, lower, names=None, units=None):
                 f'squares; with the parameters below their bounds held '
                 f'there, it comes to its bound {lower[i]:.4g} {unit} too '
                 '(bounded least squares)')
-    return values, std, singular, bounded
+    return values, std, singular, bounded, found
+
+
+def _check_payload(source, base, payload, found, std, lower):
+    """
+    Refuse a payload the log's forces do not carry (IdentificationError).
+
+    With its forces taken off, the platform's own mass (the base parameter
+    ``m5`` is in) must not come out below what any robot has by more
+    than PAYLOAD_SIGMAS of its standard deviations: a payload larger than
+    the one the log was recorded with (or in another unit) leaves a
+    platform of negative mass, and every other parameter bent to make up
+    for it.
+    """
+    rows = np.flatnonzero(base.matrix[:, _M5])
+    if payload <= 0.0 or len(rows) != 1:
+        return
+    i = int(rows[0])
+    if found[i] + PAYLOAD_SIGMAS * std[i] < lower[i]:
+        raise IdentificationError(
+            f'{source}: with a payload of {payload:g} kg the platform\'s '
+            f'own mass ({base.names[i]}) comes out at {found[i]:.4g} kg '
+            f'(standard deviation {std[i]:.2g} kg), which no robot has: '
+            'the log\'s forces do not carry that payload; give the one it '
+            'was recorded with (kg)')
 
 
 def bounds(base: Base) -> Array:
@@ -470,7 +578,10 @@ def split(robot: Robot, base: Base, values: Array,
     the carrier below its bound (a mass below 1e-6 kg), the whole
     combination is scaled from its nominal values instead, ``theta =
     theta_nominal beta_i / beta_i,nominal`` (when the combination's
-    coefficients and both values are positive). A friction coefficient or
+    coefficients and both values are positive); where no scaling keeps
+    every member within its bound (a combination found at or near its
+    bound, the sum of its members' bounds), the other members are set to
+    their bounds and the carrier takes the rest. A friction coefficient or
     an armature found below zero is set to zero. A combination no robot
     within the bounds has (a mass combination found below zero: a
     parameter the log hardly excites) keeps its nominal values. Each
@@ -509,6 +620,19 @@ def split(robot: Robot, base: Base, values: Array,
                          'other members\' nominal share: the combination '
                          f'is scaled by {ratio:.6g} from its nominal '
                          'values')
+            continue
+        # (The bounded least squares hold a combination at its bound to
+        # the rounding of its scaled solution.)
+        rest = values[i] - row[others] @ lower[others]
+        if (row >= 0.0).all() and not shared and rest >= lower[carrier] - (
+                1e-9 * abs(lower[carrier])):
+            theta[others] = lower[others]
+            theta[carrier] = rest = max(rest, lower[carrier])
+            notes.append(f'{name} = {values[i]:.6g} {unit} is below what '
+                         'its members\' nominal values or their scaling '
+                         'allow: the other members are set to their bounds '
+                         f'and {names[carrier]} takes the rest, {rest:.6g} '
+                         f'{unit}')
             continue
         notes.append(f'{name} was found {values[i]:.4g} {unit}, which no '
                      'robot within the bounds has: its nominal value '

@@ -64,6 +64,12 @@ MISSING_FACTOR = 1.5
 # through the three best (doc/identification.md).
 LAG_SEARCH = 0.01
 LAG_STEPS = 4
+# The largest speed (m/s) and acceleration (m/s^2) of the platform a log
+# may show, per axis: the largest max_speed and max_acceleration the
+# feedforward accepts. Beyond them the stamps are not in seconds or the
+# log is not a robot's, and the forces computed from such a motion would
+# leave the finite numbers.
+MOTION_LIMITS = (('speed', 1e3, 'm/s'), ('acceleration', 1e5, 'm/s^2'))
 Samples = namedtuple('Samples', (
     'times', 'regressor', 'forces', 'segments', 'rate', 'law', 'lambdas',
     'lambdadots', 'coverage'), defaults=(PLAIN, None, None, None))
@@ -128,6 +134,11 @@ class Motion:
             raise LogError(f'{log.source}: the cutoff {cutoff:g} Hz must lie '
                            f'in (0, {0.5 * rate:g}) Hz, half the sampling '
                            f'rate {rate:g} Hz')
+        span = float(times[-1] - times[0])
+        if not 4.0 / cutoff < span:
+            raise LogError(f'{log.source}: no piece of the log lasts more '
+                           f'than {4.0 / cutoff:.3g} s (4 / cutoff, the '
+                           f'cutoff {cutoff:g} Hz): it lasts {span:.3g} s')
         self.cutoff = cutoff
         self.sos = scipy.signal.butter(FILTER_ORDER, cutoff, fs=rate,
                                        output='sos')
@@ -167,6 +178,7 @@ class Motion:
                             state_sos, on_grid(measured[start:end]),
                             axis=0)[:, :, None])[:, :, 0]
                 acceleration = np.gradient(velocity, period, axis=0)
+                _check_motion(log.source, grid, velocity, acceleration)
                 rigid, reference = rigid_columns(robot, position, velocity,
                                                  acceleration)
             except mechanics.WorkspaceError as error:
@@ -247,10 +259,21 @@ class Motion:
         return self._kinds[key]
 
     def model_forces(self, robot: Robot) -> Array:
-        """Return ``robot``'s forces along the motion (the full model)."""
-        return self.filtered([mechanics.solve_batch(
-            robot, p.position, p.velocity, p.acceleration).force
-            for p in self.pieces])
+        """
+        Return ``robot``'s forces along the motion (the full model).
+
+        Raises :class:`LogError` where the model cannot give them.
+        """
+        forces = []
+        for p in self.pieces:
+            try:
+                forces.append(mechanics.solve_batch(
+                    robot, p.position, p.velocity, p.acceleration).force)
+            except mechanics.WorkspaceError as error:
+                raise LogError(f'{self.source}: the motion at t = '
+                               f'{p.grid[error.row]:.6g} s: {error}') \
+                    from None
+        return self.filtered(forces)
 
     def samples(self, regressor: Optional[Array], forces: Array,
                 law: Law = PLAIN) -> 'Samples':
@@ -307,6 +330,19 @@ def prepare(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     motion = Motion(robot, log, cutoff)
     check_lag(log.source, force_lag, cutoff)
     return motion.samples(motion.columns(law), motion.forces(force_lag), law)
+
+
+def _check_motion(source, grid, velocity, acceleration):
+    """Refuse a motion beyond MOTION_LIMITS, naming when (LogError)."""
+    for (name, limit, unit), values in zip(MOTION_LIMITS,
+                                           (velocity, acceleration)):
+        k, j = np.unravel_index(np.argmax(np.abs(values)), values.shape)
+        if not abs(values[k, j]) <= limit:
+            raise LogError(
+                f'{source}: the platform\'s {name} along {"xyz"[j]} reaches '
+                f'{values[k, j]:.4g} {unit} at t = {grid[k]:.6g} s, beyond '
+                f'the {limit:g} {unit} a robot may have: are the times in '
+                'seconds and lambda in metres?')
 
 
 def check_lag(source: str, force_lag: float, cutoff: float) -> None:

@@ -118,8 +118,9 @@ def validation_lines(validation: Validation,
                 ('share of the force explained (%)', 100 * v.explained,
                  '.4g')):
             text = f'{label}: {what}' if reference is not None else what
+            # (A cell of 10 characters or more keeps a space before it.)
             lines.append(f'{text:<34}' + ''.join(
-                f'{value:>10{form}}' for value in values))
+                (' ' + format(value, form)).rjust(10) for value in values))
     lines += [f'warning: {w}' for w in validation.warnings]
     return lines
 

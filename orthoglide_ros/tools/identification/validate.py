@@ -15,6 +15,7 @@ from collections import namedtuple
 
 import numpy as np
 
+from orthoglide_ros.formats.logs import LogError
 from orthoglide_ros.tools.identification.laws import standard_parameters
 from orthoglide_ros.tools.identification.motion import (
     check_lag, DEFAULT_CUTOFF, estimate_lag, Motion)
@@ -91,11 +92,16 @@ def validate(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     explained = 1.0 - np.divide(np.sum(error ** 2, axis=0), squares,
                                 out=np.full(3, np.nan), where=squares > 0.0)
     samples = motion.samples(None, measured)
+    rms = np.sqrt(np.mean(error ** 2, axis=0))
+    if not np.isfinite(rms).all():
+        j = int(np.argmin(np.isfinite(rms)))
+        raise LogError(f'{log.source}: the error on actuator {"ABC"[j]} '
+                       'is not finite: the robot\'s forces along the log\'s '
+                       'motion leave the finite numbers')
     return Validation(
-        log.source, samples, measured, predicted,
-        np.sqrt(np.mean(error ** 2, axis=0)), np.abs(error).max(axis=0),
-        explained, float(force_lag), lag_estimated,
-        _warnings(samples, error))
+        log.source, samples, measured, predicted, rms,
+        np.abs(error).max(axis=0), explained, float(force_lag),
+        lag_estimated, _warnings(samples, error))
 
 
 def _warnings(samples, error):
