@@ -30,7 +30,9 @@ services), and :class:`Diagnostics` (``/diagnostics`` once a second).
 ``autostart`` (default true) configures and activates as the node is made,
 so that ``ros2 run`` and code that makes the node get a running node: an
 invalid start-up set raises ValueError, and the process exits 2
-(:func:`~orthoglide_ros.ros.node_runtime.run`).
+(:func:`~orthoglide_ros.ros.node_runtime.run`). Its inputs are read from
+the activation on: what comes between configure and activate waits in the
+subscriptions' histories and is handled as the active node's.
 
 One input, as it goes: the input thread takes the message, checks its byte
 limit and decodes it (outside the lock); with the lock held,
@@ -424,7 +426,11 @@ class ManagedNode(LifecycleNode):
         Configure and activate when ``autostart`` says so.
 
         Raises NotStarting with the reason when configure or activate
-        fails (``run`` then exits 2); nothing of the node runs on.
+        fails (``run`` then exits 2); nothing of the node runs on. The
+        two are one step: the inputs are read from the activation on, so
+        no message is handled by the inactive state in between (a message
+        that comes meanwhile waits in its subscription's history; the
+        recorder lost such messages under load).
         """
         if not self.get_parameter('autostart').value:
             self.log('info', 'unconfigured: waiting for ~/change_state '
@@ -437,6 +443,7 @@ class ManagedNode(LifecycleNode):
             refused = self._refused or 'activate failed'
         else:
             self._announce = True
+            self.inputs.start()
             return
         self.inputs.stop()
         raise NotStarting(refused)
@@ -459,7 +466,8 @@ class ManagedNode(LifecycleNode):
                             qos_overriding_options=None if row.qos else
                             QoSOverridingOptions.with_default_policies())
         self.core.active = False
-        self.inputs.start()
+        if self._announce:      # not autostart's: it starts them once active
+            self.inputs.start()
 
     def on_activate(self, state):
         """Start the outputs."""
