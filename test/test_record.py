@@ -48,40 +48,54 @@ def record(args):
                               command=[node_executable('orthoglide')])
 
 
+def wait_subscribed(publisher, proc):
+    """
+    Wait until the recorder's reader matches ``publisher``.
+
+    ``proc``: the recorder's process (None: in this process). The
+    recorder makes its reader only once it sees this publisher, so its
+    reader matches this writer as it is made: once this writer sees the
+    reader, both sides are matched.
+    """
+    deadline = time.monotonic() + MATCH_TIMEOUT
+    while publisher.get_subscription_count() < 1:
+        assert proc is None or proc.poll() is None, stop_process(proc)
+        assert time.monotonic() < deadline, 'the recorder never subscribed'
+        time.sleep(0.05)
+
+
+def joint_state(k):
+    """Return state ``k``: stamped 1000 s + 10 ms k, values from k."""
+    msg = JointState(name=['slider_c', 'slider_a', 'slider_b'],
+                     position=[0.003 * k, 0.001 * k, 0.002 * k],
+                     velocity=[0.0, 0.0, 0.0],
+                     effort=[250.0 + k, 1.0 + k, -2.0 - k])
+    msg.header.stamp.sec = 1000 + k // 100
+    msg.header.stamp.nanosec = (k % 100) * 10_000_000
+    return msg
+
+
 def publish_states(node, publisher, proc):
     """
     Publish MESSAGES joint states once the recorder listens; return them.
 
     ``proc``: the recorder's process (None: in this process).
     """
-    deadline = time.monotonic() + MATCH_TIMEOUT
-    # The recorder makes its reader only once it sees this publisher, so
-    # its reader matches this writer as it is made: once this writer sees
-    # the reader, both sides are matched.
-    while publisher.get_subscription_count() < 1:
-        assert proc is None or proc.poll() is None, stop_process(proc)
-        assert time.monotonic() < deadline, 'the recorder never subscribed'
-        time.sleep(0.05)
+    wait_subscribed(publisher, proc)
     sent = []
     for k in range(MESSAGES):
-        msg = JointState(name=['slider_c', 'slider_a', 'slider_b'],
-                         position=[0.003 * k, 0.001 * k, 0.002 * k],
-                         velocity=[0.0, 0.0, 0.0],
-                         effort=[250.0 + k, 1.0 + k, -2.0 - k])
-        msg.header.stamp.sec = 1000 + k // 100
-        msg.header.stamp.nanosec = (k % 100) * 10_000_000
-        publisher.publish(msg)
-        sent.append(msg)
+        sent.append(joint_state(k))
+        publisher.publish(sent[-1])
         time.sleep(0.005)
     assert publisher.wait_for_all_acked(Duration(seconds=5.0))
     return sent
 
 
-def check_bag(path):
+def check_bag(path, k=np.arange(MESSAGES)):
+    """Check that the bag holds the states ``k``, as published."""
     log = identification.read_bag(path)
-    k = np.arange(MESSAGES)
-    assert np.allclose(log.times, 0.01 * k, rtol=0.0, atol=1e-12)
-    assert log.origin == 1000 * 10**9
+    assert np.allclose(log.times, 0.01 * (k - k[0]), rtol=0.0, atol=1e-12)
+    assert log.origin == 1000 * 10**9 + k[0] * 10**7
     assert np.array_equal(log.lambdas, np.column_stack(
         (0.001 * k, 0.002 * k, 0.003 * k)))
     assert np.array_equal(log.forces, np.column_stack(
@@ -204,6 +218,49 @@ def test_what_comes_before_the_activation_is_recorded(ros_context,
     finally:
         maker.join(timeout=MATCH_TIMEOUT)
         for recorder in made:
+            recorder.destroy_node()
+        node.destroy_node()
+
+
+def test_a_deactivated_recorder_counts_what_it_did_not_record(
+        ros_context, tmp_path):
+    """
+    What comes while a lifecycle client has deactivated it is dropped, said.
+
+    The recorder in this process, deactivated after the first 50 states
+    were handled and activated again after the next 50: the bag holds the
+    first and the last 50, the 50 between are counted as dropped
+    (``inactive``) in the last line, and the recording is lossy.
+    """
+    from orthoglide_ros.ros.recorder_node import Recorder
+    node = rclpy.create_node('joint_state_source', context=ros_context)
+    recorder = None
+    try:
+        publisher = node.create_publisher(JointState, 'joint_states', QOS)
+        recorder = Recorder(str(tmp_path / 'bag'), ['joint_states'],
+                            context=ros_context)
+        wait_subscribed(publisher, None)
+        for part, change in ((range(0, 50), recorder.trigger_deactivate),
+                             (range(50, 100), recorder.trigger_activate),
+                             (range(100, 150), None)):
+            for k in part:
+                publisher.publish(joint_state(k))
+                time.sleep(0.002)
+            deadline = time.monotonic() + MATCH_TIMEOUT
+            while recorder.core.received['/joint_states'] < part.stop:
+                assert time.monotonic() < deadline, recorder.core.received
+                time.sleep(0.01)
+            if change is not None:
+                change()
+        recorder.on_stop(True)
+        assert recorder.lossy
+        assert recorder.core.summary('bag') == (
+            'recorded 100 message(s) into bag (/joint_states: 100); dropped '
+            '50 (/joint_states inactive: 50, received while the recorder was '
+            'not active)')
+        check_bag(tmp_path / 'bag', np.r_[0:50, 100:150])
+    finally:
+        if recorder is not None:
             recorder.destroy_node()
         node.destroy_node()
 
