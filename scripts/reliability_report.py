@@ -53,6 +53,9 @@ os.environ.setdefault('ROS_LOG_DIR',
 import numpy as np  # noqa: E402
 
 from orthoglide_ros.harness import hostile  # noqa: E402
+from orthoglide_ros.harness.hostile import logs as hostile_logs  # noqa: E402
+from orthoglide_ros.harness.hostile.streams import \
+    mechanism_stamps  # noqa: E402
 from orthoglide_ros.harness import live_graph  # noqa: E402
 from orthoglide_ros.harness import netns  # noqa: E402
 from orthoglide_ros.harness import reliability as harness  # noqa: E402
@@ -335,6 +338,29 @@ def hostile_report():
              f'1e200 m/s^2, 1e300 N and m/s, 5 m: {r.feedforward_outputs} '
              f'outputs, {r.commands} commands; {r.feedforward_rejected}, '
              f'{r.controller_rejected}')
+    for label, function in (('refused transitions',
+                             hostile_logs.refused_transitions),
+                            ('resets', hostile_logs.resets)):
+        r = run(label, function)
+        if r is not None:
+            line(r.code == 0 and r.after
+                 and r.lines <= int(r.seconds) + 1,
+                 f'{label}, one client as fast as answered: {r.answered} '
+                 f'in {r.seconds:.1f} s, {r.lines} log lines (said left '
+                 f'out {r.left_out}), the service still works {r.after}')
+    r = run('forged log lines', hostile_logs.forged_text)
+    if r is not None:
+        line(not r.not_log_lines and not r.control,
+             f'"\\n[FATAL] ... FORGED" as a label, a parameter value, a '
+             f'frame id: {len(r.not_log_lines)} forged lines, '
+             f'{len(r.control)} with a control character')
+    r = run('mechanism state stamps', mechanism_stamps)
+    if r is not None:
+        line(r.bad_outputs == 0 and r.stamps_out == [(0, 0), (9, 5)],
+             f'nanosec 2e9, negative seconds at the mechanism state '
+             f'publisher: {r.bad_outputs} outputs, {r.rejected_stamp} '
+             f'rejected (stamp); zero and valid stamps served '
+             f'{r.stamps_out}')
     return lines, hard
 
 

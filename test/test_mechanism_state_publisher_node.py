@@ -206,3 +206,22 @@ def test_process_exits_2_on_invalid_parameter():
         START_WAIT)
     assert code == 2, f'exit code {code}; stderr:\n{stderr}'
     assert 'joint_names' in stderr and 'Traceback' not in stderr, stderr
+
+
+@needs_script
+def test_invalid_stamps_are_refused_counted_and_said():
+    """
+    A peer's stamps that are no ROS time publish nothing (real processes).
+
+    nanosec 2e9, negative seconds and a "zero" second with nanosec 1e9
+    were forwarded with diagnostics ``ok``: each is now refused as
+    ``rejected stamp`` (WARN, the reason in the message); a zero stamp
+    still passes unchanged, as a valid one does.
+    """
+    from orthoglide_ros.harness.hostile.streams import mechanism_stamps
+    result = mechanism_stamps()
+    assert result.alive, result
+    assert result.bad_outputs == 0, result
+    assert result.rejected_stamp == 4, result
+    assert result.level == 1 and 'stamp' in result.message, result
+    assert result.stamps_out == [(0, 0), (9, 5)], result

@@ -1,7 +1,8 @@
 """
 The rules of the node runtime that need no DDS.
 
-- ``text.clip``: the one place text from messages is shortened;
+- ``text.clip``: the one place text from messages is shortened, and
+  ``text.printable``, the one filter between a node's text and its log;
 - the set-parameters requests refused before rclpy sees them;
 - the feedforward's trajectory stamp rule (header + time_from_start, the
   zero header meaning "now", nanosec in [0, 1e9) on both);
@@ -30,6 +31,19 @@ def test_clip_keeps_short_text_and_cuts_long_text_in_the_middle():
     assert len(cut) <= text.TEXT_LIMIT + 60
     assert cut.startswith('a' * 1000) and cut.endswith('c' * 1000)
     assert '5000000 characters cut' in cut
+
+
+@pytest.mark.parametrize('bad', [
+    '\n', '\r', '\r\n', '\t', '\x00', '\x1b[2J', '\x7f', '\x85', '\u2028',
+    '\u2029', '\u202e', '\u200b', '\ufeff', '\x1c', '\ud800'])
+def test_printable_leaves_one_line_without_a_control_character(bad):
+    forged = f'label{bad}[FATAL] [1.0] [feedforward]: FORGED{bad}'
+    shown = text.printable(forged)
+    assert shown.isprintable() and len(shown.splitlines()) == 1, shown
+    # Written as Python writes it: the text can be told back.
+    assert shown == repr(forged)[1:-1].replace("\\'", "'")
+    assert text.printable('plain, é, 中文, \\n') == 'plain, é, 中文, \\n'
+    assert len(text.printable(bad * 100_000)) <= text.TEXT_LIMIT + 60
 
 
 @pytest.mark.parametrize('srv_type', [SetParameters,

@@ -105,7 +105,7 @@ def convert_trajectory(settings, waypoints):
     if len(w.time) == 0:
         raise Rejected('empty', 'trajectory without points')
     setpoint_rules.check_frame(w.frame, settings, 'trajectory')
-    check_stamp(w.stamp, zero_means_now=True)
+    check_stamp(w.stamp, zero_allowed=True)
     _first_bad('malformed', ~w.transform, 'has no transform')
     velocity, acceleration = w.linear_velocity, w.linear_acceleration
     if settings.pose_only:

@@ -5,8 +5,9 @@ Rules every node applies to what it receives, without ROS.
   a rule; its ``reason`` is the key the node counts it under (and reports
   in ``/diagnostics`` as ``rejected <reason>``).
 - :func:`check_time`: the one rule for a ``builtin_interfaces`` time
-  (nanosec in [0, 1e9)), on which :func:`check_stamp` (every stamped
-  input) and :func:`trajectory_times` (every trajectory's points) build;
+  (nanosec in [0, 1e9)), on which :func:`check_stamp` (every stamp a node
+  uses or passes on) and :func:`trajectory_times` (every trajectory's
+  points) build;
 - :func:`read_joint_state`: the one way to pick the actuated joints out of
   a ``sensor_msgs/JointState``, by name, in any order, and
   :func:`read_joint_trajectory` the same for every point of a
@@ -70,30 +71,36 @@ def check_time(what, sec, nanosec, reason='stamp'):
                        'must lie in [0, 1e9)')
 
 
-def check_stamp(stamp, zero_means_now=False):
+def check_stamp(stamp, zero_allowed=False):
     """
-    Refuse a stamp ``(sec, nanosec)`` that cannot pair or be published.
+    Refuse a stamp ``(sec, nanosec)`` that is not a ROS time.
 
     Raises :class:`Rejected` (``stamp``) for nanoseconds outside [0, 1e9)
-    (:func:`check_time`), a negative stamp, a zero one unless
-    ``zero_means_now`` (a trajectory's header: "start now"; else it cannot
-    tell one setpoint from another) and seconds beyond int32.
+    (:func:`check_time`: two spellings of one instant), a negative stamp
+    (before the epoch: ``rclcpp::Time`` throws on it, so a C++ node down
+    the line, ``robot_state_publisher`` among them, would fail on it),
+    seconds beyond int32 and a zero stamp unless ``zero_allowed`` (a
+    trajectory's header, "start now"; the mechanism state at time 0 of a
+    simulated clock; else it cannot tell one setpoint from another).
 
     >>> check_stamp((12, 5))
-    >>> try:
-    ...     check_stamp((12, 10**9))
-    ... except Rejected as error:
-    ...     print(error)
-    stamp 12 s + 1000000000 ns: nanosec must lie in [0, 1e9)
-    >>> try:
-    ...     check_stamp((0, 0))
-    ... except Rejected as error:
-    ...     print(error.reason)
-    stamp
+    >>> check_stamp((0, 0), zero_allowed=True)
+    >>> for bad in ((12, 10**9), (-1, 0), (0, 0)):
+    ...     try:
+    ...         check_stamp(bad)
+    ...     except Rejected as error:
+    ...         print(error.reason, '|', error)
+    stamp | stamp 12 s + 1000000000 ns: nanosec must lie in [0, 1e9)
+    stamp | stamp -1.000000000 is negative: a ROS time is not
+    stamp | stamp 0.000000000 cannot pair pose, twist and accel: stamp \
+setpoints with their time
     """
     sec, nanosec = stamp
     check_time('stamp', sec, nanosec)
-    if sec < 0 or (stamp == (0, 0) and not zero_means_now):
+    if sec < 0:
+        raise Rejected('stamp', (
+            f'stamp {sec}.{nanosec:09d} is negative: a ROS time is not'))
+    if stamp == (0, 0) and not zero_allowed:
         raise Rejected('stamp', (
             f'stamp {sec}.{nanosec:09d} cannot pair pose, twist and '
             'accel: stamp setpoints with their time'))

@@ -18,7 +18,9 @@ Rules (``doc/mechanism_state_publisher.md`` states them for users):
 - Joint states are matched by name, in any order; joints not in
   ``joint_names`` are ignored. Positions are needed, velocities are used
   when the message has them (then the output has velocities too).
-- A message is rejected, counted by reason and publishes nothing when one
+- A message is rejected, counted by reason and publishes nothing when its
+  stamp is not a ROS time (``stamp``: nanosec outside [0, 1e9), negative
+  seconds; :func:`check_stamp`, the rule of every input), one
   of ``joint_names`` is absent (``missing_joint``), names repeat or an
   array is neither empty nor as long as the names (``malformed``), it has
   no positions (``missing_position``), a value read is NaN or infinite
@@ -29,14 +31,16 @@ Rules (``doc/mechanism_state_publisher.md`` states them for users):
   ``oversize`` or ``malformed``.
 - The output carries the input's stamp and frame id unchanged: the sliders
   of the input are the robot's state at that stamp, and so is every joint
-  solved from them.
+  solved from them. A zero stamp passes (unchanged): the time 0 of a
+  simulated clock, which ``robot_state_publisher`` accepts too.
 """
 
 from collections import namedtuple
 import math
 
 from orthoglide_ros.model import bodies, mechanics
-from orthoglide_ros.cores.inputs import read_joint_state, Rejected
+from orthoglide_ros.cores.inputs import (check_stamp, read_joint_state,
+                                         Rejected)
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import joint_names_spec, Spec, Table
@@ -44,8 +48,8 @@ from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.status import OK, WARN
 from orthoglide_ros.model.urdf import moving_joints, RATES
 
-REASONS = ('missing_joint', 'malformed', 'missing_position', 'non_finite',
-           'unreachable', 'singular', 'overflow', 'oversize')
+REASONS = ('stamp', 'missing_joint', 'malformed', 'missing_position',
+           'non_finite', 'unreachable', 'singular', 'overflow', 'oversize')
 
 PARAMETERS = Table('MechanismStateSettings', (
     joint_names_spec(
@@ -138,6 +142,7 @@ class MechanismState(Core):
         self.received['joint_states'] += 1
         settings = self.settings
         try:
+            check_stamp(stamp, zero_allowed=True)
             values = read_joint_state(settings.joint_names, names, position,
                                       velocity, (), False, True)
             try:

@@ -4,45 +4,112 @@ The recorder's logic without ROS: which message goes into the bag.
 :class:`Recording` is the core (:mod:`orthoglide_ros.cores.core`) of the
 node behind ``orthoglide record``: one input per topic recorded, each
 message's serialized bytes returned unchanged to be written, and counted
-per topic; a message refused before it was read (longer than its byte
-limit) is counted by reason and written nowhere.
+per topic. A message that does not reach the bag is dropped, counted per
+topic and reason (``rejected <topic> <reason>`` in the diagnostics), and
+said at the end (:meth:`Recording.summary`):
+
+- ``oversize``: longer than its byte limit (RECORD_MESSAGE_BYTES), refused
+  before it is read;
+- ``malformed``: unreadable (the recorder reads nothing of a message: a
+  defect if ever counted);
+- ``inactive``: received while the recorder was not active (a lifecycle
+  client deactivated it), counted without a warning;
+- ``write_failed``: the bag's writer refused it (the disk).
+
+A recording that dropped any is lossy: ``orthoglide record`` then exits
+with LOSSY (doc/cli.md#record), the bag complete and readable.
 """
 
 from orthoglide_ros.cores.core import Core
+from orthoglide_ros.cores.inputs import RECORD_MESSAGE_BYTES, Rejected
 from orthoglide_ros.cores.status import OK, WARN
+
+# The exit code of a recording that dropped messages (0: none dropped).
+LOSSY = 3
+# Why a message of each reason did not reach the bag, as said at the end.
+WHY = {'oversize': f'larger than {RECORD_MESSAGE_BYTES // 2**20} MiB',
+       'malformed': 'unreadable',
+       'inactive': 'received while the recorder was not active',
+       'write_failed': 'the bag\'s writer refused them'}
 
 
 class Recording(Core):
-    """What was recorded, per topic (``received``), and what was refused."""
+    """What was recorded and dropped, per topic."""
 
-    REASONS = ('oversize', 'malformed')
+    REASONS = tuple(WHY)
+    REJECTED_BY_INPUT = True
     INACTIVE = 'inactive: messages counted, not recorded'
 
     def __init__(self, topics, now=0.0):
         """Record ``topics`` (their resolved names)."""
         self.INPUTS = tuple(topics)
         super().__init__(None, now)
-        self.written = 0
+        self.written = dict.fromkeys(self.INPUTS, 0)
 
     def message(self, topic, data, now):
-        """Take one message of ``topic``; return ``(topic, data)`` to write."""
+        """
+        Take one message of ``topic``; return ``(topic, data)`` to write.
+
+        None while inactive: the message is counted as dropped
+        (``inactive``), without a warning (a deactivated recorder is
+        asked for that).
+        """
         self.received[topic] += 1
         if not self.active:
+            self.count(topic, Rejected('inactive', WHY['inactive']))
             return None
-        self.written += 1
+        self.written[topic] += 1
         return topic, data
+
+    def write_failed(self, topic, error):
+        """Count a message of ``topic`` handed to the bag and refused there."""
+        self.written[topic] -= 1
+        self.count(topic, Rejected('write_failed', error))
+
+    @property
+    def dropped(self):
+        """Return ``{(topic, reason): count}`` of the messages dropped."""
+        return {key: n for key, n in self.rejected.items() if n}
+
+    def summary(self, output):
+        """
+        Return the line that ends a recording into ``output``.
+
+        What went into the bag, per topic, then what was dropped, per
+        topic and reason, and why. Every message received is in one of
+        the two.
+
+        >>> r = Recording(['/a', '/b'])
+        >>> r.message('/a', b'', 0.0)
+        ('/a', b'')
+        >>> r.reject('/b', Rejected('oversize', ''))
+        >>> r.summary('bag')
+        'recorded 1 message(s) into bag (/a: 1, /b: 0); dropped 1 (/b \
+oversize: 1, larger than 4 MiB)'
+        """
+        line = (f'recorded {sum(self.written.values())} message(s) into '
+                f'{output} (' + ', '.join(
+                    f'{t}: {n}' for t, n in self.written.items()) + ')')
+        dropped = self.dropped
+        if dropped:
+            line += (f'; dropped {sum(dropped.values())} (' + '; '.join(
+                f'{topic} {reason}: {n}, {WHY[reason]}'
+                for (topic, reason), n in dropped.items()) + ')')
+        return line
 
     def period_counters(self):
         """Return the counters of the period's rate."""
-        return dict(written=self.written)
+        return dict(written=sum(self.written.values()))
 
     def ladder(self, now, seconds, new):
-        """Return the rejections and the wait steps."""
+        """Return the drops and the wait steps."""
         return ((new['rejected'], WARN,
-                 f'{new["rejected"]} message(s) refused in the last period'),
-                (self.written == 0, OK, 'waiting for messages'))
+                 f'{new["rejected"]} message(s) dropped in the last period'),
+                (not any(self.received.values()), OK,
+                 'waiting for messages'))
 
     def values(self, now, seconds, new):
-        """Return the rate and the count of messages written."""
+        """Return the rate and the counts of messages written and dropped."""
         return [('write rate (Hz)', new['written'] / seconds),
-                ('messages written', self.written)]
+                ('messages written', sum(self.written.values())),
+                ('messages dropped', sum(self.rejected.values()))]

@@ -1,10 +1,15 @@
 """
-The one place text from messages, requests and files is shortened.
+The one place text from messages, requests and files is made safe to show.
 
-:func:`clip` cuts a text (a frame id, joint names, a parameter value, a
-repr) to about TEXT_LIMIT characters, dropping its middle, before it
-reaches a log line, a reply or an error message: no input can make a line
-longer than that plus a few dozen characters.
+- :func:`clip` cuts a text (a frame id, joint names, a parameter value, a
+  repr) to about TEXT_LIMIT characters, dropping its middle, before it
+  reaches a log line, a reply or an error message: no input can make a
+  line longer than that plus a few dozen characters.
+- :func:`printable` escapes every character that is not printable (line
+  breaks, escape sequences, bidirectional controls) and clips the result:
+  what a node logs goes through it, so no text a peer gives (a lifecycle
+  label, a frame id, a parameter name or value) can start a line of its
+  own in the log, forge one, or move the terminal's cursor.
 """
 
 from __future__ import annotations
@@ -31,3 +36,22 @@ def clip(text: object, limit: int = TEXT_LIMIT) -> str:
     half = limit // 2
     return (f'{text[:half]} ... [{len(text) - 2 * half} characters cut] ... '
             f'{text[-half:]}')
+
+
+def printable(text: object, limit: int = TEXT_LIMIT) -> str:
+    r"""
+    Return ``text`` on one line, every unprintable character escaped, clipped.
+
+    A character that ``str.isprintable()`` refuses becomes its Python
+    escape (``\n``, ``\x1b``, ``\u2028``), as ``repr`` writes it; the
+    result is then cut by :func:`clip`. The one filter between a node's
+    text and its log (and its ``/diagnostics`` message).
+
+    >>> print(printable('refused\n[FATAL] [0.0] [node]: FORGED\x1b[2J'))
+    refused\n[FATAL] [0.0] [node]: FORGED\x1b[2J
+    """
+    text = str(text)
+    if not text.isprintable():
+        text = ''.join(c if c.isprintable() else repr(c)[1:-1]
+                       for c in text)
+    return clip(text, limit)

@@ -19,7 +19,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.status import OK, Status, WARN
-from orthoglide_ros.formats.text import clip
+from orthoglide_ros.formats.text import printable
 
 PERIOD = 1.0    # s between two /diagnostics messages
 
@@ -103,7 +103,7 @@ def diagnostic_array(node, title, status):
     level, message, values = status
     diagnostic = DiagnosticStatus(
         name=f'{node.get_name()}: {title}', hardware_id='orthoglide',
-        level=bytes((level,)), message=clip(message),
+        level=bytes((level,)), message=printable(message),
         values=[KeyValue(key=k, value=_text(v)) for k, v in values])
     array_message = DiagnosticArray(status=[diagnostic])
     array_message.header.stamp = node.get_clock().now().to_msg()

@@ -42,7 +42,6 @@ from contextlib import ExitStack
 import functools
 import threading
 import time
-import traceback
 
 from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
@@ -323,8 +322,8 @@ class InputThreads:
         try:
             self._wait_and_take(group)
         except Exception:   # a defect: no input is read any more
-            self._node.log('fatal', f'input thread {group.name} '
-                           'stopped by an error:\n' + traceback.format_exc())
+            self._node.log_exception('fatal', f'input thread {group.name} '
+                                     'stopped by an error')
 
     def _wait_and_take(self, group):
         context = self._node.context

@@ -30,7 +30,9 @@ services), and :class:`Diagnostics` (``/diagnostics`` once a second).
 ``autostart`` (default true) configures and activates as the node is made,
 so that ``ros2 run`` and code that makes the node get a running node: an
 invalid start-up set raises ValueError, and the process exits 2
-(:func:`~orthoglide_ros.ros.node_runtime.run`).
+(:func:`~orthoglide_ros.ros.node_runtime.run`). Its inputs are read from
+the activation on: what comes between configure and activate waits in the
+subscriptions' histories and is handled as the active node's.
 
 One input, as it goes: the input thread takes the message, checks its byte
 limit and decodes it (outside the lock); with the lock held,
@@ -41,6 +43,7 @@ other exception a defect report.
 """
 
 from copy import copy
+import sys
 import threading
 import time
 import traceback
@@ -55,7 +58,7 @@ from rcl_interfaces.msg import SetParametersResult
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.inputs import Rejected
 from orthoglide_ros.cores.parameters import Spec
-from orthoglide_ros.formats.text import clip
+from orthoglide_ros.formats.text import clip, printable
 from orthoglide_ros.ros.diagnostics import Diagnostics
 from orthoglide_ros.ros.input_threads import Input, InputThreads
 from orthoglide_ros.ros.node_runtime import NotStarting
@@ -113,7 +116,8 @@ class ManagedNode(LifecycleNode):
         self.lock = threading.Lock()
         self.core = None
         self._internal_errors = 0
-        self._last_warning = {}
+        self._throttled = {}        # reason: (last line's time, left out)
+        self._throttle_lock = threading.Lock()
         self._made_publishers = []       # made at configure, ended at cleanup
         self._made_services = []
         self._announce = False      # log transitions, not autostart's
@@ -280,7 +284,8 @@ class ManagedNode(LifecycleNode):
                                               parameters))
         except ValueError as error:
             reason = clip(error)
-            self.log('warning', f'parameter change refused: {reason}')
+            self.warn_throttled(('parameters', 'refused'),
+                                f'parameter change refused: {reason}')
             return SetParametersResult(successful=False, reason=reason)
         except Exception:   # a defect: refuse the change, report it
             self.report_defect('validating a parameter change')
@@ -299,15 +304,22 @@ class ManagedNode(LifecycleNode):
                 self.reconfigure(settings)
 
     # Logging --------------------------------------------------------------
-    def log(self, level, text):
+    def log(self, level, text, frames=''):
         """
-        Log ``text``, clipped (:func:`clip`), at ``level``.
+        Log ``text`` at ``level`` as one line (:func:`printable`).
 
         ``level``: ``'info'``, ``'warning'``, ``'error'`` or ``'fatal'``.
+        Every character of ``text`` that is not printable is escaped and
+        the line clipped: whatever a peer's string inside holds (a label,
+        a frame id, a parameter name), it cannot break the line or forge
+        another. ``frames``: lines of the package's own that follow it
+        as they are (a traceback's stack, clipped), never a peer's text.
         One call per level: rclpy's logger keys its state by call site and
         refuses two severities from one line.
         """
-        logger, text = self.get_logger(), clip(text)
+        logger, text = self.get_logger(), printable(text)
+        if frames:
+            text = f'{text}\n{clip(frames.rstrip())}'
         if level == 'info':
             logger.info(text)
         elif level == 'warning':
@@ -319,15 +331,32 @@ class ManagedNode(LifecycleNode):
 
     def warn_throttled(self, reason, message):
         """Log a warning, at most one per WARNING_PERIOD for ``reason``."""
-        if self._throttle(reason):
-            self.log('warning', message)
+        self.log_throttled('warning', reason, message)
+
+    def log_throttled(self, level, reason, message):
+        """
+        Log ``message`` at most once per WARNING_PERIOD for ``reason``.
+
+        ``reason``: a key of the package's own (never a peer's text, so
+        that the keys stay few); a line logged after some were left out
+        says how many. Any thread may call it.
+        """
+        left_out = self._throttle(reason)
+        if left_out is not None:
+            self.log(level, message + (
+                f' ({left_out} more like it not logged in between)'
+                if left_out else ''))
 
     def _throttle(self, reason):
+        """Return how many lines ``reason`` left out, or None: not now."""
         now = time.monotonic()
-        if now - self._last_warning.get(reason, -1e9) < WARNING_PERIOD:
-            return False
-        self._last_warning[reason] = now
-        return True
+        with self._throttle_lock:
+            last, left_out = self._throttled.get(reason, (-1e9, 0))
+            if now - last < WARNING_PERIOD:
+                self._throttled[reason] = (last, left_out + 1)
+                return None
+            self._throttled[reason] = (now, 0)
+            return left_out
 
     @property
     def internal_errors(self):
@@ -342,9 +371,24 @@ class ManagedNode(LifecycleNode):
         goes on and its diagnostics turn ERROR. Call it from an ``except``.
         """
         self._internal_errors += 1
-        if self._throttle('internal'):
-            self.log('error', f'internal error {where}:\n'
-                     + traceback.format_exc())
+        left_out = self._throttle('internal')
+        if left_out is not None:
+            self.log_exception('error', f'internal error {where}' + (
+                f' ({left_out} more not logged in between)'
+                if left_out else ''))
+
+    def log_exception(self, level, what):
+        """
+        Log the exception being handled: ``what``, its text, its stack.
+
+        The exception's text (which may quote a peer's) on the first line,
+        escaped as every logged text; the stack (the package's code) after
+        it. Call it from an ``except``.
+        """
+        kind, error, stack = sys.exc_info()
+        self.log(level, f'{what}: {kind.__name__}: {error}',
+                 'Traceback (most recent call last):\n'
+                 + ''.join(traceback.format_tb(stack)))
 
     # Lifecycle ------------------------------------------------------------
     @property
@@ -368,8 +412,9 @@ class ManagedNode(LifecycleNode):
                        self._state_machine.available_transitions]
             if not any(wanted.label == label if wanted.label
                        else wanted.id == number for number, label in offered):
-                self.log('warning', (
-                    f'transition {wanted.label or wanted.id} refused: not '
+                # A client may ask again and again: one line a second.
+                self.warn_throttled(('change_state', 'unavailable'), (
+                    f'transition {wanted.label or wanted.id!r} refused: not '
                     f'available in state {self.lifecycle_state}'))
                 response.success = False
                 return response
@@ -381,7 +426,11 @@ class ManagedNode(LifecycleNode):
         Configure and activate when ``autostart`` says so.
 
         Raises NotStarting with the reason when configure or activate
-        fails (``run`` then exits 2); nothing of the node runs on.
+        fails (``run`` then exits 2); nothing of the node runs on. The
+        two are one step: the inputs are read from the activation on, so
+        no message is handled by the inactive state in between (a message
+        that comes meanwhile waits in its subscription's history; the
+        recorder lost such messages under load).
         """
         if not self.get_parameter('autostart').value:
             self.log('info', 'unconfigured: waiting for ~/change_state '
@@ -394,6 +443,7 @@ class ManagedNode(LifecycleNode):
             refused = self._refused or 'activate failed'
         else:
             self._announce = True
+            self.inputs.start()
             return
         self.inputs.stop()
         raise NotStarting(refused)
@@ -405,7 +455,8 @@ class ManagedNode(LifecycleNode):
         except (ValueError, ParameterException) as error:
             self._refused = f'invalid parameters: {clip(error)}'
             if self._announce:      # autostart's: run says it, once
-                self.log('error', f'configure refused: {self._refused}')
+                self.log_throttled('error', ('transition', 'configure'),
+                                   f'configure refused: {self._refused}')
             return FAILURE
         return self._transition('configure', self._build, settings)
 
@@ -415,7 +466,8 @@ class ManagedNode(LifecycleNode):
                             qos_overriding_options=None if row.qos else
                             QoSOverridingOptions.with_default_policies())
         self.core.active = False
-        self.inputs.start()
+        if self._announce:      # not autostart's: it starts them once active
+            self.inputs.start()
 
     def on_activate(self, state):
         """Start the outputs."""
@@ -449,7 +501,8 @@ class ManagedNode(LifecycleNode):
             self._refused = clip(str(error)) if isinstance(error, ValueError) \
                 else _line(error)
             if self._announce:      # autostart's: run says it, once
-                self.log('error', f'{name} failed: {self._refused}')
+                self.log_throttled('error', ('transition', name),
+                                   f'{name} failed: {self._refused}')
             return ERROR
         if self._announce:
             self.log('info', f'{name}: {_STATE_AFTER[name]}')

@@ -18,9 +18,12 @@ definitions into the bag. The subscription's reliability follows the
 publishers' (reliable when all of them are), keep-last RECORD_DEPTH.
 
 Run by ``orthoglide record`` through :func:`node_runtime.run`: Ctrl-C or
-SIGTERM ends it with exit code 0 and a complete bag, as does the end of
-``duration``; a topic without a publisher after ``wait`` seconds, an
-unknown type or an existing output ends it with exit code 2.
+SIGTERM ends it with a complete bag, as does the end of ``duration``;
+every message received before the stop is in it or counted as dropped,
+and the last line says how many of each (:meth:`Recording.summary`).
+Exit code 0 when none was dropped, LOSSY (3) when some were; a topic
+without a publisher after ``wait`` seconds, an unknown type or an
+existing output ends it with exit code 2.
 """
 
 import functools
@@ -33,7 +36,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from orthoglide_ros.cores.inputs import RECORD_MESSAGE_BYTES
 from orthoglide_ros.cores.parameters import Table
-from orthoglide_ros.cores.recording import Recording
+from orthoglide_ros.cores.recording import LOSSY, Recording
 from orthoglide_ros.ros import console
 from orthoglide_ros.ros.managed_node import Input, ManagedNode
 from orthoglide_ros.ros.node_runtime import run
@@ -50,20 +53,21 @@ class BagThread(threading.Thread):
 
     :attr:`queue` takes ``(connection index, stamp ns, bytes)`` and None
     to close. :attr:`ready` is set once the bag is open (or could not be:
-    :attr:`error`); :attr:`failed` counts the writes the writer refused.
+    :attr:`error`); a write the writer refuses goes to
+    ``failed(index, error)``.
     """
 
-    def __init__(self, output, storage, topics, typestore):
+    def __init__(self, output, storage, topics, typestore, failed):
         """Prepare the thread; ``topics``: ``(topic, type)`` pairs."""
         super().__init__(name='orthoglide_record bag', daemon=True)
         self.output = output
         self.storage = storage
         self.topics = topics
         self.typestore = typestore
+        self.failed = failed
         self.queue = queue.SimpleQueue()
         self.ready = threading.Event()
         self.error = None
-        self.failed = 0
 
     def run(self):
         """Open the bag, write what comes, close it on None."""
@@ -89,8 +93,8 @@ class BagThread(threading.Thread):
             index, stamp, data = item
             try:
                 writer.write(connections[index], stamp, data)
-            except Exception:   # the disk, the writer: counted, reported
-                self.failed += 1
+            except Exception as error:  # the disk, the writer: counted
+                self.failed(index, error)
         writer.close()
 
 
@@ -105,6 +109,7 @@ class Recorder(ManagedNode):
                  wait=10.0, **kwargs):
         self._request = (output, topics, storage, wait)
         self._bag = None
+        self._recording = None  # the core, kept after a cleanup drops it
         self._duration = duration
         self._end = None        # set once recording: the wait is not in it
         super().__init__(**kwargs)
@@ -117,16 +122,17 @@ class Recorder(ManagedNode):
         found = self._topic_types(topics, wait)
         for topic, type_name in found.items():
             if type_name not in typestore.types:
-                raise ValueError(f'{topic}: type {type_name} is not in the '
-                                 'ROS 2 Jazzy type store of rosbags')
-        bag = BagThread(output, storage, list(found.items()), typestore)
+                raise ValueError(f'{topic}: type {type_name!r} is not in '
+                                 'the ROS 2 Jazzy type store of rosbags')
+        bag = BagThread(output, storage, list(found.items()), typestore,
+                        self._write_failed)
         bag.start()
         bag.ready.wait()
         if bag.error is not None:
             raise ValueError(f'cannot write the bag {output}: {bag.error}')
         self._bag = bag
         self._index = {topic: i for i, topic in enumerate(found)}
-        self.core = Recording(found, time.monotonic())
+        self.core = self._recording = Recording(found, time.monotonic())
         if self._duration is not None:
             self._end = time.monotonic() + self._duration
         self.log('info', (
@@ -176,6 +182,20 @@ class Recorder(ManagedNode):
         self._bag.queue.put((self._index[topic],
                              self.get_clock().now().nanoseconds, data))
 
+    def _write_failed(self, index, error):
+        """Count a message the bag's writer refused (the bag's thread)."""
+        topic = self._recording.INPUTS[index]
+        with self.lock:
+            self._recording.write_failed(topic, error)
+        self.warn_throttled(('bag', 'write_failed'),
+                            f'{topic}: the bag\'s writer refused a message: '
+                            f'{error}')
+
+    @property
+    def lossy(self):
+        """Whether a message received was not written into the bag."""
+        return self._recording is not None and bool(self._recording.dropped)
+
     @property
     def finished(self):
         """Whether ``duration`` has passed."""
@@ -186,7 +206,9 @@ class Recorder(ManagedNode):
         Close the bag (complete, whatever stopped the recording).
 
         Every message received goes in: those the input thread had not
-        handled yet, and those still in the subscriptions' histories.
+        handled yet, and those still in the subscriptions' histories. The
+        last line says what was written and what was dropped (a warning
+        when any was).
         """
         if self._bag is None:
             return
@@ -194,13 +216,10 @@ class Recorder(ManagedNode):
         self.inputs.drain()
         self._bag.queue.put(None)
         self._bag.join()
-        failed = f'; {self._bag.failed} write(s) failed' \
-            if self._bag.failed else ''
-        counts = self.core.received if self.core is not None else {}
-        self.log('info', (
-            f'recorded {sum(counts.values())} message(s) ('
-            + ', '.join(f'{t}: {n}' for t, n in counts.items())
-            + f') into {self._request[0]}{failed}'))
+        with self.lock:
+            lossy = self.lossy
+            summary = self._recording.summary(self._request[0])
+        self.log('warning' if lossy else 'info', summary)
 
 
 def _raw(data):
@@ -219,9 +238,15 @@ def main(output, topics, storage='mcap', duration=None, wait=10.0,
     """
     Record until ``duration`` (s), Ctrl-C or SIGTERM; return the code.
 
-    A refusal to start (no publisher within ``wait``, a bad output) goes to
-    ``report(reason)`` when given (the tool's one-line error), else FATAL.
+    0, or LOSSY when a message received was dropped (the bag complete all
+    the same). A refusal to start (no publisher within ``wait``, a bad
+    output) goes to ``report(reason)`` when given (the tool's one-line
+    error), else FATAL, and returns 2.
     """
-    return run(functools.partial(Recorder, output, topics, storage,
-                                 duration, wait), 'orthoglide_record',
-               args=[], report=report)
+    made = []
+
+    def make():
+        made.append(Recorder(output, topics, storage, duration, wait))
+        return made[-1]
+    code = run(make, 'orthoglide_record', args=[], report=report)
+    return LOSSY if code == 0 and made and made[-1].lossy else code

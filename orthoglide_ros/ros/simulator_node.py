@@ -87,7 +87,8 @@ class SimulatorNode(ManagedNode):
         with self.lock:
             response.message = self.core.reset()
         response.success = True
-        self.log('info', f'reset: {response.message}')
+        # A client may call it again and again: one line a second.
+        self.log_throttled('info', 'reset', f'reset: {response.message}')
         return response
 
     # Steps (their own thread) ---------------------------------------------

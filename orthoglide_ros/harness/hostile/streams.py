@@ -1,7 +1,8 @@
 """
 Hostile peers and stalls of the nodes' streams.
 
-Stamps a builtin_interfaces/Time cannot hold, the simulator asked for 10
+Stamps a builtin_interfaces/Time cannot hold (at the feedforward and at
+the mechanism state publisher), the simulator asked for 10
 kHz, the looping setpoint publisher's way back, a process of the closed
 loop stopped for seconds, a flood of joint trajectories, finite but absurd
 values on the inputs.
@@ -36,6 +37,18 @@ class Stamps:
     outputs: int            # for the bad ones: should be 0
     good: int               # for the same instants written right
     rejected_stamp: int
+    alive: bool
+
+
+@dataclass
+class MechanismStamps:
+    """:func:`mechanism_stamps`: what the bad and the good stamps gave."""
+
+    bad_outputs: int        # published for the invalid stamps: should be 0
+    stamps_out: list        # (sec, nanosec) of the outputs after them
+    rejected_stamp: int
+    level: int              # of the diagnostics after the bad stamps
+    message: str
     alive: bool
 
 
@@ -168,6 +181,54 @@ def stamps():
                       rejected_stamp=_counter(peer, 'feedforward',
                                               'rejected stamp'),
                       alive=nodes.alive('feedforward'))
+
+
+def mechanism_stamps(bad=((5, 2_000_000_000), (-1, 0), (-7, 999_999_999),
+                          (0, 1_000_000_000))):
+    """
+    Send joint states stamped ``bad`` to the mechanism state publisher.
+
+    Then one stamped zero (it passes: time 0 of a simulated clock) and a
+    valid one. Returns how many outputs the bad ones gave (should be 0),
+    the stamps of the outputs after them ((0, 0) and (9, 5)), the
+    ``rejected stamp`` count and the diagnostics' level and message.
+    """
+    def state(stamp):
+        msg = JointState(name=['slider_a', 'slider_b', 'slider_c'],
+                         position=[0.0, 0.0, 0.0])
+        msg.header.stamp.sec, msg.header.stamp.nanosec = stamp
+        return msg
+
+    with Nodes() as nodes, Peer() as peer:
+        nodes.start('mechanism_state_publisher')
+        states = peer.publisher(JointState, 'joint_states')
+        outputs = peer.record('mechanism/joint_states', JointState)
+        _running(peer, ('mechanism_state_publisher',))
+        _handshake(peer, lambda k: states.publish(state((1, k))),
+                   lambda: outputs)
+        shaken = len(outputs)
+        for stamp in bad:
+            states.publish(state(stamp))
+        # The first diagnostics to count them all: its period holds the
+        # last of them.
+        peer.wait(lambda: _counter(peer, 'mechanism_state_publisher',
+                                   'rejected stamp') >= len(bad),
+                  START_TIMEOUT)
+        with peer.lock:
+            status = peer.diagnostics.get('mechanism_state_publisher',
+                                          (-1, '', {}))
+        bad_outputs = len(outputs) - shaken
+        for stamp in ((0, 0), (9, 5)):
+            states.publish(state(stamp))
+        peer.wait(lambda: len(outputs) >= shaken + bad_outputs + 2, 5.0)
+        return MechanismStamps(
+            bad_outputs=bad_outputs,
+            stamps_out=[(m.header.stamp.sec, m.header.stamp.nanosec)
+                        for _, m in outputs[shaken + bad_outputs:]],
+            rejected_stamp=_counter(peer, 'mechanism_state_publisher',
+                                    'rejected stamp'),
+            level=status[0], message=status[1],
+            alive=nodes.alive('mechanism_state_publisher'))
 
 
 # The simulator at 10 kHz -----------------------------------------------------

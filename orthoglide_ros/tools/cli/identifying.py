@@ -13,6 +13,7 @@ import warnings
 
 import numpy as np
 
+from orthoglide_ros.cores.recording import LOSSY, WHY
 from orthoglide_ros.formats import cdr, params_file
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import ROW
@@ -189,7 +190,10 @@ def add_record(sub, common):
         'reception) into a new rosbag2 bag directory for --duration seconds '
         '(Ctrl-C ends it earlier, the bag complete); their types are taken '
         'from their publishers. The bag is what identify reads (topic '
-        f'{identification.DEFAULT_TOPIC}) and what ros2 bag reads. Needs '
+        f'{identification.DEFAULT_TOPIC}) and what ros2 bag reads. A '
+        f'message {WHY["oversize"]} is dropped; the last line counts what '
+        'was recorded and what was dropped, and why, and the exit code is '
+        f'{LOSSY} when any was dropped (0 when none). Needs '
         'rclpy; DDS settings from the environment (ROS_DOMAIN_ID, '
         'ROS_AUTOMATIC_DISCOVERY_RANGE).')
     record.add_argument('--output', required=True, metavar='BAG',
