@@ -1,0 +1,566 @@
+"""
+The fastest motion along a path under the robot's own dynamics.
+
+Time-optimal path parametrization by reachability analysis (TOPP-RA: Pham
+and Pham, IEEE T-RO 34(3), 2018) on the package's inverse dynamics. Along a
+path ``p(s)`` the platform's velocity is ``p' sdot`` and its acceleration
+``p' u + p'' x`` with ``x = sdot^2``, ``u = sddot``, so every actuator force
+of the rigid model (masses, payload, armature, gravity; eqs. 16 and 25) is
+``f = a(s) u + b(s) x + c(s)``, found by three :func:`solve_batch` calls
+over all gridpoints: ``a`` on a robot without gravity or friction at rest
+with acceleration ``p'``, ``b`` on the same robot at velocity ``p'`` and
+acceleration ``p''``, ``c`` the statics. The same calls give the actuator
+rates ``lambdadot = lambda' sdot`` and ``lambdaddot = lambda' u + lambda''
+x``.
+
+What TOPP-RA lacks, added here:
+
+- friction (viscous, Coulomb as tanh, per direction, Stribeck), a function
+  of ``sdot`` (``lambdadot = lambda' sdot``): a fixed point, the friction
+  of each gridpoint at the speed of the last solution, until the speeds
+  agree;
+- the grid holds both sides of every junction (the curvature jumps there:
+  two gridpoints at one ``s``) and points around every actuator reversal
+  (where Coulomb friction changes sign);
+- TOPP-RA's interpolation discretization: each interval's ``u`` meets the
+  constraints at both its ends; a stage with no solution refines the grid
+  and plans again;
+- a verification pass: every output sample re-solved with
+  :func:`solve_batch` (the full model, friction and all), and wherever a
+  limit is exceeded by more than VERIFY_SHARE the limits of the gridpoints
+  around it are tightened by the excess and the plan made again, so that
+  no sample exceeds a limit by more than ACCEPT_SHARE (0.1 %).
+
+The two passes are TOPP-RA's: backward, the largest controllable ``x`` at
+each gridpoint (the one-dimensional programme of each stage solved in
+closed form: ``u`` is bounded by affine functions of ``x``); forward, the
+largest ``u`` keeping the next ``x`` controllable. Within an interval ``u``
+is constant, so the samples are exact quadratics in time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+import numpy as np
+
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.types import Array
+from orthoglide_ros.planning.gcode import ProgramError
+from orthoglide_ros.planning.limits import Limits
+from orthoglide_ros.planning.path import Path
+
+# Intervals of the grid over the whole path, at least; each piece has at
+# least MIN_INTERVALS, and an arc at least one per MAX_ARC_STEP (rad).
+GRID_INTERVALS = 2000
+MIN_INTERVALS = 4
+MAX_ARC_STEP = math.radians(2.0)
+# Gridpoints at these distances (m) either side of an actuator reversal.
+REVERSAL_OFFSETS = (2e-5, 2e-4)
+# A sample beyond a limit by this share tightens the limits and plans again;
+# the plan is refused (a PlanningError) if one exceeds ACCEPT_SHARE.
+VERIFY_SHARE = 2e-4
+ACCEPT_SHARE = 1e-3
+# Rounds of planning: friction's fixed point, then verification.
+FRICTION_ROUNDS = 8
+FRICTION_AGREEMENT = 1e-4
+VERIFY_ROUNDS = 16
+# Grid refinements where a stage has no solution.
+REFINEMENTS = 3
+# |coefficient of u| below this: a row bounds x alone.
+U_ZERO = 1e-10
+# x (m^2/s^2) where nothing else bounds it (G at 1e6 m/s: never reached).
+X_BIG = 1e12
+
+
+class PlanningError(ProgramError):
+    """A path the robot cannot follow within its limits (``line N``)."""
+
+
+@dataclass(frozen=True)
+class Motion:
+    """
+    The planned motion, sampled at a fixed rate.
+
+    ``t`` (n,) s from 0 to ``duration``, the last sample exactly at the
+    end; ``position``, ``velocity``, ``acceleration`` (n, 3) of G in the
+    base frame (m, m/s, m/s^2); ``solution``: :func:`solve_batch` of them
+    (lambda, lambdadot, lambdaddot, force, ...); ``gridpoints``: the
+    grid's size; ``rounds``: the plans made (friction and verification).
+    """
+
+    t: Array
+    position: Array
+    velocity: Array
+    acceleration: Array
+    solution: mechanics.Solution
+    gridpoints: int
+    rounds: int
+
+    @property
+    def duration(self) -> float:
+        """Return the duration of the motion (s)."""
+        return float(self.t[-1])
+
+
+@dataclass
+class _Grid:
+    """Gridpoints along the path and the dynamics there."""
+
+    index: Array        # (M,) piece
+    w: Array            # (M,) m within the piece
+    delta: Array        # (M - 1,) m to the next gridpoint (0: a junction)
+    stop: Array         # (M,) bool: G at rest there
+    feed: Array         # (M,) m/s
+
+
+def plan(robot: Robot, path: Path, limits: Limits, rate: float,
+         max_speed: float = math.inf,
+         margin: float = mechanics.DEFAULT_SINGULARITY_MARGIN) -> Motion:
+    """
+    Return the fastest motion of G along ``path`` within ``limits``.
+
+    From rest at the path's start to rest at its end, sampled at ``rate``
+    (Hz; the duration rounded up to a whole number of periods, the last
+    sample at the end); G's speed within each piece's feed and
+    ``max_speed`` (m/s). Raises :class:`PlanningError` (a
+    :class:`ProgramError`) naming the program's line where a point of the
+    path is out of the workspace or nearer a singularity than ``margin``,
+    beyond an actuator's position limits, or needs more than an
+    actuator's ``max_effort`` at rest, and where nothing bounds the
+    motion.
+    """
+    intervals = GRID_INTERVALS
+    for _ in range(REFINEMENTS + 1):
+        grid = _grid(path, intervals)
+        dyn = _dynamics(robot, path, grid, margin)
+        grid, dyn = _add_reversals(robot, path, grid, dyn, margin)
+        _check_rest(path, grid, dyn, limits)
+        try:
+            return _plan_on(robot, path, grid, dyn, limits, rate, max_speed)
+        except _StageFailure:
+            intervals *= 4
+    raise PlanningError(None, 'no motion found: the time-optimal '
+                        'parametrization failed on every grid')
+
+
+class _StageFailure(Exception):
+    """A stage without a solution: the grid is refined."""
+
+
+def _grid(path, intervals):
+    """Gridpoints of every piece, both ends included, ends shared twice."""
+    spacing = path.length / intervals
+    index, w, stop, feed = [], [], [], []
+    for k, piece in enumerate(path.pieces):
+        n = max(MIN_INTERVALS, math.ceil(piece.length / spacing))
+        if piece.kind == 'helix' and piece.radius > 0.0:
+            n = max(n, math.ceil(abs(piece.angle) / MAX_ARC_STEP))
+        elif piece.kind == 'bezier':
+            n = max(n, 32)
+        ws = np.linspace(0.0, piece.length, n + 1)
+        index.append(np.full(n + 1, k))
+        w.append(ws)
+        flags = np.zeros(n + 1, dtype=bool)
+        flags[0] = path.stops[k]
+        flags[-1] = path.stops[k + 1]
+        stop.append(flags)
+        feed.append(np.full(n + 1, piece.feed))
+    index = np.concatenate(index)
+    w = np.concatenate(w)
+    delta = np.where(index[1:] == index[:-1], np.diff(w), 0.0)
+    return _Grid(index, w, delta, np.concatenate(stop), np.concatenate(feed))
+
+
+@dataclass
+class _Dynamics:
+    """Per gridpoint: a, b, c of the forces, lambda', lambda'', |p'|."""
+
+    position: Array
+    a: Array
+    b: Array
+    c: Array
+    lam: Array
+    lam1: Array
+    lam2: Array
+    speed: Array
+
+
+def _dynamics(robot, path, grid, margin):
+    """Return a, b, c and the rates: three batch solves over all gridpoints."""
+    p, d1, d2 = path.evaluate(grid.index, grid.w)
+    inertia = robot.frictionless().replace(gravity=mechanics.ZERO)
+    try:
+        statics = mechanics.solve_batch(robot.frictionless(), p, None, None,
+                                        margin)
+        along = mechanics.solve_batch(inertia, p, None, d1, margin)
+        curving = mechanics.solve_batch(inertia, p, d1, d2, margin)
+    except mechanics.WorkspaceError as error:
+        row = error.row if error.row is not None else 0
+        line = path.pieces[grid.index[row]].line
+        raise PlanningError(line, f'the path at {mechanics.format_vector(p[row])} '
+                            f'm: {error.detail}') from None
+    return _Dynamics(p, along.force, curving.force, statics.force,
+                     statics.lambda_, curving.lambdadot, curving.lambdaddot,
+                     np.linalg.norm(d1, axis=1))
+
+
+def _add_reversals(robot, path, grid, dyn, margin):
+    """Add gridpoints around every zero of lambda' within a piece."""
+    inside = grid.delta > 0.0
+    change = (np.sign(dyn.lam1[1:]) * np.sign(dyn.lam1[:-1]) < 0) & \
+        inside[:, None]
+    if not change.any():
+        return grid, dyn
+    extra_index, extra_w = [], []
+    for i, j in zip(*np.nonzero(change)):
+        l0, l1 = dyn.lam1[i, j], dyn.lam1[i + 1, j]
+        w0 = grid.w[i] + grid.delta[i] * l0 / (l0 - l1)
+        for offset in (0.0, *REVERSAL_OFFSETS, *(-o for o in REVERSAL_OFFSETS)):
+            w = w0 + offset
+            if grid.w[i] < w < grid.w[i + 1]:
+                extra_index.append(grid.index[i])
+                extra_w.append(w)
+    index = np.concatenate((grid.index, extra_index))
+    w = np.concatenate((grid.w, extra_w))
+    order = np.lexsort((w, index))
+    # Keep the duplicated junction points in order: a stable sort on
+    # (piece, w) keeps a piece's end before the next one's start.
+    index, w = index[order], w[order]
+    stop = np.concatenate((grid.stop, np.zeros(len(extra_w), bool)))[order]
+    feed = np.concatenate((grid.feed, [path.pieces[k].feed
+                                       for k in extra_index]))[order]
+    keep = np.r_[True, (index[1:] != index[:-1]) | (np.diff(w) > 0.0)]
+    index, w, stop, feed = index[keep], w[keep], stop[keep], feed[keep]
+    delta = np.where(index[1:] == index[:-1], np.diff(w), 0.0)
+    grid = _Grid(index, w, delta, stop, feed)
+    return grid, _dynamics(robot, path, grid, margin)
+
+
+def _check_rest(path, grid, dyn, limits):
+    """Refuse positions beyond the position limits or statics beyond effort."""
+    names = limits.names
+    low, high = limits.position[:, 0], limits.position[:, 1]
+    outside = (dyn.lam < low) | (dyn.lam > high)
+    if outside.any():
+        row, j = np.argwhere(outside)[0]
+        raise PlanningError(
+            path.pieces[grid.index[row]].line,
+            f'at {mechanics.format_vector(dyn.position[row])} m {names[j]} is '
+            f'at lambda = {dyn.lam[row, j]:.6g} m, beyond its position limits '
+            f'[{low[j]:g}, {high[j]:g}] m')
+    over = np.abs(dyn.c) > limits.effort
+    if over.any():
+        row, j = np.argwhere(over)[0]
+        raise PlanningError(
+            path.pieces[grid.index[row]].line,
+            f'at {mechanics.format_vector(dyn.position[row])} m {names[j]} '
+            f'needs {dyn.c[row, j]:.6g} N at rest, beyond its max_effort '
+            f'{limits.effort[j]:g} N')
+
+
+def _plan_on(robot, path, grid, dyn, limits, rate, max_speed):
+    """Plan on one grid: friction's fixed point, then verification rounds."""
+    rows = _Rows(dyn, grid, limits, max_speed)
+    x = np.zeros(len(grid.w))
+    rounds = 0
+    for _ in range(FRICTION_ROUNDS if robot.has_friction else 1):
+        rounds += 1
+        previous = x
+        x, u = _passes(rows, grid, _friction(robot, dyn, x), rounds == 1)
+        if np.abs(x - previous).max() <= FRICTION_AGREEMENT * max(
+                x.max(), 1e-12):
+            break
+    for _ in range(VERIFY_ROUNDS):
+        motion, stage = _sample(robot, path, grid, x, u, rate, rounds)
+        worst = rows.tighten(motion, stage, grid, max_speed)
+        if worst <= VERIFY_SHARE:
+            return motion
+        rounds += 1
+        x, u = _passes(rows, grid, _friction(robot, dyn, x), False)
+    motion, stage = _sample(robot, path, grid, x, u, rate, rounds)
+    worst = rows.tighten(motion, stage, grid, max_speed)
+    if worst <= ACCEPT_SHARE:
+        return motion
+    raise PlanningError(None, f'no motion found within the limits: a sample '
+                        f'still exceeds one by {worst:.3%} after '
+                        f'{rounds} rounds')
+
+
+def _friction(robot, dyn, x):
+    """Friction (N, (M, 3)) at each gridpoint at the speeds ``sqrt(x)``."""
+    if not robot.has_friction:
+        return np.zeros_like(dyn.c)
+    return mechanics.friction_force(robot, dyn.lam1 * np.sqrt(x)[:, None])
+
+
+# The rows of a gridpoint: force upper, force lower, acceleration upper and
+# lower, each per actuator A, B, C.
+FORCE_UP, FORCE_DOWN, ACCEL_UP, ACCEL_DOWN = 0, 3, 6, 9
+
+
+class _Rows:
+    """
+    The constraints of every gridpoint, affine in ``(u, x)``.
+
+    Rows ``alpha u + beta x <= gamma`` (M, 12): per actuator the force's
+    upper and lower limits, then its acceleration's (the deceleration's
+    where it slows the actuator down); ``cap`` (M,): the bounds on ``x``
+    alone (the actuators' velocities, G's speed, a stop's 0). Verification
+    takes ``shrink`` (N, m/s^2) off ``gamma`` and scales ``cap`` by
+    ``cap_scale`` where a sample exceeded a limit.
+    """
+
+    def __init__(self, dyn, grid, limits, max_speed):
+        lam1 = dyn.lam1
+        self.alpha = np.hstack((dyn.a, -dyn.a, lam1, -lam1))
+        self.beta = np.hstack((dyn.b, -dyn.b, dyn.lam2, -dyn.lam2))
+        up, down = _acceleration_bounds(limits, lam1 >= 0.0)
+        self.base = np.hstack((limits.effort - dyn.c, limits.effort + dyn.c,
+                               up, down))
+        self.shrink = np.zeros_like(self.base)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            cap = np.where(lam1 != 0.0, (limits.velocity / np.abs(lam1)) ** 2,
+                           np.inf).min(1)
+            cap = np.minimum(cap, (np.minimum(grid.feed, max_speed)
+                                   / dyn.speed) ** 2)
+        self.cap = np.where(grid.stop, 0.0, np.minimum(cap, X_BIG))
+        self.cap_scale = np.ones_like(self.cap)
+        self.limits = limits
+
+    def gamma(self, friction):
+        """Return the right-hand sides with ``friction`` (N, (M, 3)) at each point."""
+        zero = np.zeros_like(friction)
+        return self.base + np.hstack((-friction, friction, zero, zero)) \
+            - self.shrink
+
+    def tighten(self, motion, stage, grid, max_speed):
+        """
+        Check every sample; tighten the rows where one exceeds a limit.
+
+        ``stage``: each sample's interval (its gridpoints ``stage`` and
+        ``stage + 1`` are tightened). Returns the largest excess over a
+        limit, as a share of the limit (negative: all within).
+        """
+        worst = -np.inf
+        for value, bound, rows in _checks(motion, stage, grid, self.limits,
+                                          max_speed):
+            with np.errstate(divide='ignore', invalid='ignore'):
+                share = np.where(np.isfinite(bound), value / bound - 1.0,
+                                 -np.inf)
+            worst = max(worst, float(share.max(initial=-np.inf)))
+            for sample, j in np.argwhere(share > VERIFY_SHARE):
+                points = (stage[sample], stage[sample] + 1)
+                if rows is None:
+                    ratio = (bound[sample, j] / value[sample, j]) ** 2
+                    for point in points:
+                        self.cap_scale[point] = min(
+                            self.cap_scale[point], ratio * (1.0 - 1e-6))
+                else:
+                    take = value[sample, j] - bound[sample, j] * (
+                        1.0 - 0.5 * VERIFY_SHARE)
+                    row = rows[sample, j]
+                    for point in points:
+                        self.shrink[point, row] += take
+        return worst
+
+
+def _acceleration_bounds(limits, forward):
+    """|lambdaddot| bounds speeding up and slowing down, per direction."""
+    acc = limits.acceleration
+    dec = np.where(np.isfinite(limits.deceleration), limits.deceleration,
+                   acc)
+    return np.where(forward, acc, dec), np.where(forward, dec, acc)
+
+
+def _checks(motion, stage, grid, limits, max_speed):
+    """Yield ``(value, bound, rows)`` of every limit per sample ((n, k))."""
+    sol = motion.solution
+    n = len(motion.t)
+    columns = np.arange(3)
+    force = sol.force
+    yield (np.abs(force), np.broadcast_to(limits.effort, (n, 3)),
+           np.where(force >= 0.0, columns + FORCE_UP, columns + FORCE_DOWN))
+    yield (np.abs(sol.lambdadot), np.broadcast_to(limits.velocity, (n, 3)),
+           None)
+    up, down = _acceleration_bounds(limits, sol.lambdadot >= 0.0)
+    rising = sol.lambdaddot >= 0.0
+    yield (np.abs(sol.lambdaddot), np.where(rising, up, down),
+           np.where(rising, columns + ACCEL_UP, columns + ACCEL_DOWN))
+    speed = np.linalg.norm(motion.velocity, axis=1)[:, None]
+    yield (speed, np.minimum(grid.feed[stage], max_speed)[:, None], None)
+
+
+def _passes(rows, grid, friction, first):
+    """
+    TOPP-RA's backward and forward passes: ``x`` (M,) and ``u`` (M - 1,).
+
+    ``first``: the first plan on this grid, where a stage without a
+    solution means the grid is too coarse (:class:`_StageFailure`); later
+    (friction at other speeds) such a stage stops G.
+    """
+    gamma = rows.gamma(friction)
+    delta = grid.delta
+    twice = 2.0 * delta[:, None]
+    alpha = np.hstack((rows.alpha[:-1], rows.alpha[1:] + twice
+                       * rows.beta[1:]))
+    beta = np.hstack((rows.beta[:-1], rows.beta[1:]))
+    gamma = np.hstack((gamma[:-1], gamma[1:]))
+    gamma[delta == 0.0] = np.inf
+    used = ~np.isinf(gamma).all(0)
+    alpha, beta, gamma = alpha[:, used], beta[:, used], gamma[:, used]
+    cap = rows.cap * rows.cap_scale
+    upper = alpha > U_ZERO
+    lower = alpha < -U_ZERO
+    alone = ~(upper | lower)
+    with np.errstate(divide='ignore', invalid='ignore'):
+        h = np.where(upper, gamma / alpha, np.inf)
+        n = np.where(upper, -beta / alpha, 0.0)
+        low = np.where(lower, gamma / alpha, -np.inf)
+        m = np.where(lower, -beta / alpha, 0.0)
+        x_alone = np.where(alone & (beta > 0.0), gamma / beta, np.inf)
+    start = np.minimum(cap[:-1], x_alone.min(1, initial=np.inf))
+    blocked = (alone & (beta <= 0.0) & (gamma < 0.0)).any(1)
+    mvc = _largest_feasible(h, n, low, m, start)
+    failed = (mvc < 0.0) | blocked
+    failed &= delta > 0.0
+    if failed.any():
+        if first:
+            raise _StageFailure()
+        mvc[failed] = 0.0
+    with np.errstate(divide='ignore', invalid='ignore'):
+        slope = 1.0 + twice * m
+        valid = lower & (slope > 0.0)
+        shift = np.where(valid, twice * low, -np.inf).tolist()
+        scale = np.where(valid, 1.0 / slope, 1.0).tolist()
+    k = _backward(delta.tolist(), cap.tolist(), mvc.tolist(), shift, scale)
+    return _forward(delta.tolist(), k, h.tolist(), n.tolist(), low.tolist(),
+                    m.tolist())
+
+
+def _largest_feasible(h, n, low, m, start):
+    """
+    Return the largest ``x`` of each stage where some ``u`` meets every row.
+
+    ``u <= h + n x`` and ``u >= low + m x`` per row: the gap ``min(h + n
+    x) - max(low + m x)`` is concave and piecewise linear in ``x``, so
+    Newton's method from ``start`` (an upper bound) reaches its last zero
+    in finitely many steps. -1 where no ``x >= 0`` has a ``u``.
+    """
+    x = np.minimum(start, X_BIG)
+    rows = np.arange(len(x))
+    active = np.ones(len(x), dtype=bool)
+    for _ in range(200):
+        hx = h + n * x[:, None]
+        j = np.argmin(hx, 1)
+        lx = low + m * x[:, None]
+        k = np.argmax(lx, 1)
+        top, bottom = hx[rows, j], lx[rows, k]
+        with np.errstate(invalid='ignore'):
+            gap = top - bottom
+            active &= gap < -1e-12 * (np.abs(top) + np.abs(bottom))
+        if not active.any():
+            return x
+        slope = n[rows, j] - m[rows, k]
+        with np.errstate(divide='ignore', invalid='ignore'):
+            target = x - gap / slope
+        # Concave: where the gap rises to the left, or its tangent's zero
+        # is below 0, no x in [0, x] has a u.
+        failed = active & ((slope >= 0.0) | (target < 0.0))
+        x = np.where(active, target, x)
+        x[failed] = -1.0
+        active &= ~failed
+    return x
+
+
+def _backward(delta, cap, mvc, shift, scale):
+    """Return the largest controllable ``x`` of every gridpoint, from the end."""
+    count = len(delta)
+    k = [0.0] * (count + 1)
+    for i in range(count - 1, -1, -1):
+        after = k[i + 1]
+        if delta[i] == 0.0:
+            k[i] = min(after, cap[i])
+            continue
+        best = mvc[i]
+        for a, b in zip(shift[i], scale[i]):
+            value = (after - a) * b
+            if value < best:
+                best = value
+        k[i] = best if best > 0.0 else 0.0
+    return k
+
+
+def _forward(delta, k, h, n, low, m):
+    """From rest, the largest ``u`` of each stage keeping ``x`` controllable."""
+    count = len(delta)
+    x = [0.0] * (count + 1)
+    u = [0.0] * count
+    for i in range(count):
+        xi = x[i]
+        if delta[i] == 0.0:
+            x[i + 1] = min(xi, k[i + 1])
+            continue
+        twice = 2.0 * delta[i]
+        top = min(a + b * xi for a, b in zip(h[i], n[i]))
+        bottom = max(a + b * xi for a, b in zip(low[i], m[i]))
+        ui = min(top, (k[i + 1] - xi) / twice)
+        if ui < bottom:
+            ui = bottom
+        following = xi + twice * ui
+        following = min(max(following, 0.0), k[i + 1])
+        u[i] = (following - xi) / twice
+        x[i + 1] = following
+    return np.array(x), np.array(u)
+
+
+def _sample(robot, path, grid, x, u, rate, rounds):
+    """
+    Sample the motion at ``rate``: ``(Motion, stage of each sample)``.
+
+    Within a stage ``u`` is constant: ``s = s_i + sdot_i tau + u tau^2 /
+    2``. The duration is stretched to a whole number of periods (``sdot``
+    divided by the stretch, ``u`` by its square): the last sample is at the
+    end.
+    """
+    speed = np.sqrt(x)
+    delta = grid.delta
+    pace = speed[:-1] + speed[1:]
+    moving = delta > 0.0
+    if (moving & (pace <= 0.0)).any():
+        i = int(np.argmax(moving & (pace <= 0.0)))
+        raise PlanningError(path.pieces[grid.index[i]].line, 'G cannot move '
+                            'there within the limits')
+    with np.errstate(divide='ignore', invalid='ignore'):
+        dt = np.where(moving, 2.0 * delta / pace, 0.0)
+    times = np.concatenate(([0.0], np.cumsum(dt)))
+    duration = times[-1]
+    periods = max(1, math.ceil(duration * rate - 1e-9))
+    stretch = periods / rate / duration
+    times *= stretch
+    t = np.arange(periods + 1) / rate
+    t[-1] = times[-1]
+    stage = np.searchsorted(times, t, side='right') - 1
+    stage = np.clip(stage, 0, len(delta) - 1)
+    # A sample at a zero-length stage (a junction) belongs to the next one.
+    while True:
+        still = (delta[stage] == 0.0) & (stage < len(delta) - 1)
+        if not still.any():
+            break
+        stage[still] += 1
+    tau = t - times[stage]
+    sdot0 = speed[stage] / stretch
+    acc = u[stage] / (stretch * stretch)
+    w = grid.w[stage] + sdot0 * tau + 0.5 * acc * tau * tau
+    w = np.clip(w, grid.w[stage], grid.w[stage + 1])
+    sdot = np.maximum(sdot0 + acc * tau, 0.0)
+    sddot = acc.copy()
+    w[-1], sdot[-1], sddot[-1] = grid.w[-1], 0.0, 0.0
+    sdot[0] = 0.0
+    p, d1, d2 = path.evaluate(grid.index[stage], w)
+    v = d1 * sdot[:, None]
+    a = d1 * sddot[:, None] + d2 * (sdot * sdot)[:, None]
+    solution = mechanics.solve_batch(robot, p, v, a, 0.0)
+    return Motion(t, p, v, a, solution, len(grid.w), rounds), stage
