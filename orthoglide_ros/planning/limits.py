@@ -66,7 +66,7 @@ PAPER_LIMITS = {name: {'has_velocity_limits': True, 'max_velocity': 1.0,
                        'has_acceleration_limits': False,
                        'max_acceleration': 0.0,
                        'has_jerk_limits': False, 'max_jerk': 0.0,
-                       'has_effort_limits': True, 'max_effort': 450.0}
+                       'has_effort_limits': True, 'max_effort': 650.0}
                 for name in JOINT_NAMES}
 
 

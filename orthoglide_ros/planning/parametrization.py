@@ -132,14 +132,15 @@ def plan(robot: Robot, path: Path, limits: Limits, rate: float,
     actuator's ``max_effort`` at rest, and where nothing bounds the
     motion.
     """
+    models = _Models(robot, margin)
     intervals = GRID_INTERVALS
     for _ in range(REFINEMENTS + 1):
         grid = _grid(path, intervals)
-        dyn = _dynamics(robot, path, grid, margin)
-        grid, dyn = _add_reversals(robot, path, grid, dyn, margin)
+        dyn = models.dynamics(path, grid.index, grid.w)
+        grid, dyn = _add_reversals(models, path, grid, dyn)
         _check_rest(path, grid, dyn, limits)
         try:
-            return _plan_on(robot, path, grid, dyn, limits, rate, max_speed)
+            return _plan_on(models, path, grid, dyn, limits, rate, max_speed)
         except _StageFailure:
             intervals *= 4
     raise PlanningError(None, 'no motion found: the time-optimal '
@@ -160,23 +161,25 @@ def _grid(path, intervals):
             n = max(n, math.ceil(abs(piece.angle) / MAX_ARC_STEP))
         elif piece.kind == 'bezier':
             n = max(n, 32)
-        ws = np.linspace(0.0, piece.length, n + 1)
         index.append(np.full(n + 1, k))
-        w.append(ws)
+        w.append(np.linspace(0.0, piece.length, n + 1))
         flags = np.zeros(n + 1, dtype=bool)
         flags[0] = path.stops[k]
         flags[-1] = path.stops[k + 1]
         stop.append(flags)
         feed.append(np.full(n + 1, piece.feed))
-    index = np.concatenate(index)
-    w = np.concatenate(w)
+    return _make_grid(np.concatenate(index), np.concatenate(w),
+                      np.concatenate(stop), np.concatenate(feed))
+
+
+def _make_grid(index, w, stop, feed):
     delta = np.where(index[1:] == index[:-1], np.diff(w), 0.0)
-    return _Grid(index, w, delta, np.concatenate(stop), np.concatenate(feed))
+    return _Grid(index, w, delta, stop, feed)
 
 
 @dataclass
 class _Dynamics:
-    """Per gridpoint: a, b, c of the forces, lambda', lambda'', |p'|."""
+    """Per gridpoint: a, b, c of the forces, lambda, lambda', lambda'', |p'|."""
 
     position: Array
     a: Array
@@ -187,56 +190,85 @@ class _Dynamics:
     lam2: Array
     speed: Array
 
+    def take(self, order):
+        """Return the rows ``order`` (an index array) of every field."""
+        return _Dynamics(*(getattr(self, f)[order] for f in _DYNAMICS))
 
-def _dynamics(robot, path, grid, margin):
-    """Return a, b, c and the rates: three batch solves over all gridpoints."""
-    p, d1, d2 = path.evaluate(grid.index, grid.w)
-    inertia = robot.frictionless().replace(gravity=mechanics.ZERO)
-    try:
-        statics = mechanics.solve_batch(robot.frictionless(), p, None, None,
-                                        margin)
-        along = mechanics.solve_batch(inertia, p, None, d1, margin)
-        curving = mechanics.solve_batch(inertia, p, d1, d2, margin)
-    except mechanics.WorkspaceError as error:
-        row = error.row if error.row is not None else 0
-        line = path.pieces[grid.index[row]].line
-        raise PlanningError(line, f'the path at {mechanics.format_vector(p[row])} '
-                            f'm: {error.detail}') from None
-    return _Dynamics(p, along.force, curving.force, statics.force,
-                     statics.lambda_, curving.lambdadot, curving.lambdaddot,
-                     np.linalg.norm(d1, axis=1))
+    def join(self, other):
+        """Return these rows followed by ``other``'s."""
+        return _Dynamics(*(np.concatenate((getattr(self, f),
+                                           getattr(other, f)))
+                           for f in _DYNAMICS))
 
 
-def _add_reversals(robot, path, grid, dyn, margin):
+_DYNAMICS = ('position', 'a', 'b', 'c', 'lam', 'lam1', 'lam2', 'speed')
+
+
+class _Models:
+    """The robot and the two it is split into, built once per plan."""
+
+    def __init__(self, robot, margin):
+        self.robot = robot
+        self.statics = robot.frictionless()
+        self.inertia = self.statics.replace(gravity=mechanics.ZERO)
+        self.margin = margin
+
+    def dynamics(self, path, index, w):
+        """Return a, b, c and the rates: three batch solves over the points."""
+        p, d1, d2 = path.evaluate(index, w)
+        margin = self.margin
+        try:
+            statics = mechanics.solve_batch(self.statics, p, None, None,
+                                            margin)
+            along = mechanics.solve_batch(self.inertia, p, None, d1, margin)
+            curving = mechanics.solve_batch(self.inertia, p, d1, d2, margin)
+        except mechanics.WorkspaceError as error:
+            row = error.row if error.row is not None else 0
+            raise PlanningError(
+                path.pieces[index[row]].line, f'the path at '
+                f'{mechanics.format_vector(p[row])} m: {error.detail}') \
+                from None
+        return _Dynamics(p, along.force, curving.force, statics.force,
+                         statics.lambda_, curving.lambdadot,
+                         curving.lambdaddot, np.linalg.norm(d1, axis=1))
+
+    def friction(self, dyn, x):
+        """Friction (N, (M, 3)) at each gridpoint at the speeds ``sqrt(x)``."""
+        if not self.robot.has_friction:
+            return np.zeros_like(dyn.c)
+        return mechanics.friction_force(self.robot,
+                                        dyn.lam1 * np.sqrt(x)[:, None])
+
+
+def _add_reversals(models, path, grid, dyn):
     """Add gridpoints around every zero of lambda' within a piece."""
     inside = grid.delta > 0.0
     change = (np.sign(dyn.lam1[1:]) * np.sign(dyn.lam1[:-1]) < 0) & \
         inside[:, None]
     if not change.any():
         return grid, dyn
-    extra_index, extra_w = [], []
-    for i, j in zip(*np.nonzero(change)):
-        l0, l1 = dyn.lam1[i, j], dyn.lam1[i + 1, j]
-        w0 = grid.w[i] + grid.delta[i] * l0 / (l0 - l1)
-        for offset in (0.0, *REVERSAL_OFFSETS, *(-o for o in REVERSAL_OFFSETS)):
-            w = w0 + offset
-            if grid.w[i] < w < grid.w[i + 1]:
-                extra_index.append(grid.index[i])
-                extra_w.append(w)
-    index = np.concatenate((grid.index, extra_index))
-    w = np.concatenate((grid.w, extra_w))
-    order = np.lexsort((w, index))
-    # Keep the duplicated junction points in order: a stable sort on
-    # (piece, w) keeps a piece's end before the next one's start.
-    index, w = index[order], w[order]
-    stop = np.concatenate((grid.stop, np.zeros(len(extra_w), bool)))[order]
-    feed = np.concatenate((grid.feed, [path.pieces[k].feed
-                                       for k in extra_index]))[order]
-    keep = np.r_[True, (index[1:] != index[:-1]) | (np.diff(w) > 0.0)]
-    index, w, stop, feed = index[keep], w[keep], stop[keep], feed[keep]
-    delta = np.where(index[1:] == index[:-1], np.diff(w), 0.0)
-    grid = _Grid(index, w, delta, stop, feed)
-    return grid, _dynamics(robot, path, grid, margin)
+    stage, joint = np.nonzero(change)
+    l0, l1 = dyn.lam1[stage, joint], dyn.lam1[stage + 1, joint]
+    zero = grid.w[stage] + grid.delta[stage] * l0 / (l0 - l1)
+    offsets = np.array((0.0, *REVERSAL_OFFSETS,
+                        *(-o for o in REVERSAL_OFFSETS)))
+    w = (zero[:, None] + offsets).ravel()
+    at = np.repeat(stage, len(offsets))
+    keep = (w > grid.w[at]) & (w < grid.w[at + 1])
+    w, at = w[keep], at[keep]
+    index = grid.index[at]
+    extra = models.dynamics(path, index, w)
+    order = np.lexsort((np.r_[grid.w, w], np.r_[grid.index, index]))
+    all_w = np.r_[grid.w, w][order]
+    all_index = np.r_[grid.index, index][order]
+    stop = np.r_[grid.stop, np.zeros(len(w), bool)][order]
+    feed = np.r_[grid.feed, grid.feed[at]][order]
+    dyn = dyn.join(extra).take(order)
+    # Junction duplicates differ in their piece; equal (piece, w) once.
+    keep = np.r_[True, (all_index[1:] != all_index[:-1])
+                 | (np.diff(all_w) > 0.0)]
+    return (_make_grid(all_index[keep], all_w[keep], stop[keep], feed[keep]),
+            dyn.take(np.nonzero(keep)[0]))
 
 
 def _check_rest(path, grid, dyn, limits):
@@ -261,26 +293,26 @@ def _check_rest(path, grid, dyn, limits):
             f'{limits.effort[j]:g} N')
 
 
-def _plan_on(robot, path, grid, dyn, limits, rate, max_speed):
+def _plan_on(models, path, grid, dyn, limits, rate, max_speed):
     """Plan on one grid: friction's fixed point, then verification rounds."""
     rows = _Rows(dyn, grid, limits, max_speed)
     x = np.zeros(len(grid.w))
     rounds = 0
-    for _ in range(FRICTION_ROUNDS if robot.has_friction else 1):
+    for _ in range(FRICTION_ROUNDS if models.robot.has_friction else 1):
         rounds += 1
         previous = x
-        x, u = _passes(rows, grid, _friction(robot, dyn, x), rounds == 1)
+        x, u = _passes(rows, grid, models.friction(dyn, x), rounds == 1)
         if np.abs(x - previous).max() <= FRICTION_AGREEMENT * max(
                 x.max(), 1e-12):
             break
     for _ in range(VERIFY_ROUNDS):
-        motion, stage = _sample(robot, path, grid, x, u, rate, rounds)
+        motion, stage = _sample(models, path, grid, x, u, rate, rounds)
         worst = rows.tighten(motion, stage, grid, max_speed)
         if worst <= VERIFY_SHARE:
             return motion
         rounds += 1
-        x, u = _passes(rows, grid, _friction(robot, dyn, x), False)
-    motion, stage = _sample(robot, path, grid, x, u, rate, rounds)
+        x, u = _passes(rows, grid, models.friction(dyn, x), False)
+    motion, stage = _sample(models, path, grid, x, u, rate, rounds)
     worst = rows.tighten(motion, stage, grid, max_speed)
     if worst <= ACCEPT_SHARE:
         return motion
@@ -289,38 +321,34 @@ def _plan_on(robot, path, grid, dyn, limits, rate, max_speed):
                         f'{rounds} rounds')
 
 
-def _friction(robot, dyn, x):
-    """Friction (N, (M, 3)) at each gridpoint at the speeds ``sqrt(x)``."""
-    if not robot.has_friction:
-        return np.zeros_like(dyn.c)
-    return mechanics.friction_force(robot, dyn.lam1 * np.sqrt(x)[:, None])
-
-
-# The rows of a gridpoint: force upper, force lower, acceleration upper and
-# lower, each per actuator A, B, C.
-FORCE_UP, FORCE_DOWN, ACCEL_UP, ACCEL_DOWN = 0, 3, 6, 9
+# The families of two-sided rows of a gridpoint: each actuator's force,
+# then its acceleration.
+FORCE, ACCELERATION = 0, 3
 
 
 class _Rows:
     """
-    The constraints of every gridpoint, affine in ``(u, x)``.
+    The constraints of every gridpoint, two-sided and affine in ``(u, x)``.
 
-    Rows ``alpha u + beta x <= gamma`` (M, 12): per actuator the force's
-    upper and lower limits, then its acceleration's (the deceleration's
-    where it slows the actuator down); ``cap`` (M,): the bounds on ``x``
-    alone (the actuators' velocities, G's speed, a stop's 0). Verification
-    takes ``shrink`` (N, m/s^2) off ``gamma`` and scales ``cap`` by
-    ``cap_scale`` where a sample exceeded a limit.
+    ``low <= alpha u + beta x <= high`` (M, 6): per actuator its force
+    (``high = max_effort - c - friction``, ``low = -max_effort - c -
+    friction``), then its acceleration (the deceleration's bound where it
+    slows the actuator down); ``cap`` (M,): the bounds on ``x`` alone (the
+    actuators' velocities, G's speed, a stop's 0). Verification takes
+    ``shrink_high`` off ``high`` and adds ``shrink_low`` to ``low`` (N,
+    m/s^2), and scales ``cap`` by ``cap_scale``, where a sample exceeded a
+    limit.
     """
 
     def __init__(self, dyn, grid, limits, max_speed):
         lam1 = dyn.lam1
-        self.alpha = np.hstack((dyn.a, -dyn.a, lam1, -lam1))
-        self.beta = np.hstack((dyn.b, -dyn.b, dyn.lam2, -dyn.lam2))
+        self.alpha = np.hstack((dyn.a, lam1))
+        self.beta = np.hstack((dyn.b, dyn.lam2))
         up, down = _acceleration_bounds(limits, lam1 >= 0.0)
-        self.base = np.hstack((limits.effort - dyn.c, limits.effort + dyn.c,
-                               up, down))
-        self.shrink = np.zeros_like(self.base)
+        self.high = np.hstack((limits.effort - dyn.c, up))
+        self.low = np.hstack((-limits.effort - dyn.c, -down))
+        self.shrink_high = np.zeros_like(self.high)
+        self.shrink_low = np.zeros_like(self.low)
         with np.errstate(divide='ignore', invalid='ignore'):
             cap = np.where(lam1 != 0.0, (limits.velocity / np.abs(lam1)) ** 2,
                            np.inf).min(1)
@@ -330,11 +358,11 @@ class _Rows:
         self.cap_scale = np.ones_like(self.cap)
         self.limits = limits
 
-    def gamma(self, friction):
-        """Return the right-hand sides with ``friction`` (N, (M, 3)) at each point."""
+    def bounds(self, friction):
+        """Return ``(low, high)`` with ``friction`` (N, (M, 3)) at each point."""
         zero = np.zeros_like(friction)
-        return self.base + np.hstack((-friction, friction, zero, zero)) \
-            - self.shrink
+        f = np.hstack((friction, zero))
+        return self.low - f + self.shrink_low, self.high - f - self.shrink_high
 
     def tighten(self, motion, stage, grid, max_speed):
         """
@@ -345,99 +373,113 @@ class _Rows:
         limit, as a share of the limit (negative: all within).
         """
         worst = -np.inf
-        for value, bound, rows in _checks(motion, stage, grid, self.limits,
-                                          max_speed):
+        for value, bound, family, rising in _checks(motion, grid, stage,
+                                                    self.limits, max_speed):
             with np.errstate(divide='ignore', invalid='ignore'):
                 share = np.where(np.isfinite(bound), value / bound - 1.0,
                                  -np.inf)
             worst = max(worst, float(share.max(initial=-np.inf)))
             for sample, j in np.argwhere(share > VERIFY_SHARE):
                 points = (stage[sample], stage[sample] + 1)
-                if rows is None:
+                if family is None:
                     ratio = (bound[sample, j] / value[sample, j]) ** 2
                     for point in points:
                         self.cap_scale[point] = min(
                             self.cap_scale[point], ratio * (1.0 - 1e-6))
-                else:
-                    take = value[sample, j] - bound[sample, j] * (
-                        1.0 - 0.5 * VERIFY_SHARE)
-                    row = rows[sample, j]
-                    for point in points:
-                        self.shrink[point, row] += take
+                    continue
+                take = value[sample, j] - bound[sample, j] * (
+                    1.0 - 0.5 * VERIFY_SHARE)
+                shrink = self.shrink_high if rising[sample, j] \
+                    else self.shrink_low
+                for point in points:
+                    shrink[point, family + j] += take
         return worst
 
 
 def _acceleration_bounds(limits, forward):
-    """|lambdaddot| bounds speeding up and slowing down, per direction."""
+    """Return the |lambdaddot| bounds (up, down) for each direction."""
     acc = limits.acceleration
     dec = np.where(np.isfinite(limits.deceleration), limits.deceleration,
                    acc)
     return np.where(forward, acc, dec), np.where(forward, dec, acc)
 
 
-def _checks(motion, stage, grid, limits, max_speed):
-    """Yield ``(value, bound, rows)`` of every limit per sample ((n, k))."""
+def _checks(motion, grid, stage, limits, max_speed):
+    """Yield ``(value, bound, family, rising)`` of every limit per sample."""
     sol = motion.solution
     n = len(motion.t)
-    columns = np.arange(3)
     force = sol.force
-    yield (np.abs(force), np.broadcast_to(limits.effort, (n, 3)),
-           np.where(force >= 0.0, columns + FORCE_UP, columns + FORCE_DOWN))
+    yield (np.abs(force), np.broadcast_to(limits.effort, (n, 3)), FORCE,
+           force >= 0.0)
     yield (np.abs(sol.lambdadot), np.broadcast_to(limits.velocity, (n, 3)),
-           None)
+           None, None)
     up, down = _acceleration_bounds(limits, sol.lambdadot >= 0.0)
     rising = sol.lambdaddot >= 0.0
-    yield (np.abs(sol.lambdaddot), np.where(rising, up, down),
-           np.where(rising, columns + ACCEL_UP, columns + ACCEL_DOWN))
+    yield (np.abs(sol.lambdaddot), np.where(rising, up, down), ACCELERATION,
+           rising)
     speed = np.linalg.norm(motion.velocity, axis=1)[:, None]
-    yield (speed, np.minimum(grid.feed[stage], max_speed)[:, None], None)
+    yield (speed, np.minimum(grid.feed[stage], max_speed)[:, None], None,
+           None)
 
 
 def _passes(rows, grid, friction, first):
     """
-    TOPP-RA's backward and forward passes: ``x`` (M,) and ``u`` (M - 1,).
+    Run TOPP-RA's backward and forward passes: ``x`` (M,) and ``u`` (M - 1,).
 
-    ``first``: the first plan on this grid, where a stage without a
-    solution means the grid is too coarse (:class:`_StageFailure`); later
-    (friction at other speeds) such a stage stops G.
+    Each stage's rows are its gridpoints' (the interpolation scheme: at
+    ``i + 1``, ``x + 2 delta u`` for ``x``). ``first``: the first plan on
+    this grid, where a stage without a solution means the grid is too
+    coarse (:class:`_StageFailure`); later (friction at other speeds)
+    such a stage stops G.
     """
-    gamma = rows.gamma(friction)
+    low, high = rows.bounds(friction)
     delta = grid.delta
     twice = 2.0 * delta[:, None]
     alpha = np.hstack((rows.alpha[:-1], rows.alpha[1:] + twice
                        * rows.beta[1:]))
     beta = np.hstack((rows.beta[:-1], rows.beta[1:]))
-    gamma = np.hstack((gamma[:-1], gamma[1:]))
-    gamma[delta == 0.0] = np.inf
-    used = ~np.isinf(gamma).all(0)
-    alpha, beta, gamma = alpha[:, used], beta[:, used], gamma[:, used]
+    low = np.hstack((low[:-1], low[1:]))
+    high = np.hstack((high[:-1], high[1:]))
+    bounded = np.isfinite(high) | np.isfinite(low)
+    bounded[delta == 0.0] = False
+    used = bounded.any(0)
+    alpha, beta = alpha[:, used], beta[:, used]
+    low, high, bounded = low[:, used], high[:, used], bounded[:, used]
     cap = rows.cap * rows.cap_scale
-    upper = alpha > U_ZERO
-    lower = alpha < -U_ZERO
-    alone = ~(upper | lower)
+    positive = (alpha > U_ZERO) & bounded
+    negative = (alpha < -U_ZERO) & bounded
+    alone = bounded & ~(positive | negative)
     with np.errstate(divide='ignore', invalid='ignore'):
-        h = np.where(upper, gamma / alpha, np.inf)
-        n = np.where(upper, -beta / alpha, 0.0)
-        low = np.where(lower, gamma / alpha, -np.inf)
-        m = np.where(lower, -beta / alpha, 0.0)
-        x_alone = np.where(alone & (beta > 0.0), gamma / beta, np.inf)
+        # alpha > 0: u <= (high - beta x) / alpha, u >= (low - beta x) /
+        # alpha; alpha < 0 the other way round.
+        slope = np.where(positive | negative, -beta / alpha, 0.0)
+        top = np.where(positive, high / alpha,
+                       np.where(negative, low / alpha, np.inf))
+        bottom = np.where(positive, low / alpha,
+                          np.where(negative, high / alpha, -np.inf))
+        x_alone = np.where(alone & (beta > 0.0), high / beta, np.inf)
+        x_alone = np.minimum(x_alone, np.where(alone & (beta < 0.0),
+                                               low / beta, np.inf))
+        blocked = (alone & ((high < 0.0) | (low > 0.0))
+                   & ((beta == 0.0) | (high < 0.0) & (beta <= 0.0)
+                      | (low > 0.0) & (beta >= 0.0))).any(1)
+    top = np.where(np.isnan(top), np.inf, top)
+    bottom = np.where(np.isnan(bottom), -np.inf, bottom)
     start = np.minimum(cap[:-1], x_alone.min(1, initial=np.inf))
-    blocked = (alone & (beta <= 0.0) & (gamma < 0.0)).any(1)
-    mvc = _largest_feasible(h, n, low, m, start)
-    failed = (mvc < 0.0) | blocked
-    failed &= delta > 0.0
+    mvc = _largest_feasible(top, slope, bottom, slope, start)
+    failed = ((mvc < 0.0) | blocked) & (delta > 0.0)
     if failed.any():
         if first:
             raise _StageFailure()
         mvc[failed] = 0.0
     with np.errstate(divide='ignore', invalid='ignore'):
-        slope = 1.0 + twice * m
-        valid = lower & (slope > 0.0)
-        shift = np.where(valid, twice * low, -np.inf).tolist()
-        scale = np.where(valid, 1.0 / slope, 1.0).tolist()
+        rate = 1.0 + twice * slope
+        valid = np.isfinite(bottom) & (rate > 0.0)
+        shift = np.where(valid, twice * bottom, -np.inf).tolist()
+        scale = np.where(valid, 1.0 / rate, 1.0).tolist()
     k = _backward(delta.tolist(), cap.tolist(), mvc.tolist(), shift, scale)
-    return _forward(delta.tolist(), k, h.tolist(), n.tolist(), low.tolist(),
-                    m.tolist())
+    return _forward(delta.tolist(), k, top.tolist(), slope.tolist(),
+                    bottom.tolist())
 
 
 def _largest_feasible(h, n, low, m, start):
@@ -469,9 +511,13 @@ def _largest_feasible(h, n, low, m, start):
         # Concave: where the gap rises to the left, or its tangent's zero
         # is below 0, no x in [0, x] has a u.
         failed = active & ((slope >= 0.0) | (target < 0.0))
+        # A step below the rounding of x: there (a hair below, to be on
+        # the feasible side).
+        settled = active & ~failed & (x - target <= 1e-12 * x)
         x = np.where(active, target, x)
+        x[settled] *= 1.0 - 1e-12
         x[failed] = -1.0
-        active &= ~failed
+        active &= ~(failed | settled)
     return x
 
 
@@ -493,7 +539,7 @@ def _backward(delta, cap, mvc, shift, scale):
     return k
 
 
-def _forward(delta, k, h, n, low, m):
+def _forward(delta, k, top, slope, bottom):
     """From rest, the largest ``u`` of each stage keeping ``x`` controllable."""
     count = len(delta)
     x = [0.0] * (count + 1)
@@ -504,19 +550,18 @@ def _forward(delta, k, h, n, low, m):
             x[i + 1] = min(xi, k[i + 1])
             continue
         twice = 2.0 * delta[i]
-        top = min(a + b * xi for a, b in zip(h[i], n[i]))
-        bottom = max(a + b * xi for a, b in zip(low[i], m[i]))
-        ui = min(top, (k[i + 1] - xi) / twice)
-        if ui < bottom:
-            ui = bottom
-        following = xi + twice * ui
-        following = min(max(following, 0.0), k[i + 1])
+        rows = list(zip(top[i], slope[i], bottom[i]))
+        ui = min(min(t + m * xi for t, m, _ in rows), (k[i + 1] - xi) / twice)
+        least = max(b + m * xi for _, m, b in rows)
+        if ui < least:
+            ui = least
+        following = min(max(xi + twice * ui, 0.0), k[i + 1])
         u[i] = (following - xi) / twice
         x[i + 1] = following
     return np.array(x), np.array(u)
 
 
-def _sample(robot, path, grid, x, u, rate, rounds):
+def _sample(models, path, grid, x, u, rate, rounds):
     """
     Sample the motion at ``rate``: ``(Motion, stage of each sample)``.
 
@@ -541,7 +586,7 @@ def _sample(robot, path, grid, x, u, rate, rounds):
     stretch = periods / rate / duration
     times *= stretch
     t = np.arange(periods + 1) / rate
-    t[-1] = times[-1]
+    times[-1] = t[-1]
     stage = np.searchsorted(times, t, side='right') - 1
     stage = np.clip(stage, 0, len(delta) - 1)
     # A sample at a zero-length stage (a junction) belongs to the next one.
@@ -560,7 +605,7 @@ def _sample(robot, path, grid, x, u, rate, rounds):
     w[-1], sdot[-1], sddot[-1] = grid.w[-1], 0.0, 0.0
     sdot[0] = 0.0
     p, d1, d2 = path.evaluate(grid.index[stage], w)
-    v = d1 * sdot[:, None]
-    a = d1 * sddot[:, None] + d2 * (sdot * sdot)[:, None]
-    solution = mechanics.solve_batch(robot, p, v, a, 0.0)
+    v = d1 * sdot[:, None] + 0.0        # (+ 0.0: no negative zeros)
+    a = d1 * sddot[:, None] + d2 * (sdot * sdot)[:, None] + 0.0
+    solution = mechanics.solve_batch(models.robot, p, v, a, 0.0)
     return Motion(t, p, v, a, solution, len(grid.w), rounds), stage
