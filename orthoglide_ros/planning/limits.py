@@ -94,10 +94,10 @@ class Limits:
 
     @property
     def bounding(self) -> bool:
-        """Whether any limit bounds."""
+        """Whether any limit bounds the motion (position limits do not)."""
         return bool(np.isfinite(np.r_[
             self.velocity, self.acceleration, self.deceleration, self.jerk,
-            self.effort, self.position.ravel()]).any())
+            self.effort]).any())
 
     def scaled(self, factor: float) -> 'Limits':
         """Return the limits times ``factor`` (effort, rates; not positions)."""

@@ -63,6 +63,8 @@ REVERSAL_OFFSETS = (2e-5, 2e-4)
 # the plan is refused (a PlanningError) if one exceeds ACCEPT_SHARE.
 VERIFY_SHARE = 2e-4
 ACCEPT_SHARE = 1e-3
+# Most samples of a motion.
+MAX_SAMPLES = 20_000_000
 # Rounds of planning: friction's fixed point, then verification.
 FRICTION_ROUNDS = 8
 FRICTION_AGREEMENT = 1e-4
@@ -132,6 +134,10 @@ def plan(robot: Robot, path: Path, limits: Limits, rate: float,
     actuator's ``max_effort`` at rest, and where nothing bounds the
     motion.
     """
+    if not limits.bounding and max_speed == math.inf and all(
+            piece.feed == math.inf for piece in path.pieces):
+        raise PlanningError(None, 'nothing bounds the motion: no limit of '
+                            'any actuator, no feed and no speed cap')
     models = _Models(robot, margin)
     intervals = GRID_INTERVALS
     for _ in range(REFINEMENTS + 1):
@@ -301,24 +307,46 @@ def _plan_on(models, path, grid, dyn, limits, rate, max_speed):
     for _ in range(FRICTION_ROUNDS if models.robot.has_friction else 1):
         rounds += 1
         previous = x
-        x, u = _passes(rows, grid, models.friction(dyn, x), rounds == 1)
+        x, u = _passes(rows, grid, models.friction(dyn, x), path,
+                       rounds == 1)
         if np.abs(x - previous).max() <= FRICTION_AGREEMENT * max(
                 x.max(), 1e-12):
             break
+    timing = _Timing(path, grid, x, u, rate, 0.0)
+    smoothing = 0.0
+    if np.isfinite(limits.jerk).any():
+        smoothing = _first_smoothing(models, path, timing, limits)
     for _ in range(VERIFY_ROUNDS):
-        motion, stage = _sample(models, path, grid, x, u, rate, rounds)
-        worst = rows.tighten(motion, stage, grid, max_speed)
+        timing = _Timing(path, grid, x, u, rate, smoothing)
+        motion, samples = _sample(models, path, timing, rounds)
+        worst, longer = rows.tighten(motion, samples, max_speed, x)
         if worst <= VERIFY_SHARE:
             return motion
         rounds += 1
-        x, u = _passes(rows, grid, models.friction(dyn, x), False)
-    motion, stage = _sample(models, path, grid, x, u, rate, rounds)
-    worst = rows.tighten(motion, stage, grid, max_speed)
+        smoothing *= longer
+        x, u = _passes(rows, grid, models.friction(dyn, x), path, False)
+    timing = _Timing(path, grid, x, u, rate, smoothing)
+    motion, samples = _sample(models, path, timing, rounds)
+    worst, _ = rows.tighten(motion, samples, max_speed, x)
     if worst <= ACCEPT_SHARE:
         return motion
     raise PlanningError(None, f'no motion found within the limits: a sample '
                         f'still exceeds one by {worst:.3%} after '
                         f'{rounds} rounds')
+
+
+def _first_smoothing(models, path, timing, limits):
+    """
+    Return the first smoothing time (s) for jerk limits.
+
+    The moving average over ``T`` of the time law makes the jerk of
+    ``lambdaddot`` about its change over ``T`` divided by ``T``: ``T =
+    max_j (range of lambdaddot_j) / max_jerk_j``.
+    """
+    motion, _ = _sample(models, path, timing, 0)
+    accelerations = motion.solution.lambdaddot
+    spread = accelerations.max(0) - accelerations.min(0)
+    return float(max(np.max(spread / limits.jerk), 1.0 / timing.rate))
 
 
 # The families of two-sided rows of a gridpoint: each actuator's force,
@@ -332,12 +360,13 @@ class _Rows:
 
     ``low <= alpha u + beta x <= high`` (M, 6): per actuator its force
     (``high = max_effort - c - friction``, ``low = -max_effort - c -
-    friction``), then its acceleration (the deceleration's bound where it
-    slows the actuator down); ``cap`` (M,): the bounds on ``x`` alone (the
-    actuators' velocities, G's speed, a stop's 0). Verification takes
-    ``shrink_high`` off ``high`` and adds ``shrink_low`` to ``low`` (N,
-    m/s^2), and scales ``cap`` by ``cap_scale``, where a sample exceeded a
-    limit.
+    friction``: the room the motion has beside statics and friction), then
+    its acceleration (the deceleration's bound where it slows the actuator
+    down); ``cap`` (M,): the bounds on ``x`` alone (the actuators'
+    velocities, G's speed, a stop's 0). Where a sample exceeded a limit,
+    verification scales that room down by ``scale_high``, ``scale_low``
+    (the share of the sample's own room that keeps it within) and bounds
+    ``x`` by ``cap_extra`` (a share of the ``x`` that exceeded).
     """
 
     def __init__(self, dyn, grid, limits, max_speed):
@@ -347,53 +376,85 @@ class _Rows:
         up, down = _acceleration_bounds(limits, lam1 >= 0.0)
         self.high = np.hstack((limits.effort - dyn.c, up))
         self.low = np.hstack((-limits.effort - dyn.c, -down))
-        self.shrink_high = np.zeros_like(self.high)
-        self.shrink_low = np.zeros_like(self.low)
+        self.scale_high = np.ones_like(self.high)
+        self.scale_low = np.ones_like(self.low)
         with np.errstate(divide='ignore', invalid='ignore'):
             cap = np.where(lam1 != 0.0, (limits.velocity / np.abs(lam1)) ** 2,
                            np.inf).min(1)
             cap = np.minimum(cap, (np.minimum(grid.feed, max_speed)
                                    / dyn.speed) ** 2)
         self.cap = np.where(grid.stop, 0.0, np.minimum(cap, X_BIG))
-        self.cap_scale = np.ones_like(self.cap)
+        self.cap_extra = np.full_like(self.cap, np.inf)
         self.limits = limits
 
     def bounds(self, friction):
         """Return ``(low, high)`` with ``friction`` (N, (M, 3)) at each point."""
-        zero = np.zeros_like(friction)
-        f = np.hstack((friction, zero))
-        return self.low - f + self.shrink_low, self.high - f - self.shrink_high
+        f = np.hstack((friction, np.zeros_like(friction)))
+        high = self.high - f
+        low = self.low - f
+        return (np.where(low < 0.0, low * self.scale_low, low),
+                np.where(high > 0.0, high * self.scale_high, high))
 
-    def tighten(self, motion, stage, grid, max_speed):
+    def tighten(self, motion, samples, max_speed, x):
         """
         Check every sample; tighten the rows where one exceeds a limit.
 
-        ``stage``: each sample's interval (its gridpoints ``stage`` and
-        ``stage + 1`` are tightened). Returns the largest excess over a
-        limit, as a share of the limit (negative: all within).
+        ``samples``: what :func:`_sample` tells of each sample (the
+        gridpoints whose rows shaped it, its feed, its statics and
+        friction, its jerk's share from the smoothing); ``x``: the
+        solution's. Returns ``(worst, longer)``: the largest excess over a
+        limit as a share of it (negative: all within), and the factor by
+        which the smoothing time must grow (1: none).
         """
         worst = -np.inf
-        for value, bound, family, rising in _checks(motion, grid, stage,
+        longer = 1.0
+        scale_high = np.ones_like(self.scale_high)
+        scale_low = np.ones_like(self.scale_low)
+        cap = np.full_like(self.cap, np.inf)
+        sol = motion.solution
+        signed = np.hstack((sol.force, sol.lambdaddot))
+        for value, bound, family, rising in _checks(motion, samples,
                                                     self.limits, max_speed):
             with np.errstate(divide='ignore', invalid='ignore'):
                 share = np.where(np.isfinite(bound), value / bound - 1.0,
                                  -np.inf)
             worst = max(worst, float(share.max(initial=-np.inf)))
             for sample, j in np.argwhere(share > VERIFY_SHARE):
-                points = (stage[sample], stage[sample] + 1)
-                if family is None:
-                    ratio = (bound[sample, j] / value[sample, j]) ** 2
-                    for point in points:
-                        self.cap_scale[point] = min(
-                            self.cap_scale[point], ratio * (1.0 - 1e-6))
+                points = slice(samples.first[sample],
+                               samples.last[sample] + 1)
+                ratio = bound[sample, j] / value[sample, j]
+                if family == JERK:
+                    if samples.smoothed_jerk[sample, j] >= 0.5 * value[
+                            sample, j]:
+                        longer = max(longer, min(1.5, 1.02 / ratio))
+                    else:       # the jump of lambda'' x at a junction
+                        cap[points] = np.minimum(cap[points],
+                                                 x[points] * ratio)
                     continue
-                take = value[sample, j] - bound[sample, j] * (
-                    1.0 - 0.5 * VERIFY_SHARE)
-                shrink = self.shrink_high if rising[sample, j] \
-                    else self.shrink_low
-                for point in points:
-                    shrink[point, family + j] += take
-        return worst
+                if family is None:
+                    cap[points] = np.minimum(cap[points],
+                                             x[points] * ratio * ratio)
+                    continue
+                column = family + j
+                total = signed[sample, column]
+                static = samples.static[sample, column]
+                room = math.copysign(bound[sample, j], total) - static
+                if room * total > 0.0 and abs(total - static) > abs(room):
+                    share_left = room / (total - static)
+                    scale = scale_high if total > 0.0 else scale_low
+                    scale[points, column] = np.minimum(
+                        scale[points, column], share_left)
+                else:   # statics and friction alone: slower, less friction
+                    cap[points] = np.minimum(cap[points], x[points] * 0.81)
+        margin = 1.0 - 0.5 * VERIFY_SHARE
+        self.scale_high *= np.where(scale_high < 1.0, scale_high * margin,
+                                    1.0)
+        self.scale_low *= np.where(scale_low < 1.0, scale_low * margin, 1.0)
+        self.cap_extra = np.minimum(self.cap_extra, cap)
+        return worst, longer
+
+
+JERK = 'jerk'
 
 
 def _acceleration_bounds(limits, forward):
@@ -404,7 +465,7 @@ def _acceleration_bounds(limits, forward):
     return np.where(forward, acc, dec), np.where(forward, dec, acc)
 
 
-def _checks(motion, grid, stage, limits, max_speed):
+def _checks(motion, samples, limits, max_speed):
     """Yield ``(value, bound, family, rising)`` of every limit per sample."""
     sol = motion.solution
     n = len(motion.t)
@@ -418,11 +479,15 @@ def _checks(motion, grid, stage, limits, max_speed):
     yield (np.abs(sol.lambdaddot), np.where(rising, up, down), ACCELERATION,
            rising)
     speed = np.linalg.norm(motion.velocity, axis=1)[:, None]
-    yield (speed, np.minimum(grid.feed[stage], max_speed)[:, None], None,
-           None)
+    yield (speed, np.minimum(samples.feed, max_speed)[:, None], None, None)
+    if np.isfinite(limits.jerk).any():
+        jerk = np.zeros((n, 3))
+        jerk[1:] = np.abs(np.diff(sol.lambdaddot, axis=0)) / np.diff(
+            motion.t)[:, None]
+        yield (jerk, np.broadcast_to(limits.jerk, (n, 3)), JERK, None)
 
 
-def _passes(rows, grid, friction, first):
+def _passes(rows, grid, friction, path, first):
     """
     Run TOPP-RA's backward and forward passes: ``x`` (M,) and ``u`` (M - 1,).
 
@@ -445,7 +510,7 @@ def _passes(rows, grid, friction, first):
     used = bounded.any(0)
     alpha, beta = alpha[:, used], beta[:, used]
     low, high, bounded = low[:, used], high[:, used], bounded[:, used]
-    cap = rows.cap * rows.cap_scale
+    cap = np.minimum(rows.cap, rows.cap_extra)
     positive = (alpha > U_ZERO) & bounded
     negative = (alpha < -U_ZERO) & bounded
     alone = bounded & ~(positive | negative)
@@ -465,6 +530,13 @@ def _passes(rows, grid, friction, first):
                       | (low > 0.0) & (beta >= 0.0))).any(1)
     top = np.where(np.isnan(top), np.inf, top)
     bottom = np.where(np.isnan(bottom), -np.inf, bottom)
+    free = (delta > 0.0) & (np.isinf(top).all(1) | np.isinf(bottom).all(1))
+    if free.any():
+        i = int(np.argmax(free))
+        raise PlanningError(
+            path.pieces[grid.index[i]].line, 'nothing bounds the '
+            'acceleration of G along the path there: give the actuators '
+            'effort or acceleration limits (max_effort, max_acceleration)')
     start = np.minimum(cap[:-1], x_alone.min(1, initial=np.inf))
     mvc = _largest_feasible(top, slope, bottom, slope, start)
     failed = ((mvc < 0.0) | blocked) & (delta > 0.0)
@@ -561,51 +633,172 @@ def _forward(delta, k, top, slope, bottom):
     return np.array(x), np.array(u)
 
 
-def _sample(models, path, grid, x, u, rate, rounds):
+class _Timing:
     """
-    Sample the motion at ``rate``: ``(Motion, stage of each sample)``.
+    The time law ``s(t)`` of a solution, and its smoothing.
 
     Within a stage ``u`` is constant: ``s = s_i + sdot_i tau + u tau^2 /
-    2``. The duration is stretched to a whole number of periods (``sdot``
-    divided by the stretch, ``u`` by its square): the last sample is at the
-    end.
+    2`` (``s`` along the whole path, m). Unsmoothed, the duration is
+    stretched to a whole number of periods (``sdot`` divided by the
+    stretch, ``u`` by its square), the last sample at the end. Smoothed
+    (jerk limits), the time law is its moving average over ``smoothing``
+    (s, made up to a whole number of periods): ``s~(t) = (I(t) - I(t -
+    T)) / T`` with ``I`` the integral of ``s``, so that ``sdot~ = (s(t) -
+    s(t - T)) / T`` and ``sddot~ = (sdot(t) - sdot(t - T)) / T`` are
+    continuous and the jerk of the time law is ``(sddot(t) - sddot(t -
+    T)) / T``: Biagiotti and Melchiorri's FIR filter, at the cost of
+    ``T`` in duration.
     """
-    speed = np.sqrt(x)
-    delta = grid.delta
-    pace = speed[:-1] + speed[1:]
-    moving = delta > 0.0
-    if (moving & (pace <= 0.0)).any():
-        i = int(np.argmax(moving & (pace <= 0.0)))
-        raise PlanningError(path.pieces[grid.index[i]].line, 'G cannot move '
-                            'there within the limits')
-    with np.errstate(divide='ignore', invalid='ignore'):
-        dt = np.where(moving, 2.0 * delta / pace, 0.0)
-    times = np.concatenate(([0.0], np.cumsum(dt)))
-    duration = times[-1]
-    periods = max(1, math.ceil(duration * rate - 1e-9))
-    stretch = periods / rate / duration
-    times *= stretch
-    t = np.arange(periods + 1) / rate
-    times[-1] = t[-1]
-    stage = np.searchsorted(times, t, side='right') - 1
-    stage = np.clip(stage, 0, len(delta) - 1)
-    # A sample at a zero-length stage (a junction) belongs to the next one.
-    while True:
-        still = (delta[stage] == 0.0) & (stage < len(delta) - 1)
-        if not still.any():
-            break
-        stage[still] += 1
-    tau = t - times[stage]
-    sdot0 = speed[stage] / stretch
-    acc = u[stage] / (stretch * stretch)
-    w = grid.w[stage] + sdot0 * tau + 0.5 * acc * tau * tau
-    w = np.clip(w, grid.w[stage], grid.w[stage + 1])
-    sdot = np.maximum(sdot0 + acc * tau, 0.0)
-    sddot = acc.copy()
-    w[-1], sdot[-1], sddot[-1] = grid.w[-1], 0.0, 0.0
-    sdot[0] = 0.0
-    p, d1, d2 = path.evaluate(grid.index[stage], w)
+
+    def __init__(self, path, grid, x, u, rate, smoothing):
+        speed = np.sqrt(x)
+        delta = grid.delta
+        pace = speed[:-1] + speed[1:]
+        moving = delta > 0.0
+        if (moving & (pace <= 0.0)).any():
+            i = int(np.argmax(moving & (pace <= 0.0)))
+            raise PlanningError(path.pieces[grid.index[i]].line, 'G cannot '
+                                'move there within the limits')
+        with np.errstate(divide='ignore', invalid='ignore'):
+            dt = np.where(moving, 2.0 * delta / pace, 0.0)
+        # Smoothed, G rests for T at each stop within the path: the moving
+        # average then comes to rest there too.
+        dwell = ~moving & grid.stop[:-1] & grid.stop[1:]
+        times = np.concatenate(([0.0], np.cumsum(dt)))
+        duration = times[-1] + dwell.sum() * smoothing
+        if smoothing > 0.0:
+            periods = max(1, math.ceil((duration + smoothing) * rate - 1e-9))
+            # The rest of a period goes to the smoothing: the dwells grow
+            # with it.
+            smoothing = (periods / rate - times[-1]) / (1 + dwell.sum())
+            dt = np.where(dwell, smoothing, dt)
+            times = np.concatenate(([0.0], np.cumsum(dt)))
+            self.smoothing = smoothing
+            moving = moving | dwell
+            stretch = 1.0
+        else:
+            periods = max(1, math.ceil(duration * rate - 1e-9))
+            self.smoothing = 0.0
+            stretch = periods / rate / duration
+            times *= stretch
+        if periods > MAX_SAMPLES:
+            raise PlanningError(None, f'the motion lasts {periods / rate:.6g}'
+                                f' s: more than {MAX_SAMPLES} samples at '
+                                f'{rate:g} Hz')
+        self.t = np.arange(periods + 1) / rate
+        if smoothing == 0.0:
+            times[-1] = self.t[-1]
+        self.times = times
+        self.speed = speed[:-1] / stretch
+        self.u = u / (stretch * stretch)
+        starts = np.concatenate(([0.0], np.cumsum(
+            [piece.length for piece in path.pieces])))
+        self.starts = starts
+        self.s = starts[grid.index] + grid.w
+        self.grid = grid
+        self.rate = rate
+        self.moving = moving
+        d = np.diff(times)
+        self.integral = np.concatenate(([0.0], np.cumsum(
+            self.s[:-1] * d + self.speed * d * d / 2 + self.u * d ** 3 / 6)))
+
+    def stage(self, t):
+        """Return the stage of each time (s, within the motion)."""
+        count = len(self.grid.delta)
+        stage = np.clip(np.searchsorted(self.times, t, side='right') - 1, 0,
+                        count - 1)
+        # At a junction (a stage of no length) the next stage's.
+        for _ in range(count):
+            still = ~self.moving[stage] & (stage < count - 1)
+            if not still.any():
+                break
+            stage[still] += 1
+        return stage
+
+    def law(self, t):
+        """Return ``s, sdot, sddot, I, stage`` at ``t`` (rest before, after)."""
+        inside = np.clip(t, 0.0, self.times[-1])
+        stage = self.stage(inside)
+        tau = inside - self.times[stage]
+        v0, u = self.speed[stage], self.u[stage]
+        s0 = self.s[stage]
+        s = np.minimum(s0 + v0 * tau + 0.5 * u * tau * tau,
+                       self.s[stage + 1])
+        sdot = np.maximum(v0 + u * tau, 0.0)
+        integral = self.integral[stage] + s0 * tau + v0 * tau * tau / 2 \
+            + u * tau ** 3 / 6
+        after = t > self.times[-1]
+        before = t < 0.0
+        integral = np.where(after, self.integral[-1] + self.s[-1]
+                            * (t - self.times[-1]), integral)
+        for values in (sdot, u):
+            values[after | before] = 0.0
+        s = np.where(before, 0.0, s)
+        integral = np.where(before, 0.0, integral)
+        return s, sdot, u, integral, stage
+
+
+def _sample(models, path, timing, rounds):
+    """
+    Sample the motion at the timing's rate: ``(Motion, _Samples)``.
+
+    The last sample is exactly at the end, at rest.
+    """
+    t = timing.t
+    grid = timing.grid
+    if timing.smoothing > 0.0:
+        span = timing.smoothing
+        s1, v1, a1, i1, stage = timing.law(t)
+        s0, v0, a0, i0, early = timing.law(t - span)
+        s = (i1 - i0) / span
+        sdot = (s1 - s0) / span
+        sddot = (v1 - v0) / span
+        third = (a1 - a0) / span
+        first = timing.stage(np.clip(t - span, 0.0, timing.times[-1]))
+    else:
+        s, sdot, sddot, _, stage = timing.law(t)
+        third = np.zeros_like(t)
+        first = stage
+    sdot[0] = sdot[-1] = sddot[-1] = 0.0
+    if timing.smoothing > 0.0:
+        sddot[0] = 0.0
+    piece = np.clip(np.searchsorted(timing.starts, s, side='right') - 1, 0,
+                    len(path.pieces) - 1)
+    lengths = timing.starts[1:] - timing.starts[:-1]
+    w = np.clip(s - timing.starts[piece], 0.0, lengths[piece])
+    piece[-1], w[-1] = len(path.pieces) - 1, lengths[-1]
+    p, d1, d2 = path.evaluate(piece, w)
     v = d1 * sdot[:, None] + 0.0        # (+ 0.0: no negative zeros)
     a = d1 * sddot[:, None] + d2 * (sdot * sdot)[:, None] + 0.0
     solution = mechanics.solve_batch(models.robot, p, v, a, 0.0)
-    return Motion(t, p, v, a, solution, len(grid.w), rounds), stage
+    with np.errstate(divide='ignore', invalid='ignore'):
+        rates = np.where(sdot[:, None] > 1e-9, solution.lambdadot
+                         / sdot[:, None], np.inf)
+        smoothed = np.where(third[:, None] == 0.0, 0.0,
+                            np.abs(rates * third[:, None]))
+    feeds = np.array([pc.feed for pc in path.pieces])[piece]
+    static = mechanics.solve_batch(models.statics, p, None, None, 0.0).force
+    if models.robot.has_friction:
+        static = static + mechanics.friction_force(models.robot,
+                                                   solution.lambdadot)
+    samples = _Samples(np.minimum(first, stage), np.maximum(first, stage) + 1,
+                       feeds, np.hstack((static, np.zeros_like(static))),
+                       smoothed)
+    return Motion(t, p, v, a, solution, len(grid.w), rounds), samples
+
+
+@dataclass
+class _Samples:
+    """
+    Per sample: its gridpoints' span, its feed, its statics and friction.
+
+    ``static`` (n, 6): the forces at rest plus friction (N), then zeros
+    (the accelerations'); ``smoothed_jerk`` (n, 3): the part of the jerk
+    the smoothing's time law makes (``lambda' sdddot``, m/s^3).
+    """
+
+    first: Array
+    last: Array
+    feed: Array
+    static: Array
+    smoothed_jerk: Array

@@ -44,7 +44,7 @@ import sys
 from orthoglide_ros.formats.params_file import load_robot, ParametersFileError
 from orthoglide_ros.model.robot import ParameterError, Robot
 from orthoglide_ros.tools.cli import (identifying, models, pictures,
-                                     planning, solving)
+                                      planning, solving)
 from orthoglide_ros.tools.cli.common import (check_output, CliError,
                                              CSV_COLUMNS, fail,
                                              OUTPUT_OPTIONS, PROG)
