@@ -190,15 +190,20 @@ def lagrange_check(robot, motion, limits, samples):
 
 
 def path_distance(points, dense):
-    """Distance (m) of each of ``points`` (n, 3) to the polyline ``dense``."""
-    out = np.empty(len(points))
-    for start in range(0, len(points), 256):
-        chunk = points[start:start + 256]
-        a = dense[:-1][None]
-        ab = (dense[1:] - dense[:-1])[None]
-        ap = chunk[:, None] - a
-        t = np.clip((ap * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300),
-                    0.0, 1.0)
-        out[start:start + 256] = np.linalg.norm(
-            ap - t[..., None] * ab, axis=-1).min(1)
-    return out
+    """
+    Distance (m) of each of ``points`` (n, 3) to the polyline ``dense``.
+
+    The nearest vertex by a k-d tree, then the two segments beside it.
+    """
+    from scipy.spatial import cKDTree
+    _, nearest = cKDTree(dense).query(points)
+    best = np.full(len(points), np.inf)
+    for first in (nearest - 1, nearest):
+        k = np.clip(first, 0, len(dense) - 2)
+        a, b = dense[k], dense[k + 1]
+        ab = b - a
+        t = np.clip(((points - a) * ab).sum(1) / np.maximum(
+            (ab * ab).sum(1), 1e-300), 0.0, 1.0)
+        best = np.minimum(best, np.linalg.norm(points - a - t[:, None] * ab,
+                                               axis=1))
+    return best

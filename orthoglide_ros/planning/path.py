@@ -32,7 +32,7 @@ import numpy as np
 
 from orthoglide_ros.model.types import Array
 from orthoglide_ros.planning.gcode import (BLEND, EXACT_PATH, EXACT_STOP, Move,
-                                           ZERO_LENGTH)
+                                           ProgramError, ZERO_LENGTH)
 
 # Tangents within this angle (rad) join smoothly: passed at speed.
 TANGENT = 1e-9
@@ -238,6 +238,8 @@ def from_moves(moves: Sequence[Move], tolerance: float) -> Path:
     ``tolerance`` (m): the blends' where a move's own is None (G64 without
     P, waypoints). See the module's docstring for the rules.
     """
+    if not moves:
+        raise ProgramError(None, 'zero-length program: no move')
     pieces = [move_piece(m) for m in moves]
     n = len(pieces)
     trim = np.zeros((n, 2))         # taken off each piece's start, end
@@ -396,7 +398,8 @@ def from_waypoints(points: Array, feeds: Optional[Array], lines: Sequence[int],
 
     Segment k ends at ``points[k + 1]`` with that row's ``feeds`` (m/s, or
     none) and ``lines``; consecutive equal points are one. Corners are
-    blended within ``tolerance`` (m), stopped where it is 0.
+    blended within ``tolerance`` (m), stopped where it is 0. Raises
+    :class:`ProgramError` where no point is away from the first.
     """
     points = np.asarray(points, dtype=float)
     moves = []
@@ -410,5 +413,6 @@ def from_waypoints(points: Array, feeds: Optional[Array], lines: Sequence[int],
                           tolerance))
         here = points[k]
     if not moves:
-        return None
+        raise ProgramError(None, 'zero-length program: no waypoint is away '
+                           'from the first')
     return from_moves(moves, tolerance)

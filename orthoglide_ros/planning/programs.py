@@ -46,18 +46,11 @@ def read_program(path: FilePath, start: Sequence[float],
     if {'x', 'y', 'z'} <= cells:
         points, feeds, lines = _waypoints(text)
         origin = np.asarray(start, dtype=float)[None]
-        made = from_waypoints(np.vstack((origin, points)),
+        return from_waypoints(np.vstack((origin, points)),
                               None if feeds is None
                               else np.r_[math.inf, feeds],
                               [0, *lines], tolerance)
-        if made is None:
-            raise ProgramError(None, 'zero-length program: no waypoint is '
-                               'away from the start')
-        return made
-    moves = read_gcode(text, start)
-    if not moves:
-        raise ProgramError(None, 'zero-length program: no move')
-    return from_moves(moves, tolerance)
+    return from_moves(read_gcode(text, start), tolerance)
 
 
 def _read_text(path):
