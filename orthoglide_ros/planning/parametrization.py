@@ -230,10 +230,10 @@ class _Models:
             curving = mechanics.solve_batch(self.inertia, p, d1, d2, margin)
         except mechanics.WorkspaceError as error:
             row = error.row if error.row is not None else 0
-            raise PlanningError(
-                path.pieces[index[row]].line, f'the path at '
-                f'{mechanics.format_vector(p[row])} m: {error.detail}') \
-                from None
+            point = mechanics.format_vector(p[row])
+            detail = error.detail.removeprefix(f'position {point} m ')
+            raise PlanningError(path.pieces[index[row]].line,
+                                f'the path at {point} m {detail}') from None
         return _Dynamics(p, along.force, curving.force, statics.force,
                          statics.lambda_, curving.lambdadot,
                          curving.lambdaddot, np.linalg.norm(d1, axis=1))
