@@ -64,7 +64,7 @@ def test_arcs_turn_about_the_plane_normal_by_the_right_hand_rule(plane,
 
 
 def _end(plane, start, sign):
-    """The end a quarter turn away, about the normal, in program words."""
+    """Return the end a quarter turn away about the normal, as words."""
     normal = {17: (0, 0, 1), 18: (0, 1, 0), 19: (1, 0, 0)}[plane]
     end = rotate(start, normal, sign * math.pi / 2)
     return ' '.join(f'{a}{c:.9f}' for a, c in zip('XYZ', end))
@@ -82,8 +82,8 @@ def test_a_full_turn_and_a_helix():
     assert helix.angle == pytest.approx(-4 * math.pi)
     assert np.allclose(helix.end, [0.010, 0.0, -0.006])
     piece = move_piece(helix)
-    assert piece.length == pytest.approx(math.hypot(4 * math.pi * 0.01,
-                                                    0.006))
+    length = math.hypot(4 * math.pi * 0.01, 0.006)
+    assert piece.length == pytest.approx(length)
     assert np.allclose(piece.point(piece.length), helix.end, atol=1e-15)
 
 

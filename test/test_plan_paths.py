@@ -27,7 +27,7 @@ def path_of(text, tolerance=1e-5):
 
 
 def dense_programmed(text):
-    """The programmed moves as dense points (no blend)."""
+    """Return the programmed moves as dense points (no blend)."""
     points = []
     for move in gcode.read_gcode(text):
         piece = from_moves([move], 0.0).pieces[0]
