@@ -48,8 +48,8 @@ def test_a_move_to_where_g_is_is_dropped():
 
 @pytest.mark.parametrize('plane, normal', (
     (17, (0, 0, 1)), (18, (0, 1, 0)), (19, (1, 0, 0))))
-def test_arcs_turn_about_the_plane_normal_by_the_right_hand_rule(plane,
-                                                                  normal):
+def test_arcs_turn_about_the_plane_normal_by_the_right_hand_rule(
+        plane, normal):
     """A quarter turn about the origin: G3 positive about the normal."""
     start = {17: (10, 0, 0), 18: (10, 0, 0), 19: (0, 10, 0)}[plane]
     start_m = np.array(start) * 1e-3
