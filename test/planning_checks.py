@@ -189,21 +189,23 @@ def lagrange_check(robot, motion, limits, samples):
     return worst
 
 
-def path_distance(points, dense):
+def path_distance(points, dense, neighbours=8):
     """
     Distance (m) of each of ``points`` (n, 3) to the polyline ``dense``.
 
-    The nearest vertex by a k-d tree, then the two segments beside it.
+    The nearest ``neighbours`` vertices by a k-d tree (a junction's vertex
+    comes twice, once per piece), then the segments beside each.
     """
     from scipy.spatial import cKDTree
-    _, nearest = cKDTree(dense).query(points)
+    _, nearest = cKDTree(dense).query(points, k=neighbours)
     best = np.full(len(points), np.inf)
-    for first in (nearest - 1, nearest):
-        k = np.clip(first, 0, len(dense) - 2)
-        a, b = dense[k], dense[k + 1]
-        ab = b - a
-        t = np.clip(((points - a) * ab).sum(1) / np.maximum(
-            (ab * ab).sum(1), 1e-300), 0.0, 1.0)
-        best = np.minimum(best, np.linalg.norm(points - a - t[:, None] * ab,
-                                               axis=1))
+    for column in nearest.T:
+        for first in (column - 1, column):
+            k = np.clip(first, 0, len(dense) - 2)
+            a, b = dense[k], dense[k + 1]
+            ab = b - a
+            t = np.clip(((points - a) * ab).sum(1) / np.maximum(
+                (ab * ab).sum(1), 1e-300), 0.0, 1.0)
+            best = np.minimum(best, np.linalg.norm(
+                points - a - t[:, None] * ab, axis=1))
     return best
