@@ -177,7 +177,7 @@ def read_gcode(text: str,
     that move nothing are dropped; a program with none left is the
     caller's to refuse.
 
-    >>> moves = read_gcode('G21 G90 F600\\nG1 X10\\nG2 X20 Y0 I5 J0\\nM30')
+    >>> moves = read_gcode('G21 G90 F600\nG1 X10\nG2 X20 Y0 I5 J0\nM30')
     >>> [(m.kind, m.line, round(m.feed, 4)) for m in moves]
     [('line', 2, 0.01), ('arc', 3, 0.01)]
     """

@@ -67,7 +67,7 @@ ACCEPT_SHARE = 1e-3
 MAX_SAMPLES = 20_000_000
 # Rounds of planning: friction's fixed point, then verification.
 FRICTION_ROUNDS = 8
-FRICTION_AGREEMENT = 1e-4
+FRICTION_AGREEMENT = 1e-3
 VERIFY_ROUNDS = 16
 # Grid refinements where a stage has no solution.
 REFINEMENTS = 3
@@ -550,8 +550,17 @@ def _passes(rows, grid, friction, path, first):
         shift = np.where(valid, twice * bottom, -np.inf).tolist()
         scale = np.where(valid, 1.0 / rate, 1.0).tolist()
     k = _backward(delta.tolist(), cap.tolist(), mvc.tolist(), shift, scale)
+    # Where G is on the controllable bound, it stays on it if the largest
+    # acceleration there reaches the next bound (the backward pass made
+    # sure the smallest does not overshoot it): known for every stage at
+    # once.
+    bound = np.array(k)
+    with np.errstate(invalid='ignore'):
+        fastest = (top + slope * bound[:-1, None]).min(1)
+        follows = (bound[:-1] + twice[:, 0] * fastest >= bound[1:]) & (
+            delta > 0.0)
     return _forward(delta.tolist(), k, top.tolist(), slope.tolist(),
-                    bottom.tolist())
+                    bottom.tolist(), follows.tolist())
 
 
 def _largest_feasible(h, n, low, m, start):
@@ -611,8 +620,12 @@ def _backward(delta, cap, mvc, shift, scale):
     return k
 
 
-def _forward(delta, k, top, slope, bottom):
-    """From rest, the largest ``u`` of each stage keeping ``x`` controllable."""
+def _forward(delta, k, top, slope, bottom, follows):
+    """
+    From rest, the largest ``u`` of each stage keeping ``x`` controllable.
+
+    ``follows[i]``: G on the bound ``k[i]`` can reach ``k[i + 1]``.
+    """
     count = len(delta)
     x = [0.0] * (count + 1)
     u = [0.0] * count
@@ -622,6 +635,10 @@ def _forward(delta, k, top, slope, bottom):
             x[i + 1] = min(xi, k[i + 1])
             continue
         twice = 2.0 * delta[i]
+        if follows[i] and xi == k[i]:
+            x[i + 1] = k[i + 1]
+            u[i] = (k[i + 1] - xi) / twice
+            continue
         rows = list(zip(top[i], slope[i], bottom[i]))
         ui = min(min(t + m * xi for t, m, _ in rows), (k[i + 1] - xi) / twice)
         least = max(b + m * xi for _, m, b in rows)

@@ -80,18 +80,33 @@ class Piece:
 
     def point(self, w: float) -> Array:
         """Return ``p(w)`` (3,)."""
-        return self.evaluate(np.array([w]))[0][0]
+        if self.kind == 'bezier':
+            return self.evaluate(np.array([w]))[0][0]
+        phi = self.angle * w / self.length
+        return self.centre + self.radius * (
+            math.cos(phi) * self.e1 + math.sin(phi) * _cross(self.e3,
+                                                             self.e1)) \
+            + (self.rise * w / self.length) * self.e3
 
     def tangent(self, w: float) -> Array:
         """Return the unit tangent at ``w`` (3,)."""
-        d1 = self.evaluate(np.array([w]))[1][0]
-        return d1 / np.linalg.norm(d1)
+        if self.kind == 'bezier':
+            d1 = self.evaluate(np.array([w]))[1][0]
+        elif self.radius == 0.0:
+            return self.e3
+        else:
+            phi = self.angle * w / self.length
+            d1 = (self.angle * self.radius / self.length) * (
+                math.cos(phi) * _cross(self.e3, self.e1)
+                - math.sin(phi) * self.e1) + (self.rise / self.length) \
+                * self.e3
+        return d1 / math.sqrt(float(d1 @ d1))
 
     def sub(self, a: float, b: float) -> 'Piece':
         """Return the part from ``w = a`` to ``b`` of a helix, as a piece."""
         frac = a / self.length
         phi = self.angle * frac
-        e2 = np.cross(self.e3, self.e1)
+        e2 = _cross(self.e3, self.e1)
         return Piece('helix', b - a, self.line, self.feed,
                      self.centre + self.rise * frac * self.e3,
                      math.cos(phi) * self.e1 + math.sin(phi) * e2, self.e3,
@@ -99,9 +114,17 @@ class Piece:
                      self.rise * (b - a) / self.length)
 
 
+def _cross(a, b):
+    """Return ``a x b`` of (..., 3) arrays (np.cross is slow on small ones)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2,
+                     a0 * b1 - a1 * b0), -1)
+
+
 def _helix(centre, e1, e3, radius, angle, rise, length, w):
     """Evaluate the helix formula on arrays (every argument per point)."""
-    e2 = np.cross(e3, e1)
+    e2 = _cross(e3, e1)
     k = angle / length
     phi = k * w
     c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
@@ -137,11 +160,14 @@ def line_piece(start: Array, end: Array, line: int, feed: float) -> Piece:
     """Return the straight piece from ``start`` to ``end`` (m)."""
     start = np.asarray(start, dtype=float)
     delta = np.asarray(end, dtype=float) - start
-    length = float(np.linalg.norm(delta))
+    length = math.sqrt(float(delta @ delta))
     e3 = delta / length
-    e1 = np.cross(e3, np.eye(3)[int(np.argmin(np.abs(e3)))])
-    return Piece('helix', length, line, feed, start, e1 / np.linalg.norm(e1),
-                 e3, 0.0, 1.0, length)
+    e1 = _cross(e3, _AXES[int(np.argmin(np.abs(e3)))])
+    return Piece('helix', length, line, feed, start,
+                 e1 / math.sqrt(float(e1 @ e1)), e3, 0.0, 1.0, length)
+
+
+_AXES = np.eye(3)
 
 
 def move_piece(move: Move) -> Piece:
@@ -336,11 +362,11 @@ def _line_blend(first, second, tolerance, turn, room):
     corner = first.point(first.length)
     radius = trim / math.tan(0.5 * turn)
     inward = t2 - t1 * float(t1 @ t2)
-    inward /= np.linalg.norm(inward)
+    inward /= math.sqrt(float(inward @ inward))
     tangent_point = corner - trim * t1
     centre = tangent_point + radius * inward
-    e3 = np.cross(t1, t2)
-    e3 /= np.linalg.norm(e3)
+    e3 = _cross(t1, t2)
+    e3 /= math.sqrt(float(e3 @ e3))
     feed = min(first.feed, second.feed)
     piece = Piece('helix', radius * turn, first.line, feed, centre, -inward,
                   e3, radius, turn, 0.0)
