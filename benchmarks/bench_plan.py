@@ -24,7 +24,11 @@ On the robot of doc/programs/drives.yaml (ball-screw drives, friction, a
   the circle and duration against the exact circle's optimum. Slow (a few
   minutes: the Lagrange model takes about 70 ms a sample).
 
-Usage: python benchmarks/bench_plan.py [--repeat N] [--acceptance]
+- ``--node``: the ``planner`` node as a process, a 400-pose circle sent
+  ``--repeat`` times (at least 10): its planning time (its diagnostics)
+  and the time from publishing the path to receiving the motion.
+
+Usage: python benchmarks/bench_plan.py [--repeat N] [--acceptance] [--node]
 """
 
 import argparse
@@ -59,7 +63,7 @@ def circle_poses(count=CIRCLE_POSES):
 
 
 def circle_arc():
-    """The same circle as one G-code arc from its first pose."""
+    """Return the same circle as one G-code arc from its first pose."""
     start = circle_poses()[0]
     text = f'G21 G90 F1e6\nG3 X{start[0] * 1e3:.9f} Y{start[1] * 1e3:.9f} ' \
         f'I{-CIRCLE_RADIUS * 1e3:.9f} J0'
@@ -95,7 +99,7 @@ def plan_times(robot, limits, repeat):
 
 
 def _grid(path, per_metre=20000):
-    """A fine grid of every piece, junctions twice: (index, w, s, stops)."""
+    """Return a fine grid of every piece, junctions twice (index, w, s, stops)."""
     index, w, s, stops = [], [], [], []
     start = 0.0
     for k, piece in enumerate(path.pieces):
@@ -114,7 +118,7 @@ def _grid(path, per_metre=20000):
 
 def kinematic(robot, path, limits):
     """
-    The CNC-style planner: the largest Cartesian acceleration limit.
+    Return the CNC-style planner's largest Cartesian acceleration limit.
 
     Returns ``(acceleration, duration)``: the largest per-axis limit
     (m/s^2) whose motion keeps every force within ``limits.effort``.
@@ -209,7 +213,7 @@ def acceptance(robot, limits):
         optimum = independent_optimum(robot, optimum_path or path, limits,
                                       reference, friction_reference)
         print(f'{name}: {len(motion.t)} samples, planned in {cpu:.3f} s CPU')
-        print(f'  worst share of each limit (Lagrange + friction law): '
+        print('  worst share of each limit (Lagrange + friction law): '
               + ', '.join(f'{k} {v:.5f}' for k, v in worst.items()))
         print(f'  largest distance to {what}: {distance * 1e6:.2f} um')
         print(f'  duration {motion.duration:.4f} s, independent optimum '
@@ -218,7 +222,7 @@ def acceptance(robot, limits):
 
 def independent_optimum(robot, path, limits, reference, friction):
     """
-    The phase-plane optimum on the Lagrange model, friction exact.
+    Return the phase-plane optimum on the Lagrange model, friction exact.
 
     The model's a, b, c (forces per u, per x, at rest) and lambda' at
     about one point per millimetre, interpolated along each piece onto a
@@ -259,10 +263,51 @@ def independent_optimum(robot, path, limits, reference, friction):
     return phase_plane.optimal_duration(rows)
 
 
+def node(repeat):
+    """Time the planner node: a 400-pose circle, path in to motion out."""
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
+    from geometry_msgs.msg import PoseStamped
+    from nav_msgs.msg import Path
+    from trajectory_msgs.msg import MultiDOFJointTrajectory
+    from orthoglide_ros.harness.hostile import Nodes, Peer
+    message = Path()
+    message.header.frame_id = 'base_link'
+    for point in circle_poses():
+        pose = PoseStamped()
+        pose.pose.position.x, pose.pose.position.y, pose.pose.position.z = (
+            float(c) for c in point)
+        message.poses.append(pose)
+    with Nodes() as nodes, Peer() as peer:
+        nodes.start('planner')
+        pub = peer.publisher(Path, 'path')
+        out = peer.record('cartesian_trajectory', MultiDOFJointTrajectory)
+        peer.wait(lambda: pub.get_subscription_count() > 0, 30.0)
+        peer.wait(lambda: pub.publish(message) or len(out) > 0, 30.0)
+        time.sleep(1.0)
+        rounds, planning = [], []
+        for _ in range(repeat):
+            before = len(out)
+            start = time.monotonic()
+            pub.publish(message)
+            peer.wait(lambda: len(out) > before, 30.0)
+            rounds.append(out[-1][0] - start)
+            status = peer.status('planner', timeout=3.0)
+            planning.append(float(status[2]['last planning time (s)']))
+    print(f'\nThe planner node, a circle of {CIRCLE_POSES} poses (paper '
+          f'robot, config/orthoglide.yaml\'s limits), {repeat} paths:')
+    print(f'  planning (the node\'s own clock): median '
+          f'{np.median(planning) * 1e3:.1f} ms, max {max(planning) * 1e3:.1f}'
+          f' ms; path published to motion received: median '
+          f'{np.median(rounds) * 1e3:.1f} ms, max {max(rounds) * 1e3:.1f} ms')
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
     parser.add_argument('--repeat', type=int, default=5)
     parser.add_argument('--acceptance', action='store_true')
+    parser.add_argument('--node', action='store_true',
+                        help='also time the planner node (starts DDS)')
     args = parser.parse_args()
     robot = load_robot(os.path.join(PROGRAMS, 'drives.yaml'))
     limits = load_limits(os.path.join(PROGRAMS, 'drives_limits.yaml'))
@@ -272,6 +317,8 @@ def main():
     jerk_cost(robot, limits)
     if args.acceptance:
         acceptance(robot, limits)
+    if args.node:
+        node(max(args.repeat, 10))
 
 
 if __name__ == '__main__':

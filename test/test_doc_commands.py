@@ -25,7 +25,7 @@ import pytest
 import yaml
 
 from orthoglide_ros.cores import (feedforward, mechanism_state_publisher,
-                                  setpoint_publisher, simulator,
+                                  planner, setpoint_publisher, simulator,
                                   tracking_controller)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -34,7 +34,8 @@ TABLES = {'feedforward': feedforward.PARAMETERS,
           'simulator': simulator.PARAMETERS,
           'tracking_controller': tracking_controller.PARAMETERS,
           'setpoint_publisher': setpoint_publisher.PARAMETERS,
-          'mechanism_state_publisher': mechanism_state_publisher.PARAMETERS}
+          'mechanism_state_publisher': mechanism_state_publisher.PARAMETERS,
+          'planner': planner.PARAMETERS}
 # The lifecycle's, declared by every node (orthoglide_ros.ros.managed_node).
 COMMON = {'autostart'}
 TOOL = '.venv/bin/orthoglide '
