@@ -33,9 +33,10 @@ def toppra_duration(robot, path, limits, intervals=4000, max_speed=math.inf):
     two pieces meet, both pieces' coefficients constrain the junction
     gridpoint, and a junction where the planner stops is held at rest.
     """
-    import toppra
-    import toppra.algorithm
-    import toppra.constraint
+    import warnings
+    with warnings.catch_warnings():     # its docstrings' escape sequences
+        warnings.simplefilter('ignore', DeprecationWarning)
+        import toppra.algorithm
 
     assert not robot.has_friction
     starts = np.concatenate(([0.0], np.cumsum([p.length for p in path.pieces])))
@@ -99,7 +100,10 @@ class _Line:
 
 
 def _rows_class():
-    import toppra.constraint as constraint
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', DeprecationWarning)
+        import toppra.constraint as constraint
 
     class Rows(constraint.LinearConstraint):
         """``|a u + b x + c| <= bound`` per row, interpolation scheme."""
