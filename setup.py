@@ -60,6 +60,7 @@ setup(
             'simulator = orthoglide_ros.ros.console:simulator',
             'mechanism_state_publisher = '
             'orthoglide_ros.ros.console:mechanism_state_publisher',
+            'planner = orthoglide_ros.ros.console:planner',
         ],
     },
     **legacy_kwargs,

@@ -298,3 +298,23 @@ def test_joint_trajectory_points_reads_what_rclpy_writes(
             kept = min(width, len(sent))
             assert same(tuple(read[k, :kept]), tuple(sent[:kept]))
             assert np.isnan(read[k, kept:]).all()
+
+
+def test_multi_dof_trajectory_reads_back_and_as_rclpy_reads_it():
+    """The planner's writer: the fast reader and rclpy read the same."""
+    rng = np.random.default_rng(3)
+    n = 7
+    p, v, a = (rng.normal(size=(n, 3)) for _ in range(3))
+    times = np.column_stack((np.arange(n), rng.integers(0, 10**9, n)))
+    data = cdr.multi_dof_trajectory((4, 5), 'base_link', ('platform',),
+                                    times, p, v, a)
+    read = cdr.cartesian_trajectory(data)
+    assert read.frame == 'base_link' and tuple(read.stamp) == (4, 5)
+    assert np.array_equal(read.position, p)
+    assert np.array_equal(read.linear_velocity, v)
+    assert np.array_equal(read.linear_acceleration, a)
+    assert np.array_equal(read.time, times)
+    message = deserialize_message(data, MultiDOFJointTrajectory)
+    assert message.joint_names == ['platform']
+    assert message.points[3].transforms[0].rotation.w == 1.0
+    assert message.points[3].time_from_start.nanosec == times[3, 1]

@@ -75,7 +75,8 @@ def test_install_layout(install):
                      'lib/orthoglide_ros/orthoglide',
                      'lib/orthoglide_ros/tracking_controller',
                      'lib/orthoglide_ros/simulator',
-                     'lib/orthoglide_ros/mechanism_state_publisher'):
+                     'lib/orthoglide_ros/mechanism_state_publisher',
+                     'lib/orthoglide_ros/planner'):
         path = install / relative
         assert path.is_file() and os.access(path, os.X_OK), relative
     for name in ('orthoglide.yaml', 'fastdds_one_host.xml',

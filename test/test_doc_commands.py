@@ -5,7 +5,7 @@ The shell blocks of the documents are read line by line (comments and
 continuations joined):
 
 - the ``orthoglide`` tool's commands that need no robot and no DDS (paper,
-  solve, batch, excitation, urdf, mjcf, draw, animate) run, in the order of
+  solve, batch, plan, excitation, urdf, mjcf, draw, animate) run, in the order of
   their document, in a scratch folder that holds the clone's ``.venv`` and
   ``config``: exit 0, no error line; identify and validate of a log that
   only a robot gives (a bag ``record`` writes) are left out;
@@ -25,7 +25,7 @@ import pytest
 import yaml
 
 from orthoglide_ros.cores import (feedforward, mechanism_state_publisher,
-                                  setpoint_publisher, simulator,
+                                  planner, setpoint_publisher, simulator,
                                   tracking_controller)
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -34,14 +34,15 @@ TABLES = {'feedforward': feedforward.PARAMETERS,
           'simulator': simulator.PARAMETERS,
           'tracking_controller': tracking_controller.PARAMETERS,
           'setpoint_publisher': setpoint_publisher.PARAMETERS,
-          'mechanism_state_publisher': mechanism_state_publisher.PARAMETERS}
+          'mechanism_state_publisher': mechanism_state_publisher.PARAMETERS,
+          'planner': planner.PARAMETERS}
 # The lifecycle's, declared by every node (orthoglide_ros.ros.managed_node).
 COMMON = {'autostart'}
 TOOL = '.venv/bin/orthoglide '
 # The tool's subcommands that need no robot and no DDS; identify and
 # validate also need their log, run where an earlier command wrote it.
-OFFLINE = {'paper', 'solve', 'batch', 'excitation', 'urdf', 'mjcf', 'draw',
-           'animate', 'identify', 'validate'}
+OFFLINE = {'paper', 'solve', 'batch', 'plan', 'excitation', 'urdf', 'mjcf',
+           'draw', 'animate', 'identify', 'validate'}
 LOGS = {'identify', 'validate'}
 NODE = re.compile(r'^(?:\.venv/bin/|ros2 run orthoglide_ros )(\w+)(.*)$')
 
@@ -90,6 +91,7 @@ def test_tool_commands_run_as_written(tmp_path, path, lines):
     (tmp_path / 'config').symlink_to(ROOT / 'config')
     for folder in ('urdf', 'mjcf', 'doc'):     # the committed pictures' own
         (tmp_path / folder).mkdir()
+    (tmp_path / 'doc' / 'programs').symlink_to(ROOT / 'doc' / 'programs')
     recorded = {word for line in commands(path) for word in re.findall(
         r'record --output (\S+)', line)}
     for line in lines:

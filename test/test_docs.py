@@ -51,6 +51,7 @@ NODE_PAGES = {
     'tracking_controller.md': 'orthoglide_ros.cores.tracking_controller',
     'setpoint_publisher.md': 'orthoglide_ros.cores.setpoint_publisher',
     'mechanism_state_publisher.md': 'orthoglide_ros.cores.mechanism_state_publisher',
+    'planner.md': 'orthoglide_ros.cores.planner',
 }
 
 

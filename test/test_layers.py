@@ -2,7 +2,8 @@
 The layers: their order, and the model, formats, cores and tool without ROS.
 
 The package's folders are its layers, in this order: ``model`` (the
-math), ``formats`` (files and messages), ``cores`` (the nodes' rules),
+math), ``formats`` (files and messages), ``planning`` (paths and their
+time-optimal motions), ``cores`` (the nodes' rules),
 ``ros`` (the glue), ``tools`` (the ``orthoglide`` tool), ``harness`` (what
 the demos, benchmarks and tests share). A module imports from its own
 layer and those before it, never after: every ``import`` of every module,
@@ -10,7 +11,7 @@ those inside functions included, is read here.
 
 A fresh interpreter whose import system refuses rclpy (and every ROS
 message package) imports every module of ``model``, ``formats``,
-``cores`` and ``tools``, and runs ``orthoglide solve``, ``batch``,
+``planning``, ``cores`` and ``tools``, and runs ``orthoglide solve``, ``batch``,
 ``urdf``, ``draw`` and ``identify`` on a CSV log: where ROS is not
 installed they work the same. Only ``ros`` and ``harness`` may import
 rclpy.
@@ -27,8 +28,9 @@ import pytest
 import orthoglide_ros
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-LAYERS = ('model', 'formats', 'cores', 'ros', 'tools', 'harness')
-ROS_FREE = ('model', 'formats', 'cores', 'tools')
+LAYERS = ('model', 'formats', 'planning', 'cores', 'ros', 'tools',
+          'harness')
+ROS_FREE = ('model', 'formats', 'planning', 'cores', 'tools')
 # An import hook refusing rclpy and the message packages, then the code.
 REFUSE_ROS = '''
 import sys

@@ -166,7 +166,7 @@ def test_robot_from_parameters_on_a_flat_dict():
 
 
 @pytest.mark.parametrize('node', ['simulator', 'tracking_controller',
-                                  'mechanism_state_publisher'])
+                                  'mechanism_state_publisher', 'planner'])
 def test_shipped_config_sections_hold_the_defaults(node):
     """
     The other nodes' sections parse by rcl's rules and are the defaults.
@@ -178,6 +178,8 @@ def test_shipped_config_sections_hold_the_defaults(node):
         from orthoglide_ros.cores.simulator import PARAMETERS
     elif node == 'mechanism_state_publisher':
         from orthoglide_ros.cores.mechanism_state_publisher import PARAMETERS
+    elif node == 'planner':
+        from orthoglide_ros.cores.planner import PARAMETERS
     else:
         from orthoglide_ros.cores.tracking_controller import PARAMETERS
     specs, parse = PARAMETERS.specs, PARAMETERS.parse

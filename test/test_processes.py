@@ -1,7 +1,7 @@
 """
 Every node as ``ros2 run`` starts it: it starts, answers, exits 0 on Ctrl-C.
 
-One rule for the five console scripts: started with the shipped
+One rule for the six console scripts: started with the shipped
 parameters file (and an override, as a user would), the node answers a
 ``get_parameters`` call over DDS with the value its parameters file and
 its core's table give, keeps running, and SIGINT ends it with exit code
@@ -35,6 +35,7 @@ NODES = {
     'setpoint_publisher': ('loop:=true', 'loop', True),
     'mechanism_state_publisher': ('singularity_margin:=0.3',
                                   'singularity_margin', 0.3),
+    'planner': ('rate_hz:=500.0', 'rate_hz', 500.0),
 }
 
 

@@ -86,7 +86,9 @@ class Table:
     One node's parameters: rows, settings tuple, rules across rows.
 
     ``name``: the settings tuple's type name. ``specs``: the node's own
-    rows; with ``robot`` the :data:`ROBOT_SPECS` come first and the
+    rows (a dotted name, ``joint_limits.slider_a.max_effort``, is the
+    field ``joint_limits__slider_a__max_effort``); with ``robot`` the
+    :data:`ROBOT_SPECS` come first and the
     settings' first field ``robot`` holds the validated :class:`Robot`.
     ``rules``: functions ``rule(settings)`` that raise
     :class:`ParameterError` when several values together break a rule.
@@ -102,7 +104,8 @@ class Table:
         if len(names) != len(set(names)):
             raise ValueError(f'{name}: a parameter name repeats')
         self.Settings = namedtuple(name, (('robot',) if robot else ())
-                                   + tuple(s.name for s in self.own_specs))
+                                   + tuple(field(s.name)
+                                           for s in self.own_specs))
 
     def defaults(self):
         """Return ``{name: default}`` of every row that has a default."""
@@ -126,12 +129,17 @@ class Table:
                 {k: v for k, v in values.items()
                  if k.startswith(ROBOT_PREFIX) and v is not None})
         for spec in self.own_specs:
-            fields[spec.name] = spec.validate(
+            fields[field(spec.name)] = spec.validate(
                 values.get(spec.name, spec.default))
         settings = self.Settings(**fields)
         for rule in self.rules:
             rule(settings)
         return settings
+
+
+def field(name):
+    """Return the settings field of parameter ``name``: dots as ``__``."""
+    return name.replace('.', '__')
 
 
 # Checks used by several tables ------------------------------------------------

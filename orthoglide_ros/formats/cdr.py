@@ -19,10 +19,10 @@ therefore subscribes with ``raw=True`` and reads only what it uses:
 - ``JointTrajectory`` whole (:func:`joint_trajectory_points`): names, every
   point's arrays and time, as numpy arrays.
 
-and writes one message the same way, :func:`joint_trajectory` (a
+and writes two messages the same way, :func:`joint_trajectory` (a
 ``trajectory_msgs/JointTrajectory`` of three joints from numpy arrays:
 building 10,000 message objects in Python would cost far more than the
-mechanics).
+mechanics) and :func:`multi_dof_trajectory` (the planner's whole motion).
 
 The layout is the OMG CDR encoding of the ROS 2 message definitions
 (XCDR1: a 4-byte encapsulation header, then each primitive aligned to its
@@ -413,6 +413,41 @@ def joint_trajectory(stamp: Stamp, frame: str, names: Sequence[str],
         words[(base + clock) // 4 + 1] = np.asarray(
             time, dtype=np.int64)[points, 1]
     return out[:end].tobytes()
+
+
+def multi_dof_trajectory(stamp: Stamp, frame: str, names: Sequence[str],
+                         time: Array, positions: Array, velocities: Array,
+                         accelerations: Array) -> bytes:
+    """
+    Serialize a ``trajectory_msgs/MultiDOFJointTrajectory`` of one body.
+
+    Each point holds one transform (``positions`` (N, 3) m, the identity
+    rotation), one twist (``velocities`` (N, 3) m/s linear, no angular)
+    and one acceleration (``accelerations`` (N, 3) m/s^2), and its
+    ``time`` (N, 2) (sec, nanosec); ``names``: the body's joint name.
+    Returns the bytes ``Publisher.publish`` sends as is (little-endian CDR;
+    the reader is :func:`cartesian_trajectory`).
+    """
+    out = bytearray(b'\x00\x01\x00\x00')
+    out += _STAMP.pack(*stamp)
+    _put_string(out, frame)
+    out += bytes(-(len(out) - 4) % 4) + _COUNT.pack(len(names))
+    for name in names:
+        out += bytes(-(len(out) - 4) % 4)
+        _put_string(out, name)
+    out += bytes(-(len(out) - 4) % 4) + _COUNT.pack(len(time))
+    one = _COUNT.pack(1)
+    zero3 = (0.0, 0.0, 0.0)
+    for k in range(len(time)):
+        for count, values in ((one, (*positions[k], 0.0, 0.0, 0.0, 1.0)),
+                              (one, (*velocities[k], *zero3)),
+                              (one, (*accelerations[k], *zero3))):
+            out += bytes(-(len(out) - 4) % 4) + count
+            out += bytes(-(len(out) - 4) % 8)
+            out += struct.pack(f'<{len(values)}d', *values)
+        out += bytes(-(len(out) - 4) % 4)
+        out += _STAMP.pack(int(time[k][0]), int(time[k][1]))
+    return bytes(out)
 
 
 def _point_layout(origin, joints):

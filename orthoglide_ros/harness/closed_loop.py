@@ -214,7 +214,8 @@ class ClosedLoop:
     after a timeout) and :attr:`exit_codes` and :attr:`stderr` keep what
     they returned. ``loop_rate`` and ``plant_rate`` in Hz; ``engine``: the
     simulator's (``builtin`` or ``mujoco``), ``mjcf_file`` its model file
-    (mujoco; '' builds it from the plant's robot). ``realtime`` (default:
+    (mujoco; '' builds it from the plant's robot); ``force_limit``: the
+    simulator's (N, each actuator; None: its default). ``realtime`` (default:
     where the OS grants it): the loop's nodes (the setpoint publisher's
     included) run every thread SCHED_FIFO NODE_PRIORITY (their
     ``thread_priority``) and this process, the recorder, SCHED_FIFO
@@ -222,7 +223,8 @@ class ClosedLoop:
     """
 
     def __init__(self, context, loop_rate=LOOP_RATE, plant_rate=PLANT_RATE,
-                 engine='builtin', mjcf_file='', realtime=REALTIME):
+                 engine='builtin', mjcf_file='', realtime=REALTIME,
+                 force_limit=None):
         self.context = context
         self.realtime = realtime
         self.node_args = realtime_args(realtime)
@@ -230,6 +232,7 @@ class ClosedLoop:
         self.plant_rate = plant_rate
         self.engine = engine
         self.mjcf_file = mjcf_file
+        self.force_limit = force_limit
         self.processes = {}
         self.exit_codes = {}
         self.stderr = {}
@@ -244,7 +247,9 @@ class ClosedLoop:
             'simulator': ['-p', f'rate_hz:={self.plant_rate}',
                           '-p', f'engine:={self.engine}'] + (
                               ['-p', f'mjcf_file:={self.mjcf_file}']
-                              if self.mjcf_file else []),
+                              if self.mjcf_file else []) + (
+                              ['-p', f'force_limit:={float(self.force_limit)}']
+                              if self.force_limit else []),
             'feedforward': [],
             'tracking_controller': [
                 '-r', 'joint_trajectory:=feedforward/joint_trajectory'],

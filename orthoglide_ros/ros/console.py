@@ -74,3 +74,8 @@ def setpoint_publisher():
 def mechanism_state_publisher():
     """Run the ``mechanism_state_publisher`` node; return its exit code."""
     return _run('mechanism_state_publisher_node')
+
+
+def planner():
+    """Run the ``planner`` node; return its exit code."""
+    return _run('planner_node')

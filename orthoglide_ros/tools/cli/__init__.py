@@ -7,6 +7,9 @@ Subcommands (``orthoglide SUBCOMMAND --help`` for details):
   summary table, a CSV file (``--csv``) and a PNG figure (``--plot``).
 - ``solve``: inverse kinematics and dynamics of one sample.
 - ``batch``: the same for every row of a trajectory CSV file.
+- ``plan``: the fastest motion along a G-code program or CSV waypoints,
+  within the actuators' limits under the robot's dynamics (a ``batch``
+  input file, or a JointTrajectory).
 - ``excitation``: a periodic trajectory for identification (a ``batch``
   input file), its peaks and the condition number of its regressor.
 - ``identify``: the robot's masses and friction from a log (a CSV file or
@@ -24,7 +27,8 @@ Subcommands (``orthoglide SUBCOMMAND --help`` for details):
   forces (GIF).
 
 One module per job, each subcommand's parser beside its ``run_``:
-:mod:`.solving` (paper, solve, batch), :mod:`.identifying` (excitation,
+:mod:`.solving` (paper, solve, batch), :mod:`.planning` (plan),
+:mod:`.identifying` (excitation,
 record, identify, validate), :mod:`.models` (urdf, mjcf),
 :mod:`.pictures` (draw, render, animate); :mod:`.common` what they share.
 
@@ -41,7 +45,8 @@ import sys
 
 from orthoglide_ros.formats.params_file import load_robot, ParametersFileError
 from orthoglide_ros.model.robot import ParameterError, Robot
-from orthoglide_ros.tools.cli import identifying, models, pictures, solving
+from orthoglide_ros.tools.cli import (identifying, models, pictures,
+                                      planning, solving)
 from orthoglide_ros.tools.cli.common import (check_distinct, check_output,
                                              CliError, CSV_COLUMNS, fail,
                                              OUTPUT_OPTIONS, PROG)
@@ -109,7 +114,7 @@ def _parser():
     parser.add_argument('--version', action='version',
                         version=f'%(prog)s {_version()}')
     sub = parser.add_subparsers(dest='command', metavar='COMMAND')
-    for module in (solving, identifying, models, pictures):
+    for module in (solving, planning, identifying, models, pictures):
         for add in module.PARSERS:
             add(sub, common)
     return parser

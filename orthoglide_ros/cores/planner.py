@@ -1,0 +1,215 @@
+"""
+The planner node's logic without ROS: a path in, the fastest motion out.
+
+A ``nav_msgs/Path`` (poses of G in ``base_frame``, untimed) is a polyline
+followed as the smooth curve it samples, within ``path_tolerance``
+(:func:`orthoglide_ros.planning.path.from_waypoints`), and planned by
+:func:`orthoglide_ros.planning.parametrization.plan`: the fastest motion
+from rest at the first pose to rest at the last, within the
+``joint_limits.<joint>.*`` of actuators A, B, C under the robot's own
+dynamics (``robot.*``) and ``max_speed``, sampled at ``rate_hz``. The node
+publishes it on ``cartesian_trajectory``, the feedforward's whole-motion
+input.
+
+Rules (``doc/planner.md`` states them for users): a path is refused,
+counted by reason, and publishes nothing, when its frame (or a pose's) is
+neither empty nor ``base_frame`` (``frame``), a position is not finite
+(``non_finite``), it has fewer than two poses or none away from the first
+(``too_few_poses``), or the robot cannot follow it within its limits
+(``infeasible``: out of the workspace, statics beyond ``max_effort``,
+nothing that bounds it; the reason names the pose, from 1); one refused
+before it is read counts as ``oversize`` or ``malformed``. Orientations
+are not used: the platform only translates.
+"""
+
+import math
+import time
+
+import numpy as np
+
+from orthoglide_ros.cores import realtime
+from orthoglide_ros.cores.core import Core
+from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.parameters import field, Spec, Table
+from orthoglide_ros.cores.status import OK, WARN
+from orthoglide_ros.model.robot import JOINT_NAMES, ParameterError
+from orthoglide_ros.planning.gcode import ProgramError
+from orthoglide_ros.planning.limits import (KINDS, limits_from_parameters,
+                                            LIMIT_BOUND, LimitsError,
+                                            PAPER_LIMITS)
+from orthoglide_ros.planning.parametrization import plan
+from orthoglide_ros.planning.path import from_waypoints
+
+REASONS = ('frame', 'non_finite', 'too_few_poses', 'infeasible',
+           'malformed', 'oversize')
+# The nav_msgs/Path read whole: 100,000 poses (about 8 MB).
+PATH_BYTES = 8 * 1024 * 1024
+MAX_POSES = 100_000
+
+
+def _limit_specs():
+    """Return the ``joint_limits.<joint>.*`` rows, the paper robot's by default."""
+    specs = []
+    for joint in JOINT_NAMES:
+        paper = PAPER_LIMITS[joint]
+        for key, has, unit, what in KINDS:
+            specs.append(Spec(
+                f'joint_limits.{joint}.{has}', 'bool', paper.get(has, False),
+                f'whether {key} of {joint} bounds {what}'))
+            specs.append(Spec(
+                f'joint_limits.{joint}.{key}', 'double', paper.get(key, 0.0),
+                f'largest {what} of {joint} ({unit}) where '
+                f'{has} is true', (0.0, LIMIT_BOUND)))
+    return specs
+
+
+def _limits_rule(settings):
+    """Refuse limits that ros2_control's form refuses (a flag without a value)."""
+    try:
+        limits_of(settings)
+    except LimitsError as error:
+        name = str(error).split(' ', 1)[0].rstrip(':')
+        raise ParameterError(name, str(error).split(' ', 1)[1]) from None
+
+
+PARAMETERS = Table('PlannerSettings', (
+    Spec('base_frame', 'string', 'base_link',
+         'frame of the path\'s poses and of the published motion'),
+    Spec('max_speed', 'double', 0.0,
+         'largest speed of G (m/s); 0.0: none beside the limits',
+         (0.0, 100.0)),
+    Spec('path_tolerance', 'double', 1e-5,
+         'a path\'s polyline is followed as the smooth curve it samples, '
+         'its corners blended within this distance (m); 0.0: G stops at '
+         'every corner', (0.0, 0.01)),
+    Spec('rate_hz', 'double', 1000.0,
+         'points per second of the published motion (Hz)',
+         (100.0, 100000.0)),
+    *_limit_specs(),
+    *realtime.SPECS,
+), rules=(_limits_rule,), robot=True)
+
+
+def limits_of(settings):
+    """Return the :class:`Limits` of the settings' ``joint_limits.*``."""
+    values = {}
+    for joint in JOINT_NAMES:
+        for key, has, _, _ in KINDS:
+            for name in (has, key):
+                full = f'joint_limits.{joint}.{name}'
+                values[full] = getattr(settings, field(full))
+    for joint in JOINT_NAMES:   # a max of 0.0 where its flag is off: none
+        for key, has, _, _ in KINDS:
+            if not values[f'joint_limits.{joint}.{has}']:
+                del values[f'joint_limits.{joint}.{key}']
+    return limits_from_parameters(values)
+
+
+class Planner(Core):
+    """
+    Inputs, rules and counters of the planner.
+
+    :meth:`path` returns ``(frame, Motion)`` to publish, or raises
+    :class:`Rejected`, already counted.
+    """
+
+    INPUTS = ('path',)
+    REASONS = REASONS
+
+    def __init__(self, settings, now=0.0):
+        super().__init__(settings, now)
+        self.limits = limits_of(settings)
+        self.planned = 0
+        self.withheld = 0
+        self.last_rejection = None
+        self.last_seconds = math.nan      # planning time of the last path
+        self.last_duration = math.nan     # its motion's duration
+        self.last_points = 0
+
+    def configure(self, settings):
+        """Use new settings (and their limits) from the next path on."""
+        super().configure(settings)
+        self.limits = limits_of(settings)
+
+    def path(self, frame, frames, positions, now):
+        """
+        Take one path; return ``(frame, Motion)`` to publish.
+
+        ``frame``: the header's; ``frames``: each pose's; ``positions``:
+        (N, 3) m. None (withheld) while inactive.
+        """
+        self.received['path'] += 1
+        try:
+            motion = self._plan(frame, frames, positions)
+        except Rejected as rejection:
+            self.count('path', rejection)
+            raise
+        if motion is None:
+            self.withheld += 1
+            return None
+        self.planned += 1
+        return self.settings.base_frame, motion
+
+    def _plan(self, frame, frames, positions):
+        settings = self.settings
+        base = settings.base_frame
+        for k, name in enumerate((frame, *frames)):
+            if name and name != base:
+                where = 'the path' if k == 0 else f'pose {k}'
+                raise Rejected('frame', f'{where} in frame {name!r}, '
+                               f'expected {base!r}')
+        positions = np.asarray(positions, dtype=float).reshape(-1, 3)
+        if not np.isfinite(positions).all():
+            k = int(np.argmin(np.isfinite(positions).all(1))) + 1
+            raise Rejected('non_finite', f'pose {k}: position '
+                           f'{positions[k - 1].tolist()} is not finite')
+        if len(positions) < 2:
+            raise Rejected('too_few_poses', f'{len(positions)} pose(s): a '
+                           'path needs two at least')
+        if not self.active:
+            return None
+        start = time.monotonic()
+        try:
+            path = from_waypoints(positions, None,
+                                  list(range(1, len(positions) + 1)),
+                                  settings.path_tolerance)
+            motion = plan(settings.robot, path, self.limits,
+                          settings.rate_hz, settings.max_speed or math.inf)
+        except ProgramError as error:
+            reason = 'too_few_poses' if 'zero-length' in error.detail \
+                else 'infeasible'
+            where = '' if error.line is None else f'pose {error.line}: '
+            raise Rejected(reason, where + error.detail) from None
+        self.last_seconds = time.monotonic() - start
+        self.last_duration = motion.duration
+        self.last_points = len(motion.t)
+        return motion
+
+    def count(self, source, rejection):
+        """Count a refusal, and keep it for the status message."""
+        super().count(source, rejection)
+        self.last_rejection = rejection
+
+    def period_counters(self):
+        """Return the counters of the period's rates."""
+        return dict(planned=self.planned)
+
+    def ladder(self, now, seconds, new):
+        """Return the rejections and the wait steps."""
+        last = self.last_rejection
+        return (
+            (new['rejected'], WARN,
+             f'{new["rejected"]} path(s) rejected in the last period, the '
+             f'last ({last.reason if last else ""}): {last}'),
+            (self.received['path'] == 0, OK, 'waiting for a path'))
+
+    def values(self, now, seconds, new):
+        """Return the counters and the last plan's figures."""
+        return [
+            ('paths planned', self.planned),
+            ('paths received', self.received['path']),
+            ('paths withheld (inactive)', self.withheld),
+            ('last planning time (s)', self.last_seconds),
+            ('last motion duration (s)', self.last_duration),
+            ('last motion points', self.last_points),
+        ]

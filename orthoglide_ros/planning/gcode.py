@@ -1,0 +1,464 @@
+"""
+The G-code subset a CAM post-processor for a 3-axis mill emits, read into moves.
+
+:func:`read_gcode` turns the text of a program into :class:`Move` rows
+(straight lines, exact arcs and helices), each with the line of the file it
+came from (counted from 1), its feed and the path control mode of its end.
+Nothing is linearised: an arc stays its centre, plane and angle.
+
+The subset (doc/planning.md has the table):
+
+- motion: ``G0`` (no feed cap), ``G1``, ``G2``/``G3`` (clockwise and
+  counter-clockwise seen from the plane's positive normal, ``I J K``
+  offsets from the start, incremental as G91.1, or ``R``: positive for the
+  arc of at most half a turn, negative for the longer one), helical when
+  the third axis moves, a full turn when the end's in-plane coordinates
+  are the start's, ``P`` whole turns;
+- ``G17``/``G18``/``G19`` planes XY, ZX, YZ; ``G20``/``G21`` inches and
+  millimetres (the default); ``G90``/``G91`` absolute (the default) and
+  incremental coordinates; ``G94`` feed per minute (the only one);
+- ``G61`` exact path (the default): stops only at a corner, a tangent
+  junction is passed at speed; ``G61.1`` exact stop at every move's end;
+  ``G64 P<p>`` corners blended within ``p`` (program units), ``G64``
+  without ``P`` within the planner's tolerance;
+- ``G40``, ``G49``, ``G80``, ``G91.1``: the states above, accepted as
+  no-ops (a post-processor's safety line);
+- ``F`` feed (units per minute, in the units of the move), ``N`` line
+  numbers, comments ``( )`` and ``;``, ``%`` delimiter lines,
+  ``M2``/``M30`` (the end: what follows is not read).
+
+Anything else is refused with :class:`ProgramError` naming the line:
+``line 7: G41 (cutter compensation) is not supported``. Coordinates are
+those of G in the base frame, origin at home; :class:`Move` holds them in
+m, feeds in m/s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+import re
+from typing import Optional, Sequence
+
+import numpy as np
+
+from orthoglide_ros.model.types import Array
+
+MM = 1e-3                   # m per program unit, G21
+INCH = 25.4e-3              # m per program unit, G20
+# Longest line read (characters): RS274NGC's is 255; comments may run on.
+MAX_LINE = 1024
+# Most moves in one program.
+MAX_MOVES = 200_000
+# Arc ends whose distances to the centre differ by more than this (m) or
+# this share of the radius, whichever is larger, are refused; a smaller
+# difference moves the centre onto the chord's bisector (LinuxCNC's rule,
+# 0.002 mm).
+ARC_RADIUS_TOLERANCE = 2e-6
+ARC_RADIUS_SHARE = 1e-4
+# In-plane distance (m) below which an arc's end is its start: a full turn.
+FULL_TURN_TOLERANCE = 1e-9
+# A move shorter than this (m) moves nothing and is dropped.
+ZERO_LENGTH = 1e-12
+
+# The path control modes of a move's end.
+EXACT_STOP = 'exact_stop'       # G61.1
+EXACT_PATH = 'exact_path'       # G61
+BLEND = 'blend'                 # G64
+
+# Planes: the in-plane axes (e1, e2) and the normal e3 = e1 x e2 (indices
+# of x, y, z), and the offset letters of e1, e2.
+PLANES = {17: ((0, 1, 2), 'IJ'), 18: ((2, 0, 1), 'KI'), 19: ((1, 2, 0), 'JK')}
+
+MOTION = {0, 1, 2, 3}
+SUPPORTED_G = {0.0, 1.0, 2.0, 3.0, 17.0, 18.0, 19.0, 20.0, 21.0, 40.0,
+               49.0, 61.0, 61.1, 64.0, 80.0, 90.0, 91.0, 91.1, 94.0}
+# Modal groups of the supported codes (two of one group on a line: refused).
+GROUPS = {0: 'motion', 1: 'motion', 2: 'motion', 3: 'motion', 17: 'plane',
+          18: 'plane', 19: 'plane', 20: 'units', 21: 'units',
+          90: 'distance', 91: 'distance', 61: 'path control',
+          61.1: 'path control', 64: 'path control'}
+# Why a code is refused, by family (RS274NGC's names).
+G_NAMES = (
+    ((4,), 'dwell'), ((5, 5.1, 5.2, 5.3), 'splines'),
+    ((7, 8), 'lathe diameter mode'), ((10,), 'data setting'),
+    ((28, 28.1, 30, 30.1), 'return to a stored position'),
+    ((33, 33.1, 76), 'threading'), ((38.2, 38.3, 38.4, 38.5), 'probing'),
+    ((41, 41.1, 42, 42.1), 'cutter compensation'),
+    ((43, 43.1, 43.2), 'tool length offset'),
+    ((52, 92, 92.1, 92.2, 92.3), 'coordinate offsets'),
+    ((53,), 'machine coordinates'),
+    ((54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3), 'work offsets'),
+    ((73, 81, 82, 83, 84, 85, 86, 87, 88, 89), 'canned cycles'),
+    ((90.1,), 'absolute arc centres'), ((93,), 'inverse time feed'),
+    ((95,), 'feed per revolution'), ((96, 97), 'spindle speed mode'),
+    ((98, 99), 'canned cycle return'))
+M_NAMES = (
+    ((0, 1, 60), 'program pause'), ((3, 4, 5, 19), 'spindle'),
+    ((6, 61), 'tool change'), ((7, 8, 9), 'coolant'),
+    ((48, 49, 50, 51, 52, 53), 'override control'),
+    ((62, 63, 64, 65, 66, 67, 68), 'digital and analog outputs'),
+    ((98, 99), 'subprograms'))
+WORD_NAMES = {'S': 'spindle speed', 'T': 'tool', 'H': 'tool length offset',
+              'D': 'cutter compensation', 'A': 'rotary axis A',
+              'B': 'rotary axis B', 'C': 'rotary axis C', 'U': 'axis U',
+              'V': 'axis V', 'W': 'axis W', 'E': 'extruder axis E',
+              'Q': 'canned cycle or blending parameter Q',
+              'L': 'loop count or data setting L', 'O': 'subroutines',
+              '#': 'parameters', '[': 'expressions'}
+NUMBER = re.compile(r'[+-]?(?:\d+\.?\d*|\.\d+)$')
+
+
+class ProgramError(ValueError):
+    """
+    A program the planner refuses: the message names the line (``line N``).
+
+    ``line``: the program's line (from 1), None where no line is to blame;
+    ``detail``: the message without it.
+    """
+
+    def __init__(self, line: Optional[int], message: str) -> None:
+        """Keep ``line`` (from 1, or None) and the message without it."""
+        super().__init__(message if line is None
+                         else f'line {line}: {message}')
+        self.line = line
+        self.detail = message
+
+
+@dataclass(frozen=True)
+class Move:
+    """
+    One move of the program, in the base frame (m, m/s).
+
+    ``kind``: ``'line'`` or ``'arc'``; ``start``, ``end``: (3,) arrays of G
+    (m); ``line``: the program's line (from 1); ``feed``: the speed cap of
+    G (m/s; ``math.inf`` for G0 and for waypoints without one); ``mode``:
+    the path control at its end (EXACT_STOP, EXACT_PATH, BLEND) and
+    ``tolerance``: a blend's (m; None: the planner's). An arc also has
+    ``centre`` (m, on the start's level along the normal), ``normal`` (the
+    plane's unit normal e3), ``angle`` (rad, signed about ``normal``: a
+    full turn is 2 pi) and ``rise`` (m along ``normal``, a helix's).
+    """
+
+    kind: str
+    start: Array
+    end: Array
+    line: int
+    feed: float
+    mode: str = EXACT_PATH
+    tolerance: Optional[float] = None
+    centre: Optional[Array] = None
+    normal: Optional[Array] = None
+    angle: float = 0.0
+    rise: float = 0.0
+
+
+@dataclass
+class _State:
+    """The interpreter's modal state."""
+
+    position: Array                     # m
+    scale: float = MM                   # m per program unit
+    absolute: bool = True
+    plane: int = 17
+    motion: Optional[int] = None
+    feed: Optional[float] = None        # program units per minute
+    feed_line: int = 0
+    mode: str = EXACT_PATH
+    tolerance: Optional[float] = None   # m
+
+
+def read_gcode(text: str,
+               start: Sequence[float] = (0.0, 0.0, 0.0)) -> list[Move]:
+    r"""
+    Return the moves of the G-code program ``text``, from ``start`` (m).
+
+    Raises :class:`ProgramError` naming the first line it refuses. Moves
+    that move nothing are dropped; a program with none left is the
+    caller's to refuse.
+
+    >>> moves = read_gcode('G21 G90 F600\nG1 X10\nG2 X20 Y0 I5 J0\nM30')
+    >>> [(m.kind, m.line, round(m.feed, 4)) for m in moves]
+    [('line', 2, 0.01), ('arc', 3, 0.01)]
+    """
+    state = _State(np.array(start, dtype=float))
+    moves: list[Move] = []
+    for number, raw in enumerate(text.splitlines(), 1):
+        if len(raw) > MAX_LINE:
+            raise ProgramError(number, f'longer than {MAX_LINE} characters')
+        words = _words(number, raw)
+        if words is None:
+            continue
+        if _execute(number, words, state, moves):
+            break
+        if len(moves) > MAX_MOVES:
+            raise ProgramError(number, f'more than {MAX_MOVES} moves')
+    return moves
+
+
+def _words(number, raw):
+    """Return a line's words as ``[(letter, value, text)]``, None if none."""
+    text = ''.join(_strip_comments(number, raw).split())
+    if not text or text == '%':
+        return None
+    if text.startswith('/'):
+        raise ProgramError(number, '/ (block delete) is not supported')
+    words = []
+    k = 0
+    while k < len(text):
+        letter = text[k].upper()
+        if not letter.isalpha():
+            name = WORD_NAMES.get(letter)
+            if name is not None:
+                raise ProgramError(number,
+                                   f'{letter} ({name}) is not supported')
+            raise ProgramError(number, f'unexpected {text[k]!r} where a word '
+                               '(a letter and a number) was expected')
+        j = k + 1
+        while j < len(text) and (text[j].isdigit() or text[j] in '.+-'):
+            j += 1
+        digits = text[k + 1:j]
+        if not NUMBER.match(digits):
+            raise ProgramError(number, f'malformed number {letter}{digits}')
+        words.append((letter, float(digits), f'{letter}{digits}'))
+        k = j
+    return words
+
+
+def _strip_comments(number, raw):
+    """Return ``raw`` without its ``( )`` and ``;`` comments."""
+    out = []
+    inside = False
+    for char in raw:
+        if inside:
+            if char == ')':
+                inside = False
+            elif char == '(':
+                raise ProgramError(number, 'nested comment')
+        elif char == '(':
+            inside = True
+        elif char == ';':
+            break
+        else:
+            out.append(char)
+    if inside:
+        raise ProgramError(number, 'comment not closed: ( without )')
+    return ''.join(out)
+
+
+def _execute(number, words, state, moves):
+    """Apply one line to ``state``, append its move; True at M2/M30."""
+    g_codes, values, end = _sort_words(number, words)
+    p_word = values.pop('P', None)
+    if 'F' in values:
+        feed = values.pop('F')
+        if feed < 0.0:
+            raise ProgramError(number, f'negative feed rate F{feed:g}')
+        state.feed, state.feed_line = feed, number
+    values.pop('N', None)
+    motion = None
+    for code in g_codes:
+        if code in (20, 21):
+            state.scale = INCH if code == 20 else MM
+        elif code in (17, 18, 19):
+            state.plane = int(code)
+        elif code in (90, 91):
+            state.absolute = code == 90
+        elif code == 61:
+            state.mode, state.tolerance = EXACT_PATH, None
+        elif code == 61.1:
+            state.mode, state.tolerance = EXACT_STOP, None
+        elif code == 64:
+            state.mode = BLEND
+            state.tolerance = None if p_word is None else _tolerance(
+                number, p_word, state.scale)
+            p_word = None
+        elif code in MOTION:
+            motion = int(code)
+    if motion is not None:
+        state.motion = motion
+    axes = {k: values.pop(k) for k in 'XYZ' if k in values}
+    arc_words = {k: values.pop(k) for k in 'IJKR' if k in values}
+    if not axes and not arc_words and motion is None:
+        if p_word is not None:
+            raise ProgramError(number, 'P without G64 or an arc')
+        return end
+    if state.motion is None:
+        raise ProgramError(number, 'a move without a motion mode (G0, G1, '
+                           'G2 or G3)')
+    target = state.position.copy()
+    for axis, value in axes.items():
+        k = 'XYZ'.index(axis)
+        target[k] = value * state.scale + (0.0 if state.absolute
+                                           else state.position[k])
+    if state.motion in (0, 1):
+        if arc_words:
+            raise ProgramError(number, ', '.join(arc_words)
+                               + ' only with G2 or G3')
+        if p_word is not None:
+            raise ProgramError(number, 'P without G64 or an arc')
+        move = _line(number, state, target)
+    else:
+        move = _arc(number, state, target, arc_words, p_word)
+    if move is not None:
+        moves.append(move)
+        state.position = move.end
+    return end
+
+
+def _sort_words(number, words):
+    """Split a line into its G codes, other words and whether it ends."""
+    g_codes = []
+    values = {}
+    groups = {}
+    end = False
+    for letter, value, text in words:
+        if letter == 'G':
+            code = round(value, 1)
+            if code not in SUPPORTED_G or abs(value - code) > 1e-9:
+                raise ProgramError(number, f'{text} ({_name(G_NAMES, code)}) '
+                                   'is not supported')
+            group = GROUPS.get(code)
+            if group is not None:
+                if group in groups:
+                    raise ProgramError(number, f'{groups[group]} and {text} '
+                                       f'on one line: two {group} codes')
+                groups[group] = text
+            g_codes.append(code)
+        elif letter == 'M':
+            if value in (2.0, 30.0):
+                end = True
+            else:
+                raise ProgramError(number, f'{text} ({_name(M_NAMES, value)})'
+                                   ' is not supported')
+        elif letter in 'FNXYZIJKRP':
+            if letter in values:
+                raise ProgramError(number, f'two {letter} words on one line')
+            values[letter] = value
+        else:
+            name = WORD_NAMES.get(letter, 'an unknown word')
+            raise ProgramError(number, f'{text} ({name}) is not supported')
+    return g_codes, values, end
+
+
+def _name(table, code):
+    for codes, name in table:
+        if code in codes:
+            return name
+    return 'not in the subset'
+
+
+def _tolerance(number, value, scale):
+    if value < 0.0:
+        raise ProgramError(number, f'negative blending tolerance P{value:g}')
+    return value * scale
+
+
+def _feed(number, state, rapid):
+    """Return the move's feed cap (m/s): inf for G0."""
+    if rapid:
+        return math.inf
+    if state.feed is None:
+        raise ProgramError(number, f'G{state.motion} without a feed rate (F)')
+    if state.feed <= 0.0:
+        raise ProgramError(number, f'G{state.motion} at feed rate zero (F0 '
+                           f'on line {state.feed_line})')
+    return state.feed * state.scale / 60.0
+
+
+def _line(number, state, target):
+    if np.linalg.norm(target - state.position) <= ZERO_LENGTH:
+        return None
+    feed = _feed(number, state, state.motion == 0)
+    return Move('line', state.position.copy(), target, number, feed,
+                state.mode, state.tolerance)
+
+
+def _arc(number, state, target, words, turns):
+    """Return the arc (G2, G3) from the state's position to ``target``."""
+    feed = _feed(number, state, False)
+    (i1, i2, i3), letters = PLANES[state.plane]
+    allowed = set(letters) | {'R'}
+    wrong = [k for k in words if k not in allowed]
+    if wrong:
+        raise ProgramError(number, f'{wrong[0]} is not an arc word of the '
+                           f'G{state.plane} plane ({", ".join(sorted(allowed))})')
+    if 'R' in words and len(words) > 1:
+        raise ProgramError(number, 'an arc with both R and I J K')
+    if not words:
+        raise ProgramError(number, f'G{state.motion} needs I J K offsets or R')
+    if turns is not None and (turns < 1.0 or turns != int(turns)):
+        raise ProgramError(number, f'P{turns:g}: the turns of an arc must be '
+                           'a whole number of at least 1')
+    start = state.position
+    a = np.array([start[i1], start[i2]])
+    b = np.array([target[i1], target[i2]])
+    ccw = state.motion == 3
+    if 'R' in words:
+        centre = _centre_from_radius(number, a, b, words['R'] * state.scale,
+                                     ccw)
+    else:
+        offset = np.array([words.get(letters[0], 0.0),
+                           words.get(letters[1], 0.0)]) * state.scale
+        centre = _centre_from_offsets(number, a, b, a + offset)
+    ra, rb = a - centre, b - centre
+    full = float(np.hypot(*(b - a))) <= FULL_TURN_TOLERANCE
+    if full:
+        sweep = 2.0 * math.pi
+    else:   # counter-clockwise from the start to the end, in [0, 2 pi)
+        sweep = (math.atan2(rb[1], rb[0]) - math.atan2(ra[1], ra[0])) % (
+            2.0 * math.pi)
+        if not ccw:
+            sweep = 2.0 * math.pi - sweep
+    angle = (sweep + 2.0 * math.pi * (int(turns or 1) - 1)) * (
+        1.0 if ccw else -1.0)
+    centre3 = start.copy()
+    centre3[i1], centre3[i2] = centre
+    normal = np.zeros(3)
+    normal[i3] = 1.0
+    end = target.copy()
+    if full:    # the end's in-plane coordinates are the start's, exactly
+        end[i1], end[i2] = start[i1], start[i2]
+    return Move('arc', start.copy(), end, number, feed, state.mode,
+                state.tolerance, centre3, normal, angle,
+                float(target[i3] - start[i3]))
+
+
+def _centre_from_offsets(number, a, b, centre):
+    """Check an I J K centre; move it onto the chord's bisector."""
+    ra = float(np.hypot(*(a - centre)))
+    rb = float(np.hypot(*(b - centre)))
+    if ra <= ZERO_LENGTH:
+        raise ProgramError(number, 'an arc of radius zero (its centre is its '
+                           'start)')
+    if abs(rb - ra) > max(ARC_RADIUS_TOLERANCE, ARC_RADIUS_SHARE * ra):
+        raise ProgramError(number, f'the arc\'s end is {rb * 1e3:.6g} mm from '
+                           f'its centre, its start {ra * 1e3:.6g} mm: no arc '
+                           'joins them')
+    chord = b - a
+    length = float(np.hypot(*chord))
+    if length <= FULL_TURN_TOLERANCE:
+        return centre
+    along = chord / length
+    return centre - along * float((centre - 0.5 * (a + b)) @ along)
+
+
+def _centre_from_radius(number, a, b, radius, ccw):
+    """Centre of the R-format arc (RS274NGC: R < 0 the longer one)."""
+    chord = b - a
+    length = float(np.hypot(*chord))
+    if length <= FULL_TURN_TOLERANCE:
+        raise ProgramError(number, 'a full turn needs I J K, not R')
+    if radius == 0.0:
+        raise ProgramError(number, 'an arc of radius zero')
+    half = 0.5 * length
+    if abs(radius) < half * (1.0 - 1e-9) - ARC_RADIUS_TOLERANCE:
+        raise ProgramError(number, f'the arc radius {abs(radius) * 1e3:.6g} '
+                           f'mm does not fit its chord of '
+                           f'{length * 1e3:.6g} mm')
+    height = math.sqrt(max(radius * radius - half * half, 0.0))
+    left = np.array([-chord[1], chord[0]]) / length
+    side = 1.0 if ccw else -1.0
+    if radius < 0.0:
+        side = -side
+    return 0.5 * (a + b) + side * height * left

@@ -1,0 +1,130 @@
+"""
+Plan the fastest motion along a program: ``plan``.
+
+A G-code program or CSV waypoints in, the time-optimal motion of G out
+(:mod:`orthoglide_ros.planning`), as the CSV ``batch`` reads or as the
+JointTrajectory ``batch`` writes.
+"""
+
+import math
+import sys
+
+import numpy as np
+
+from orthoglide_ros.formats.params_file import ParametersFileError
+from orthoglide_ros.planning import parametrization
+from orthoglide_ros.planning.gcode import ProgramError
+from orthoglide_ros.planning.limits import (limits_from_params_file,
+                                            LimitsError, load_limits,
+                                            paper_limits)
+from orthoglide_ros.planning.programs import read_program
+from orthoglide_ros.tools.cli.common import (CliError, command, finite_float,
+                                             INPUT_GROUPS, table_csv, within,
+                                             write_output)
+from orthoglide_ros.tools.cli.solving import (_joint_names,
+                                              _joint_trajectory_yaml)
+
+DEFAULT_RATE = 1000.0           # Hz
+DEFAULT_TOLERANCE = 1e-5        # m
+# The columns written: those ``batch`` reads.
+PLAN_COLUMNS = tuple(c for _, names, _ in INPUT_GROUPS for c in names)
+_rate = within(float, 1.0, 100000.0, unit=' Hz')
+_tolerance = within(float, 0.0, 0.01, unit=' m')
+_speed = within(float, 0.0, 100.0, above=True, unit=' m/s')
+
+
+def add_plan(sub, common):
+    """Add ``plan``: the fastest motion along a program."""
+    plan = command(
+        sub, [common], 'plan', run_plan,
+        help='plan the fastest motion along a G-code program or waypoints',
+        description='The fastest motion of the platform centre G that '
+        'starts at rest at --start, follows the program\'s path and ends at '
+        'rest at its last point, within the actuators\' limits under the '
+        'robot\'s own dynamics (masses, payload, armature, friction, '
+        'gravity) and within the programmed feed. The program: G-code (the '
+        'subset of doc/planning.md: G0 G1 G2 G3, G17-G19, G20/G21, '
+        'G90/G91, G94, G61, G61.1, G64 P, F, N, comments, M2/M30; mm by '
+        'default, origin at home) or CSV waypoints (header x,y,z in m, '
+        'optional feed in m/s). Limits: --limits FILE (ros2_control\'s '
+        'joint_limits form), else the --params file\'s planner section, else '
+        'the paper robot\'s. Output columns: ' + ','.join(PLAN_COLUMNS)
+        + ' (SI units), the last sample exactly at the end. Nothing is '
+        'written unless the whole motion is planned.')
+    plan.add_argument('--input', required=True, metavar='PROGRAM',
+                      help='G-code program or CSV waypoints; - for standard '
+                      'input')
+    plan.add_argument('--output', required=True, metavar='FILE',
+                      help='the planned motion; - for standard output')
+    plan.add_argument('--limits', metavar='FILE', help='YAML file with a '
+                      'top-level joint_limits: mapping (ros2_control / '
+                      'MoveIt form, per joint slider_a, slider_b, slider_c: '
+                      'has_effort_limits, max_effort (N), has_velocity_limits, '
+                      'max_velocity (m/s), has_acceleration_limits, '
+                      'max_acceleration (m/s^2), has_jerk_limits, max_jerk '
+                      '(m/s^3))')
+    plan.add_argument('--rate', type=_rate, default=DEFAULT_RATE,
+                      metavar='HZ', help='samples per second (default '
+                      f'{DEFAULT_RATE:g})')
+    plan.add_argument('--start', type=finite_float, nargs=3,
+                      default=[0.0, 0.0, 0.0], metavar=('X', 'Y', 'Z'),
+                      help='where G starts, at rest (m, base frame; default '
+                      'home 0 0 0)')
+    plan.add_argument('--tolerance', type=_tolerance,
+                      default=DEFAULT_TOLERANCE, metavar='M',
+                      help='corners of waypoints and of G64 without P are '
+                      'blended within this distance of the path (m, default '
+                      f'{DEFAULT_TOLERANCE:g}; 0: G stops at every corner)')
+    plan.add_argument('--max-speed', type=_speed, default=math.inf,
+                      metavar='M/S', help='G\'s speed cap beside the '
+                      'programmed feed (m/s; default none)')
+    plan.add_argument('--format', choices=('csv', 'joint_trajectory'),
+                      default='csv', help='csv: the columns above (default); '
+                      'joint_trajectory: a trajectory_msgs/JointTrajectory in '
+                      'YAML with the forces as efforts, as batch writes it')
+    return plan
+
+
+def run_plan(robot, args):
+    """Plan the program; write CSV or a JointTrajectory."""
+    name = '<stdin>' if args.input == '-' else args.input
+    names = _joint_names(args.params)
+    limits, told = _limits(args, names)
+    try:
+        path = read_program(args.input, args.start, args.tolerance)
+        motion = parametrization.plan(robot, path, limits, args.rate,
+                                      args.max_speed)
+    except ProgramError as error:
+        raise CliError(f'{name}: {error}') from None
+    if args.format == 'joint_trajectory':
+        ns = np.round(motion.t * 1e9).astype(np.int64)
+        data = _joint_trajectory_yaml(ns, motion.solution, names)
+    else:
+        data = table_csv(PLAN_COLUMNS, motion.t, np.hstack((
+            motion.position, motion.velocity, motion.acceleration)))
+    write_output(args.output, data)
+    if not told:
+        print('orthoglide: note: no --limits and no planner section in '
+              '--params: the paper robot\'s limits (doc/planning.md)',
+              file=sys.stderr)
+    if args.output != '-':
+        print(f'planned {motion.duration:.6g} s ({len(motion.t)} samples at '
+              f'{args.rate:g} Hz) along {path.length:.6g} m')
+    return 0
+
+
+def _limits(args, names):
+    """Return ``(limits, given)``: --limits, --params' planner's, the paper's."""
+    try:
+        if args.limits is not None:
+            return load_limits(args.limits, names), True
+        if args.params is not None:
+            found = limits_from_params_file(args.params, 'planner', names)
+            if found is not None:
+                return found, True
+    except (LimitsError, ParametersFileError) as error:
+        raise CliError(str(error)) from None
+    return paper_limits(), False
+
+
+PARSERS = (add_plan,)

@@ -1,0 +1,148 @@
+"""
+The G-code subset: what each word does, and every refusal naming its line.
+
+Arcs are checked against the right-hand rule written here (G17, G18, G19:
+counter-clockwise about the plane's normal Z, Y, X for G3), full turns,
+helices, R both ways, units, incremental coordinates, feeds, comments,
+the end of the program; then each refusal: ``line N: ...`` in one line.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from orthoglide_ros.planning.gcode import ProgramError, read_gcode
+from orthoglide_ros.planning.path import move_piece
+
+
+def midpoint(move):
+    piece = move_piece(move)
+    return piece.point(0.5 * piece.length)
+
+
+def rotate(vector, axis, angle):
+    """Rodrigues: ``vector`` turned by ``angle`` about the unit ``axis``."""
+    v, k = np.asarray(vector, float), np.asarray(axis, float)
+    return (v * math.cos(angle) + np.cross(k, v) * math.sin(angle)
+            + k * (k @ v) * (1 - math.cos(angle)))
+
+
+def test_lines_units_incremental_feed_and_comments():
+    moves = read_gcode(
+        '%\n(a comment) N10 G21 G90 F600 ; and another\n'
+        'G1 X10 Y-5.5\nG91 Z+2.\nG20 G1 X1 F60\nM30\nG1 X1000\n')
+    assert [m.line for m in moves] == [3, 4, 5]
+    assert np.allclose(moves[0].end, [0.010, -0.0055, 0.0])
+    assert np.allclose(moves[1].end, [0.010, -0.0055, 0.002])
+    assert np.allclose(moves[2].end, [0.010 + 0.0254, -0.0055, 0.002])
+    assert moves[0].feed == pytest.approx(0.6 / 60.0)
+    assert moves[2].feed == pytest.approx(60 * 0.0254 / 60.0)
+    rapid = read_gcode('G0 X1')[0]
+    assert rapid.feed == math.inf
+
+
+def test_a_move_to_where_g_is_is_dropped():
+    assert read_gcode('G1 X0 F100\nG0 Y0') == []
+
+
+@pytest.mark.parametrize('plane, normal', (
+    (17, (0, 0, 1)), (18, (0, 1, 0)), (19, (1, 0, 0))))
+def test_arcs_turn_about_the_plane_normal_by_the_right_hand_rule(
+        plane, normal):
+    """A quarter turn about the origin: G3 positive about the normal."""
+    start = {17: (10, 0, 0), 18: (10, 0, 0), 19: (0, 10, 0)}[plane]
+    start_m = np.array(start) * 1e-3
+    for code, sign in (('G3', 1.0), ('G2', -1.0)):
+        text = (f'G21 F600 G{plane}\nG0 X{start[0]} Y{start[1]} Z{start[2]}'
+                f'\n{code} {_end(plane, start, sign)} '
+                f'{_offsets(plane, start)}')
+        arc = read_gcode(text)[-1]
+        assert abs(arc.angle) == pytest.approx(math.pi / 2)
+        expected = rotate(start_m, normal, sign * math.pi / 4)
+        assert np.allclose(midpoint(arc), expected, atol=1e-12)
+
+
+def _end(plane, start, sign):
+    """Return the end a quarter turn away about the normal, as words."""
+    normal = {17: (0, 0, 1), 18: (0, 1, 0), 19: (1, 0, 0)}[plane]
+    end = rotate(start, normal, sign * math.pi / 2)
+    return ' '.join(f'{a}{c:.9f}' for a, c in zip('XYZ', end))
+
+
+def _offsets(plane, start):
+    letters = {17: 'IJ', 18: 'IK', 19: 'JK'}[plane]
+    index = {'I': 0, 'J': 1, 'K': 2}
+    return ' '.join(f'{k}{-start[index[k]]}' for k in letters)
+
+
+def test_a_full_turn_and_a_helix():
+    moves = read_gcode('G21 F600\nG0 X10\nG2 X10 Y0 Z-6 I-10 J0 P2')
+    helix = moves[-1]
+    assert helix.angle == pytest.approx(-4 * math.pi)
+    assert np.allclose(helix.end, [0.010, 0.0, -0.006])
+    piece = move_piece(helix)
+    length = math.hypot(4 * math.pi * 0.01, 0.006)
+    assert piece.length == pytest.approx(length)
+    assert np.allclose(piece.point(piece.length), helix.end, atol=1e-15)
+
+
+def test_r_gives_the_short_arc_positive_and_the_long_one_negative():
+    short = read_gcode('G21 F600\nG3 X20 Y0 R10.000001')[0]
+    long = read_gcode('G21 F600\nG3 X10 Y10 R-10')[0]
+    assert short.angle == pytest.approx(math.pi, abs=1e-3)
+    assert long.angle == pytest.approx(1.5 * math.pi)
+
+
+def test_i_j_k_centres_rounded_are_moved_onto_the_bisector():
+    arc = read_gcode('G21 F600\nG3 X20 Y0.0005 I10.0005 J0')[0]
+    piece = move_piece(arc)
+    assert np.allclose(piece.point(piece.length), arc.end, atol=1e-15)
+
+
+def test_path_control_modes():
+    moves = read_gcode('G21 F600 G61.1\nG1 X1\nG64 P0.02\nG1 X2\nG64\n'
+                       'G1 X3\nG61\nG1 X4')
+    assert [m.mode for m in moves] == ['exact_stop', 'blend', 'blend',
+                                       'exact_path']
+    assert moves[1].tolerance == pytest.approx(2e-5)
+    assert moves[2].tolerance is None
+
+
+@pytest.mark.parametrize('program, message', (
+    ('G21\nG1 X1 F100\n\n\n\n\nG41 D1\n',
+     'line 7: G41 (cutter compensation) is not supported'),
+    ('G43 H1', 'line 1: G43 (tool length offset) is not supported'),
+    ('G54', 'line 1: G54 (work offsets) is not supported'),
+    ('G81 X1 Y1 Z-1 R1', 'line 1: G81 (canned cycles) is not supported'),
+    ('G90.1', 'line 1: G90.1 (absolute arc centres) is not supported'),
+    ('M3 S1000', 'line 1: M3 (spindle) is not supported'),
+    ('S1000', 'line 1: S1000 (spindle speed) is not supported'),
+    ('T1 M6', 'line 1: T1 (tool) is not supported'),
+    ('#1=2', 'line 1: # (parameters) is not supported'),
+    ('G1 X1..2 F1', 'line 1: malformed number X1..2'),
+    ('G1 X- F1', 'line 1: malformed number X-'),
+    ('G1 X', 'line 1: malformed number X'),
+    ('G1 X1 X2 F1', 'line 1: two X words on one line'),
+    ('G0 G1 X1', 'line 1: G0 and G1 on one line: two motion codes'),
+    ('(open comment', 'line 1: comment not closed'),
+    ('X1', 'line 1: a move without a motion mode'),
+    ('G1 X1', 'line 1: G1 without a feed rate (F)'),
+    ('F0\nG1 X1', 'line 2: G1 at feed rate zero (F0 on line 1)'),
+    ('G1 X1 I1 F1', 'line 1: I only with G2 or G3'),
+    ('G17 G2 X1 K1 F1', 'line 1: K is not an arc word of the G17 plane'),
+    ('G2 X1 R1 I1 F1', 'line 1: an arc with both R and I J K'),
+    ('G2 X1 F1', 'line 1: G2 needs I J K offsets or R'),
+    ('G21 G2 X30 Y0 R10 F1', 'line 1: the arc radius 10 mm does not fit '
+     'its chord of 30 mm'),
+    ('G21 G2 X20 Y0 I5 J0 F1', 'line 1: the arc\'s end is 15 mm from its '
+     'centre, its start 5 mm'),
+    ('G2 X0 Y0 R5 F1', 'line 1: a full turn needs I J K, not R'),
+    ('G2 X1 I1 P1.5 F1', 'line 1: P1.5: the turns of an arc'),
+    ('/G1 X1 F1', 'line 1: / (block delete) is not supported'),
+    ('G1 X1 F1\nG1 Y' + '0' * 2000, 'line 2: longer than 1024 characters'),
+))
+def test_refusals_name_their_line(program, message):
+    with pytest.raises(ProgramError) as error:
+        read_gcode(program)
+    assert str(error.value).startswith(message), str(error.value)

@@ -1,0 +1,96 @@
+"""
+The limits file: ros2_control's joint_limits form, and what bounds.
+
+A limit bounds with its ``has_...: true`` and its value, or with its value
+alone; ``has_...: false`` or no value does not bound; a flag without its
+value, an unknown joint or key, a value that is not a positive number, a
+file that is not YAML: refused, naming the key. The node's parameters
+(``joint_limits.<joint>.<key>``) and a parameters file's ``planner``
+section give the same limits; config/orthoglide.yaml's are the paper
+robot's.
+"""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from orthoglide_ros.planning.limits import (limits_from_mapping,
+                                            limits_from_parameters,
+                                            limits_from_params_file,
+                                            LimitsError, load_limits,
+                                            paper_limits)
+
+CONFIG = Path(__file__).resolve().parents[1] / 'config' / 'orthoglide.yaml'
+
+
+def test_what_bounds_and_what_does_not():
+    limits = limits_from_mapping({
+        'slider_a': {'has_effort_limits': True, 'max_effort': 300.0,
+                     'has_velocity_limits': False, 'max_velocity': 1.0},
+        'slider_b': {'max_acceleration': 20, 'has_jerk_limits': False},
+        'slider_c': {'has_position_limits': True, 'min_position': -0.3,
+                     'max_position': 0.2, 'has_soft_limits': False}})
+    assert limits.effort[0] == 300.0 and np.isinf(limits.effort[1:]).all()
+    assert np.isinf(limits.velocity).all()
+    assert limits.acceleration[1] == 20.0
+    assert np.isinf(limits.jerk).all()
+    assert tuple(limits.position[2]) == (-0.3, 0.2)
+    assert limits.bounding
+    assert not limits_from_mapping({'slider_c': {
+        'has_position_limits': True, 'min_position': -0.3,
+        'max_position': 0.2}}).bounding
+
+
+@pytest.mark.parametrize('entries, words', (
+    ({'slider_d': {}}, 'joint_limits.slider_d: not an actuator joint'),
+    ({'slider_a': {'max_efort': 1.0}}, 'joint_limits.slider_a.max_efort: '
+     'not a joint limit'),
+    ({'slider_a': {'has_effort_limits': True}},
+     'joint_limits.slider_a.has_effort_limits is true without max_effort'),
+    ({'slider_a': {'max_effort': -1.0}},
+     'joint_limits.slider_a.max_effort: must be above 0'),
+    ({'slider_a': {'max_effort': 'a lot'}},
+     'joint_limits.slider_a.max_effort: must be a number'),
+    ({'slider_a': {'max_effort': math.inf}},
+     'joint_limits.slider_a.max_effort: must be finite'),
+    ({'slider_a': {'has_effort_limits': 'yes', 'max_effort': 1.0}},
+     'joint_limits.slider_a.has_effort_limits: must be true or false'),
+    ({'slider_a': {'min_position': 0.1}},
+     'position limits need both min_position and max_position'),
+    ({'slider_a': 5}, 'joint_limits.slider_a: must be a mapping'),
+))
+def test_refusals_name_the_key(entries, words):
+    with pytest.raises(LimitsError) as error:
+        limits_from_mapping(entries)
+    assert words in str(error.value)
+
+
+def test_a_file_of_joint_limits(tmp_path):
+    path = tmp_path / 'joint_limits.yaml'
+    path.write_text('joint_limits:\n  slider_c:\n    has_effort_limits: true'
+                    '\n    max_effort: 520.0\n')
+    assert load_limits(path).effort[2] == 520.0
+    for text, words in (('a: [', 'not valid YAML'),
+                        ('robot: {}', 'no top-level joint_limits'),
+                        ('joint_limits: &a {}\nx: *a', 'aliases')):
+        path.write_text(text)
+        with pytest.raises(LimitsError, match=words):
+            load_limits(path)
+    with pytest.raises(LimitsError, match='No such file'):
+        load_limits(tmp_path / 'missing.yaml')
+
+
+def test_parameters_and_the_config_file_give_the_paper_robots_limits():
+    flat = {f'joint_limits.{joint}.{key}': value
+            for joint, entry in {'slider_a': {'max_effort': 650.0}}.items()
+            for key, value in entry.items()}
+    flat['robot.m5'] = 15.0
+    assert limits_from_parameters(flat).effort[0] == 650.0
+    from_config = limits_from_params_file(CONFIG, 'planner')
+    paper = paper_limits()
+    for field in ('effort', 'velocity', 'acceleration', 'jerk'):
+        assert np.array_equal(getattr(from_config, field),
+                              getattr(paper, field)), field
+    assert limits_from_params_file(CONFIG, 'simulator') is None

@@ -1,0 +1,312 @@
+"""
+Planned motions: within every limit, on the path, at rest, optimal.
+
+- a straight line rest to rest under one constant limit takes its
+  closed-form bang-bang duration;
+- a contour of lines, tangent arcs and a helical turn, on a robot with
+  drives and a payload, takes within 1 % of toppra's optimum on a fine
+  grid (an independent solver of the same problem);
+- random programs of lines and arcs inside the workspace, random limits
+  (hypothesis): every sample within every limit (the package's model on
+  every sample, the Lagrange model of ``mechanics_reference`` on the
+  samples nearest their limits), on the programmed path, at rest at both
+  ends, velocities and accelerations those of the positions;
+- friction (viscous, Coulomb per direction, Stribeck) and jerk limits are
+  kept;
+- a path out of the workspace, statics beyond a limit and nothing that
+  bounds the motion are refused, naming the line.
+"""
+
+import math
+
+from hypothesis import assume, given, HealthCheck, settings, \
+    strategies as st
+from mechanics_reference import DRIVES_ROBOT_VALUES
+import numpy as np
+from planning_checks import (friction_reference, lagrange_check,
+                             path_distance, toppra_duration)
+import pytest
+
+from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.planning import gcode, path as paths
+from orthoglide_ros.planning.limits import limits_from_mapping
+from orthoglide_ros.planning.parametrization import (ACCEPT_SHARE, plan,
+                                                     PlanningError)
+
+RATE = 1000.0
+DRIVES = Robot(**DRIVES_ROBOT_VALUES)
+# The issue's drives: force limits of 160-520 N.
+EFFORTS = {'slider_a': 160.0, 'slider_b': 250.0, 'slider_c': 520.0}
+CONTOUR = """(pocket contour: lines, tangent arcs, a helical turn)
+G21 G90 G17 G94
+F30000
+G1 X50 Y0 Z0
+G3 X70 Y20 I0 J20
+G1 Y60
+G3 X50 Y80 I-20 J0
+G1 X-50
+G3 X-70 Y60 J-20
+G1 Y20
+G3 X-50 Y0 I20
+G1 X0
+G2 X0 Y0 Z-30 I0 J40 (helical turn)
+G1 Z-60
+M30
+"""
+
+
+def efforts(values=EFFORTS):
+    return limits_from_mapping({name: {'has_effort_limits': True,
+                                       'max_effort': value}
+                                for name, value in values.items()})
+
+
+def program_path(text, tolerance=1e-5, start=(0.0, 0.0, 0.0)):
+    return paths.from_moves(gcode.read_gcode(text, start), tolerance)
+
+
+def dense(path, points=200000):
+    """Return points along ``path``, about every length / ``points``."""
+    out = []
+    for k, piece in enumerate(path.pieces):
+        n = max(8, int(points * piece.length / path.length))
+        w = np.linspace(0.0, piece.length, n)
+        out.append(path.evaluate(np.full(n, k), w)[0])
+    return np.vstack(out)
+
+
+def shares(motion, limits):
+    """Return the largest |value| / limit of each limit over every sample."""
+    sol = motion.solution
+    with np.errstate(divide='ignore'):
+        out = {'effort': np.abs(sol.force) / limits.effort,
+               'velocity': np.abs(sol.lambdadot) / limits.velocity,
+               'acceleration': np.abs(sol.lambdaddot) / limits.acceleration}
+        if np.isfinite(limits.jerk).any():
+            jerk = np.abs(np.diff(sol.lambdaddot, axis=0)) / np.diff(
+                motion.t)[:, None]
+            out['jerk'] = jerk / limits.jerk
+    return {k: float(v.max()) for k, v in out.items()}
+
+
+def assert_consistent(motion):
+    """
+    At rest at both ends; velocity and acceleration those of the positions.
+
+    The first sample holds the acceleration the motion starts with, the
+    last one is at rest (velocity and acceleration zero: what holds G
+    there), so the last interval's acceleration is its start's.
+    """
+    t, p, v, a = (motion.t, motion.position, motion.velocity,
+                  motion.acceleration)
+    assert np.all(v[0] == 0.0) and np.all(v[-1] == 0.0)
+    assert np.all(a[-1] == 0.0)
+    assert np.allclose(np.diff(t), 1.0 / RATE, rtol=0.0, atol=1e-12)
+    dt = np.diff(t)[:, None]
+    a_in = a[:-1].copy()
+    after = a[1:].copy()
+    after[-1] = a[-2]       # the last interval: its start's acceleration
+    # Positions: the trapezoid of the velocities, exact but for the kink
+    # of a switch of the bang-bang law within the interval (about the
+    # jump of the acceleration times dt^2 / 8; twice that for two).
+    jump = np.linalg.norm(after - a_in, axis=1)[:, None]
+    step = np.abs(np.diff(p, axis=0) - 0.5 * (v[1:] + v[:-1]) * dt)
+    scale = np.abs(a).max() * dt ** 2
+    assert (step <= jump * dt ** 2 / 4 + 1e-3 * scale + 1e-12).all(), \
+        step.max()
+    # Velocities: the trapezoid of the accelerations, integrated from
+    # rest, each interval off by at most half the jump of the
+    # acceleration across it (a switch of the law within it, or a short
+    # curve of high curvature passed within a period).
+    error = np.abs(v[1:] - np.cumsum(0.5 * (after + a_in) * dt, axis=0))
+    budget = np.cumsum(0.5 * jump * dt) + 1e-3 * np.abs(a).max() * t[1:]
+    assert (error <= budget[:, None] + 1e-12).all()
+
+
+@pytest.mark.parametrize('limits, expected', (
+    ({'slider_a': {'max_acceleration': 5.0}}, 2.0 * math.sqrt(0.1 / 5.0)),
+    ({'slider_a': {'max_acceleration': 5.0, 'max_velocity': 0.5}},
+     0.1 / 0.5 + 0.5 / 5.0),
+), ids=('triangle', 'trapezoid'))
+def test_a_line_rest_to_rest_takes_its_bang_bang_duration(limits, expected):
+    """
+    Along x through home, lambda_A = x + const: a |lambdaddot_A| limit is G's.
+
+    The bang-bang law under a constant limit, its duration in closed
+    form, up to the period the duration is rounded up to.
+    """
+    path = program_path('G0 X100')
+    motion = plan(Robot(), path, limits_from_mapping(limits), RATE)
+    assert expected * (1 - 1e-9) <= motion.duration <= expected * 1.001 \
+        + 1.0 / RATE
+    assert_consistent(motion)
+
+
+def test_the_contour_is_within_1_percent_of_toppra_on_a_fine_grid():
+    """Drives and a payload, the issue's force limits; no friction."""
+    path = program_path(CONTOUR)
+    limits = efforts()
+    motion = plan(DRIVES, path, limits, RATE)
+    optimum = toppra_duration(DRIVES, path, limits, intervals=8000)
+    assert abs(motion.duration - optimum) <= 0.01 * optimum, (
+        motion.duration, optimum)
+    assert shares(motion, limits)['effort'] <= 1.0 + ACCEPT_SHARE
+    # The tangent junctions are passed at speed: only the corners stop.
+    speed = np.linalg.norm(motion.velocity, axis=1)
+    rests = np.sum((speed[1:-1] == 0.0))
+    assert rests <= 2
+    assert path_distance(motion.position, dense(path)).max() <= 2e-6
+
+
+def _line_or_arc(draw, here):
+    """One random G-code move from ``here`` (mm) inside the cube."""
+    target = [draw(st.floats(-150.0, 150.0)) for _ in range(3)]
+    if draw(st.booleans()):
+        return 'G1 X{:.4f} Y{:.4f} Z{:.4f}'.format(*target), target
+    plane = draw(st.sampled_from((17, 18, 19)))
+    axes = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}[plane]
+    letters = {17: 'IJ', 18: 'KI', 19: 'JK'}[plane]
+    radius = draw(st.floats(10.0, 60.0))
+    angle = draw(st.floats(0.0, 2.0 * math.pi))
+    offset = (radius * math.cos(angle), radius * math.sin(angle))
+    centre = [here[axes[0]] + offset[0], here[axes[1]] + offset[1]]
+    sweep = draw(st.floats(0.3, 5.0))
+    ccw = draw(st.booleans())
+    start = math.atan2(-offset[1], -offset[0])
+    end = start + (sweep if ccw else -sweep)
+    target = list(here)
+    target[axes[0]] = centre[0] + radius * math.cos(end)
+    target[axes[1]] = centre[1] + radius * math.sin(end)
+    target[axes[2]] = here[axes[2]] + draw(st.floats(-20.0, 20.0))
+    if max(abs(c) for c in target) > 160.0 or max(
+            abs(c) + radius for c in centre) > 200.0:
+        return None, here
+    words = ' '.join('{}{:.6f}'.format('XYZ'[k], target[k]) for k in range(3))
+    return (f'G{plane} G{3 if ccw else 2} {words} {letters[0]}{offset[0]:.6f} '
+            f'{letters[1]}{offset[1]:.6f}'), target
+
+
+@st.composite
+def programs(draw):
+    """Draw a G-code program of 1-4 lines and arcs inside the workspace."""
+    here = [0.0, 0.0, 0.0]
+    mode = draw(st.sampled_from(('G61', 'G61.1', 'G64 P0.01')))
+    lines = [f'G21 G90 {mode} F{draw(st.floats(3000.0, 60000.0)):.1f}']
+    for _ in range(draw(st.integers(1, 4))):
+        line, target = _line_or_arc(draw, here)
+        if line is not None:
+            # Rounded to the program's digits: the arcs' ends as written.
+            lines.append(line)
+            here = target
+    lines.append('M2')
+    return '\n'.join(lines)
+
+
+@st.composite
+def limit_sets(draw):
+    """Draw limits: efforts above the statics, maybe velocity, acceleration."""
+    entries = {}
+    for name, statics in zip(('slider_a', 'slider_b', 'slider_c'),
+                             (150.0, 150.0, 400.0)):
+        entry = {'max_effort': statics + draw(st.floats(50.0, 400.0))}
+        if draw(st.booleans()):
+            entry['max_velocity'] = draw(st.floats(0.1, 1.0))
+        if draw(st.booleans()):
+            entry['max_acceleration'] = draw(st.floats(2.0, 40.0))
+        entries[name] = entry
+    return limits_from_mapping(entries)
+
+
+@settings(max_examples=8, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(programs(), limit_sets())
+def test_random_programs_keep_every_limit_on_the_path(program, limits):
+    try:
+        path = program_path(program)
+    except gcode.ProgramError:      # moves nothing; an arc end off its circle
+        assume(False)
+    motion = plan(DRIVES, path, limits, RATE)
+    for name, share in shares(motion, limits).items():
+        assert share <= 1.0 + ACCEPT_SHARE, (name, share)
+    # The independent model on the samples nearest their limits.
+    sol = motion.solution
+    nearest = set()
+    for values, bound in ((sol.force, limits.effort),
+                          (sol.lambdadot, limits.velocity),
+                          (sol.lambdaddot, limits.acceleration)):
+        with np.errstate(divide='ignore'):
+            ratio = (np.abs(values) / bound).max(1)
+        nearest.update(np.argsort(ratio)[-3:].tolist())
+    for name, share in lagrange_check(DRIVES, motion, limits,
+                                      sorted(nearest)).items():
+        assert share <= 1.0 + ACCEPT_SHARE + 1e-6, (name, share)
+    assert path_distance(motion.position, dense(path)).max() <= 2e-6
+    assert np.allclose(motion.position[0], 0.0, atol=1e-12)
+    assert np.allclose(motion.position[-1], path.end, atol=1e-12)
+    assert_consistent(motion)
+
+
+def test_friction_of_every_law_is_kept():
+    """Viscous, Coulomb both ways apart, Stribeck: forces within limits."""
+    robot = DRIVES.replace(friction_viscous=(30.0, 40.0, 50.0),
+                           friction_coulomb=(5.0, 3.0, 4.0),
+                           friction_coulomb_negative=(7.0, 2.0, 6.0),
+                           friction_stribeck=(3.0, 2.0, 4.0))
+    path = program_path(CONTOUR)
+    limits = efforts()
+    motion = plan(robot, path, limits, RATE)
+    force = mechanics.solve_batch(robot.frictionless(), motion.position,
+                                  motion.velocity,
+                                  motion.acceleration).force
+    force = force + friction_reference(robot, motion.solution.lambdadot)
+    assert (np.abs(force) / limits.effort).max() <= 1.0 + ACCEPT_SHARE
+    # Friction slows it, a little.
+    assert motion.duration >= plan(DRIVES, path, limits, RATE).duration
+
+
+@pytest.mark.parametrize('jerk', (500.0, 5000.0))
+def test_jerk_limits_are_kept_from_sample_to_sample(jerk):
+    path = program_path(CONTOUR)
+    limits = limits_from_mapping({
+        name: {'max_effort': value, 'max_jerk': jerk}
+        for name, value in EFFORTS.items()})
+    motion = plan(DRIVES, path, limits, RATE)
+    for name, share in shares(motion, limits).items():
+        assert share <= 1.0 + ACCEPT_SHARE, (name, share)
+    assert np.all(motion.acceleration[[0, -1]] == 0.0)
+    assert path_distance(motion.position, dense(path)).max() <= 2e-6
+    unlimited = plan(DRIVES, path, efforts(), RATE).duration
+    assert motion.duration > unlimited
+
+
+def test_a_path_out_of_the_workspace_is_refused_naming_line_and_point():
+    path = program_path('G21 G90 F6000\nG1 X100\nG1 X900\nM2')
+    with pytest.raises(PlanningError) as error:
+        plan(DRIVES, path, efforts(), RATE)
+    assert error.value.line == 3
+    assert str(error.value).startswith('line 3: the path at [')
+    assert '] m is too near a singularity' in str(error.value)
+
+
+def test_statics_beyond_a_limit_are_refused_naming_line_joint_force():
+    """C holds about 305 N at home, 380 N at (-200, -200, -250) mm."""
+    path = program_path('G21 G90 F6000\nG1 X10\n\nG1 X-200 Y-200 Z-250\nM2')
+    limits = efforts({'slider_a': 400.0, 'slider_b': 400.0,
+                      'slider_c': 350.0})
+    with pytest.raises(PlanningError) as error:
+        plan(DRIVES, path, limits, RATE)
+    message = str(error.value)
+    assert message.startswith('line 4: at [')
+    assert 'slider_c needs 35' in message and 'N at rest' in message
+    assert 'beyond its max_effort 350 N' in message
+
+
+def test_nothing_bounding_is_refused():
+    path = program_path('G0 X10\nM2')
+    with pytest.raises(PlanningError, match='nothing bounds the motion'):
+        plan(DRIVES, path, limits_from_mapping({}), RATE)
+    feed_only = program_path('G1 X10 F600\nM2')
+    with pytest.raises(PlanningError, match='line 1: nothing bounds the '
+                       'acceleration'):
+        plan(DRIVES, feed_only, limits_from_mapping({}), RATE)
