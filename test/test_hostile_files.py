@@ -157,6 +157,12 @@ SAME_FILE = {
     'animate_output_is_input': (
         ['animate', '--input', '@traj.gif', '--output', '@traj.gif'],
         '--output', '--input'),
+    'plan_output_is_input': (
+        ['plan', '--input', '@traj.csv', '--output', '@traj.csv'],
+        '--output', '--input'),
+    'plan_output_is_limits': (
+        ['plan', '--input', '@traj.csv', '--limits', '@params.yaml',
+         '--output', '@params.yaml'], '--output', '--limits'),
     'paper_plot_is_csv': (
         ['paper', '--csv', '@new.csv', '--plot', '@./new.csv'],
         '--plot', '--csv'),

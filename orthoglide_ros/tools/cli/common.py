@@ -42,7 +42,7 @@ INPUT_GROUPS = (('time', ('t',), False),
 # The options that name files, by role, the same in every subcommand (a
 # new file option goes in one of the two): checked before anything is read,
 # computed or written.
-INPUT_OPTIONS = ('params', 'input', 'validate')
+INPUT_OPTIONS = ('params', 'input', 'validate', 'limits')
 OUTPUT_OPTIONS = ('output', 'report', 'csv', 'plot', 'validate_report')
 
 
