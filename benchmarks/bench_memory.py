@@ -38,12 +38,16 @@ from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.node import Node  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 
-from orthoglide_ros.harness.messages import qos_profile  # noqa: E402
-from orthoglide_ros.harness.probe import spin_until  # noqa: E402
-from orthoglide_ros.harness.processes import (memory_kb,  # noqa: E402
-                                              node_executable, page_faults,
-                                              start_node_process,
-                                              stop_process)
+from orthoglide_testing import use_checkout  # noqa: E402
+from orthoglide_testing.messages import qos_profile  # noqa: E402
+from orthoglide_testing.probe import spin_until  # noqa: E402
+from orthoglide_testing.processes import (memory_kb,  # noqa: E402
+                                          node_executable, page_faults,
+                                          start_node_process,
+                                          stop_process)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+use_checkout(ROOT)
 
 NODES = ('feedforward', 'simulator', 'tracking_controller',
          'setpoint_publisher', 'mechanism_state_publisher')

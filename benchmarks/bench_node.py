@@ -69,14 +69,17 @@ from sensor_msgs.msg import JointState
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 
-from orthoglide_ros.harness.load import busy_loops  # noqa: E402
-from orthoglide_ros.harness.messages import (INPUT_TOPICS,  # noqa: E402
-                                             Producer, qos_profile)
-from orthoglide_ros.harness.processes import (cpu_seconds,  # noqa: E402
-                                              interrupt)
-from orthoglide_ros.cores import realtime  # noqa: E402
+from orthoglide_testing import use_checkout  # noqa: E402
+from orthoglide_testing.load import (busy_loops, client as fifo_client,  # noqa: E402
+                                     granted, normal)
+from orthoglide_testing.messages import (INPUT_TOPICS,  # noqa: E402
+                                         Producer, qos_profile)
+from orthoglide_testing.processes import (cpu_seconds,  # noqa: E402
+                                          interrupt)
 from orthoglide_ros.model.trajectory import PAPER_DURATION  # noqa: E402
 from orthoglide_ros.model.trajectory import paper_sample  # noqa: E402
+
+use_checkout(ROOT)
 
 TARGETS = ('node', 'echo-single', 'echo-events')
 NODES = ('node',)
@@ -255,7 +258,7 @@ def run_group(target, kind, qos, runs, domain, say, priority=0,
         node = rclpy.create_node('bench_producer', context=context)
         producer = Producer(node, kind, qos)
         if client:      # this process's DDS threads exist now
-            for warning in realtime.client(client):
+            for warning in fifo_client(client):
                 say(f'  {warning}')
         _start(producer, procs['recorder'], check, runs[0][0])
         for k, (rate, duration) in enumerate(runs):
@@ -294,7 +297,7 @@ def run_group(target, kind, qos, runs, domain, say, priority=0,
                 result['status'] = f'failed: {error}'
     finally:
         if client:
-            realtime.normal()
+            normal()
         ends = {name: stop(proc) for name, proc in procs.items()}
         if node is not None:
             node.destroy_node()
@@ -630,7 +633,7 @@ def main():
     priorities = [0] + ([args.thread_priority] if args.thread_priority
                         else [])
     client = args.client_priority if args.thread_priority else 0
-    if (args.thread_priority or client) and not realtime.granted(
+    if (args.thread_priority or client) and not granted(
             max(args.thread_priority, client)):
         parser.error('SCHED_FIFO is not granted here (CAP_SYS_NICE or an '
                      'RLIMIT_RTPRIO): see doc/deployment.md#real-time')

@@ -13,7 +13,7 @@ On the robot of doc/programs/drives.yaml (ball-screw drives, friction, a
 - cycle time against a kinematic planner (a CNC's: one Cartesian
   acceleration limit per axis, the largest that keeps every force within
   its limit on the same program, found by bisection; its time law by
-  phase-plane integration, :mod:`orthoglide_ros.harness.phase_plane`),
+  phase-plane integration, :mod:`orthoglide_testing.phase_plane`),
   printed as a ratio;
 - what jerk limits cost in cycle time;
 - ``--acceptance``: every sample of the contour re-solved with the
@@ -40,7 +40,7 @@ import time
 import numpy as np
 
 from orthoglide_ros.formats.params_file import load_robot
-from orthoglide_ros.harness import phase_plane
+from orthoglide_testing import phase_plane, use_checkout
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.planning import gcode, parametrization
 from orthoglide_ros.planning.limits import load_limits
@@ -48,6 +48,7 @@ from orthoglide_ros.planning.path import from_moves, from_waypoints
 from orthoglide_ros.planning.programs import read_program
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+use_checkout(ROOT)
 PROGRAMS = os.path.join(ROOT, 'doc', 'programs')
 RATE = 1000.0
 CIRCLE_RADIUS = 0.1                        # m
@@ -270,7 +271,7 @@ def node(repeat):
     from geometry_msgs.msg import PoseStamped
     from nav_msgs.msg import Path
     from trajectory_msgs.msg import MultiDOFJointTrajectory
-    from orthoglide_ros.harness.hostile import Nodes, Peer
+    from orthoglide_testing.hostile import Nodes, Peer
     message = Path()
     message.header.frame_id = 'base_link'
     for point in circle_poses():

@@ -3,17 +3,16 @@
 Identify robots of the rough-guideway kind drawn at random; report how close.
 
 For each seed, a robot and its log's defects drawn by
-``harness.rough_guideways.drawn_robot`` (a Coulomb level per direction, a
-Stribeck excess, a ripple periodic in position, a lag, noise, drops, a
-stall), 30 s of an excitation logged with every defect, plain
-``identification.identify`` (every choice its own), then the identified
-robot's forces along another motion (``mechanics.solve_batch``, what
-``orthoglide batch`` computes) against those the robot needs there. Prints
-per robot the law chosen, the Stribeck speed and the lag found against
-the truth, the RMS error per actuator as a multiple of the floor (the
-ripple's RMS, which no model holds) and the time of the identification;
-then how many are within EACH times the floor per actuator and MEAN in
-the mean. No ROS import.
+``orthoglide_testing.rough_guideways.drawn_robot`` (a Coulomb level per
+direction, a Stribeck excess, a ripple periodic in position, a lag, noise,
+drops, a stall), 30 s of an excitation logged with every defect, plain
+``identification.identify`` (every choice its own), then the identified robot's
+forces along another motion (``mechanics.solve_batch``, what ``orthoglide
+batch`` computes) against those the robot needs there. Prints per robot the law
+chosen, the Stribeck speed and the lag found against the truth, the RMS error
+per actuator as a multiple of the floor (the ripple's RMS, which no model
+holds) and the time of the identification; then how many are within EACH times
+the floor per actuator and MEAN in the mean. No ROS import.
 
 Usage: python benchmarks/bench_rough_guideways.py [--seeds 0-19]
 """
@@ -26,10 +25,14 @@ import time
 
 import numpy as np
 
-from orthoglide_ros.harness import rough_guideways as rough
+from orthoglide_testing import use_checkout
+from orthoglide_testing import rough_guideways as rough
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.tools import identification
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+use_checkout(ROOT)
 
 
 def seeds(text):

@@ -35,14 +35,17 @@ from rclpy.serialization import (deserialize_message,  # noqa: E402
 from trajectory_msgs.msg import (JointTrajectory,  # noqa: E402
                                  MultiDOFJointTrajectory)
 
-from orthoglide_ros.harness.hostile import Nodes, Peer  # noqa: E402
-from orthoglide_ros.harness.messages import cartesian_message  # noqa: E402
+from orthoglide_testing import use_checkout  # noqa: E402
+from orthoglide_testing.hostile import Nodes, Peer  # noqa: E402
+from orthoglide_testing.messages import cartesian_message  # noqa: E402
 from orthoglide_ros.model import trajectory  # noqa: E402
 from orthoglide_ros.formats import cdr  # noqa: E402
 from orthoglide_ros.model import mechanics  # noqa: E402
 from orthoglide_ros.cores.feedforward import (convert_trajectory,  # noqa: E402
                                               PARAMETERS)
 from orthoglide_ros.model.robot import Robot  # noqa: E402
+
+use_checkout(ROOT)
 
 SIZES = (100, 1000, 10000)
 

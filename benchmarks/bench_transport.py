@@ -24,7 +24,10 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 
-from orthoglide_ros.harness import netns  # noqa: E402
+from orthoglide_testing import use_checkout  # noqa: E402
+from orthoglide_testing import netns  # noqa: E402
+
+use_checkout(ROOT)
 
 SIZES = (200, 64 * 1024, 1024 * 1024, 4 * 1024 * 1024)
 PROFILE = os.path.join(ROOT, 'config', 'fastdds_one_host.xml')

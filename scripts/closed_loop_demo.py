@@ -14,7 +14,8 @@ once, whole, as a Cartesian trajectory that the feedforward converts into a
 JointTrajectory and the tracking controller follows as
 joint_trajectory_controller would. Prints the tracking error of every case
 and writes a PNG of the errors over time. The loop and its error measure are
-in ``orthoglide_ros/harness/closed_loop.py`` (shared with ``test_closed_loop.py``).
+in ``testing/orthoglide_testing/closed_loop.py`` (shared with
+``test_closed_loop.py``).
 
 Run it through ``bash scripts/closed_loop_demo.sh`` (sets up .venv, keeps
 DDS on this host, picks a ROS_DOMAIN_ID); ``--help`` for the options. Exit
@@ -33,9 +34,13 @@ os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 232))
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from orthoglide_ros.harness import closed_loop as harness  # noqa: E402
-from orthoglide_ros.harness.load import (add_load_options, REALTIME,  # noqa: E402
-                                         check_load_options)
+from orthoglide_testing import use_checkout  # noqa: E402
+from orthoglide_testing import closed_loop as harness  # noqa: E402
+from orthoglide_testing import verdicts  # noqa: E402
+from orthoglide_testing.load import (add_load_options, REALTIME,  # noqa: E402
+                                     check_load_options)
+
+use_checkout(ROOT)
 
 CASES = ((False, 1.0), (True, 1.0), (False, harness.MISMATCH),
          (True, harness.MISMATCH))      # (feedforward, plant mass factor)
@@ -114,9 +119,9 @@ def main(argv=None):
         print_pickups(pickups, names, args)
     plot(runs, names, args.plot)
     print(f'plot: {args.plot}')
-    spoiled = [f'{run.label}: {harness.spoiled_by(run)}' for run in (
+    spoiled = [f'{run.label}: {verdicts.pass_spoiled_by(run)}' for run in (
         *runs.values(), *(run for run, _ in pickups.values()))
-        if harness.spoiled_by(run)]
+        if verdicts.pass_spoiled_by(run)]
     if spoiled:
         print('verdict: FAILED, every pass of these rows was spoiled by a '
               'stall (their figures measure the stall, not the loop; try '
@@ -141,8 +146,8 @@ def print_table(runs, names, args):
         for mass in (1.0, harness.MISMATCH):
             pd, ff = runs[name, False, mass], runs[name, True, mass]
             plant = 'exact' if mass == 1.0 else f'm5 x{mass:g}'
-            mark = ' spoiled' if (harness.spoiled_by(pd)
-                                  or harness.spoiled_by(ff)) else ''
+            mark = ' spoiled' if (verdicts.pass_spoiled_by(pd)
+                                  or verdicts.pass_spoiled_by(ff)) else ''
             print(f'{name:<10} {plant:<16} {pd.rms_mm:8.3f} {pd.max_mm:8.3f} '
                   f'{ff.rms_mm:10.3f} {ff.max_mm:10.3f} '
                   f'{pd.rms_mm / ff.rms_mm:9.1f}x{mark}')

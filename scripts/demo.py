@@ -52,10 +52,14 @@ from orthoglide_ros.model import mechanics  # noqa: E402
 from orthoglide_ros.tools import drawing  # noqa: E402
 from orthoglide_ros.tools.cli import CSV_COLUMNS  # noqa: E402
 from orthoglide_ros.formats.params_file import load_robot  # noqa: E402
-from orthoglide_ros.harness.load import (add_load_options, REALTIME,  # noqa: E402
-                                         busy_loops, check_load_options,
-                                         realtime_args, realtime_client)
-from orthoglide_ros.harness.processes import interrupt  # noqa: E402
+from orthoglide_testing import use_checkout  # noqa: E402
+from orthoglide_testing.load import (add_load_options, REALTIME,  # noqa: E402
+                                     busy_loops, check_load_options,
+                                     realtime_args, realtime_client)
+from orthoglide_testing.processes import interrupt  # noqa: E402
+from orthoglide_testing.verdicts import stream_spoiled_by  # noqa: E402
+
+use_checkout(ROOT)
 
 BIN = Path(sys.executable).parent
 PARAMS = ROOT / 'config' / 'orthoglide.yaml'
@@ -67,12 +71,6 @@ DRAIN = 5.0             # s at most for the last outputs and diagnostics
 DRAIN_IDLE = 1.5        # s without an output that end the drain early
 STOP_TIMEOUT = 5.0      # s a process gets to exit after SIGINT
 TOLERANCE = 1e-9        # largest accepted |node - mechanics.solve|
-# A run spoiled by the machine (load, a stall), said FAILED, not OK: fewer
-# setpoints sent than SENT_SHARE of duration x rate, a gap between two
-# longer than GAP_PERIODS periods, more outputs lost than LOSS_SHARE.
-SENT_SHARE = 0.95
-GAP_PERIODS = 10.0
-LOSS_SHARE = 0.005
 CURVE_SAMPLES = 401
 # The animation of the run: frames at most, size (pixels).
 ANIMATION_FRAMES = 30
@@ -487,31 +485,15 @@ def _report(args, robot, record, logs):
     if worst > TOLERANCE:
         raise DemoError(f'the node differs from mechanics.solve by '
                         f'{worst:.3g} (tolerance {TOLERANCE:g})')
-    spoiled = _spoiled(args, sent, gap_ms, lost)
+    # A run the machine spoiled (load, a stall) is FAILED, not OK.
+    spoiled = stream_spoiled_by(args.duration, args.rate, sent, gap_ms,
+                                lost)
     if spoiled:
         raise DemoError('the run was spoiled, its figures do not show the '
                         'node: ' + '; '.join(spoiled) + ' (another load on '
                         'this machine? see --realtime)')
     print('verdict    OK: every output matches mechanics.solve, the stream '
           'kept its rate')
-
-
-def _spoiled(args, sent, gap_ms, lost):
-    """Return why the stream did not keep its rate (empty: it did)."""
-    expected = args.duration * args.rate
-    period_ms = 1e3 / args.rate
-    reasons = []
-    if sent is None:
-        reasons.append('the setpoint publisher did not say what it sent')
-    elif sent < SENT_SHARE * expected:
-        reasons.append(f'{sent} of {expected:.0f} setpoints sent '
-                       f'({sent / args.duration:.0f} of {args.rate:g} Hz)')
-    if gap_ms is not None and gap_ms > GAP_PERIODS * period_ms:
-        reasons.append(f'a gap of {gap_ms:.1f} ms between two setpoints '
-                       f'({gap_ms / period_ms:.0f} periods)')
-    if sent and lost is not None and lost > LOSS_SHARE * sent:
-        reasons.append(f'{lost} of {sent} outputs lost')
-    return reasons
 
 
 def _diagnosis(diagnostics):

@@ -36,7 +36,8 @@ MJCF's values stand beside the identified ones and PD + identified must
 beat PD + nominal 5x (RMS).
 
 
-The loop and its error measure are in ``orthoglide_ros/harness/closed_loop.py``.
+The loop and its error measure are in
+``testing/orthoglide_testing/closed_loop.py``.
 Run it through ``bash scripts/identification_demo.sh`` (sets up .venv,
 keeps DDS on this host, picks a ROS_DOMAIN_ID); ``--help`` for the
 options. Exit code 0 when every criterion holds, 1 if one misses or a
@@ -59,15 +60,19 @@ ROOT = Path(__file__).resolve().parents[1]
 
 import numpy as np  # noqa: E402
 
-from orthoglide_ros.harness import closed_loop as harness  # noqa: E402
-from orthoglide_ros.harness.load import (add_load_options, REALTIME,  # noqa: E402
-                                         check_load_options, elevate)
-from orthoglide_ros.harness.processes import (node_executable,  # noqa: E402
-                                              start_node_process, stop_process)
+from orthoglide_testing import use_checkout  # noqa: E402
+from orthoglide_testing import closed_loop as harness  # noqa: E402
+from orthoglide_testing import verdicts  # noqa: E402
+from orthoglide_testing.load import (add_load_options, REALTIME,  # noqa: E402
+                                     check_load_options, elevate)
+from orthoglide_testing.processes import (node_executable,  # noqa: E402
+                                          start_node_process, stop_process)
 from orthoglide_ros.formats import params_file  # noqa: E402
 from orthoglide_ros.model import mjcf  # noqa: E402
 from orthoglide_ros.tools import identification  # noqa: E402
 from orthoglide_ros.model.robot import Robot  # noqa: E402
+
+use_checkout(ROOT)
 
 RECORD_MARGIN = 60.0    # s the recording may last beyond the passes
 VALIDATION_PASSES = 2   # periods of the validation excitation
@@ -190,14 +195,14 @@ def excite(loop, seed, period, passes, bag, nominal, plant):
     """
     print(f'Excitation: seed {seed}, {passes} x {period:g} s, '
           f'PD + nominal feedforward, recorded into {bag}', flush=True)
-    for attempt in range(1, harness.ATTEMPTS + 1):
+    for attempt in range(1, verdicts.ATTEMPTS + 1):
         shutil.rmtree(bag, ignore_errors=True)
         run = _record_pass(loop, seed, period, passes, bag, nominal, plant)
-        spoiled = harness.spoiled_by(run)
+        spoiled = verdicts.pass_spoiled_by(run)
         if spoiled is None:
             return run
         print(f'  spoiled: {spoiled} (attempt {attempt} of '
-              f'{harness.ATTEMPTS}); recorded again', flush=True)
+              f'{verdicts.ATTEMPTS}); recorded again', flush=True)
     raise harness.LoopError(f'every excitation pass was spoiled ({spoiled}):'
                             ' the machine is too loaded for the demo; try '
                             '--realtime')
@@ -272,7 +277,7 @@ def validate(loop, names, nominal, identified, plant, repeats, setup):
     The cases outside the criterion once; the two it compares
     ``repeats`` times each, interleaved, their median pass kept, and
     ``repeats`` more each when the first medians miss the criterion
-    (:func:`harness.closed_loop.median_runs`), as the DDS test does.
+    (:func:`orthoglide_testing.closed_loop.median_runs`), as the DDS test does.
     """
     models = {'PD': (False, nominal), 'PD + nominal FF': (True, nominal),
               'PD + identified FF': (True, identified),
@@ -335,7 +340,7 @@ def print_tracking(runs, names, setup):
                                   - runs[name, reference].rms_mm
                                   <= NOISE_FLOOR_MM)
         spoiled = [c for c in setup.cases
-                   if harness.spoiled_by(runs[name, c])]
+                   if verdicts.pass_spoiled_by(runs[name, c])]
         print(f'{name:<12}' + ''.join(f'{r:20.3f}' for r in rms)
               + f'{ratio:19.2f}x' + (' spoiled: ' + ', '.join(spoiled)
                                      if spoiled else ''))

@@ -37,12 +37,14 @@ ROOT = Path(__file__).resolve().parents[1]
 import numpy as np  # noqa: E402
 
 from orthoglide_ros.formats.params_file import load_robot  # noqa: E402
-from orthoglide_ros.harness import closed_loop as harness  # noqa: E402
-from orthoglide_ros.harness import phase_plane  # noqa: E402
+from orthoglide_testing import closed_loop as harness  # noqa: E402
+from orthoglide_testing import phase_plane, use_checkout, verdicts  # noqa: E402
 from orthoglide_ros.model import mechanics  # noqa: E402
 from orthoglide_ros.planning import parametrization  # noqa: E402
 from orthoglide_ros.planning.limits import limits_from_mapping  # noqa: E402
 from orthoglide_ros.planning.programs import read_program  # noqa: E402
+
+use_checkout(ROOT)
 
 LIMIT = 400.0       # N, each drive
 PLANNED = 0.9       # the share of it the plan may use: the rest is feedback's
@@ -173,7 +175,7 @@ def main(argv=None):
         clipped = float((np.abs(run.efforts) >= LIMIT * 0.999).any(1).mean())
         print(f'{name:<28}{" ".join(f"{f:7.1f}" for f in peak):>26}'
               f'{clipped:>8.1%}{run.rms_mm:>10.3f} mm{run.max_mm:>6.2f} mm')
-        if run.braked or run.skipped_s > harness.SKIP_LIMIT:
+        if run.braked or run.skipped_s > verdicts.SKIP_LIMIT:
             verdict.append(f'{name}: the pass was spoiled (the plant braked '
                            'or skipped)')
     planned_peak = np.abs(results['planned'][3]).max()

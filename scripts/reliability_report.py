@@ -4,7 +4,8 @@ Run the full reliability cases of the feedforward node and print a report.
 
 How the reliability targets are shown: the full versions of the flood, reliable,
 restart and fuzz tests, with the figures doc/measurements.md quotes. The runs are
-those of ``orthoglide_ros/harness/reliability`` (the tests run them shorter):
+those of ``testing/orthoglide_testing/reliability`` (the tests run them
+shorter):
 
 - best-effort floods for ``--duration`` s (trajectory and topics inputs);
 - a reliable stream at 1 kHz for ``--duration`` s, every setpoint matched
@@ -20,7 +21,7 @@ those of ``orthoglide_ros/harness/reliability`` (the tests run them shorter):
 - ``test/test_fuzz_node.py`` and ``test/test_fuzz_mechanics.py`` (when
   present) through pytest, with ``--hypothesis-seed`` and
   ``ORTHOGLIDE_FUZZ_EXAMPLES`` when the files read it;
-- the hostile peers and stalls (``orthoglide_ros/harness/hostile``
+- the hostile peers and stalls (``testing/orthoglide_testing/hostile``
   and ``harness.big_messages``), every node, one line each with its
   figures against the target (``--hostile-only`` runs just these).
 
@@ -52,13 +53,16 @@ os.environ.setdefault('ROS_LOG_DIR',
 
 import numpy as np  # noqa: E402
 
-from orthoglide_ros.harness import hostile  # noqa: E402
-from orthoglide_ros.harness.hostile import logs as hostile_logs  # noqa: E402
-from orthoglide_ros.harness.hostile.streams import \
+from orthoglide_testing import use_checkout  # noqa: E402
+from orthoglide_testing import hostile  # noqa: E402
+from orthoglide_testing.hostile import logs as hostile_logs  # noqa: E402
+from orthoglide_testing.hostile.streams import \
     mechanism_stamps  # noqa: E402
-from orthoglide_ros.harness import live_graph  # noqa: E402
-from orthoglide_ros.harness import netns  # noqa: E402
-from orthoglide_ros.harness import reliability as harness  # noqa: E402
+from orthoglide_testing import live_graph  # noqa: E402
+from orthoglide_testing import netns  # noqa: E402
+from orthoglide_testing import reliability as harness  # noqa: E402
+
+use_checkout(ROOT)
 
 
 def say(text):
@@ -86,7 +90,7 @@ def runs(args):
 
 
 def in_namespace(case, say, **kwargs):
-    """Run a ``harness.live_graph`` case in a network namespace of its own."""
+    """Run an ``orthoglide_testing.live_graph`` case in a namespace of its own."""
     reason = netns.unavailable()
     if reason:
         raise harness.HarnessError(reason)

@@ -3,7 +3,9 @@
 # Jazzy from PyPI wheels, the test tooling, and orthoglide_ros installed in
 # editable mode (console scripts `orthoglide`, `feedforward`,
 # `setpoint_publisher`, `simulator`, `tracking_controller`,
-# `mechanism_state_publisher` in .venv/bin).
+# `mechanism_state_publisher` in .venv/bin), and beside it, editable too,
+# the test support `orthoglide_testing` (testing/: what test/, scripts/ and
+# benchmarks/ import; never part of the installed product).
 #
 # Usage: scripts/setup_venv.sh [REQUIREMENTS_FILE]   (default: requirements-test.txt)
 # Env:   PYTHON=python3.11   interpreter used to create the venv (default python3)
@@ -32,7 +34,8 @@ unset _ROS_WHEELS_BOOTSTRAP_COMPLETE
 fingerprint() {
     {
         echo "req=$REQ"
-        cat "$ROOT/requirements.txt" "$REQ" "$ROOT/setup.py" "$ROOT/setup.cfg" "$ROOT/package.xml" 2>/dev/null
+        cat "$ROOT/requirements.txt" "$REQ" "$ROOT/setup.py" "$ROOT/setup.cfg" "$ROOT/package.xml" \
+            "$ROOT/testing/pyproject.toml" 2>/dev/null
         ls "$ROOT/config" 2>/dev/null || true
         "$VPY" -c 'import sys; print(sys.version)' 2>/dev/null || true
     } | sha256sum | cut -d' ' -f1
@@ -52,7 +55,8 @@ touch "$VENV/COLCON_IGNORE"
 
 if [ "${FORCE:-0}" != 1 ] && [ -f "$STAMP" ] && [ "$(cat "$STAMP")" = "$(fingerprint)" ] \
         && [ -x "$VENV/bin/orthoglide" ] && [ -x "$VENV/bin/feedforward" ] \
-        && [ -x "$VENV/bin/setpoint_publisher" ]; then
+        && [ -x "$VENV/bin/setpoint_publisher" ] \
+        && "$VPY" -c 'import orthoglide_testing' >/dev/null 2>&1; then
     echo "setup_venv: $VENV up to date"
     exit 0
 fi
@@ -80,18 +84,18 @@ elif command -v uv >/dev/null 2>&1; then
 fi
 
 if [ -n "$UV" ]; then
-    echo "setup_venv: installing $(basename "$REQ") + orthoglide_ros (editable) with uv"
+    echo "setup_venv: installing $(basename "$REQ") + orthoglide_ros, orthoglide_testing (editable) with uv"
     # `pip` too, so .venv/bin/pip exists for people who want it.
     # --compile-bytecode: the wheels hold no .pyc, and where
     # PYTHONDONTWRITEBYTECODE is set every process would compile rclpy,
     # numpy and the messages again (node start 1.3 s instead of 0.55 s).
     run "$UV" pip install --python "$VPY" --compile-bytecode -r "$REQ" pip
-    run "$UV" pip install --python "$VPY" -e "$ROOT"
+    run "$UV" pip install --python "$VPY" -e "$ROOT" -e "$ROOT/testing"
 else
-    echo "setup_venv: installing $(basename "$REQ") + orthoglide_ros (editable) with pip (no uv)"
+    echo "setup_venv: installing $(basename "$REQ") + orthoglide_ros, orthoglide_testing (editable) with pip (no uv)"
     "$VPY" -m pip --version >/dev/null 2>&1 || run "$VPY" -m ensurepip --upgrade
     run "$VPY" -m pip install -q --disable-pip-version-check -r "$REQ"
-    run "$VPY" -m pip install -q --disable-pip-version-check -e "$ROOT"
+    run "$VPY" -m pip install -q --disable-pip-version-check -e "$ROOT" -e "$ROOT/testing"
 fi
 
 fingerprint > "$STAMP"

@@ -11,10 +11,14 @@ README's test command:
   so parallel runs and a live ROS graph on the same machine do not see each
   other;
 - ``ROS_LOG_DIR``: a temporary directory, so tests leave no logs behind.
+
+It names the checkout the proving ground runs from
+(:func:`orthoglide_testing.use_checkout`, pytest's root directory).
 """
 
 from contextlib import contextmanager
 import os
+import sys
 import tempfile
 
 import pytest
@@ -67,12 +71,31 @@ def closed_loop():
     """
     Start the closed loop's nodes once for a module; stop them after.
 
-    :class:`harness.closed_loop.ClosedLoop` in a context of its own; every node
-    must have exited 0.
+    :class:`orthoglide_testing.closed_loop.ClosedLoop` in a context of its
+    own; every node must have exited 0.
     """
-    harness = pytest.importorskip('orthoglide_ros.harness.closed_loop')
+    harness = pytest.importorskip('orthoglide_testing.closed_loop')
     with harness.demo_loop() as running:
         yield running
+
+
+def pytest_configure(config):
+    """
+    Name the checkout to ``orthoglide_testing`` (its ``config/``, its cwd).
+
+    ``scripts/setup_venv.sh`` installs it; where it is not installed
+    (``colcon test``), it is taken from the checkout's ``testing/``, for
+    the processes the tests start too.
+    """
+    try:
+        import orthoglide_testing
+    except ImportError:
+        testing = str(config.rootpath / 'testing')
+        sys.path.insert(0, testing)
+        os.environ['PYTHONPATH'] = os.pathsep.join(
+            [testing] + [p for p in [os.environ.get('PYTHONPATH')] if p])
+        import orthoglide_testing
+    orthoglide_testing.use_checkout(config.rootpath)
 
 
 def pytest_collection_modifyitems(config, items):

@@ -13,7 +13,7 @@ import os
 
 import pytest
 
-from orthoglide_ros.harness.processes import node_executable
+from orthoglide_testing.processes import node_executable
 
 
 # Outputs are checked against mechanics.solve to this (relative above 1,

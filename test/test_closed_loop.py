@@ -2,11 +2,11 @@
 The closed loop over DDS: the feedforward does its job.
 
 ``setpoint_publisher`` -> ``feedforward`` -> ``tracking_controller`` ->
-``simulator`` -> back, all processes on real Fast DDS (loopback, the
-session's domain), run by ``harness.closed_loop`` at its default rates
-(loop 250 Hz, plant 500 Hz) on the paper's trajectory, eq. (6). The error is
-the platform centre's, measured minus the trajectory at the measurement's
-stamp (see the harness).
+``simulator`` -> back, all processes on real Fast DDS (loopback, the session's
+domain), run by ``orthoglide_testing.closed_loop`` at its default rates (loop
+250 Hz, plant 500 Hz) on the paper's trajectory, eq. (6). The error is the
+platform centre's, measured minus the trajectory at the measurement's stamp
+(see the harness).
 
 - Open loop (gains zero) is about the dynamics, not the timing: it is
   ``test_open_loop.py``, the same cores stepped on a simulated clock.
@@ -31,7 +31,7 @@ import pytest
 from node_checks import needs_scripts
 
 pytest.importorskip('rclpy')
-harness = pytest.importorskip('orthoglide_ros.harness.closed_loop')
+harness = pytest.importorskip('orthoglide_testing.closed_loop')
 
 pytestmark = [pytest.mark.ros, needs_scripts(
     'simulator', 'feedforward', 'tracking_controller', 'setpoint_publisher')]

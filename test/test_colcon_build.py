@@ -21,10 +21,10 @@ from orthoglide_ros.formats.params_file import load_robot
 from orthoglide_ros.model.trajectory import paper_sample
 
 from node_checks import close  # noqa: E402
-from orthoglide_ros.harness.messages import header_stamp  # noqa: E402
-from orthoglide_ros.harness.probe import Probe, spin_until  # noqa: E402
-from orthoglide_ros.harness.processes import (node_executable,  # noqa: E402
-                                              start_node_process, stop_process)
+from orthoglide_testing.messages import header_stamp  # noqa: E402
+from orthoglide_testing.probe import Probe, spin_until  # noqa: E402
+from orthoglide_testing.processes import (node_executable,  # noqa: E402
+                                          start_node_process, stop_process)
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = 'orthoglide_ros'
@@ -89,6 +89,20 @@ def test_install_layout(install):
     assert (install / 'share' / PACKAGE / 'package.xml').is_file()
     assert (install / 'share' / 'ament_index' / 'resource_index'
             / 'packages' / PACKAGE).is_file()
+
+
+def test_install_holds_the_package_and_no_test_support(install):
+    """Every module of orthoglide_ros/ is installed, no other Python file."""
+    _, site = install_env(install)
+    installed = {str(p.relative_to(site)) for p in site.rglob('*.py')}
+    product = {str(p.relative_to(ROOT))
+               for p in (ROOT / 'orthoglide_ros').rglob('*.py')}
+    assert installed == product, installed ^ product
+    support = [str(p.relative_to(install)) for p in install.rglob('*')
+               if any(name in p.name for name in
+                      ('orthoglide_testing', 'harness', 'conftest'))
+               or p.name in ('test', 'scripts', 'benchmarks', 'testing')]
+    assert support == []
 
 
 def test_installed_code_is_used_and_cli_runs(install):

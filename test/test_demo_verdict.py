@@ -1,46 +1,51 @@
 """
-The demo's verdict: a run the machine spoiled is FAILED, named why.
+The demos' verdict: a run the machine spoiled is FAILED, named why.
 
-``scripts/demo.py``'s rule, without DDS: fewer setpoints than the rate
-promises, a gap of several periods, outputs lost.
+``orthoglide_testing.verdicts``, without DDS: a stream with fewer
+setpoints than the rate promises, a gap of several periods, outputs lost
+(``scripts/demo.py``); a closed-loop pass with the plant braked, the
+controller held or simulated time skipped (the loop demos and tests).
 """
 
-import argparse
-import importlib.util
-from pathlib import Path
+from types import SimpleNamespace
 
-import pytest
+import numpy as np
 
-pytest.importorskip('rclpy')
-
-ROOT = Path(__file__).resolve().parents[1]
+from orthoglide_testing import verdicts
 
 
-@pytest.fixture(scope='module')
-def demo():
-    spec = importlib.util.spec_from_file_location(
-        'demo_script', ROOT / 'scripts' / 'demo.py')
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def test_a_stream_that_kept_its_rate_is_not_spoiled():
+    assert verdicts.stream_spoiled_by(2.0, 500.0, 1001, 2.3, 0) == []
 
 
-ARGS = argparse.Namespace(duration=2.0, rate=500.0)
-
-
-def test_a_stream_that_kept_its_rate_is_not_spoiled(demo):
-    assert demo._spoiled(ARGS, 1001, 2.3, 0) == []
-
-
-def test_a_slow_gapped_lossy_stream_is_spoiled_and_says_why(demo):
+def test_a_slow_gapped_lossy_stream_is_spoiled_and_says_why():
     """662 of 1000 setpoints at 330 Hz, a 170 ms gap, 5 lost."""
-    reasons = demo._spoiled(ARGS, 662, 170.0, 5)
+    reasons = verdicts.stream_spoiled_by(2.0, 500.0, 662, 170.0, 5)
     assert len(reasons) == 3, reasons
     assert reasons[0] == '662 of 1000 setpoints sent (331 of 500 Hz)'
     assert reasons[1].startswith('a gap of 170.0 ms')
     assert reasons[2] == '5 of 662 outputs lost'
 
 
-def test_no_word_from_the_publisher_is_spoiled(demo):
-    assert demo._spoiled(ARGS, None, None, None) == [
+def test_no_word_from_the_publisher_is_spoiled():
+    assert verdicts.stream_spoiled_by(2.0, 500.0, None, None, None) == [
         'the setpoint publisher did not say what it sent']
+
+
+def loop_pass(braked=0, joint_error=0.0, skipped_s=0.0):
+    return SimpleNamespace(braked=braked, skipped_s=skipped_s,
+                           joint_error=np.full((10, 3), joint_error))
+
+
+def test_a_closed_loop_pass_is_spoiled_by_a_brake_a_hold_or_a_skip():
+    tolerance = float(verdicts.PATH_TOLERANCE.max())
+    assert verdicts.pass_spoiled_by(loop_pass()) is None
+    assert verdicts.pass_spoiled_by(
+        loop_pass(joint_error=0.5 * tolerance)) is None
+    assert verdicts.pass_spoiled_by(loop_pass(braked=4)) == \
+        'the plant was braked for 4 states'
+    assert 'path tolerance' in verdicts.pass_spoiled_by(
+        loop_pass(joint_error=-1.01 * tolerance))
+    assert verdicts.pass_spoiled_by(loop_pass(skipped_s=0.25)) == \
+        'the plant skipped 0.250 s of simulated time'
+    assert verdicts.pass_spoiled_by(loop_pass(skipped_s=0.1)) is None

@@ -1,12 +1,13 @@
 """
 Tests of the feedforward node in the test's own process, over real DDS.
 
-The node (``FeedforwardNode``) and a :class:`harness.probe.Probe` share one
-rclpy context and one executor (the EventsExecutor the node runs on, unless
-a test says otherwise); messages still go through Fast DDS. Setpoints are
-sent in lock-step: the test spins until the outputs of one setpoint arrive
-before it sends the next, so no message is lost and nothing waits for real
-time except the timers (rate_hz, diagnostics at 1 Hz).
+The node (``FeedforwardNode``) and a probe
+(:class:`orthoglide_testing.probe.Probe`) share one rclpy context and one
+executor (the EventsExecutor the node runs on, unless a test says otherwise);
+messages still go through Fast DDS. Setpoints are sent in lock-step: the test
+spins until the outputs of one setpoint arrive before it sends the next, so no
+message is lost and nothing waits for real time except the timers (rate_hz,
+diagnostics at 1 Hz).
 """
 
 import itertools
@@ -26,11 +27,11 @@ from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.trajectory import paper_sample, paper_times
 
 from node_checks import assert_declared, assert_vector, close
-from orthoglide_ros.harness.messages import (diagnostic_values, header_stamp,
-                                             stamp_of)
-from orthoglide_ros.harness.probe import (call, node_graphs, parameter_client,
-                                          Probe, spin_for, spin_until,
-                                          wait_diagnostics as harness_wait_diagnostics)
+from orthoglide_testing.messages import (diagnostic_values, header_stamp,
+                                         stamp_of)
+from orthoglide_testing.probe import (call, node_graphs, parameter_client,
+                                      Probe, spin_for, spin_until,
+                                      wait_diagnostics as harness_wait_diagnostics)
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 WAIT = 10.0     # s: generous, the machine is shared

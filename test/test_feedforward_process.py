@@ -18,10 +18,10 @@ from orthoglide_ros.formats.params_file import load_robot
 from orthoglide_ros.model.trajectory import paper_sample, paper_times
 
 from node_checks import assert_vector, needs_scripts  # noqa: E402
-from orthoglide_ros.harness.messages import header_stamp  # noqa: E402
-from orthoglide_ros.harness.probe import Probe, spin_until  # noqa: E402
-from orthoglide_ros.harness.processes import (start_node_process,  # noqa: E402
-                                              stop_process, wait_exit)
+from orthoglide_testing.messages import header_stamp  # noqa: E402
+from orthoglide_testing.probe import Probe, spin_until  # noqa: E402
+from orthoglide_testing.processes import (start_node_process,  # noqa: E402
+                                          stop_process, wait_exit)
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config' / 'orthoglide.yaml'

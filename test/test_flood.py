@@ -10,7 +10,7 @@ an input history that covers the stalls of a busy machine
 (``harness.LOSSLESS_DEPTH``, 100 ms at 1 kHz: doc/deployment.md's recipe for
 "nothing lost") every setpoint must give exactly one output. The runs and
 the bounds
-are in ``harness.reliability`` (shared with
+are in ``orthoglide_testing.reliability`` (shared with
 ``scripts/reliability_report.py``); the soak versions last 10 s.
 """
 
@@ -19,7 +19,7 @@ import sys
 import pytest
 
 from node_checks import needs_scripts  # noqa: E402
-from orthoglide_ros.harness import reliability as harness  # noqa: E402
+from orthoglide_testing import reliability as harness  # noqa: E402
 
 SHORT = 2.5         # s of flood / stream in the default run
 FULL = 10.0         # s in the soak run (the target's)

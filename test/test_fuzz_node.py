@@ -1,17 +1,17 @@
 """
 Fuzzed messages into the feedforward node's raw callbacks, in-process.
 
-The node (``FeedforwardNode``) and a :class:`harness.probe.Probe` share one
-rclpy context and executor. Hypothesis builds PoseStamped, TwistStamped,
-AccelStamped and MultiDOFJointTrajectory messages (stamps zero, negative,
-repeated, near the int32 limit; frames base_link, empty or other;
-orientations identity, -identity, just below and above 1e-3 rad, zero,
-huge, tiny, NaN; positions, velocities and accelerations of
-``fuzz_strategies``; empty points, transforms, velocities), serializes them
-with rclpy, may cut them, overwrite a byte or replace them with random
-bytes, and hands the bytes to the node's raw callbacks exactly as DDS
-delivers them (``node.inputs.deliver(source, data, arrival)``, as the
-input thread does).
+The node (``FeedforwardNode``) and a probe
+(:class:`orthoglide_testing.probe.Probe`) share one rclpy context and executor.
+Hypothesis builds PoseStamped, TwistStamped, AccelStamped and
+MultiDOFJointTrajectory messages (stamps zero, negative, repeated, near the
+int32 limit; frames base_link, empty or other; orientations identity,
+-identity, just below and above 1e-3 rad, zero, huge, tiny, NaN; positions,
+velocities and accelerations of ``fuzz_strategies``; empty points, transforms,
+velocities), serializes them with rclpy, may cut them, overwrite a byte or
+replace them with random bytes, and hands the bytes to the node's raw callbacks
+exactly as DDS delivers them (``node.inputs.deliver(source, data, arrival)``,
+as the input thread does).
 
 Properties: every callback returns None (nothing escapes), the node counts
 no internal error, every output the probe receives is finite and equals
@@ -48,8 +48,8 @@ from orthoglide_ros.ros.feedforward_node import FeedforwardNode
 from orthoglide_ros.ros.input_threads import fallback_decoder
 
 from fuzz_strategies import any_float, inside, states
-from orthoglide_ros.harness.messages import header_stamp
-from orthoglide_ros.harness.probe import Probe, spin_until
+from orthoglide_testing.messages import header_stamp
+from orthoglide_testing.probe import Probe, spin_until
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 

@@ -2,7 +2,7 @@ r"""
 Hostile peers against the logs: refusals throttled, no line forged.
 
 Over real DDS with the installed executables; the client is an rclpy node
-of this process (:mod:`orthoglide_ros.harness.hostile.logs`). One test per
+of this process (:mod:`orthoglide_testing.hostile.logs`). One test per
 defect a peer showed (doc/robustness.md#logs):
 
 1. one client asking for an unavailable lifecycle transition as fast as
@@ -21,7 +21,7 @@ from node_checks import needs_scripts
 
 pytestmark = [pytest.mark.ros, needs_scripts('feedforward', 'simulator')]
 
-logs = pytest.importorskip('orthoglide_ros.harness.hostile.logs')
+logs = pytest.importorskip('orthoglide_testing.hostile.logs')
 
 
 def check_throttled(result):

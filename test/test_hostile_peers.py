@@ -5,8 +5,9 @@ Over real DDS with the installed executables.
 
 One test per defect a hostile peer showed, each played by a client of this test
 (or a child process of its own), never by the node's code; the cases
-themselves are ``harness.hostile`` and ``harness.reliability`` functions
-that ``scripts/reliability_report.sh`` runs too:
+themselves are ``orthoglide_testing.hostile`` and
+``orthoglide_testing.reliability`` functions that
+``scripts/reliability_report.sh`` runs too:
 
 1. a set-parameters request with a value type that does not exist;
 2. huge but finite lengths, at run time and at start-up;
@@ -28,8 +29,8 @@ from node_checks import needs_scripts
 
 pytestmark = [pytest.mark.ros, needs_scripts()]
 
-harness = pytest.importorskip('orthoglide_ros.harness.hostile')
-from orthoglide_ros.harness import reliability  # noqa: E402
+harness = pytest.importorskip('orthoglide_testing.hostile')
+from orthoglide_testing import reliability  # noqa: E402
 
 
 def test_malformed_parameter_request_is_refused_and_the_node_stays_up():

@@ -1,15 +1,14 @@
 """
 Identification over DDS: a better feedforward for an unknown plant.
 
-The loop of ``harness.closed_loop`` with a plant the feedforward does not
-know (``UNKNOWN_PLANT``: a 25 % heavier platform, heavier bars, friction
-on every slider): three periods of the excitation through PD + the nominal
-feedforward, then ``identification.identify`` on the plant's measured
-joint states (the harness's recorder; a segment per stretch the plant
-stepped without skipping time, ``log_of``), the effort taken as applied
-half a plant step before its state (``force_lag``), the plant's friction
-law (viscous + Coulomb: the law's choice is tested on synthetic logs).
-Checked:
+The loop of ``orthoglide_testing.closed_loop`` with a plant the feedforward
+does not know (``UNKNOWN_PLANT``: a 25 % heavier platform, heavier bars,
+friction on every slider): three periods of the excitation through PD + the
+nominal feedforward, then ``identification.identify`` on the plant's measured
+joint states (the harness's recorder; a segment per stretch the plant stepped
+without skipping time, ``log_of``), the effort taken as applied half a plant
+step before its state (``force_lag``), the plant's friction law (viscous +
+Coulomb: the law's choice is tested on synthetic logs). Checked:
 
 - the identified base parameters lie within the tolerances of the
   plant's (3 %, the lightest group 10 %, friction 25 %; measured within
@@ -18,8 +17,8 @@ Checked:
   errors of 0.07-0.16 % at 4.3-4.5 of the computed deviations);
 - on the paper's trajectory, PD + the identified feedforward tracks
   better (RMS) than PD + the nominal one, in medians of interleaved
-  passes (``harness.closed_loop.median_runs``; a pass a stall spoiled is
-  run again once). The criterion, within 1.5 times the error of
+  passes (``orthoglide_testing.closed_loop.median_runs``; a pass a stall
+  spoiled is run again once). The criterion, within 1.5 times the error of
   PD + the exact feedforward, is checked where a pass is deterministic
   (``test_identification.py``) and printed here: over DDS a pass's error
   is set by the timing as much as by the model (0.08-0.20 mm with either
@@ -42,14 +41,14 @@ import pytest
 
 from identification_checks import assert_within_tolerances
 from node_checks import needs_scripts
-from orthoglide_ros.harness.processes import start_node_process, stop_process
+from orthoglide_testing.processes import start_node_process, stop_process
 
 from orthoglide_ros.formats import params_file
 from orthoglide_ros.tools import identification
 from orthoglide_ros.model.robot import Robot
 
 rclpy = pytest.importorskip('rclpy')
-harness = pytest.importorskip('orthoglide_ros.harness.closed_loop')
+harness = pytest.importorskip('orthoglide_testing.closed_loop')
 from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter_client import AsyncParameterClient  # noqa: E402
 from rcl_interfaces.msg import ParameterType  # noqa: E402

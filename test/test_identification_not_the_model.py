@@ -353,7 +353,7 @@ def test_drives_predict_another_motion_within_10_percent_of_the_best(
 # RIPPLE / sqrt(2) = 0.354 N, is the floor no identification goes below.
 # The targets 0.55 N per actuator and 0.46 N in the mean were set for a
 # robot of this kind with this ripple: 1.55 and 1.30 times its floor
-# (harness.rough_guideways: EACH, MEAN).
+# (orthoglide_testing.rough_guideways: EACH, MEAN).
 FLOOR = RIPPLE / math.sqrt(2.0)
 SEEDS = (0, 1, 2, 3)    # (identified on excitation 2 s, validated on 2 s + 1)
 
@@ -390,7 +390,7 @@ def test_plain_identify_then_batch_is_within_the_floor(
     stall); another motion validates.
     """
     from cli_runs import run
-    from orthoglide_ros.harness import rough_guideways as rough
+    from orthoglide_testing import rough_guideways as rough
     from synthetic_logs import write_csv
     log = write_csv(tmp_path / 'log.csv', robot_log(2 * seed, 30.0,
                                                     100 + seed))
@@ -422,7 +422,7 @@ def test_drawn_robots_of_this_kind_are_within_their_floor(capsys, tmp_path,
                                                           seed):
     """The limits above, each robot against its own ripple's floor."""
     from orthoglide_ros.formats.params_file import robot_file_text
-    from orthoglide_ros.harness import rough_guideways as rough
+    from orthoglide_testing import rough_guideways as rough
     robot, defects = rough.drawn_robot(seed)
     found = identification.identify(
         NOMINAL, rough.log(robot, defects, 2 * seed, 10 + seed))

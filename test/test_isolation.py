@@ -18,9 +18,9 @@ import rclpy
 from rclpy.executors import SingleThreadedExecutor
 
 from node_checks import needs_scripts
-from orthoglide_ros.harness.probe import Probe, spin_for
-from orthoglide_ros.harness.processes import start_node_process, stop_process
-from orthoglide_ros.harness.processes import process_environment
+from orthoglide_testing.probe import Probe, spin_for
+from orthoglide_testing.processes import start_node_process, stop_process
+from orthoglide_testing.processes import process_environment
 
 PARAMS = Path(__file__).resolve().parents[1] / 'config' / 'orthoglide.yaml'
 START_WAIT = 30.0   # s for the node to come up and answer

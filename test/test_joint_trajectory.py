@@ -13,9 +13,9 @@ the limits publishes nothing and is counted by reason.
 import numpy as np
 import pytest
 
-from orthoglide_ros.harness.hostile import Nodes, Peer
+from orthoglide_testing.hostile import Nodes, Peer
 from node_checks import needs_scripts
-from orthoglide_ros.harness.messages import cartesian_message
+from orthoglide_testing.messages import cartesian_message
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
 

@@ -3,18 +3,19 @@ The layers: their order, and the model, formats, cores and tool without ROS.
 
 The package's folders are its layers, in this order: ``model`` (the
 math), ``formats`` (files and messages), ``planning`` (paths and their
-time-optimal motions), ``cores`` (the nodes' rules),
-``ros`` (the glue), ``tools`` (the ``orthoglide`` tool), ``harness`` (what
-the demos, benchmarks and tests share). A module imports from its own
-layer and those before it, never after: every ``import`` of every module,
-those inside functions included, is read here.
+time-optimal motions), ``cores`` (the nodes' rules), ``ros`` (the glue),
+``tools`` (the ``orthoglide`` tool). A module imports from its own layer
+and those before it, never after: every ``import`` of every module, those
+inside functions included, is read here. What the demos, benchmarks and
+tests share, ``orthoglide_testing`` (``testing/``), sits above them all
+and outside the package: no module of the package imports it.
 
 A fresh interpreter whose import system refuses rclpy (and every ROS
 message package) imports every module of ``model``, ``formats``,
 ``planning``, ``cores`` and ``tools``, and runs ``orthoglide solve``, ``batch``,
 ``urdf``, ``draw`` and ``identify`` on a CSV log: where ROS is not
-installed they work the same. Only ``ros`` and ``harness`` may import
-rclpy.
+installed they work the same. Only ``ros`` (and ``orthoglide_testing``)
+may import rclpy.
 """
 
 import ast
@@ -28,8 +29,7 @@ import pytest
 import orthoglide_ros
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-LAYERS = ('model', 'formats', 'planning', 'cores', 'ros', 'tools',
-          'harness')
+LAYERS = ('model', 'formats', 'planning', 'cores', 'ros', 'tools')
 ROS_FREE = ('model', 'formats', 'planning', 'cores', 'tools')
 # An import hook refusing rclpy and the message packages, then the code.
 REFUSE_ROS = '''
@@ -65,8 +65,8 @@ def modules_by_layer():
             yield module.name, parts[1]
 
 
-def imported_layers(name):
-    """Return the package's layers a module imports, with the line of each."""
+def imported_names(name):
+    """Return the absolute names a module imports, with the line of each."""
     spec = __import__('importlib.util').util.find_spec(name)
     with open(spec.origin) as f:
         tree = ast.parse(f.read())
@@ -75,11 +75,15 @@ def imported_layers(name):
         names = [a.name for a in node.names] if isinstance(
             node, ast.Import) else [node.module or ''] if isinstance(
             node, ast.ImportFrom) and node.level == 0 else []
-        for imported in names:
-            parts = imported.split('.')
-            if parts[0] == 'orthoglide_ros' and len(parts) > 1:
-                found.append((parts[1], node.lineno))
+        found += [(imported, node.lineno) for imported in names]
     return found
+
+
+def imported_layers(name):
+    """Return the package's layers a module imports, with the line of each."""
+    return [(imported.split('.')[1], line)
+            for imported, line in imported_names(name)
+            if imported.startswith('orthoglide_ros.')]
 
 
 def test_the_layers_are_the_folders():
@@ -99,6 +103,16 @@ def test_a_layer_imports_only_itself_and_those_before_it():
             if LAYERS.index(imported) > LAYERS.index(layer):
                 wrong.append(f'{name} (line {line}) imports {imported}')
     assert not wrong, wrong
+
+
+def test_the_package_never_imports_its_proving_ground():
+    """orthoglide_testing is not installed with the package: never needed."""
+    wrong = [f'{name} (line {line}) imports {imported}'
+             for name, _ in modules_by_layer()
+             for imported, line in imported_names(name)
+             if imported.split('.')[0] in ('orthoglide_testing', 'harness')]
+    assert not wrong, wrong
+    assert len(list(modules_by_layer())) > 50
 
 
 def test_model_formats_cores_and_tools_import_without_rclpy():

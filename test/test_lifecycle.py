@@ -29,10 +29,10 @@ from lifecycle_msgs.srv import ChangeState, GetState
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
-from orthoglide_ros.harness.messages import diagnostic_values, stamp_of
-from orthoglide_ros.harness.probe import Probe, spin_for, spin_until
-from orthoglide_ros.harness.processes import (node_executable,
-                                              start_node_process, stop_process)
+from orthoglide_testing.messages import diagnostic_values, stamp_of
+from orthoglide_testing.probe import Probe, spin_for, spin_until
+from orthoglide_testing.processes import (node_executable,
+                                          start_node_process, stop_process)
 from orthoglide_ros.model.trajectory import paper_sample
 
 pytestmark = pytest.mark.ros

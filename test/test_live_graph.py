@@ -5,7 +5,7 @@ Every process here that is not on plain LOCALHOST settings runs inside a
 network namespace the test makes with nothing but loopback (or two joined
 by a veth pair), deleted afterwards (``netns.py``); the tests skip where
 namespaces cannot be made (not root). The runs are in
-``harness.live_graph``; figures: doc/measurements.md, "Live graph".
+``orthoglide_testing.live_graph``; figures: doc/measurements.md, "Live graph".
 
 - Joins: the feedforward streams at 500 Hz to a recorder, with plain
   bystanders, while plain participants join and subscribe to its output.
@@ -27,8 +27,8 @@ import sys
 import pytest
 
 from node_checks import needs_scripts
-from orthoglide_ros.harness import live_graph as live
-from orthoglide_ros.harness import netns
+from orthoglide_testing import live_graph as live
+from orthoglide_testing import netns
 
 pytestmark = [
     pytest.mark.ros, needs_scripts(),

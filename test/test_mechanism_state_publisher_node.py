@@ -31,10 +31,10 @@ from diagnostic_msgs.msg import DiagnosticArray
 from sensor_msgs.msg import JointState
 
 from node_checks import needs_scripts
-from orthoglide_ros.harness.probe import (matched, node_graphs, PROBE_QOS,
-                                          spin_until,
-                                          wait_diagnostics as harness_wait_diagnostics)
-from orthoglide_ros.harness.processes import node_executable, run_to_exit
+from orthoglide_testing.probe import (matched, node_graphs, PROBE_QOS,
+                                      spin_until,
+                                      wait_diagnostics as harness_wait_diagnostics)
+from orthoglide_testing.processes import node_executable, run_to_exit
 from urdf_harness import COMMITTED_URDF, cut_errors, load, TOLERANCE
 
 pytestmark = pytest.mark.ros  # DDS and node processes
@@ -218,7 +218,7 @@ def test_invalid_stamps_are_refused_counted_and_said():
     ``rejected stamp`` (WARN, the reason in the message); a zero stamp
     still passes unchanged, as a valid one does.
     """
-    from orthoglide_ros.harness.hostile.streams import mechanism_stamps
+    from orthoglide_testing.hostile.streams import mechanism_stamps
     result = mechanism_stamps()
     assert result.alive, result
     assert result.bad_outputs == 0, result

@@ -16,9 +16,9 @@ import pytest
 from rclpy.executors import SingleThreadedExecutor
 
 from node_checks import needs_scripts
-from orthoglide_ros.harness.probe import paced, Probe
-from orthoglide_ros.harness.processes import (memory_kb, page_faults,
-                                              start_node_process, stop_process)
+from orthoglide_testing.probe import paced, Probe
+from orthoglide_testing.processes import (memory_kb, page_faults,
+                                          start_node_process, stop_process)
 from orthoglide_ros.model.trajectory import paper_sample
 
 pytestmark = [pytest.mark.ros, needs_scripts()]

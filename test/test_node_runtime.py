@@ -18,7 +18,7 @@ from std_msgs.msg import Float64
 
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.parameters import Table
-from orthoglide_ros.harness.probe import spin_until
+from orthoglide_testing.probe import spin_until
 from orthoglide_ros.ros.managed_node import default_qos, Input, ManagedNode
 
 pytestmark = pytest.mark.ros  # DDS and node processes

@@ -61,9 +61,9 @@ from orthoglide_ros.formats.params_file import load_robot
 from orthoglide_ros.model.trajectory import paper_sample
 
 from node_checks import close, needs_scripts  # noqa: E402
-from orthoglide_ros.harness.probe import paced, PROBE_QOS  # noqa: E402
-from orthoglide_ros.harness.processes import (start_node_process,  # noqa: E402
-                                              stop_process)
+from orthoglide_testing.probe import paced, PROBE_QOS  # noqa: E402
+from orthoglide_testing.processes import (start_node_process,  # noqa: E402
+                                          stop_process)
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config' / 'orthoglide.yaml'

@@ -20,7 +20,7 @@ from planning_checks import toppra_duration
 import pytest
 from trajectory_msgs.msg import JointTrajectory, MultiDOFJointTrajectory
 
-from orthoglide_ros.harness.hostile import Nodes, Peer
+from orthoglide_testing.hostile import Nodes, Peer
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.planning import gcode

@@ -16,9 +16,9 @@ from rclpy.node import Node
 from rclpy.parameter_client import AsyncParameterClient
 
 from node_checks import assert_clean_exit
-from orthoglide_ros.harness.probe import spin_until
-from orthoglide_ros.harness.processes import (node_executable,
-                                              start_node_process, timed_stop)
+from orthoglide_testing.probe import spin_until
+from orthoglide_testing.processes import (node_executable,
+                                          start_node_process, timed_stop)
 
 pytestmark = pytest.mark.ros
 

@@ -25,9 +25,9 @@ from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 
 from node_checks import needs_scripts
-from orthoglide_ros.harness.probe import Probe, spin_until, wait_diagnostics
-from orthoglide_ros.harness.processes import (node_executable, run_to_exit,
-                                              start_node_process, stop_process)
+from orthoglide_testing.probe import Probe, spin_until, wait_diagnostics
+from orthoglide_testing.processes import (node_executable, run_to_exit,
+                                          start_node_process, stop_process)
 from orthoglide_ros.cores import realtime
 
 pytestmark = [pytest.mark.ros, needs_scripts(

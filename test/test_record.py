@@ -23,8 +23,8 @@ import numpy as np
 import pytest
 
 from node_checks import needs_scripts
-from orthoglide_ros.harness.processes import (node_executable,
-                                              start_node_process, stop_process)
+from orthoglide_testing.processes import (node_executable,
+                                          start_node_process, stop_process)
 
 from orthoglide_ros.tools import identification
 

@@ -16,7 +16,7 @@ Restart tests of the feedforward node as a process: peers that restart.
 - SIGINT and SIGTERM while setpoints stream in: exit code 0, promptly, with
   nothing on standard error.
 
-The runs and the bounds are in ``harness.reliability`` (shared with
+The runs and the bounds are in ``orthoglide_testing.reliability`` (shared with
 ``scripts/reliability_report.py``).
 """
 
@@ -25,9 +25,9 @@ import sys
 import pytest
 
 from node_checks import needs_scripts  # noqa: E402
-from orthoglide_ros.harness import live_graph  # noqa: E402
-from orthoglide_ros.harness import netns  # noqa: E402
-from orthoglide_ros.harness import reliability as harness  # noqa: E402
+from orthoglide_testing import live_graph  # noqa: E402
+from orthoglide_testing import netns  # noqa: E402
+from orthoglide_testing import reliability as harness  # noqa: E402
 
 pytestmark = [pytest.mark.ros, needs_scripts()]
 in_a_namespace = pytest.mark.skipif(bool(netns.unavailable()),

@@ -27,8 +27,8 @@ from trajectory_msgs.msg import MultiDOFJointTrajectory  # noqa: E402
 
 from orthoglide_ros.ros.setpoint_publisher_node import (  # noqa: E402
     SetpointPublisher)
-from orthoglide_ros.harness.processes import (start_node_process,  # noqa: E402
-                                              stop_process, wait_exit)
+from orthoglide_testing.processes import (start_node_process,  # noqa: E402
+                                          stop_process, wait_exit)
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 

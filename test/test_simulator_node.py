@@ -34,13 +34,13 @@ from orthoglide_ros.cores.simulator import MAX_CATCH_UP
 from orthoglide_ros.ros.simulator_node import SimulatorNode
 
 from node_checks import needs_scripts
-from orthoglide_ros.harness.messages import header_stamp
-from orthoglide_ros.harness.probe import (matched, node_graphs, PROBE_QOS,
-                                          spin_for, spin_until,
-                                          wait_diagnostics as harness_wait_diagnostics)
-from orthoglide_ros.harness.processes import (node_executable, run_to_exit,
-                                              start_node_process,
-                                              stop_process)
+from orthoglide_testing.messages import header_stamp
+from orthoglide_testing.probe import (matched, node_graphs, PROBE_QOS,
+                                      spin_for, spin_until,
+                                      wait_diagnostics as harness_wait_diagnostics)
+from orthoglide_testing.processes import (node_executable, run_to_exit,
+                                          start_node_process,
+                                          stop_process)
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 
@@ -477,7 +477,7 @@ def test_process_mujoco_divergence_is_an_error_and_publishes_nothing(
     effort), one ERROR log line, no ``MUJOCO_LOG.TXT`` and no MuJoCo
     warning on the output; ``~/reset`` brings the states back, held.
     """
-    from orthoglide_ros.harness.hostile.peer import Peer
+    from orthoglide_testing.hostile.peer import Peer
     light = [arg for i in range(1, 7) for arg in ('-p', f'robot.m{i}:=1e-6')]
     proc = start_node_process(
         ['--ros-args', '-p', 'engine:=mujoco', '-p', 'force_limit:=1e6',

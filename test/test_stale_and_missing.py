@@ -1,16 +1,16 @@
 """
 Stale and missing input, over real DDS: doc/feedforward.md's rules hold.
 
-The node (``FeedforwardNode``) and a :class:`harness.probe.Probe` share one
-rclpy context and one EventsExecutor; the probe is also the producer. A
-producer streams at about 250 Hz and stops: with ``rate_hz > 0`` the
-outputs stop within ``setpoint_timeout`` (plus one tick and the delivery
-slack) of the last setpoint's arrival and the next ``/diagnostics`` says
-``stale`` (WARN); the producer comes back: the first output carries the
-first fresh setpoint's stamp and the diagnostics return to OK. With
-``rate_hz`` 0 only the diagnostics change. A setpoint missing its twist or
-accel, or whose accel comes later than ``pairing_timeout``, gives no output
-and is counted ``unpaired``; with ``pose_only`` a pose alone is served.
+The node (``FeedforwardNode``) and a probe
+(:class:`orthoglide_testing.probe.Probe`) share one rclpy context and one
+EventsExecutor; the probe is also the producer. A producer streams at about 250
+Hz and stops: with ``rate_hz > 0`` the outputs stop within ``setpoint_timeout``
+(plus one tick and the delivery slack) of the last setpoint's arrival and the
+next ``/diagnostics`` says ``stale`` (WARN); the producer comes back: the first
+output carries the first fresh setpoint's stamp and the diagnostics return to
+OK. With ``rate_hz`` 0 only the diagnostics change. A setpoint missing its
+twist or accel, or whose accel comes later than ``pairing_timeout``, gives no
+output and is counted ``unpaired``; with ``pose_only`` a pose alone is served.
 
 Times are the node's and the probe's ``time.monotonic()`` (one process).
 """
@@ -29,9 +29,9 @@ from orthoglide_ros.ros.feedforward_node import FeedforwardNode
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.trajectory import paper_sample
 
-from orthoglide_ros.harness.messages import (diagnostic_values, header_stamp,
-                                             stamp_of)
-from orthoglide_ros.harness.probe import paced, Probe, spin_for, spin_until
+from orthoglide_testing.messages import (diagnostic_values, header_stamp,
+                                         stamp_of)
+from orthoglide_testing.probe import paced, Probe, spin_for, spin_until
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 

@@ -26,12 +26,12 @@ from orthoglide_ros.cores.tracking_controller import INPUTS, PARAMETERS, REASONS
 from orthoglide_ros.ros.tracking_controller_node import TrackingControllerNode
 
 from node_checks import assert_declared, needs_scripts
-from orthoglide_ros.harness.messages import diagnostic_values
-from orthoglide_ros.harness.probe import (call, matched, node_graphs,
-                                          parameter_client, PROBE_QOS,
-                                          spin_for, spin_until,
-                                          wait_diagnostics as harness_wait_diagnostics)
-from orthoglide_ros.harness.processes import node_executable, run_to_exit
+from orthoglide_testing.messages import diagnostic_values
+from orthoglide_testing.probe import (call, matched, node_graphs,
+                                      parameter_client, PROBE_QOS,
+                                      spin_for, spin_until,
+                                      wait_diagnostics as harness_wait_diagnostics)
+from orthoglide_testing.processes import node_executable, run_to_exit
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 

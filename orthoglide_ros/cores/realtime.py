@@ -157,61 +157,21 @@ def apply(thread_priority, cpu_affinity, lock_memory):
         warnings += _lock_memory()
     if cpu_affinity:
         cpus = set(cpu_affinity)
-        warnings += _every_thread(
+        warnings += every_thread(
             lambda tid: os.sched_setaffinity(tid, cpus), os.sched_getaffinity,
             os.sched_setaffinity, lambda error: _affinity_refused(
                 cpu_affinity, error))
     if thread_priority:
         param = os.sched_param(thread_priority)
-        warnings += _every_thread(
+        warnings += every_thread(
             lambda tid: os.sched_setscheduler(tid, os.SCHED_FIFO, param),
             lambda tid: (os.sched_getscheduler(tid), os.sched_getparam(tid)),
             lambda tid, old: os.sched_setscheduler(tid, *old),
-            lambda error: _priority_refused(thread_priority, error))
+            lambda error: priority_refused(thread_priority, error))
     return warnings
 
 
-def client(priority, pid='self'):
-    """
-    Run every thread of a process SCHED_FIFO ``priority``, not its children.
-
-    For a process that feeds or records a real-time node and starts
-    processes itself (a demo, a test, a benchmark): with
-    SCHED_RESET_ON_FORK, the processes and threads it makes afterwards
-    start at normal scheduling, so a node it starts runs as its own
-    ``thread_priority`` says. Call it again after making threads (a DDS
-    participant's) to include them. ``pid``: this process, or another one
-    once it has started (its start-up, imports and discovery, then does
-    not preempt the real-time loop). Returns the warnings as
-    :func:`apply`.
-    """
-    param = os.sched_param(priority)
-    return _every_thread(
-        lambda tid: os.sched_setscheduler(
-            tid, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK, param),
-        lambda tid: (os.sched_getscheduler(tid), os.sched_getparam(tid)),
-        lambda tid, old: os.sched_setscheduler(tid, *old),
-        lambda error: _priority_refused(priority, error), pid)
-
-
-def normal():
-    """Put every thread of this process back at normal scheduling."""
-    for tid in _threads():
-        try:
-            os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
-        except ProcessLookupError:  # the thread ended meanwhile
-            pass
-
-
-def granted(priority):
-    """Whether this process may take SCHED_FIFO ``priority`` (caps, limit)."""
-    if _limit(resource.RLIMIT_RTPRIO) == 'unlimited' or \
-            _limit(resource.RLIMIT_RTPRIO) >= priority:
-        return True
-    return _capable(CAP_SYS_NICE)
-
-
-def _capable(capability):
+def capable(capability):
     """Whether this process holds ``capability`` (its effective set)."""
     with open('/proc/self/status') as f:
         effective = next(int(line.split()[1], 16) for line in f
@@ -219,7 +179,7 @@ def _capable(capability):
     return bool(effective >> capability & 1)
 
 
-def _every_thread(change, read, restore, refused, pid='self'):
+def every_thread(change, read, restore, refused, pid='self'):
     """
     ``change(tid)`` for every thread of ``pid``, found anew until none is new.
 
@@ -230,7 +190,7 @@ def _every_thread(change, read, restore, refused, pid='self'):
     done = {}
     try:
         for _ in range(ROUNDS):
-            new = [tid for tid in _threads(pid) if tid not in done]
+            new = [tid for tid in thread_ids(pid) if tid not in done]
             if not new:
                 break
             for tid in new:
@@ -250,22 +210,24 @@ def _every_thread(change, read, restore, refused, pid='self'):
     return []
 
 
-def _threads(pid='self'):
+def thread_ids(pid='self'):
     """Return the thread ids of a process (this one by default)."""
     return [int(name) for name in os.listdir(f'/proc/{pid}/task')]
 
 
-def _limit(kind):
+def soft_limit(kind):
+    """Return this process's soft limit ``kind`` ('unlimited' if none)."""
     soft = resource.getrlimit(kind)[0]
     return 'unlimited' if soft == resource.RLIM_INFINITY else soft
 
 
-def _priority_refused(priority, error):
+def priority_refused(priority, error):
+    """Return the warning line of a refused SCHED_FIFO ``priority``."""
     return (
         f'thread_priority {priority} refused by the OS ({error.strerror}): '
         'SCHED_FIFO needs CAP_SYS_NICE or an RLIMIT_RTPRIO of at least '
-        f'{priority} (it is {_limit(resource.RLIMIT_RTPRIO)}); allow it with '
-        '"<user> - rtprio 99" in /etc/security/limits.conf, '
+        f'{priority} (it is {soft_limit(resource.RLIMIT_RTPRIO)}); allow it '
+        'with "<user> - rtprio 99" in /etc/security/limits.conf, '
         'LimitRTPRIO=99 in a systemd unit, or docker run '
         '--cap-add=sys_nice --ulimit rtprio=99; running at normal '
         'scheduling')
@@ -280,9 +242,9 @@ def _affinity_refused(cpus, error):
 
 
 def _lock_memory():
-    limit = _limit(resource.RLIMIT_MEMLOCK)
+    limit = soft_limit(resource.RLIMIT_MEMLOCK)
     if limit != 'unlimited' and limit < MEMLOCK_NEEDED and \
-            not _capable(CAP_IPC_LOCK):
+            not capable(CAP_IPC_LOCK):
         return [_memory_refused(
             f'(RLIMIT_MEMLOCK {limit // 1024} kiB, no CAP_IPC_LOCK): it '
             f'needs {MEMLOCK_NEEDED >> 20} MiB, room for what a node maps as '
@@ -336,7 +298,7 @@ def in_effect():
     """Return the :class:`Effect` that holds now."""
     main = os.getpid()
     rows = []
-    for tid in _threads():
+    for tid in thread_ids():
         try:
             with open(f'/proc/self/task/{tid}/stat') as f:
                 fields = f.read().rsplit(')', 1)[1].split()

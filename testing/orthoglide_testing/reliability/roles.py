@@ -1,7 +1,7 @@
 """
 The child processes of a reliability run: producer, recorder, attacker.
 
-Run as ``python -m orthoglide_ros.harness.reliability.roles ROLE ...``
+Run as ``python -m orthoglide_testing.reliability.roles ROLE ...``
 (:class:`runs.Child` does): each talks in lines on its standard output
 (``ready``, ``first``, ``gap``, ``idle``, ``done``) and takes commands on
 its standard input (``go``, ``stop``); SIGINT or SIGTERM ends it.
@@ -19,9 +19,9 @@ import time
 
 import numpy as np
 
-from orthoglide_ros.harness.messages import INPUT_TOPICS, Producer, qos_profile
-from orthoglide_ros.harness.reliability.cases import attack_payloads
-from orthoglide_ros.harness.reliability.runs import (
+from orthoglide_testing.messages import INPUT_TOPICS, Producer, qos_profile
+from orthoglide_testing.reliability.cases import attack_payloads
+from orthoglide_testing.reliability.runs import (
     EPOCH_NS, FLOOD_STEP_NS, GAP_NS, IDLE_NS, LOG_COLUMNS, RECORD_LIMIT_NS,
     sample_at, START_TIMEOUT, TAIL_COUNT, TAIL_PERIOD, WARM_PERIOD)
 

@@ -3,13 +3,16 @@ A loaded machine, and the real-time set the demos and timing tests use.
 
 The nodes of a loop run every thread SCHED_FIFO NODE_PRIORITY (their
 ``thread_priority``, ros2_control's default), the process that feeds and
-records them CLIENT_PRIORITY, above it (doc/deployment.md#real-time);
+records them CLIENT_PRIORITY, above it (doc/deployment.md#real-time):
+:func:`client`, with the nodes' own :mod:`orthoglide_ros.cores.realtime`;
 REALTIME says whether the OS grants it here. :func:`busy_loops` loads
 the machine; :func:`add_load_options` gives a demo its ``--realtime`` and
 ``--load N``.
 """
 
 from contextlib import contextmanager
+import os
+import resource
 import subprocess
 import sys
 
@@ -17,10 +20,52 @@ from orthoglide_ros.cores import realtime
 
 NODE_PRIORITY = 50
 CLIENT_PRIORITY = 60
+
+
+def client(priority, pid='self'):
+    """
+    Run every thread of a process SCHED_FIFO ``priority``, not its children.
+
+    For a process that feeds or records a real-time node and starts
+    processes itself (a demo, a test, a benchmark): with
+    SCHED_RESET_ON_FORK, the processes and threads it makes afterwards
+    start at normal scheduling, so a node it starts runs as its own
+    ``thread_priority`` says. Call it again after making threads (a DDS
+    participant's) to include them. ``pid``: this process, or another one
+    once it has started (its start-up, imports and discovery, then does
+    not preempt the real-time loop). Returns the warnings as
+    :func:`realtime.apply`.
+    """
+    param = os.sched_param(priority)
+    return realtime.every_thread(
+        lambda tid: os.sched_setscheduler(
+            tid, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK, param),
+        lambda tid: (os.sched_getscheduler(tid), os.sched_getparam(tid)),
+        lambda tid, old: os.sched_setscheduler(tid, *old),
+        lambda error: realtime.priority_refused(priority, error), pid)
+
+
+def normal():
+    """Put every thread of this process back at normal scheduling."""
+    for tid in realtime.thread_ids():
+        try:
+            os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+        except ProcessLookupError:  # the thread ended meanwhile
+            pass
+
+
+def granted(priority):
+    """Whether this process may take SCHED_FIFO ``priority`` (caps, limit)."""
+    limit = realtime.soft_limit(resource.RLIMIT_RTPRIO)
+    if limit == 'unlimited' or limit >= priority:
+        return True
+    return realtime.capable(realtime.CAP_SYS_NICE)
+
+
 # Whether the OS grants it here: the timing tests then run their nodes
 # and their recording processes at it, so that their verdicts do not
 # depend on what else the machine runs.
-REALTIME = realtime.granted(CLIENT_PRIORITY)
+REALTIME = granted(CLIENT_PRIORITY)
 # A busy loop that puts itself at normal scheduling first: a real-time
 # parent's children inherit its policy unless it resets them.
 BUSY_LOOP = ('import os; os.sched_setscheduler(0, os.SCHED_OTHER, '
@@ -46,7 +91,7 @@ def elevate(proc, on=REALTIME):
     :func:`client_prefix` would make it.
     """
     if on:
-        realtime.client(CLIENT_PRIORITY, proc.pid)
+        client(CLIENT_PRIORITY, proc.pid)
 
 
 @contextmanager
@@ -55,16 +100,16 @@ def realtime_client(on=REALTIME):
     Run every thread of this process at CLIENT_PRIORITY meanwhile.
 
     For a test or demo that records a real-time node in its own process;
-    its children start at normal scheduling (:func:`realtime.client`).
+    its children start at normal scheduling (:func:`client`).
     Call it once the process's DDS participant exists.
     """
     if on:
-        realtime.client(CLIENT_PRIORITY)
+        client(CLIENT_PRIORITY)
     try:
         yield
     finally:
         if on:
-            realtime.normal()
+            normal()
 
 
 @contextmanager
@@ -110,7 +155,7 @@ def check_load_options(parser, args):
     """Refuse a negative load, or --realtime where it is not granted."""
     if args.load < 0:
         parser.error('--load must be >= 0')
-    if args.realtime and not realtime.granted(CLIENT_PRIORITY):
+    if args.realtime and not granted(CLIENT_PRIORITY):
         parser.error('--realtime: SCHED_FIFO is not granted here '
                      '(CAP_SYS_NICE or an RLIMIT_RTPRIO, '
                      'doc/deployment.md#real-time)')

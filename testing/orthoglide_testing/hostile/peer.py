@@ -19,11 +19,11 @@ from geometry_msgs.msg import (Transform, Twist)
 from rcl_interfaces.srv import GetParameters
 from trajectory_msgs.msg import (MultiDOFJointTrajectory, MultiDOFJointTrajectoryPoint)
 
-from orthoglide_ros.harness import PARAMS
-from orthoglide_ros.harness.load import (realtime_args, realtime_client)
-from orthoglide_ros.harness.messages import qos_profile
-from orthoglide_ros.harness.processes import (node_executable,
-                                              start_node_process, stop_process)
+from orthoglide_testing.checkout import params_file
+from orthoglide_testing.load import (realtime_args, realtime_client)
+from orthoglide_testing.messages import qos_profile
+from orthoglide_testing.processes import (node_executable,
+                                          start_node_process, stop_process)
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
 
@@ -184,7 +184,7 @@ class Nodes:
 
     def start(self, name, *args, params=True):
         """Start ``name`` with ``args`` (after ``--ros-args``)."""
-        extra = ['--params-file', PARAMS] if params else []
+        extra = ['--params-file', str(params_file())] if params else []
         self.processes[name] = start_node_process(
             ['--ros-args', *extra, *realtime_args(self.realtime), *args],
             command=[node_executable(name)])
@@ -211,7 +211,7 @@ class Nodes:
         self.close()
 
 
-def _running(peer, names, timeout=START_TIMEOUT):
+def wait_running(peer, names, timeout=START_TIMEOUT):
     """Wait until every node answers get_parameters; raise if not."""
     for name in names:
         answer = peer.call(GetParameters, f'/{name}/get_parameters',
@@ -221,7 +221,7 @@ def _running(peer, names, timeout=START_TIMEOUT):
             raise HarnessError(f'{name} did not answer')
 
 
-def _handshake(peer, publish, arrived, timeout=START_TIMEOUT, every=0.05):
+def handshake(peer, publish, arrived, timeout=START_TIMEOUT, every=0.05):
     """
     ``publish(k)`` every ``every`` s until ``arrived()``; return how many.
 
@@ -241,19 +241,19 @@ def _handshake(peer, publish, arrived, timeout=START_TIMEOUT, every=0.05):
             raise HarnessError('no message went through')
 
 
-def _counter(peer, node, key):
+def diagnostic_counter(peer, node, key):
     """Return a counter of ``node``'s newest diagnostics (-1: none yet)."""
     with peer.lock:
         found = peer.diagnostics.get(node)
     return int(found[2].get(key, -1)) if found else -1
 
 
-def _lines(text):
+def log_lines(text):
     """Return the log lines of a stderr text (stdout part included)."""
     return [line for line in text.splitlines() if line.strip()]
 
 
-def _setpoint(frame, stamp=(5, 0), offset=(0, 0)):
+def home_setpoint(frame, stamp=(5, 0), offset=(0, 0)):
     """Return a one-point MultiDOFJointTrajectory at home, at rest."""
     msg = MultiDOFJointTrajectory(points=[MultiDOFJointTrajectoryPoint(
         transforms=[Transform()], velocities=[Twist()],

@@ -20,9 +20,9 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
-from orthoglide_ros.harness.hostile.peer import (
-    _counter, _handshake, _lines, _running, _setpoint, HarnessError, Nodes,
-    Peer, START_TIMEOUT)
+from orthoglide_testing.hostile.peer import (
+    diagnostic_counter, handshake, HarnessError, home_setpoint, log_lines,
+    Nodes, Peer, START_TIMEOUT, wait_running)
 
 # A log line as rcutils prints it: severity, time, logger, message.
 LOG_LINE = re.compile(r'^\[(DEBUG|INFO|WARN|ERROR|FATAL)\] \[\d+\.\d+\] '
@@ -90,7 +90,7 @@ def _hammer(client, requests, seconds, last):
 
 def _hammered(answers, seconds, marker, code, stderr):
     """Return :class:`Hammered`: the lines holding ``marker`` counted."""
-    lines = [line for line in _lines(stderr) if marker in line]
+    lines = [line for line in log_lines(stderr) if marker in line]
     answered = [a for a in answers if a is not None]
     return Hammered(
         seconds=seconds, sent=len(answers), answered=len(answered),
@@ -117,7 +117,7 @@ def refused_transitions(seconds=3.0):
     """
     with Nodes() as nodes, Peer() as peer:
         nodes.start('feedforward')
-        _running(peer, ('feedforward',))
+        wait_running(peer, ('feedforward',))
         client = peer.node.create_client(ChangeState,
                                          '/feedforward/change_state')
         answers, elapsed = _hammer(client, (
@@ -138,7 +138,7 @@ def resets(seconds=3.0):
     """
     with Nodes() as nodes, Peer() as peer:
         nodes.start('simulator')
-        _running(peer, ('simulator',))
+        wait_running(peer, ('simulator',))
         client = peer.node.create_client(Trigger, '/simulator/reset')
         answers, elapsed = _hammer(client, (Trigger.Request(),), seconds,
                                    Trigger.Request())
@@ -161,9 +161,9 @@ def forged_text(text=FORGERY):
         outputs = peer.record('feedforward/joint_states', JointState)
         setpoints = peer.publisher(MultiDOFJointTrajectory,
                                    'setpoint/trajectory')
-        _running(peer, ('feedforward',))
-        _handshake(peer, lambda k: setpoints.publish(_setpoint('', (1, k))),
-                   lambda: outputs)
+        wait_running(peer, ('feedforward',))
+        handshake(peer, lambda k: setpoints.publish(home_setpoint('', (1, k))),
+                  lambda: outputs)
         client = peer.node.create_client(ChangeState,
                                          '/feedforward/change_state')
         if not client.wait_for_service(timeout_sec=START_TIMEOUT):
@@ -171,14 +171,14 @@ def forged_text(text=FORGERY):
         answer = _call(client, _transition(text))
         refused = answer is not None and not answer.success
         peer.set_parameters('feedforward', {'joint_names': [text, text, 'c']})
-        setpoints.publish(_setpoint(text, (2, 0)))
-        if not peer.wait(lambda: _counter(peer, 'feedforward',
-                                          'rejected frame') >= 1,
+        setpoints.publish(home_setpoint(text, (2, 0)))
+        if not peer.wait(lambda: diagnostic_counter(peer, 'feedforward',
+                                                    'rejected frame') >= 1,
                          START_TIMEOUT):
             raise HarnessError('the frame id never reached the node')
         codes = {'feedforward': nodes.stop('feedforward')}
     lines = [line for _, stderr in codes.values() for line in
-             _lines(stderr) if line != '[stdout]']
+             log_lines(stderr) if line != '[stdout]']
     return Forged(
         refused=refused, lines=lines,
         not_log_lines=[line for line in lines if not LOG_LINE.match(line)],

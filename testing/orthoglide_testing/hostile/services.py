@@ -3,7 +3,7 @@ Hostile peers of the nodes' services and processes.
 
 Malformed and absurd parameter requests, clients that leave with requests
 in flight (``burst``: this module run as a child process, ``python -m
-orthoglide_ros.harness.hostile.services burst ...``), a client whose reply
+orthoglide_testing.hostile.services burst ...``), a client whose reply
 reader can never match and stays (``linger``), stalls of a node while it
 answers, signals while a node starts, text in messages that would make
 long or many log lines.
@@ -35,13 +35,13 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
-from orthoglide_ros.harness.load import REALTIME
-from orthoglide_ros.harness.processes import (node_executable,
-                                              start_node_process, stop_process)
+from orthoglide_testing.load import REALTIME
+from orthoglide_testing.processes import (node_executable,
+                                          start_node_process, stop_process)
 
-from orthoglide_ros.harness.hostile.peer import (
-    _counter, _handshake, HarnessError, _lines, NODES, Nodes, Peer, _running,
-    _setpoint, START_TIMEOUT)
+from orthoglide_testing.hostile.peer import (
+    diagnostic_counter, handshake, HarnessError, home_setpoint, log_lines,
+    NODES, Nodes, Peer, START_TIMEOUT, wait_running)
 
 
 # What each case saw: named results, one dataclass per case ------------------
@@ -121,7 +121,7 @@ def malformed_parameters(type_code=200):
         for name in NODES:
             nodes.start(name, *(('-p', 'loop:=true') if name ==
                                 'setpoint_publisher' else ()))
-        _running(peer, NODES)
+        wait_running(peer, NODES)
         for name in NODES:
             single = peer.call(SetParameters, f'/{name}/set_parameters',
                                SetParameters.Request(parameters=[bad]))
@@ -170,7 +170,7 @@ def absurd_parameters():
     with Nodes() as nodes, Peer() as peer:
         for name in ABSURD:
             nodes.start(name)
-        _running(peer, ABSURD)
+        wait_running(peer, ABSURD)
         for name, changes in ABSURD.items():
             runtime[name] = {}
             for key, value in changes.items():
@@ -271,7 +271,7 @@ def _signalled(proc, signame, delay, ready):
 def quiet(stderr):
     """Whether a stopped node's stderr holds nothing but INFO lines."""
     return all(line.startswith('[INFO]') or line == '[stdout]'
-               for line in _lines(stderr))
+               for line in log_lines(stderr))
 
 
 # Log amplification -----------------------------------------------------------
@@ -293,15 +293,15 @@ def log_amplification():
                                    'setpoint/trajectory')
         measured = peer.publisher(JointState, 'joint_states')
         outputs = peer.record('feedforward/joint_states', JointState)
-        _running(peer, ('feedforward', 'tracking_controller'))
-        _handshake(peer, lambda k: setpoints.publish(_setpoint('', (1, k))),
-                   lambda: outputs)
-        _handshake(peer, lambda k: measured.publish(JointState(
-            name=['unknown'], position=[0.0])), lambda: _counter(
+        wait_running(peer, ('feedforward', 'tracking_controller'))
+        handshake(peer, lambda k: setpoints.publish(home_setpoint('', (1, k))),
+                  lambda: outputs)
+        handshake(peer, lambda k: measured.publish(JointState(
+            name=['unknown'], position=[0.0])), lambda: diagnostic_counter(
             peer, 'tracking_controller', 'rejected measured missing_joint')
             > 0)
         for frame in ('f' * 60000, 'g' * 5_000_000):
-            setpoints.publish(_setpoint(frame))
+            setpoints.publish(home_setpoint(frame))
         for count in (4000, 100000):
             state = JointState(name=[f'joint_{i}' for i in range(count)])
             measured.publish(state)
@@ -326,7 +326,7 @@ def log_amplification():
         for name in ('feedforward', 'tracking_controller'):
             alive = nodes.alive(name)
             code, stderr = nodes.stop(name)
-            lines = _lines(stderr)
+            lines = log_lines(stderr)
             values = status[name][2] if status[name] else {}
             result[name] = Logged(
                 alive=alive, code=code, lines=len(lines),
@@ -368,7 +368,7 @@ def departed_clients(requests=100):
         nodes.start('setpoint_publisher', '-p', 'loop:=true')
         states = peer.record('joint_states', JointState)
         outputs = peer.record('feedforward/joint_states', JointState)
-        _running(peer, ('simulator', 'feedforward'))
+        wait_running(peer, ('simulator', 'feedforward'))
         if not peer.wait(lambda: len(states) > 100 and len(outputs) > 100,
                          START_TIMEOUT):
             raise HarnessError('the streams did not start')
@@ -449,7 +449,7 @@ def isolated_clients(fresh=3, stalls=5):
     with Nodes() as nodes, Peer() as peer:
         nodes.start('simulator')
         node = nodes.start('feedforward')
-        _running(peer, ('simulator', 'feedforward'))
+        wait_running(peer, ('simulator', 'feedforward'))
         hostile = start_node_process([], command=[
             sys.executable, '-m', __spec__.name, 'linger'])
         try:

@@ -30,9 +30,10 @@ import time
 
 import numpy as np
 
-from orthoglide_ros.harness import netns, ROOT
-from orthoglide_ros.harness import reliability as rh
-from orthoglide_ros.harness.reliability.runs import (
+from orthoglide_testing import netns
+from orthoglide_testing.checkout import checkout, use_checkout
+from orthoglide_testing import reliability as rh
+from orthoglide_testing.reliability.runs import (
     Child, load_outputs, ONE_HOST_PROFILE, profile_environment, Run,
     START_TIMEOUT)
 
@@ -229,7 +230,7 @@ def in_namespace(case, namespace=None, **kwargs):
     a HarnessError with the case's output when it failed.
     """
     env = dict(os.environ, ROS_DOMAIN_ID=str(namespace_domain()))
-    command = [sys.executable, '-m', __spec__.name, case,
+    command = [sys.executable, '-m', __spec__.name, str(checkout()), case,
                json.dumps(kwargs)]
     if namespace is None:
         with netns.Namespace() as ns:
@@ -239,7 +240,7 @@ def in_namespace(case, namespace=None, **kwargs):
 
 def _run(command, env):
     proc = subprocess.run(command, env=env, capture_output=True, text=True,
-                          timeout=CASE_TIMEOUT, cwd=str(ROOT))
+                          timeout=CASE_TIMEOUT, cwd=checkout())
     for line in reversed(proc.stdout.splitlines()):
         if line.startswith('result '):
             return json.loads(line[len('result '):])
@@ -257,11 +258,14 @@ def _plain(value):
 def main(argv=None):
     """Run one case (inside a namespace); print ``result <json>``."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
+    parser.add_argument('checkout', help='the repository root')
     parser.add_argument('case', choices=sorted(CASES))
     parser.add_argument('kwargs', help='keyword arguments, as JSON')
     args = parser.parse_args(argv)
     if not rh.in_own_namespace():
-        parser.error('runs only inside a network namespace (harness.netns)')
+        parser.error('runs only inside a network namespace '
+                     '(orthoglide_testing.netns)')
+    use_checkout(args.checkout)
     result = CASES[args.case](**json.loads(args.kwargs))
     print('result ' + json.dumps(result, default=_plain), flush=True)
     return 0

@@ -28,9 +28,9 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
-from orthoglide_ros.harness.messages import (diagnostic_values,
-                                             header_stamp, IDENTITY,
-                                             trajectory_point, ZERO)
+from orthoglide_testing.messages import (diagnostic_values,
+                                         header_stamp, IDENTITY,
+                                         trajectory_point, ZERO)
 
 # Reliable like the node; deep, so that no output is lost while a test
 # spins at its own pace.

@@ -34,11 +34,11 @@ need its producer and recorder.) Every child process is stopped in a
 the streams: :mod:`.streams`.
 """
 
-from orthoglide_ros.harness.hostile.peer import (  # noqa: F401
+from orthoglide_testing.hostile.peer import (  # noqa: F401
     HarnessError, HOLD, LOG_LINE_LIMIT, NODES, Nodes, Peer, START_TIMEOUT)
-from orthoglide_ros.harness.hostile.services import (  # noqa: F401
+from orthoglide_testing.hostile.services import (  # noqa: F401
     absurd_parameters, departed_clients, isolated_clients, log_amplification,
     malformed_parameters, quiet, startup_signals)
-from orthoglide_ros.harness.hostile.streams import (  # noqa: F401
+from orthoglide_testing.hostile.streams import (  # noqa: F401
     absurd_values, fast_simulator, setpoint_loop, stall_resume, stamps,
     trajectory_flood, trajectory_peak_speed)

@@ -17,15 +17,15 @@ import time
 
 import numpy as np
 
-from orthoglide_ros.harness import CONFIG, PARAMS, ROOT
-from orthoglide_ros.harness.load import (client_prefix, REALTIME,
-                                         realtime_args, realtime_client)
-from orthoglide_ros.harness.processes import (interrupt, start_node_process,
-                                              stop_process)
+from orthoglide_testing.checkout import checkout, config_file, params_file
+from orthoglide_testing.load import (client_prefix, REALTIME,
+                                     realtime_args, realtime_client)
+from orthoglide_testing.processes import (interrupt, start_node_process,
+                                          stop_process)
 from orthoglide_ros.model.trajectory import paper_sample
 
 # The module the children run.
-ROLES = 'orthoglide_ros.harness.reliability.roles'
+ROLES = 'orthoglide_testing.reliability.roles'
 EPOCH_NS = 10**12               # stamps of one stream: one epoch of 1000 s
 PERIOD_NS = 2 * 10**9           # eq. (6) repeats every 2 s of stamp
 FLOOD_STEP_NS = 100000          # stamp step of a flood (0.1 ms)
@@ -35,11 +35,11 @@ RECORD_LIMIT_NS = 3600 * 10**9  # a recorder stops by itself after 1 h
 WARM_PERIOD = 0.02              # s between two warm-up setpoints
 START_TIMEOUT = 30.0            # s for a process to come up and answer
 TOL = 1e-9                      # relative (above 1) or absolute tolerance
-NODE_ARGS = ('--ros-args', '--params-file', PARAMS)
-# The one-host Fast DDS profile (doc/deployment.md, "One host"): UDP on
-# 127.0.0.1 only, announcements every 0.25 s; with the range SYSTEM_DEFAULT,
-# so only inside a network namespace (netns.py).
-ONE_HOST_PROFILE = str(CONFIG / 'fastdds_one_host.xml')
+# The one-host Fast DDS profile (doc/deployment.md, "One host"), by its
+# name in the checkout's config/: UDP on 127.0.0.1 only, announcements
+# every 0.25 s; with the range SYSTEM_DEFAULT, so only inside a network
+# namespace (netns.py).
+ONE_HOST_PROFILE = 'fastdds_one_host.xml'
 PROFILE_VARIABLE = 'FASTRTPS_DEFAULT_PROFILES_FILE'
 RANGE_VARIABLE = 'ROS_AUTOMATIC_DISCOVERY_RANGE'
 RECOVERY_LIMIT = 2.0            # s from a node's start to its first output
@@ -89,7 +89,8 @@ def profile_environment(profile=None, base=None):
     """
     Return an environment for processes with the Fast DDS ``profile``.
 
-    ``profile`` (a file): the range SYSTEM_DEFAULT, which rmw_fastrtps
+    ``profile`` (a file, by its name in the checkout's ``config/`` or a
+    path): the range SYSTEM_DEFAULT, which rmw_fastrtps
     needs to keep the profile's transports, and so only inside a network
     namespace (a HarnessError elsewhere: no DDS packet leaves this host);
     None: no profile, LOCALHOST. ``base``: the environment to start from
@@ -102,8 +103,8 @@ def profile_environment(profile=None, base=None):
         if not in_own_namespace():
             raise HarnessError('a Fast DDS profile with the range '
                                'SYSTEM_DEFAULT runs only inside a network '
-                               'namespace (test/netns.py)')
-        env[PROFILE_VARIABLE] = profile
+                               'namespace (orthoglide_testing.netns)')
+        env[PROFILE_VARIABLE] = str(config_file(profile))
         env[RANGE_VARIABLE] = 'SYSTEM_DEFAULT'
     return env
 
@@ -121,8 +122,8 @@ class Child:
         self.started = time.monotonic_ns()
         self.proc = subprocess.Popen(
             [*wrap, sys.executable, '-m', ROLES, role] + args,
-            cwd=str(ROOT), env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-            stderr=self.err)
+            cwd=checkout(), env=env, stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE, stderr=self.err)
         self.lines = []
         self._buffer = b''
         self.code = None
@@ -228,8 +229,9 @@ class Run:
         """Start the node's console script (``env``: else the run's)."""
         self.node_started = time.monotonic_ns()
         self.node = start_node_process(
-            list(NODE_ARGS) + realtime_args(self.realtime) + list(extra),
-            env=env or self.env, cwd=str(ROOT))
+            ['--ros-args', '--params-file', str(params_file()),
+             *realtime_args(self.realtime), *extra],
+            env=env or self.env, cwd=checkout())
         return self.node
 
     def node_alive(self):

@@ -56,11 +56,12 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 from trajectory_msgs.msg import MultiDOFJointTrajectory
 
-from orthoglide_ros.harness.load import (busy_loops, REALTIME,
-                                         realtime_args, realtime_client)
-from orthoglide_ros.harness.messages import cartesian_message
-from orthoglide_ros.harness.processes import (node_executable,
-                                              start_node_process, stop_process)
+from orthoglide_testing.load import (busy_loops, REALTIME,
+                                     realtime_args, realtime_client)
+from orthoglide_testing.messages import cartesian_message
+from orthoglide_testing.processes import (node_executable,
+                                          start_node_process, stop_process)
+from orthoglide_testing.verdicts import ATTEMPTS, pass_spoiled_by
 
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
@@ -105,10 +106,6 @@ TRAJECTORIES = {
 }
 DEFAULT_GAINS = {s.name: s.default for s in PARAMETERS.specs
                  if s.name in ('kp', 'kd')}
-# The controller's path tolerance (m, per actuator): a joint error beyond
-# it made the controller stop following and hold.
-PATH_TOLERANCE = np.array(next(s.default for s in PARAMETERS.specs
-                               if s.name == 'path_tolerance'))
 MISMATCH = 1.2          # the mismatched plant's platform: 20 % heavier
 # A plant the paper's model does not know, for identification: a 25 %
 # heavier platform, bars 15 % heavier, friction on every slider.
@@ -122,11 +119,6 @@ SETTLE = 0.5
 START_TIMEOUT = 20.0    # s for the nodes to start and match
 PASS_MARGIN = 15.0      # s beyond a pass's duration before giving up
 CALL_TIMEOUT = 5.0      # s for one service call
-# A pass is spoiled when the plant skipped more simulated time than this
-# (s): the simulator's default command timeout, the stall the loop's other
-# processes are held to (``ClosedLoop.run_unspoiled``).
-SKIP_LIMIT = 0.1
-ATTEMPTS = 3            # passes run_unspoiled runs before it gives up
 # A step between two recorded states longer than this many plant periods is
 # a skip (log_of); logs are joined JOIN_GAP s apart (joined).
 SKIP_FACTOR = 1.5
@@ -356,17 +348,15 @@ class ClosedLoop:
         """
         :meth:`run` until a pass is not spoiled by a stall, ATTEMPTS at most.
 
-        Spoiled: the plant was braked in it, a joint error beyond the path
-        tolerance (the controller held), or the plant skipped more than
-        SKIP_LIMIT of simulated time in all: a process of the loop stalled
-        longer than the command timeout, which busy cores do now and then,
-        and the pass measured the stall, not the loop. Returns the first
-        unspoiled pass, else the last. ``report(text)`` (optional) hears
-        about every spoiled pass, named ``case`` (default the run's label).
+        Spoiled (:func:`verdicts.pass_spoiled_by`): a process of the loop
+        stalled longer than the command timeout, which busy cores do now and
+        then, and the pass measured the stall, not the loop. Returns the first
+        unspoiled pass, else the last. ``report(text)`` (optional) hears about
+        every spoiled pass, named ``case`` (default the run's label).
         """
         for attempt in range(1, ATTEMPTS + 1):
             run = self.run(*args, **kwargs)
-            spoiled = spoiled_by(run)
+            spoiled = pass_spoiled_by(run)
             if spoiled is None:
                 return run
             if report:
@@ -573,17 +563,6 @@ def robot_parameters(robot):
     """Return every ``robot.*`` parameter of ``robot`` (rclpy Parameters)."""
     return [Parameter(f'robot.{name}', value=value)
             for name, value in robot.as_parameters().items()]
-
-
-def spoiled_by(run):
-    """Return what spoiled a :class:`Run` (text), None if nothing did."""
-    if run.braked:
-        return f'the plant was braked for {run.braked} states'
-    if (np.abs(run.joint_error) > PATH_TOLERANCE).any():
-        return 'a joint error beyond the path tolerance stopped the controller'
-    if run.skipped_s > SKIP_LIMIT:
-        return f'the plant skipped {run.skipped_s:.3f} s of simulated time'
-    return None
 
 
 def _tracking(label, recorder, motion, duration, period):

@@ -33,9 +33,9 @@ callers assert on them or print them. Every child process is stopped in a
 ``finally`` (SIGINT, wait, SIGKILL) and every wait is bounded.
 """
 
-from orthoglide_ros.harness.reliability.cases import (  # noqa: F401
+from orthoglide_testing.reliability.cases import (  # noqa: F401
     attack_payloads, ATTACKS, big_messages, flood, kill_restart,
     lossless_args, producer_restart, reliable_stream, stop_mid_stream)
-from orthoglide_ros.harness.reliability.checks import (  # noqa: F401
+from orthoglide_testing.reliability.checks import (  # noqa: F401
     check_outputs, in_epoch, match_stamps, problems, summary_lines)
-from orthoglide_ros.harness.reliability.runs import *  # noqa: F401,F403
+from orthoglide_testing.reliability.runs import *  # noqa: F401,F403

@@ -11,11 +11,11 @@ import time
 
 import numpy as np
 
-from orthoglide_ros.harness.messages import INPUT_TOPICS
-from orthoglide_ros.harness.processes import cpu_seconds, rss_mb, stop_process
-from orthoglide_ros.harness.reliability.checks import (
-    _pct, _slope, check_outputs, in_epoch, match_stamps)
-from orthoglide_ros.harness.reliability.runs import (
+from orthoglide_testing.messages import INPUT_TOPICS
+from orthoglide_testing.processes import cpu_seconds, rss_mb, stop_process
+from orthoglide_testing.reliability.checks import (
+    check_outputs, in_epoch, match_stamps, percentile, slope)
+from orthoglide_testing.reliability.runs import (
     BEST_EFFORT_INPUT, Child, DEEP_OUTPUT, drained, HarnessError,
     load_outputs, LOSSLESS_DEPTH, Monitor, ONE_HOST_PROFILE, producer_log,
     Run, START_TIMEOUT)
@@ -89,14 +89,14 @@ def flood(duration, kind='trajectory', qos='best_effort', say=None):
             else None,
             last_output=int(stamps[-1]) if len(stamps) else None,
             increasing=bool(np.all(np.diff(stamps) > 0)),
-            latency_p50_ms=_pct(latency, 50), latency_max_ms=float(
+            latency_p50_ms=percentile(latency, 50), latency_max_ms=float(
                 latency.max()) if len(latency) else math.nan,
             nonfinite=nonfinite, wrong=wrong, first_wrong=first_wrong,
             rss_warm_mb=rss_warm, rss_end_mb=rss_end,
             rss_max_mb=max(r for _, r in rss if r is not None),
             growth_mb=rss_end - rss_warm,
-            rss_slope_mb_s=_slope([r for r in rss if r[0] >= warm
-                                   and r[1] is not None]),
+            rss_slope_mb_s=slope([r for r in rss if r[0] >= warm
+                                  and r[1] is not None]),
             diagnostics=len(diag), diagnostics_max_gap_s=float(gaps.max()),
             parameter_gets=len(monitor.answers),
             parameter_max_s=max(monitor.answers, default=math.nan),
@@ -154,7 +154,7 @@ def reliable_stream(rate, duration, kind='trajectory', depth=LOSSLESS_DEPTH,
             sent=len(log), outputs=len(stream), missing=missing,
             duplicates=duplicates, extra=extra, nonfinite=nonfinite,
             wrong=wrong, first_wrong=first_wrong,
-            late_p99_ms=_pct(log[:, 3], 99) / 1e6,
+            late_p99_ms=percentile(log[:, 3], 99) / 1e6,
             node_cpu=(cpu_end - cpu_start) / duration)
     result.update(crashes=run.crashes(), exits=run.exits)
     say(f'reliable {rate} Hz: {result["sent"]} sent, {result["missing"]} '

@@ -12,8 +12,8 @@ import math
 import numpy as np
 
 from orthoglide_ros.formats.params_file import load_robot
-from orthoglide_ros.harness import PARAMS
-from orthoglide_ros.harness.reliability.runs import (
+from orthoglide_testing.checkout import params_file
+from orthoglide_testing.reliability.runs import (
     EPOCH_NS, LOSSLESS_DEPTH, RECOVERY_LIMIT, sample_at, TOL)
 from orthoglide_ros.model import mechanics
 
@@ -26,7 +26,7 @@ def check_outputs(outputs, robot=None):
     an output is wrong when a value differs from mechanics.solve of
     :func:`sample_at` its stamp by more than 1e-9 (relative above 1).
     """
-    robot = robot or load_robot(PARAMS)
+    robot = robot or load_robot(params_file())
     expected = {}
     nonfinite = wrong = 0
     first_wrong = None
@@ -62,7 +62,7 @@ def in_epoch(outputs, epoch):
     return outputs[(outputs[:, 0] // EPOCH_NS).astype(np.int64) == epoch]
 
 
-def _slope(samples):
+def slope(samples):
     """Least-squares slope of (t, value) samples; 0.0 for fewer than 3."""
     if len(samples) < 3:
         return 0.0
@@ -70,7 +70,8 @@ def _slope(samples):
     return float(np.polyfit(t, v, 1)[0])
 
 
-def _pct(values, q):
+def percentile(values, q):
+    """Return the ``q`` th percentile of ``values``; NaN if there are none."""
     return float(np.percentile(values, q)) if len(values) else math.nan
 
 

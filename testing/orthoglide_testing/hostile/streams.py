@@ -22,10 +22,10 @@ from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import (JointTrajectory, JointTrajectoryPoint,
                                  MultiDOFJointTrajectory)
 
-from orthoglide_ros.harness.load import REALTIME
-from orthoglide_ros.harness.hostile.peer import (
-    _counter, _handshake, HarnessError, HOLD, NODES, Nodes, Peer, _running,
-    _setpoint, START_TIMEOUT)
+from orthoglide_testing.load import REALTIME
+from orthoglide_testing.hostile.peer import (
+    diagnostic_counter, handshake, HarnessError, HOLD, home_setpoint, NODES,
+    Nodes, Peer, START_TIMEOUT, wait_running)
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
 
@@ -147,7 +147,7 @@ def stamps():
                 in (('pose', PoseStamped), ('twist', TwistStamped),
                     ('accel', AccelStamped),
                     ('trajectory', MultiDOFJointTrajectory))}
-        _running(peer, ('feedforward',))
+        wait_running(peer, ('feedforward',))
 
         def topics(sec, nanosec):
             for name, kind in (('pose', PoseStamped), ('twist', TwistStamped),
@@ -159,27 +159,27 @@ def stamps():
                 pubs[name].publish(msg)
 
         def point(header, offset):
-            pubs['trajectory'].publish(_setpoint('', header, offset))
+            pubs['trajectory'].publish(home_setpoint('', header, offset))
 
         # Both forms reach the node (stamps older than the test's).
-        _handshake(peer, lambda k: point((1, k), (0, 0)), lambda: outputs)
+        handshake(peer, lambda k: point((1, k), (0, 0)), lambda: outputs)
         shaken = len(outputs)
-        _handshake(peer, lambda k: topics(2, k),
-                   lambda: len(outputs) > shaken)
+        handshake(peer, lambda k: topics(2, k),
+                  lambda: len(outputs) > shaken)
         shaken = len(outputs)
         topics(100, 1_500_000_000)          # = 101.5 s, written wrong
         point((200, 2_000_000_000), (0, 0))     # header wrong
         point((300, 0), (0, 1_000_000_000))     # offset wrong
         point((0, 1_000_000_000), (0, 0))   # "zero" sec, wrong nanosec
-        peer.wait(lambda: _counter(peer, 'feedforward', 'rejected stamp')
+        peer.wait(lambda: diagnostic_counter(peer, 'feedforward', 'rejected stamp')
                   >= 6, START_TIMEOUT)
         bad = len(outputs) - shaken
         topics(101, 500_000_000)            # the same instant, written right
         point((400, 5), (1, 999_999_999))
         peer.wait(lambda: len(outputs) >= shaken + bad + 2, 5.0)
         return Stamps(outputs=bad, good=len(outputs) - shaken - bad,
-                      rejected_stamp=_counter(peer, 'feedforward',
-                                              'rejected stamp'),
+                      rejected_stamp=diagnostic_counter(peer, 'feedforward',
+                                                        'rejected stamp'),
                       alive=nodes.alive('feedforward'))
 
 
@@ -203,16 +203,16 @@ def mechanism_stamps(bad=((5, 2_000_000_000), (-1, 0), (-7, 999_999_999),
         nodes.start('mechanism_state_publisher')
         states = peer.publisher(JointState, 'joint_states')
         outputs = peer.record('mechanism/joint_states', JointState)
-        _running(peer, ('mechanism_state_publisher',))
-        _handshake(peer, lambda k: states.publish(state((1, k))),
-                   lambda: outputs)
+        wait_running(peer, ('mechanism_state_publisher',))
+        handshake(peer, lambda k: states.publish(state((1, k))),
+                  lambda: outputs)
         shaken = len(outputs)
         for stamp in bad:
             states.publish(state(stamp))
         # The first diagnostics to count them all: its period holds the
         # last of them.
-        peer.wait(lambda: _counter(peer, 'mechanism_state_publisher',
-                                   'rejected stamp') >= len(bad),
+        peer.wait(lambda: diagnostic_counter(peer, 'mechanism_state_publisher',
+                                             'rejected stamp') >= len(bad),
                   START_TIMEOUT)
         with peer.lock:
             status = peer.diagnostics.get('mechanism_state_publisher',
@@ -225,8 +225,8 @@ def mechanism_stamps(bad=((5, 2_000_000_000), (-1, 0), (-7, 999_999_999),
             bad_outputs=bad_outputs,
             stamps_out=[(m.header.stamp.sec, m.header.stamp.nanosec)
                         for _, m in outputs[shaken + bad_outputs:]],
-            rejected_stamp=_counter(peer, 'mechanism_state_publisher',
-                                    'rejected stamp'),
+            rejected_stamp=diagnostic_counter(peer, 'mechanism_state_publisher',
+                                              'rejected stamp'),
             level=status[0], message=status[1],
             alive=nodes.alive('mechanism_state_publisher'))
 
@@ -249,10 +249,10 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
         nodes.start('simulator', '-p', f'rate_hz:={rate_hz}')
         pub = peer.publisher(Float64MultiArray, 'commands')
         states = peer.record('joint_states', JointState)
-        _running(peer, ('simulator',))
+        wait_running(peer, ('simulator',))
         msg = Float64MultiArray(data=list(HOLD))
         # The first command starts the plant: its efforts are the command's.
-        _handshake(peer, lambda k: pub.publish(msg), lambda: any(
+        handshake(peer, lambda k: pub.publish(msg), lambda: any(
             any(state.effort) for _, state in list(states)))
         start = time.monotonic()
         during = None
@@ -269,8 +269,8 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
                     during = found[:3]
         # The brake after the last command, once its diagnostics say so
         # (a brake after the process's own stall is not its peer's silence).
-        peer.wait(lambda: _counter(peer, 'simulator', 'timeouts')
-                  > _counter(peer, 'simulator', 'stall brakes'),
+        peer.wait(lambda: diagnostic_counter(peer, 'simulator', 'timeouts')
+                  > diagnostic_counter(peer, 'simulator', 'stall brakes'),
                   START_TIMEOUT)
         with peer.lock:
             values = peer.diagnostics.get('simulator', (None, None, {}))[2]
@@ -378,8 +378,8 @@ def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
                 nodes.start('simulator', '-p', f'rate_hz:={plant_rate}')
                 nodes.start('tracking_controller')
                 nodes.start('feedforward')
-                _running(peer, ('simulator', 'tracking_controller',
-                                'feedforward'))
+                wait_running(peer, ('simulator', 'tracking_controller',
+                                    'feedforward'))
                 first = len(commands)
                 nodes.start('setpoint_publisher', '-p', 'loop:=true', '-p',
                             f'rate_hz:={loop_rate}', '-p',
@@ -429,7 +429,7 @@ def trajectory_flood(flood=1.5, period=0.001, after=1.5):
         states = peer.record('joint_states', JointState)
         nodes.start('simulator')
         nodes.start('tracking_controller')
-        _running(peer, ('simulator', 'tracking_controller'))
+        wait_running(peer, ('simulator', 'tracking_controller'))
         pub = peer.publisher(JointTrajectory, 'joint_trajectory', 100)
         if not peer.wait(lambda: pub.get_subscription_count()
                          and len(states) > 10, START_TIMEOUT):
@@ -495,15 +495,15 @@ def absurd_values():
             ('joint_states', JointState),
             ('feedforward/joint_states', JointState),
             ('joint_trajectory', JointTrajectory))}
-        _running(peer, ('feedforward', 'tracking_controller'))
+        wait_running(peer, ('feedforward', 'tracking_controller'))
         if not peer.wait(lambda: all(p.get_subscription_count() >= 1
                                      for p in pubs.values()), START_TIMEOUT):
             raise HarnessError('the nodes did not subscribe')
         names = ['slider_a', 'slider_b', 'slider_c']
-        setpoint = _setpoint('', (5, 0))
+        setpoint = home_setpoint('', (5, 0))
         setpoint.points[0].accelerations[0].linear.z = 1e200
         pubs['setpoint/trajectory'].publish(setpoint)
-        whole = _setpoint('', (0, 0))
+        whole = home_setpoint('', (0, 0))
         whole.points[0].accelerations[0].linear.z = 1e200
         pubs['cartesian_trajectory'].publish(whole)
         for position, velocity in (([0.0, 5.0, 0.0], [0.0] * 3),
