@@ -2,7 +2,7 @@
 """
 Latency of one host's transports: shared memory against the one-host profile.
 
-Two processes in a network namespace of their own (``test/netns.py``: the
+Two processes in a network namespace of their own (``orthoglide_ros/harness/netns.py``: the
 profile needs the range SYSTEM_DEFAULT, which runs only there; root
 needed): ``pong`` sends back every message ``ping`` sends, serialized
 bytes of a ``std_msgs/UInt8MultiArray`` of 200 B to 4 MiB, reliable,
