@@ -35,6 +35,12 @@ dotted module name of the package (and the name that follows it in that
 module) and every ``test_*`` name exists; an anchor after a page
 matches one of its headings.
 
+**No project history.** No page, docstring or comment names an issue of
+this project by its number or as the source of a rule: the documents are
+references,
+and git keeps how they came. An upstream issue is named with its project
+(`` Fast-DDS issue 6535 ``, `` issue #1615 ``).
+
 **Text.** README.md has at most 250 lines, and no page speaks of the
 machines the project was developed on ("these machines") or links to the
 development-only ``shared/`` directory.
@@ -464,3 +470,45 @@ def test_stale_references_are_found(references):
             ' and test_docs.py::test_stale_references_are_found']
     found = [list(references.missing(line)) for line in text]
     assert [len(f) for f in found] == [1, 1, 1, 1, 1, 1, 0], found
+
+
+# No project history ----------------------------------------------------------
+ISSUE = re.compile(r"\b(?:[Ii]ssues? (?=\d)|[Tt]he issue's\b)")
+
+
+def issue_numbers(line):
+    """Yield the references of ``line`` to an issue of this project."""
+    for match in ISSUE.finditer(line):
+        before = line[:match.start()].split()
+        project = before[-1] if before else ''
+        # "Fast-DDS issue 6535", "eProsima/Fast-DDS issue 12": upstream.
+        if match.group(0).startswith(('issue', 'Issue')) and \
+                re.search(r'[A-Z/-]', project[1:]):
+            continue
+        yield line[match.start():match.start() + 24].strip()
+
+
+@pytest.mark.parametrize('path', pages(), ids=page_id)
+def test_pages_name_no_issue_of_the_project(path):
+    found = [f'line {number}: {found}'
+             for number, line in enumerate(read(path).split('\n'), 1)
+             for found in issue_numbers(line)]
+    assert not found, f'{page_id(path)} tells history: ' + '; '.join(found)
+
+
+def test_docstrings_and_comments_name_no_issue_of_the_project():
+    found = [f'{source}:{number}: {found}'
+             for source in repository_files()
+             if source.endswith(('.py', '.sh'))
+             for number, line in prose_of_source(os.path.join(ROOT, source))
+             for found in issue_numbers(line)]
+    assert not found, 'docstrings and comments tell history: ' + \
+        '; '.join(found)
+
+
+def test_issue_numbers_are_found():
+    lines = ['as issue 33 found', '(issue 20)', "the issue's case",
+             'Issue 33, item 7', 'eProsima Fast-DDS issue 6535',
+             'PR #699, issue #1615', 'an issue of rclpy']
+    assert [len(list(issue_numbers(line))) for line in lines] == \
+        [1, 1, 1, 1, 0, 0, 0]

@@ -23,7 +23,7 @@ from orthoglide_ros.model.trajectory import paper_sample
 
 pytestmark = [pytest.mark.ros, needs_scripts()]
 
-LOCKED_LIMIT_KB = 250_000   # 250 MB (issue 33): the feedforward's VmLck
+LOCKED_LIMIT_KB = 250_000   # 250 MB: the feedforward's VmLck
 RATE = 1000.0               # Hz: setpoints sent
 WARM = 1.0                  # s of setpoints before the faults are counted
 WINDOW = 3.0                # s of setpoints whose faults are counted
