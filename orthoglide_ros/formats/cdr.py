@@ -1,39 +1,14 @@
 """
-Read setpoints straight from serialized (CDR) messages, without rclpy.
+Serialized ROS 2 messages (CDR) read and written with struct and numpy.
 
-rclpy turns each received message into Python objects, which costs more CPU
-than everything the feedforward does with it (measured here: about 80 us for
-a MultiDOFJointTrajectory and 60 us for a PoseStamped, against 20-25 us to
-take the raw bytes and read the few fields with ``struct``). The node
-therefore subscribes with ``raw=True`` and reads only what it uses:
-
-- ``PoseStamped``: stamp, frame, position, orientation;
-- ``TwistStamped`` / ``AccelStamped``: stamp, frame, linear part;
-- ``MultiDOFJointTrajectory``: stamp, frame and, of the first point, the
-  first transform, velocity, acceleration and ``time_from_start``;
-- ``JointState``: stamp, frame, names, positions, velocities, efforts;
-- ``Float64MultiArray``: the data (the layout is skipped);
-- ``MultiDOFJointTrajectory`` whole (:func:`cartesian_trajectory`): every
-  point's first transform, velocity and acceleration and its time, as
-  numpy arrays;
-- ``JointTrajectory`` whole (:func:`joint_trajectory_points`): names, every
-  point's arrays and time, as numpy arrays.
-
-and writes two messages the same way, :func:`joint_trajectory` (a
-``trajectory_msgs/JointTrajectory`` of three joints from numpy arrays:
-building 10,000 message objects in Python would cost far more than the
-mechanics) and :func:`multi_dof_trajectory` (the planner's whole motion).
-
-The layout is the OMG CDR encoding of the ROS 2 message definitions
-(XCDR1: a 4-byte encapsulation header, then each primitive aligned to its
-size counted from the end of that header; strings as a length that counts
-the terminating NUL, then the bytes; sequences as a count, then the items).
-A buffer this reader does not understand (big-endian, truncated, bad text)
-raises :class:`CdrError`; the node then falls back to rclpy's deserializer
-(for short messages), so this is a fast path, never the only path. A
-well-formed buffer whose cost to read would grow with a list the node does
-not use (``joint_names``) raises :class:`LimitError` beyond
-:data:`MAX_JOINT_NAMES`: what a message holds cannot make reading it slow.
+The nodes subscribe raw and read only the fields they use (setpoints,
+joint states, commands, whole trajectories; the logs' bags too), and
+write whole trajectories the same way (a ``JointTrajectory``, the
+planner's ``MultiDOFJointTrajectory``): building message objects would
+cost more than the mechanics. :class:`CdrError`: a buffer this reader
+does not understand; :class:`LimitError`: one whose reading would grow
+with a list the node does not use. See
+doc/decisions.md#runtime-and-middleware and doc/robustness.md#inputs.
 """
 
 from __future__ import annotations
@@ -46,6 +21,10 @@ import numpy as np
 
 from orthoglide_ros.model.types import Array, Stamp, Triple
 
+# The OMG CDR encoding of the ROS 2 message definitions (XCDR1): a 4-byte
+# encapsulation header, then each primitive aligned to its size counted from
+# the end of that header; a string is a length that counts its NUL, then
+# its bytes; a sequence is a count, then its items.
 _STAMP = struct.Struct('<iI')          # stamp.sec, stamp.nanosec
 _COUNT = struct.Struct('<I')
 _VECTOR = struct.Struct('<3d')

@@ -1,24 +1,12 @@
 """
 An excitation optimized for identification, without ROS.
 
-The log of an excitation identifies the base parameters the better, the
-smaller the condition number of its base regressor (noise is amplified by
-it: :func:`identification.condition_number`), the drives' armature among
-them where the robot has drives
-(:func:`identification.design_law`). :func:`optimize` searches
-the Fourier coefficients of :func:`trajectory.excitation`'s series, from a
-seed's, for a smaller one: each candidate is shaped as every excitation is
-(:func:`trajectory.shaped_excitation`: at home at rest at the start,
-within the box, the speed and the acceleration bounds, inside the
-workspace with the singularity margin), and a candidate whose actuator
-forces (the robot's, friction included) exceed ``max_force`` is refused.
-The search is scipy's L-BFGS-B on the logarithm of the condition number
-with finite differences; it keeps the best candidate met and never
-returns one worse than the seed's.
-
-:func:`check_size` bounds an excitation file before anything is computed:
-its period, its rate and its rows, the last by the readers' own limit
-(:data:`orthoglide_ros.formats.csvfile.MAX_ROWS`).
+:func:`optimize` searches the Fourier coefficients of
+:func:`trajectory.excitation`'s series, from a seed's, for a smaller
+condition number of the base regressor (scipy's L-BFGS-B on its
+logarithm), every candidate shaped and bounded as any excitation and
+never worse than the seed's; :func:`check_size` bounds a file before
+anything is computed. See doc/identification.md#the-excitation.
 """
 
 from collections import namedtuple

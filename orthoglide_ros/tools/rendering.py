@@ -1,13 +1,11 @@
 """
 Pictures of the robot from MuJoCo's offscreen renderer (``orthoglide render``).
 
-A PNG at one platform position, or an animated GIF along a trajectory.
-
-The robot's MJCF (:mod:`orthoglide_ros.model.mjcf`) with every joint at the
-closed form's values for a platform position, seen by a fixed camera that
-frames the workspace, rendered by MuJoCo (OpenGL through EGL by default,
-or ``MUJOCO_GL=osmesa``; set before MuJoCo is imported) and written as
-PNG. :class:`RenderError`: no OpenGL backend, or MuJoCo missing.
+The robot's MJCF (:mod:`orthoglide_ros.model.mjcf`) posed by the closed
+form at each platform position, a fixed camera, OpenGL through EGL
+(``MUJOCO_GL`` chooses another): a PNG, or a GIF along a trajectory.
+:class:`RenderError`: no OpenGL backend, or MuJoCo missing. See
+doc/cli.md#render.
 """
 
 import io

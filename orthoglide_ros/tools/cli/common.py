@@ -1,17 +1,10 @@
 """
 What the ``orthoglide`` subcommands share: errors, columns, outputs, types.
 
-- :class:`CliError`: bad input, printed as one line and exit code 2;
-- the columns the tool writes and the trajectory files it reads;
-- :func:`check_output`, :func:`check_distinct` and :func:`write_output`:
-  output files checked before anything is read or computed (none the
-  same file as an input or as another output), written atomically once
-  all is;
-- argparse types of finite numbers in range (:func:`within`), and the
-  options several subcommands take (:func:`command`, :func:`add_output`,
-  :func:`add_joint_names`, :func:`add_position`, :func:`add_size`);
-- the CSV and PNG writers and the trajectory reader of several
-  subcommands.
+:class:`CliError` (one line, exit code 2), the columns the tool writes and
+reads, the output files checked before anything is computed and written
+atomically (doc/cli.md#exit-codes), argparse types of finite numbers in
+range and the options several subcommands take.
 """
 
 import argparse

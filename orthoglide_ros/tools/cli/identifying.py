@@ -1,7 +1,7 @@
 """
 Identify a robot: ``excitation``, ``record``, ``identify``, ``validate``.
 
-From the motion to design to the check of the result.
+From the motion to the check of the result; see doc/identification.md.
 """
 
 import argparse

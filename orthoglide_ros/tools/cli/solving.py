@@ -1,7 +1,7 @@
 """
 Solve the inverse mechanics: ``paper``, ``solve``, ``batch``.
 
-Of eq. (6), of one sample, of a trajectory file.
+Of eq. (6), of one sample, of a trajectory file; see doc/cli.md.
 """
 
 import json
