@@ -156,7 +156,7 @@ def cartesian_trajectory(buf: bytes) -> 'Waypoints':
         raise CdrError('truncated message')
     size = len(buf)
     words = np.frombuffer(buf, dtype='<u4', count=size // 4)
-    found = _regular_points(buf, words, offset, points)
+    found = _offsets_if_repeating(buf, words, offset, points)
     first, times = found if found is not None else _walk_points(
         buf, offset, points)
     doubles = np.frombuffer(buf, dtype='<f8', offset=4,
@@ -185,7 +185,7 @@ def _gather(doubles, first, present, width):
     return out
 
 
-_ITEMS = (56, 48, 48)   # bytes of a Transform, a Twist, a Twist
+_POINT_ITEM_BYTES = (56, 48, 48)   # bytes of a Transform, a Twist, a Twist
 
 
 def _walk_points(buf, offset, points):
@@ -207,7 +207,7 @@ def _point(buf, offset):
     """
     size = len(buf)
     at, first, counts = [], [], []
-    for item in _ITEMS:
+    for item in _POINT_ITEM_BYTES:
         offset += -(offset - 4) % 4
         if offset + 4 > size:
             raise CdrError('truncated message')
@@ -226,7 +226,7 @@ def _point(buf, offset):
     return offset + 8, at, first, counts
 
 
-def _regular_points(buf, words, offset, points):
+def _offsets_if_repeating(buf, words, offset, points):
     """
     Return the offsets if every point repeats the first point's counts.
 
@@ -246,7 +246,7 @@ def _regular_points(buf, words, offset, points):
     (s0, at0, f0, c0), (s1, at1, f1, c1) = shapes
     if c0 != c1:
         return None
-    starts, end = _strided(offset, s0, s1, points)
+    starts, end = _alternating_starts(offset, s0, s1, points)
     if end > len(buf):
         return None
     # Point k has point 0's layout where its start has point 0's
@@ -263,7 +263,7 @@ def _regular_points(buf, words, offset, points):
     return first, times
 
 
-def _strided(origin, first, second, count):
+def _alternating_starts(origin, first, second, count):
     """
     Return the start offsets of ``count`` items and the end of the last.
 
@@ -357,7 +357,7 @@ def joint_trajectory(stamp: Stamp, frame: str, names: Sequence[str],
     number of names. Returns the bytes ``Publisher.publish`` sends as is.
     A point's layout depends only on its start's alignment (two values):
     the points are written by numpy, each with the layout of its
-    alignment (:func:`_strided`).
+    alignment (:func:`_alternating_starts`).
     """
     n, joints = len(time), len(names)
     head = bytearray(b'\x00\x01\x00\x00')
@@ -371,7 +371,7 @@ def joint_trajectory(stamp: Stamp, frame: str, names: Sequence[str],
     start = len(head)
     layouts = [_point_layout(start, joints)]
     layouts.append(_point_layout(start + layouts[0][0], joints))
-    origin, end = _strided(start, layouts[0][0], layouts[1][0], n)
+    origin, end = _alternating_starts(start, layouts[0][0], layouts[1][0], n)
     k = np.arange(n)
     second = (origin - start) % 8 != 0
     out = np.zeros(-(-end // 8) * 8 + 8, dtype=np.uint8)

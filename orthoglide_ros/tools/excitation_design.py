@@ -24,7 +24,7 @@ CONDITION_RATE = 100.0
 # Evaluations of the condition number the search may make.
 DEFAULT_EVALUATIONS = 400
 # What a refused candidate costs (the log of a condition number).
-_REFUSED = 1e3
+_REFUSED_COST = 1e3
 # Longest period (s): a log of two periods at 1 kHz within the readers'
 # row limit (2,000,000 rows: 1000 s).
 MAX_PERIOD = csvfile.MAX_ROWS / 2000.0
@@ -130,9 +130,9 @@ def optimize(robot, period, seed=0, max_force=math.inf,
                 period, robot=robot, **bounds)
             condition, force = measure(robot, motion, base)
         except (ValueError, mechanics.WorkspaceError):
-            return _REFUSED
+            return _REFUSED_COST
         if not (math.isfinite(condition) and force <= max_force):
-            return _REFUSED
+            return _REFUSED_COST
         if condition < best[0]:
             best[:] = condition, motion, force
         return math.log(condition)

@@ -23,7 +23,7 @@ class RenderError(RuntimeError):
     """MuJoCo cannot render here (no OpenGL backend, or no MuJoCo)."""
 
 
-def _mujoco():
+def _import_mujoco():
     os.environ.setdefault('MUJOCO_GL', 'egl')
     try:
         import mujoco
@@ -52,7 +52,7 @@ class Renderer:
     """
 
     def __init__(self, robot, size=(800, 600)):
-        mujoco = self._mujoco = _mujoco()
+        mujoco = self._mujoco = _import_mujoco()
         self.robot = robot
         text = mjcf.mjcf(robot)
         width, height = size

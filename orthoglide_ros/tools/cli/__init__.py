@@ -17,8 +17,9 @@ from orthoglide_ros.model.robot import ParameterError, Robot
 from orthoglide_ros.tools.cli import (identifying, models, pictures,
                                       planning, solving)
 from orthoglide_ros.tools.cli.common import (check_distinct, check_output,
-                                             CliError, CSV_COLUMNS, fail,
-                                             OUTPUT_OPTIONS, PROG)
+                                             CliError, CSV_COLUMNS,
+                                             OUTPUT_OPTIONS, print_error,
+                                             PROG)
 
 __all__ = ('CliError', 'CSV_COLUMNS', 'main')
 
@@ -42,10 +43,10 @@ def main(argv=None):
         robot = _robot(args.params) if 'params' in args else None
         return args.run(robot, args)
     except CliError as error:
-        fail(str(error))
+        print_error(str(error))
         return error.code
     except (ParametersFileError, ParameterError) as error:
-        fail(str(error))
+        print_error(str(error))
         return 2
 
 
