@@ -2,10 +2,11 @@
 """
 Latency of one host's transports: shared memory against the one-host profile.
 
-Two processes in a network namespace of their own (``test/netns.py``: the
-profile needs the range SYSTEM_DEFAULT, which runs only there; root
-needed): ``pong`` sends back every message ``ping`` sends, serialized
-bytes of a ``std_msgs/UInt8MultiArray`` of 200 B to 4 MiB, reliable,
+Two processes in a network namespace of their own
+(``testing/orthoglide_testing/netns.py``: the profile needs the range
+SYSTEM_DEFAULT, which runs only there; root needed): ``pong`` sends
+back every message ``ping`` sends, serialized bytes of a
+``std_msgs/UInt8MultiArray`` of 200 B to 4 MiB, reliable,
 keep-last 10, one at a time. Printed per size: the one-way latency (half
 the round trip) median and 99th percentile, for plain LOCALHOST settings
 (Fast DDS's shared memory) and for ``config/fastdds_one_host.xml`` (UDP on

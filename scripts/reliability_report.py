@@ -14,8 +14,9 @@ shorter):
   keep-last 10 (the loss is measured);
 - ``--cycles`` SIGKILL/restart cycles of the node at 500 Hz, with the Fast
   DDS profile ``config/fastdds_one_host.xml`` on every process (inside a
-  network namespace, as root: ``test/netns.py``; reported as not done
-  where none can be made) and with Fast DDS defaults;
+  network namespace, as root: ``testing/orthoglide_testing/netns.py``;
+  reported as not done where none can be made) and with Fast DDS
+  defaults;
 - producer restarts (SIGKILL then SIGINT, later then earlier stamps) on
   both inputs; SIGINT and SIGTERM mid-stream;
 - ``test/test_fuzz_node.py`` and ``test/test_fuzz_mechanics.py`` (when

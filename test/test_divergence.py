@@ -1,17 +1,16 @@
 """
 A step the engine cannot integrate is reported, never shown as physics.
 
-Issue 33, item 7: masses of 1e-6 kg and ``force_limit`` 1e6 N under
-+-1e6 N commands make MuJoCo flag ``Nan, Inf or huge value in QACC``,
-reset its own state to qpos0 and write ``MUJOCO_LOG.TXT`` into the working
-directory, every step; the simulator went on reporting ``running`` at
-home, simulated time frozen at 0.001 s. The rule now (one for both
-engines): a plant raises :class:`plant.Diverged` (MuJoCo: any warning of
-the step in ``mjData.warning``; the builtin: a stage or end state that is
-not finite), its state unchanged, and the simulator goes ``diverged``:
-ERROR with the engine's reason, nothing published, commands ignored,
-until ``~/reset``. Pure and fast: no DDS (``test_simulator_node.py``
-plays the same against the node process).
+Masses of 1e-6 kg and ``force_limit`` 1e6 N under +-1e6 N commands make
+MuJoCo flag ``Nan, Inf or huge value in QACC``, reset its own state to
+qpos0 and write ``MUJOCO_LOG.TXT`` into the working directory, every step.
+The rule (one for both engines, doc/simulator.md): a plant raises
+:class:`plant.Diverged` (MuJoCo: any warning of the step in
+``mjData.warning``; the builtin: a stage or end state that is not finite),
+its state unchanged, and the simulator goes ``diverged``: ERROR with the
+engine's reason, nothing published, commands ignored, until
+``~/reset``. Pure and fast: no DDS (``test_simulator_node.py`` plays the
+same against the node process).
 """
 
 import math
@@ -29,7 +28,7 @@ from orthoglide_ros.model.robot import Robot
 
 ZERO = (0.0, 0.0, 0.0)
 DT = 1e-3
-# The issue's case: every body 1e-6 kg, the drives 1e6 N.
+# Every body 1e-6 kg, the drives 1e6 N.
 LIGHT = {f'm{i}': 1e-6 for i in range(1, 7)}
 PUSH = (1e6, -1e6, 1e6)
 # A velocity whose squares overflow inside the step (not at its start).

@@ -27,14 +27,32 @@ no such parameter must say ``none`` in its default cell.
 (outside code) points to an existing file; a ``#fragment`` must match a
 heading of the target page (GitHub's anchors).
 
+**Named paths.** Every file or folder a page, a docstring or a comment
+names by its path from the repository's root (`` `test/test_docs.py` ``,
+``doc/model.md#bodies``, ``config/``, in any top-level folder of the
+repository that git does not ignore), every bare ``<name>.py``, every
+dotted module name of the package (and the name that follows it in that
+module) and every ``test_*`` name exists; an anchor after a page
+matches one of its headings.
+
+**No project history.** No page, docstring or comment names an issue of
+this project by its number or as the source of a rule: the documents are
+references,
+and git keeps how they came. An upstream issue is named with its project
+(`` Fast-DDS issue 6535 ``, `` issue #1615 ``).
+
 **Text.** README.md has at most 250 lines, and no page speaks of the
 machines the project was developed on ("these machines") or links to the
 development-only ``shared/`` directory.
 """
 
+import ast
+import fnmatch
 import importlib
+import io
 import os
 import re
+import tokenize
 
 import pytest
 
@@ -276,3 +294,221 @@ def test_no_development_machine_notes(path):
     assert not found, (
         f'{page_id(path)}: contains {found}: state facts as "tested with '
         '..." and link only to files of the repository')
+
+
+# Named paths -----------------------------------------------------------------
+def top_folders():
+    """Return the repository's top-level folders that git does not ignore."""
+    with open(os.path.join(ROOT, '.gitignore'), encoding='utf-8') as stream:
+        ignored = [line.strip().rstrip('/') for line in stream
+                   if line.strip() and not line.startswith('#')]
+    return sorted(
+        name for name in os.listdir(ROOT)
+        if os.path.isdir(os.path.join(ROOT, name))
+        and not name.startswith('.')
+        and not any(fnmatch.fnmatch(name, pattern) for pattern in ignored))
+
+
+TOP_FOLDERS = top_folders()
+# A path from the root: a top-level folder, then anything a path holds; a
+# ``../`` prefix (a docstring's link to doc/) is allowed, a folder before it
+# is not (``share/orthoglide_ros/config`` is an installed path).
+PATH = re.compile(r'(?<![\w./*-])(?:\.\./)*((?:%s)/[\w./-]*(?:#[\w-]+)?)'
+                  % '|'.join(map(re.escape, TOP_FOLDERS)))
+BARE_MODULE = re.compile(r'(?<![\w./*<>{-])(\w+\.py)\b')
+DOTTED = re.compile(r'(?<![\w.])orthoglide_ros(?:\.\w+)+')
+TEST_NAME = re.compile(r'(?<![\w./-])(test_\w+)\b(?!\.py)')
+
+
+def repository_files():
+    """Return the paths of every file in the top-level folders, relative."""
+    found = []
+    for top in TOP_FOLDERS:
+        for folder, folders, files in os.walk(os.path.join(ROOT, top)):
+            folders[:] = [f for f in folders if not f.startswith(('.', '__'))]
+            found += [os.path.relpath(os.path.join(folder, f), ROOT)
+                      for f in files]
+    return found + [f for f in os.listdir(ROOT)
+                    if os.path.isfile(os.path.join(ROOT, f))]
+
+
+def top_level_names(path):
+    """Return the names a module defines or imports at its top level."""
+    tree = ast.parse(read(path))
+    names = set()
+    for node in tree.body:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef,
+                             ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            names.update((a.asname or a.name).split('.')[0]
+                         for a in node.names)
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) \
+                else [node.target]
+            for target in targets:
+                names.update(n.id for n in ast.walk(target)
+                             if isinstance(n, ast.Name))
+    return names
+
+
+def module_file(parts):
+    """Return the file of the module ``parts`` names, or None."""
+    base = os.path.join(ROOT, *parts)
+    for path in (base + '.py', os.path.join(base, '__init__.py')):
+        if os.path.exists(path):
+            return path
+    return None
+
+
+def missing_dotted(name):
+    """Say why a dotted module name (and its name) names nothing, or None."""
+    parts = name.split('.')
+    for count in range(len(parts), 0, -1):
+        path = module_file(parts[:count])
+        if path is not None:
+            break
+    else:
+        return 'no such module'
+    rest = parts[count:]
+    if not rest or rest[0] in top_level_names(path):
+        return None
+    return f'{".".join(parts[:count])} defines no {rest[0]}'
+
+
+class References:
+    """What the files of the repository are: their paths, modules, tests."""
+
+    def __init__(self):
+        files = repository_files()
+        self.basenames = {os.path.basename(f) for f in files}
+        self.tests = {os.path.basename(f)[:-3] for f in files
+                      if f.startswith('test' + os.sep) and f.endswith('.py')}
+        for path in files:
+            if path.startswith('test' + os.sep) and path.endswith('.py'):
+                self.tests.update(re.findall(
+                    r'^\s*(?:async )?def (test_\w+)',
+                    read(os.path.join(ROOT, path)), re.M))
+
+    def missing(self, text):
+        """Yield ``(name, why)`` for every reference of ``text`` to nothing."""
+        for match in PATH.finditer(text):
+            path, _, fragment = match.group(1).rstrip('.,:;').partition('#')
+            full = os.path.join(ROOT, path)
+            if not os.path.exists(full):
+                yield match.group(1), 'no such file or folder'
+            elif fragment and path.endswith('.md') and \
+                    fragment not in anchors(full):
+                yield match.group(1), f'no heading #{fragment} in {path}'
+        for match in BARE_MODULE.finditer(text):
+            if match.group(1) not in self.basenames:
+                yield match.group(1), 'no file of that name'
+        for match in DOTTED.finditer(text):
+            why = missing_dotted(match.group(0))
+            if why:
+                yield match.group(0), why
+        for match in TEST_NAME.finditer(text):
+            if match.group(1) not in self.tests:
+                yield match.group(1), 'no test and no test file of that name'
+
+
+def prose_of_source(path):
+    """Yield ``(line, text)`` of the docstrings and comments of a file."""
+    text = read(path)
+    if path.endswith('.sh'):
+        for number, line in enumerate(text.split('\n'), 1):
+            if line.lstrip().startswith('#'):
+                yield number, line
+        return
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef,
+                             ast.AsyncFunctionDef)):
+            docstring = ast.get_docstring(node, clean=False)
+            if docstring:
+                first = node.body[0].lineno
+                for offset, line in enumerate(docstring.split('\n')):
+                    yield first + offset, line
+    for token in tokenize.generate_tokens(io.StringIO(text).readline):
+        if token.type == tokenize.COMMENT:
+            yield token.start[0], token.string
+
+
+@pytest.fixture(scope='module')
+def references():
+    return References()
+
+
+@pytest.mark.parametrize('path', pages(), ids=page_id)
+def test_paths_named_by_the_pages_exist(references, path):
+    stale = [f'line {number}: {name} ({why})'
+             for number, line in enumerate(read(path).split('\n'), 1)
+             for name, why in references.missing(line)]
+    assert not stale, f'{page_id(path)} names what is not there: ' + \
+        '; '.join(stale)
+
+
+def test_paths_named_by_docstrings_and_comments_exist(references):
+    stale = [f'{source}:{number}: {name} ({why})'
+             for source in repository_files()
+             if source.endswith(('.py', '.sh'))
+             for number, line in prose_of_source(os.path.join(ROOT, source))
+             for name, why in references.missing(line)]
+    assert not stale, 'docstrings and comments name what is not there: ' + \
+        '; '.join(stale)
+
+
+def test_stale_references_are_found(references):
+    # The check fails where it should: each line names one thing that is
+    # not there (or, last, only things that are).
+    text = ['see `test/closed_loop_harness.py`',
+            'as ../../doc/measurements.md#no-such-heading says',
+            'closed_loop_harness.py runs it',
+            'orthoglide_ros.model.no_such_module',
+            'orthoglide_ros.model.robot.NO_SUCH_NAME',
+            'test_that_nobody_wrote',
+            'config/ and `doc/model.md#bodies`, orthoglide_ros.model.robot.Robot'
+            ' and test_docs.py::test_stale_references_are_found']
+    found = [list(references.missing(line)) for line in text]
+    assert [len(f) for f in found] == [1, 1, 1, 1, 1, 1, 0], found
+
+
+# No project history ----------------------------------------------------------
+ISSUE = re.compile(r"\b(?:[Ii]ssues? (?=\d)|[Tt]he issue's\b)")
+
+
+def issue_numbers(line):
+    """Yield the references of ``line`` to an issue of this project."""
+    for match in ISSUE.finditer(line):
+        before = line[:match.start()].split()
+        project = before[-1] if before else ''
+        # "Fast-DDS issue 6535", "eProsima/Fast-DDS issue 12": upstream.
+        if match.group(0).startswith(('issue', 'Issue')) and \
+                re.search(r'[A-Z/-]', project[1:]):
+            continue
+        yield line[match.start():match.start() + 24].strip()
+
+
+@pytest.mark.parametrize('path', pages(), ids=page_id)
+def test_pages_name_no_issue_of_the_project(path):
+    found = [f'line {number}: {found}'
+             for number, line in enumerate(read(path).split('\n'), 1)
+             for found in issue_numbers(line)]
+    assert not found, f'{page_id(path)} tells history: ' + '; '.join(found)
+
+
+def test_docstrings_and_comments_name_no_issue_of_the_project():
+    found = [f'{source}:{number}: {found}'
+             for source in repository_files()
+             if source.endswith(('.py', '.sh'))
+             for number, line in prose_of_source(os.path.join(ROOT, source))
+             for found in issue_numbers(line)]
+    assert not found, 'docstrings and comments tell history: ' + \
+        '; '.join(found)
+
+
+def test_issue_numbers_are_found():
+    lines = ['as issue 33 found', '(issue 20)', "the issue's case",
+             'Issue 33, item 7', 'eProsima Fast-DDS issue 6535',
+             'PR #699, issue #1615', 'an issue of rclpy']
+    assert [len(list(issue_numbers(line))) for line in lines] == \
+        [1, 1, 1, 1, 0, 0, 0]

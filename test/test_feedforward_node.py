@@ -137,10 +137,10 @@ def test_inputs_keep_pace_whatever_spins_the_node(graph, executor):
     """
     1000 setpoints in lock-step on the three topics: none lost or late.
 
-    Regression test: with rmw_fastrtps a reader's QoS events and its data
-    share one status condition, and while a SingleThreadedExecutor waited
-    on the inputs' events, the input thread missed data for 100 ms and
-    more, so partial setpoints expired (about 1 in 1000 here).
+    With rmw_fastrtps a reader's QoS events and its data share one status
+    condition: an executor waiting on the inputs' events would hide data
+    from the input thread for 100 ms and more, and partial setpoints would
+    expire (about 1 in 1000 here).
     """
     g = graph(executor=executor)
     for k in range(1000):

@@ -15,7 +15,7 @@ def test_flake8(tmp_path):
 
     ament_flake8's own configuration plus ``jobs = 1``: flake8's default
     process pool forks this process, whose DDS threads (of the tests that
-    ran before) can leave a forked worker deadlocked (a CI run hung here).
+    ran before) can leave a forked worker deadlocked.
     """
     config = tmp_path / 'flake8.ini'
     config.write_text((Path(ament_flake8.__file__).parent / 'configuration'

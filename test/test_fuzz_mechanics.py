@@ -82,8 +82,8 @@ def test_reasons_are_the_nodes():
 
 @FUZZ
 @given(robot_and_state(), margins)
-# Found by the fuzzer: alpha_A / l3 rounds to 0.98999999 where the leg
-# test before the kernel passes at margin 0.99; both refuse it now.
+# Found by the fuzzer: alpha_A / l3 rounds to 0.98999999 where a leg test
+# ahead of the kernel would pass it at margin 0.99; both refuse it.
 @example(case=(Robot(), ((0.0, -0.09606293246368217, 0.07176115248850214),
                          (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))), margin=0.99)
 def test_solve_is_finite_or_refused_and_batch_agrees(case, margin):

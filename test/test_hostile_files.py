@@ -48,7 +48,7 @@ def device(path, minor):
 
 def test_a_full_device_is_written_through_and_stays_a_device(
         capsys, tmp_path, trajectory_csv):
-    """As root, --output /dev/full once became a 1.3 MB regular file."""
+    """A device is written through, never replaced (root may replace it)."""
     full = device(tmp_path / 'full', 7)
     code, out, err = run(capsys, 'batch', '--input', trajectory_csv,
                          '--output', full)
@@ -93,7 +93,7 @@ def test_a_symbolic_link_is_followed_to_its_target(capsys, tmp_path,
 
 
 def test_every_output_is_checked_before_any_is_written(capsys, tmp_path):
-    """An `identify --report DIR` once wrote the parameters file, then failed."""
+    """`identify --report DIR` fails before the parameters file is written."""
     from cli_runs import identification_log
     source, _ = identification_log(tmp_path, duration=2.0)
     out, directory = tmp_path / 'out.yaml', tmp_path / 'report.png'
@@ -208,7 +208,7 @@ def snapshot(directory):
 @pytest.mark.parametrize('name', sorted(SAME_FILE))
 def test_an_output_that_is_an_input_or_another_output_is_refused(
         capsys, tmp_path, case_files, name):
-    """`identify --input rec.csv --output rec.csv` once replaced the log."""
+    """`identify --input rec.csv --output rec.csv` leaves the log as it was."""
     argv, option, other = SAME_FILE[name]
     files, bag = case_files
     for file, data in files.items():
@@ -363,7 +363,7 @@ def test_a_csv_beyond_the_row_limit_is_refused_without_reading_it_all(
 
 
 # Peak memory of a refusal: the interpreter, numpy and a line (about 40 MB
-# measured; the endless line once took 4 GB in 10 s).
+# measured; an endless line read whole grows by about 600 MB/s).
 REFUSAL_RSS = 300 << 20
 ENDLESS = {  # command, its options: '@' the endless input, '+' an output
     'validate': ['validate', '--input', '@'],
@@ -376,7 +376,7 @@ ENDLESS = {  # command, its options: '@' the endless input, '+' an output
 @pytest.mark.parametrize('source', ['/dev/zero', 'stdin', 'one_line'])
 @pytest.mark.parametrize('command', sorted(ENDLESS))
 def test_an_endless_line_is_refused_as_it_arrives(tmp_path, command, source):
-    """`validate --input /dev/zero` once grew by 700 MB/s until killed."""
+    """`validate --input /dev/zero` exits 2 in bounded memory and time."""
     stdin = None
     if source == 'one_line':        # 300 MB without a line end (sparse)
         path = tmp_path / 'one_line.csv'
@@ -452,7 +452,7 @@ EXCITATION = {  # its arguments beyond --output: words of the refusal
 @pytest.mark.parametrize('name', sorted(EXCITATION))
 def test_an_excitation_beyond_its_bounds_is_refused_before_it_is_made(
         tmp_path, name):
-    """`--duration 1e9` once died of a 745 GiB ArrayMemoryError (exit 1)."""
+    """`--duration 1e9` is refused in one line before any array is made."""
     argv, words = EXCITATION[name]
     done = run_measured('excitation', *argv, '--output', tmp_path / 'e.csv')
     # One line: no numpy RuntimeWarning either.

@@ -3,7 +3,7 @@ Hostile peers and stalls: no other process may stop, starve or fool a node.
 
 Over real DDS with the installed executables.
 
-One test per defect a hostile peer showed, each played by a client of this test
+One test per attack of a hostile peer, each played by a client of this test
 (or a child process of its own), never by the node's code; the cases
 themselves are ``orthoglide_testing.hostile`` and
 ``orthoglide_testing.reliability`` functions that

@@ -205,7 +205,7 @@ def test_parallel_filtering_leaves_no_bias_from_a_sharp_coulomb_switch(
                                     base=identification.base_parameters(
                                         nominal))
     truth = truth_of(found.base, sharp)
-    # Filtering the motion and the forces, and not the regressor, missed
+    # Filtering the motion and the forces, and not the regressor, misses
     # m1 + m2 by 12 % (at 1 mm/s); the parallel filter leaves the
     # quantisation and the differences.
     assert np.abs(found.values / truth - 1.0).max() < 0.01, found.values
@@ -310,7 +310,7 @@ def test_split_gives_a_combination_held_at_its_bound_its_bound(base):
 
     Neither the plain rule (m2 nominal) nor scaling (m2 below 1e-6 kg) can
     give it: m2 goes to its bound and m1 takes the rest. The nominal 0.55
-    kg once kept here added 5.4 N of weight on C that the fit did not have.
+    kg kept here would add 5.4 N of weight on C that the fit does not have.
     """
     values = base.matrix @ identification.standard_parameters(NOMINAL)
     lowest = identification.bounds(base)

@@ -1,11 +1,9 @@
 """
 Absurd finite numbers given to ``identify`` and ``validate``: refused first.
 
-The attacks of a hostile round, run again: ``identify --payload 1e308``
-(once a stream of numpy RuntimeWarnings, then "the log shows no motion"
-with ``nan %``), ``--payload 2e6`` (once blamed on ``friction_viscous``),
-``validate`` naming ``None:`` before an error, and a log whose forces are
-1e300 (once an RMS error of ``inf``, a share ``nan``, exit 0). Checked:
+``identify --payload 1e308`` and ``2e6`` (a payload the log cannot hold,
+not a friction to blame), ``validate`` with a bad log (the log named, not
+``None``), and a log whose forces are 1e300 (no RMS error of ``inf``):
 each is exit 2 with one line naming the option, or the log's row and
 column, and no warning reaches the user; every numeric option of both
 commands, given a non-finite or an extreme value, either runs or is
@@ -121,7 +119,7 @@ def test_validate_names_the_option_not_none(log_file, tmp_path):
                                         (1.5e7, 7)])
 def test_a_log_with_absurd_forces_is_refused_naming_row_and_column(
         tmp_path, log_file, value, row):
-    """Once summarized as RMS inf and a share nan, exit 0."""
+    """Refused before any RMS error or share is computed from them."""
     _, log = log_file
     forces = log.forces.copy()
     forces[row, 1] = value
@@ -208,7 +206,7 @@ def test_a_non_finite_validation_is_refused_not_printed(monkeypatch,
     """
     The last guard: an error that is not finite is named, not printed.
 
-    Unreachable from the command line now (the ranges above keep every
+    Unreachable from the command line (the ranges above keep every
     number finite), so forced here: the robot's forces made infinite on
     actuator B.
     """

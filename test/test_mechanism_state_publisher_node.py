@@ -214,9 +214,8 @@ def test_invalid_stamps_are_refused_counted_and_said():
     A peer's stamps that are no ROS time publish nothing (real processes).
 
     nanosec 2e9, negative seconds and a "zero" second with nanosec 1e9
-    were forwarded with diagnostics ``ok``: each is now refused as
-    ``rejected stamp`` (WARN, the reason in the message); a zero stamp
-    still passes unchanged, as a valid one does.
+    are each refused as ``rejected stamp`` (WARN, the reason in the
+    message); a zero stamp passes unchanged, as a valid one does.
     """
     from orthoglide_testing.hostile.streams import mechanism_stamps
     result = mechanism_stamps()

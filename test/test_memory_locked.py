@@ -5,8 +5,8 @@ The feedforward runs as a process from its console script with ``-p
 lock_memory:=true``, on real DDS, and serves setpoints at 1 kHz from this
 process; read from ``/proc`` while it serves (figures independent of the
 machine's load): at most 250 MB under the lock (``VmLck``, every locked
-mapping whole, as RLIMIT_MEMLOCK counts it: 950 MB before the bounds of
-``cores/memory.py``), every page it holds in RAM locked (``Locked`` of
+mapping whole, as RLIMIT_MEMLOCK counts it: about 950 MB without the
+bounds of ``cores/memory.py``), every page it holds in RAM locked (``Locked`` of
 ``smaps_rollup`` against its ``Pss``), and, once warm, no major page fault
 and fewer minor faults than one per ten setpoints: the loop does not wait
 for pages. The process is stopped (SIGINT) whatever happens.
@@ -23,7 +23,7 @@ from orthoglide_ros.model.trajectory import paper_sample
 
 pytestmark = [pytest.mark.ros, needs_scripts()]
 
-LOCKED_LIMIT_KB = 250_000   # 250 MB (issue 33): the feedforward's VmLck
+LOCKED_LIMIT_KB = 250_000   # 250 MB: the feedforward's VmLck
 RATE = 1000.0               # Hz: setpoints sent
 WARM = 1.0                  # s of setpoints before the faults are counted
 WINDOW = 3.0                # s of setpoints whose faults are counted

@@ -36,7 +36,7 @@ from orthoglide_ros.planning.parametrization import (ACCEPT_SHARE, plan,
 
 RATE = 1000.0
 DRIVES = Robot(**DRIVES_ROBOT_VALUES)
-# The issue's drives: force limits of 160-520 N.
+# Drives with force limits of 160-520 N (doc/programs/drives_limits.yaml).
 EFFORTS = {'slider_a': 160.0, 'slider_b': 250.0, 'slider_c': 520.0}
 CONTOUR = """(pocket contour: lines, tangent arcs, a helical turn)
 G21 G90 G17 G94
@@ -144,7 +144,7 @@ def test_a_line_rest_to_rest_takes_its_bang_bang_duration(limits, expected):
 
 
 def test_the_contour_is_within_1_percent_of_toppra_on_a_fine_grid():
-    """Drives and a payload, the issue's force limits; no friction."""
+    """Drives and a payload, force limits of 160-520 N; no friction."""
     path = program_path(CONTOUR)
     limits = efforts()
     motion = plan(DRIVES, path, limits, RATE)

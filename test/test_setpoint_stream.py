@@ -5,7 +5,7 @@ Without ``loop`` one pass of eq. (6), then the end. With it the pass and
 the way back (a quintic from the pass's end state to its start state)
 repeat with period ``duration + return_duration``, and the motion is
 continuous in position, velocity and acceleration at every joint of the
-pieces: the defect this guards against was a 343.7 mm jump back to home.
+pieces (no jump back to home between passes).
 """
 
 import numpy as np

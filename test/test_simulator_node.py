@@ -468,7 +468,7 @@ def test_process_invalid_parameter_exits_2(argument, word):
 def test_process_mujoco_divergence_is_an_error_and_publishes_nothing(
         tmp_path):
     """
-    Issue 33's attack on the node: MuJoCo diverges, the node says so.
+    Under absurd masses and forces MuJoCo diverges; the node says so.
 
     ``engine:=mujoco``, every mass 1e-6 kg, ``force_limit`` 1e6 N, +-1e6 N
     commands every 10 ms, the process in an empty working directory:

@@ -113,7 +113,7 @@ def test_actuator_mass_at_home_and_damping_ratio():
 
     Mass matrix column j = f(lambdaddot = e_j) - f(0) at home, at rest,
     from mechanics.solve (platform acceleration J_lambda^-1 e_j). The
-    doc/measurements.md quotes these figures.
+    doc/tracking_controller.md quotes these figures.
     """
     robot = Robot()
     home = (0.0, 0.0, 0.0)

@@ -165,9 +165,9 @@ def test_limits_refuse_with_point_actuator_and_value():
 
 def test_absurd_points_refused_and_no_force_beyond_max_force():
     """
-    A point accelerating at 1e200 m/s^2 gave 2.45e201 N.
+    A point accelerating at 1e200 m/s^2 (2.45e201 N) is refused.
 
-    Now refused by the plausibility bounds, naming the point; max_force
+    Refused by the plausibility bounds, naming the point; max_force
     bounds every published effort even with no per-actuator limit.
     """
     w = paper()

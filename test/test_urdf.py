@@ -3,7 +3,8 @@ The URDF (orthoglide_ros.model.urdf) read by an independent library, yourdfpy.
 
 - The committed ``urdf/orthoglide.urdf`` is what ``orthoglide urdf`` writes
   for the paper's robot (so it cannot drift).
-- Names and tree: the links and joints doc/urdf.md fixes, a cut tree.
+- Names and tree: the links and joints doc/mechanism_state_publisher.md
+  fixes, a cut tree.
 - Masses, centres and inertias equal doc/model.md's bodies table, written
   out here; the total mass is the model's.
 - Kinematics: with the joint state of ``mechanism_state_publisher.joint_state``, on

@@ -1,40 +1,12 @@
 """
 The address space of a node's process, bounded before its imports.
 
-``lock_memory`` (:mod:`orthoglide_ros.cores.realtime`) locks every mapping
-of the process, and the kernel counts each one whole (``VmLck``), touched
-or only reserved; that count is what ``RLIMIT_MEMLOCK`` limits. On the C
-library's and OpenBLAS's defaults a node maps about 950 MB, almost all of
-it reserved and never used (doc/measurements.md#memory-of-the-nodes):
-
-- glibc's malloc arenas: one per thread that allocates, up to 8 per CPU,
-  each reserving 64 MiB (9 of them in a node: 576 MiB);
-- thread stacks: 8 MiB each (the default ``RLIMIT_STACK``), 18 threads
-  (144 MiB), where the deepest measured reaches 32 KiB;
-- OpenBLAS's pool: a thread per CPU beside the main one and a 32 MiB
-  buffer per thread (72 MiB on two CPUs), for the node's 3x3 matrices.
-
-:func:`bound` caps them in the console script (``ros/console.py``) before
-numpy, rclpy or the node is imported, since arenas, stacks and OpenBLAS's
-threads are made as the first threads start; it applies to every node,
-locked or not (unlocked, the reservations cost address space only):
-
-- :data:`ARENAS` malloc arena (``mallopt(M_ARENA_MAX)``; the threads
-  share the main heap, each with glibc's own small per-thread cache); an
-  ``MALLOC_ARENA_MAX`` in the environment is left to glibc;
-- :data:`NATIVE_STACK` for the stack of every thread made by C or C++
-  code (Fast DDS's, LTTng's: ``pthread_setattr_default_np``), or the
-  smaller default the process was started with (``ulimit -s``);
-- :data:`PYTHON_STACK` for the stack of every thread made by Python
-  (``threading.stack_size``): a recursion reaching Python's limit (1000
-  frames) through C calls needs about 0.7 MiB, and must raise
-  RecursionError, not overflow the stack;
-- OpenBLAS on :data:`BLAS_THREADS` thread (``OPENBLAS_NUM_THREADS``,
-  unless set).
-
-A C library without one of these calls (not glibc >= 2.18) keeps that
-default; :func:`bound` never raises. Only the standard library is imported
-here.
+On glibc's and OpenBLAS's defaults a node maps about 950 MB, almost all
+reserved and never used, which ``lock_memory`` would lock whole:
+:func:`bound` caps the malloc arenas, the thread stacks and OpenBLAS's
+threads in the console script, before numpy, rclpy or the node is
+imported, for every node. Only the standard library is imported here.
+See doc/deployment.md#memory-locked.
 """
 
 import ctypes
@@ -51,10 +23,16 @@ _ATTR_BYTES = 128           # at least sizeof(pthread_attr_t) (56 on x86_64)
 
 def bound(environ=os.environ):
     """
-    Cap malloc arenas, thread stacks and OpenBLAS's threads (see above).
+    Cap malloc arenas, thread stacks and OpenBLAS's threads.
 
-    Call it once, before the first thread starts and before numpy is
-    imported. ``environ``: the environment OpenBLAS will read.
+    :data:`ARENAS` arena (``mallopt(M_ARENA_MAX)``, unless
+    ``MALLOC_ARENA_MAX`` is set), :data:`NATIVE_STACK` for threads made by
+    C code (``pthread_setattr_default_np``, or a smaller ``ulimit -s``),
+    :data:`PYTHON_STACK` for Python's (``threading.stack_size``),
+    :data:`BLAS_THREADS` OpenBLAS thread (unless ``OPENBLAS_NUM_THREADS``
+    is set). Call it once, before the first thread starts and before numpy
+    is imported; ``environ``: the environment OpenBLAS will read. A C
+    library without one of these calls keeps that default; it never raises.
     """
     environ.setdefault('OPENBLAS_NUM_THREADS', BLAS_THREADS)
     try:

@@ -1,48 +1,12 @@
 """
 Real-time scheduling of a node's process, without ROS: priority, CPUs, memory.
 
-Every node that runs a loop or answers a stream declares the three
-read-only parameters of :data:`SPECS`, as ros2_control's
-``controller_manager`` does:
-
-- ``thread_priority``: 0 leaves the scheduling the process was started
-  with (the OS's normal one, unless it was started under ``chrt``); 1-99
-  runs every thread SCHED_FIFO at that priority;
-- ``cpu_affinity``: the CPUs every thread may run on; empty leaves the
-  affinity the process was started with (any CPU, unless ``taskset``);
-- ``lock_memory``: ``mlockall(MCL_CURRENT | MCL_FUTURE | MCL_ONFAULT)``:
-  every page of the process, now and later, is locked from the first time
-  it is touched and never paged out, so the loop, whose pages its first
-  cycles touch, never waits for one to be read back in. ros2_control's
-  ``realtime_tools::lock_memory()`` calls ``mlockall(MCL_CURRENT |
-  MCL_FUTURE)``, which also reads in and pins every page mapped and never
-  touched: for a Python node, libraries' unused code and reserved buffers,
-  twice the resident memory, three times the private
-  (doc/deployment.md#memory-locked). A kernel without MCL_ONFAULT (before
-  Linux 4.4) gets ros2_control's call. What there is to lock is bounded
-  before the imports (:mod:`orthoglide_ros.cores.memory`); without
-  CAP_IPC_LOCK an RLIMIT_MEMLOCK below :data:`MEMLOCK_NEEDED` is refused.
-
-:func:`apply` makes them hold for every thread of the process (every task
-of ``/proc/self/task``, Fast DDS's receive and event threads included);
-threads made afterwards inherit the policy and the CPUs of the thread
-that makes them. The node calls it once, as it is made, before any
-thread of its own starts and before its first input. What the OS refuses
-(SCHED_FIFO without CAP_SYS_NICE and with an RLIMIT_RTPRIO below the
-priority, mlockall without CAP_IPC_LOCK and with an RLIMIT_MEMLOCK below
-MEMLOCK_NEEDED, CPUs its cpuset excludes) comes back as one warning line
-each, naming the limit and its fix; that setting is then left as it was,
-and the node runs on. :func:`in_effect` reads back, from ``/proc``, what
-holds; the diagnostics report that (:func:`status_values`), not what was
-asked.
-
-The values a node cannot have are refused as every bad parameter is: a
-priority outside [0, 99], a CPU this machine does not have.
-
->>> settings_of({s.name: s.default for s in SPECS})
-(0, (), False)
->>> apply(*settings_of({s.name: s.default for s in SPECS}))
-[]
+The three read-only parameters of :data:`SPECS`, as ros2_control's
+``controller_manager`` has them: ``thread_priority`` (SCHED_FIFO for every
+thread), ``cpu_affinity``, ``lock_memory`` (``mlockall`` on fault).
+:func:`apply` makes them hold for every thread of the process, once, as
+the node is made; what the OS refuses comes back as one warning each.
+:func:`in_effect` reads back what holds. See doc/deployment.md#real-time.
 """
 
 from collections import namedtuple
@@ -126,6 +90,9 @@ def settings_of(values):
     ``values``: ``{name: value}`` of a node's parameters, None or absent
     taking the default; raises :class:`ParameterError` naming the first
     bad one.
+
+    >>> settings_of({s.name: s.default for s in SPECS})
+    (0, (), False)
     """
     return tuple(spec.validate(spec.default if values.get(spec.name) is None
                                else values[spec.name]) for spec in SPECS)
@@ -149,8 +116,13 @@ def apply(thread_priority, cpu_affinity, lock_memory):
     Make the settings hold for every thread of this process.
 
     Memory first (a locked page is never faulted in later), then the CPUs,
-    then the priority. Returns the warnings, one line per setting the OS
-    refused (empty: all in effect); a refused setting is left as it was.
+    then the priority, on every task of ``/proc/self/task`` (threads made
+    later inherit them). Returns the warnings, one line per setting the OS
+    refused, naming the limit and its fix (empty: all in effect); a refused
+    setting is left as it was.
+
+    >>> apply(0, (), False)
+    []
     """
     warnings = []
     if lock_memory:

@@ -1,39 +1,14 @@
 """
-Read setpoints straight from serialized (CDR) messages, without rclpy.
+Serialized ROS 2 messages (CDR) read and written with struct and numpy.
 
-rclpy turns each received message into Python objects, which costs more CPU
-than everything the feedforward does with it (measured here: about 80 us for
-a MultiDOFJointTrajectory and 60 us for a PoseStamped, against 20-25 us to
-take the raw bytes and read the few fields with ``struct``). The node
-therefore subscribes with ``raw=True`` and reads only what it uses:
-
-- ``PoseStamped``: stamp, frame, position, orientation;
-- ``TwistStamped`` / ``AccelStamped``: stamp, frame, linear part;
-- ``MultiDOFJointTrajectory``: stamp, frame and, of the first point, the
-  first transform, velocity, acceleration and ``time_from_start``;
-- ``JointState``: stamp, frame, names, positions, velocities, efforts;
-- ``Float64MultiArray``: the data (the layout is skipped);
-- ``MultiDOFJointTrajectory`` whole (:func:`cartesian_trajectory`): every
-  point's first transform, velocity and acceleration and its time, as
-  numpy arrays;
-- ``JointTrajectory`` whole (:func:`joint_trajectory_points`): names, every
-  point's arrays and time, as numpy arrays.
-
-and writes two messages the same way, :func:`joint_trajectory` (a
-``trajectory_msgs/JointTrajectory`` of three joints from numpy arrays:
-building 10,000 message objects in Python would cost far more than the
-mechanics) and :func:`multi_dof_trajectory` (the planner's whole motion).
-
-The layout is the OMG CDR encoding of the ROS 2 message definitions
-(XCDR1: a 4-byte encapsulation header, then each primitive aligned to its
-size counted from the end of that header; strings as a length that counts
-the terminating NUL, then the bytes; sequences as a count, then the items).
-A buffer this reader does not understand (big-endian, truncated, bad text)
-raises :class:`CdrError`; the node then falls back to rclpy's deserializer
-(for short messages), so this is a fast path, never the only path. A
-well-formed buffer whose cost to read would grow with a list the node does
-not use (``joint_names``) raises :class:`LimitError` beyond
-:data:`MAX_JOINT_NAMES`: what a message holds cannot make reading it slow.
+The nodes subscribe raw and read only the fields they use (setpoints,
+joint states, commands, whole trajectories; the logs' bags too), and
+write whole trajectories the same way (a ``JointTrajectory``, the
+planner's ``MultiDOFJointTrajectory``): building message objects would
+cost more than the mechanics. :class:`CdrError`: a buffer this reader
+does not understand; :class:`LimitError`: one whose reading would grow
+with a list the node does not use. See
+doc/decisions.md#runtime-and-middleware and doc/robustness.md#inputs.
 """
 
 from __future__ import annotations
@@ -46,6 +21,10 @@ import numpy as np
 
 from orthoglide_ros.model.types import Array, Stamp, Triple
 
+# The OMG CDR encoding of the ROS 2 message definitions (XCDR1): a 4-byte
+# encapsulation header, then each primitive aligned to its size counted from
+# the end of that header; a string is a length that counts its NUL, then
+# its bytes; a sequence is a count, then its items.
 _STAMP = struct.Struct('<iI')          # stamp.sec, stamp.nanosec
 _COUNT = struct.Struct('<I')
 _VECTOR = struct.Struct('<3d')
@@ -177,7 +156,7 @@ def cartesian_trajectory(buf: bytes) -> 'Waypoints':
         raise CdrError('truncated message')
     size = len(buf)
     words = np.frombuffer(buf, dtype='<u4', count=size // 4)
-    found = _regular_points(buf, words, offset, points)
+    found = _offsets_if_repeating(buf, words, offset, points)
     first, times = found if found is not None else _walk_points(
         buf, offset, points)
     doubles = np.frombuffer(buf, dtype='<f8', offset=4,
@@ -206,7 +185,7 @@ def _gather(doubles, first, present, width):
     return out
 
 
-_ITEMS = (56, 48, 48)   # bytes of a Transform, a Twist, a Twist
+_POINT_ITEM_BYTES = (56, 48, 48)   # bytes of a Transform, a Twist, a Twist
 
 
 def _walk_points(buf, offset, points):
@@ -228,7 +207,7 @@ def _point(buf, offset):
     """
     size = len(buf)
     at, first, counts = [], [], []
-    for item in _ITEMS:
+    for item in _POINT_ITEM_BYTES:
         offset += -(offset - 4) % 4
         if offset + 4 > size:
             raise CdrError('truncated message')
@@ -247,7 +226,7 @@ def _point(buf, offset):
     return offset + 8, at, first, counts
 
 
-def _regular_points(buf, words, offset, points):
+def _offsets_if_repeating(buf, words, offset, points):
     """
     Return the offsets if every point repeats the first point's counts.
 
@@ -267,7 +246,7 @@ def _regular_points(buf, words, offset, points):
     (s0, at0, f0, c0), (s1, at1, f1, c1) = shapes
     if c0 != c1:
         return None
-    starts, end = _strided(offset, s0, s1, points)
+    starts, end = _alternating_starts(offset, s0, s1, points)
     if end > len(buf):
         return None
     # Point k has point 0's layout where its start has point 0's
@@ -284,7 +263,7 @@ def _regular_points(buf, words, offset, points):
     return first, times
 
 
-def _strided(origin, first, second, count):
+def _alternating_starts(origin, first, second, count):
     """
     Return the start offsets of ``count`` items and the end of the last.
 
@@ -378,7 +357,7 @@ def joint_trajectory(stamp: Stamp, frame: str, names: Sequence[str],
     number of names. Returns the bytes ``Publisher.publish`` sends as is.
     A point's layout depends only on its start's alignment (two values):
     the points are written by numpy, each with the layout of its
-    alignment (:func:`_strided`).
+    alignment (:func:`_alternating_starts`).
     """
     n, joints = len(time), len(names)
     head = bytearray(b'\x00\x01\x00\x00')
@@ -392,7 +371,7 @@ def joint_trajectory(stamp: Stamp, frame: str, names: Sequence[str],
     start = len(head)
     layouts = [_point_layout(start, joints)]
     layouts.append(_point_layout(start + layouts[0][0], joints))
-    origin, end = _strided(start, layouts[0][0], layouts[1][0], n)
+    origin, end = _alternating_starts(start, layouts[0][0], layouts[1][0], n)
     k = np.arange(n)
     second = (origin - start) % 8 != 0
     out = np.zeros(-(-end // 8) * 8 + 8, dtype=np.uint8)

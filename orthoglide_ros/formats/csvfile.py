@@ -1,25 +1,11 @@
 """
 Read columns of numbers from a CSV file by their header names, without ROS.
 
-The one reader of the package's CSV inputs: the trajectories of
-``orthoglide batch`` and the logs of ``orthoglide identify``
-(:func:`orthoglide_ros.tools.identification.read_csv`). Rules:
-
-- columns are matched by header name, case-insensitively after trimming
-  spaces, in any order; other columns are ignored; a known column may not
-  appear twice;
-- the columns come in groups (``x, y, z``): a group is all there or absent,
-  and a required group must be there;
-- every cell read must be a finite number; blank lines are skipped; data
-  rows are counted from 1 after the header, and errors name the row, its
-  line in the file and the column;
-- the file is read as a stream into arrays of doubles (8 bytes per value
-  read), at most MAX_ROWS data rows and MAX_LINES lines; a line is
-  refused once it is longer than MAX_LINE characters, as its characters
-  arrive, before it is held whole (``/dev/zero`` is one endless line); a
-  file that is not UTF-8 text, or that the csv module cannot split (an
-  unterminated quote, a field longer than its 131072-character limit), is
-  refused with its line.
+The one reader of the package's CSV inputs (``orthoglide batch``, the logs
+of ``orthoglide identify``): groups of columns by name, finite numbers
+only, read as a stream into arrays within MAX_ROWS rows, MAX_LINES lines
+and MAX_LINE characters a line. Its rules: doc/cli.md#batch and
+doc/robustness.md#files-and-paths.
 """
 
 from __future__ import annotations

@@ -1,15 +1,11 @@
 """
 The logs identification reads: CSV files and rosbag2 bags, without ROS.
 
-A :class:`Log` holds what a robot's logger records: times, the sliders'
-``lambda`` and the actuators' forces (and optionally measured
-``lambdadot``). :func:`read_log` reads one from a CSV file
-(:func:`read_csv`, the columns of ``orthoglide batch``) or from the
-``sensor_msgs/JointState`` messages of a rosbag2 bag, MCAP or sqlite3
-(:func:`read_bag`, with the ``rosbags`` library, which is imported only
-there); :func:`check_log` refuses what cannot be identified from, naming
-the sample and the column; :func:`crop` takes a window. Every refusal is
-a :class:`LogError`. Units: s, m, N, m/s.
+:func:`read_log` returns a :class:`Log` (times, the sliders' ``lambda``,
+the actuators' forces, optionally measured ``lambdadot``; s, m, N, m/s);
+:func:`check_log` refuses what cannot be identified from, naming the
+sample and the column; :func:`crop` takes a window. rosbags is imported
+only to read a bag. See doc/identification.md#logs.
 """
 
 from __future__ import annotations

@@ -1,25 +1,11 @@
 """
 Read and write ROS 2 parameters files the way rcl does, without ROS.
 
-The node and the ``orthoglide`` tool share one file (``config/orthoglide.yaml``).
-rcl starts a node only if every value has the declared type, so the tools
-apply the same rules here:
-
-- a node's section is keyed by its name (``feedforward``, ``/feedforward``)
-  or ``/**`` (several may be present: ``/**`` first, then the node's own
-  name, the later overriding), with its values under ``ros__parameters``;
-- parameters may be nested mappings (``robot: {l3: 0.85}``) or dotted keys
-  (``robot.l3: 0.85``);
-- a double needs a decimal point or an exponent (``0.0``, not ``0``), an array
-  must not mix integers and floats, booleans are not numbers;
-- a plain scalar such as ``1e-3`` is a double, as in rcl (YAML 1.1, which
-  PyYAML implements, would read it as a string);
-- a file is UTF-8 text of at most MAX_FILE_BYTES, without aliases
-  (``*name``: an alias bomb expands a small file without bound) and nested
-  at most MAX_DEPTH deep: anything else is refused with one message.
-
-:func:`robot_file_text` writes a robot as such a file (``orthoglide
-identify`` does), with the same typing.
+The nodes and the ``orthoglide`` tool share one file
+(``config/orthoglide.yaml``), so the tool applies rcl's sections and
+typing (:func:`load_parameters`, :func:`load_robot`) and writes a robot
+with the same typing (:func:`robot_file_text`). The rules:
+doc/cli.md#--params.
 """
 
 from __future__ import annotations

@@ -1,15 +1,9 @@
 """
 The one place text from messages, requests and files is made safe to show.
 
-- :func:`clip` cuts a text (a frame id, joint names, a parameter value, a
-  repr) to about TEXT_LIMIT characters, dropping its middle, before it
-  reaches a log line, a reply or an error message: no input can make a
-  line longer than that plus a few dozen characters.
-- :func:`printable` escapes every character that is not printable (line
-  breaks, escape sequences, bidirectional controls) and clips the result:
-  what a node logs goes through it, so no text a peer gives (a lifecycle
-  label, a frame id, a parameter name or value) can start a line of its
-  own in the log, forge one, or move the terminal's cursor.
+:func:`clip` cuts a text to about TEXT_LIMIT characters; :func:`printable`
+also escapes every character that is not printable, so no text a peer
+gives can start, forge or colour a log line. See doc/robustness.md#logs.
 """
 
 from __future__ import annotations

@@ -1,18 +1,11 @@
 """
-Pictures of the Orthoglide, without ROS: a still (PNG) and an animation (GIF).
+Pictures of the Orthoglide from its model: a still (PNG), an animation (GIF).
 
-Every body is drawn where :func:`bodies.elements` puts it (the joint
-centres A1 ... A7 and G of each leg, eqs. 1-8), with the actuator axes, the
-paper's tested workspace cube and the actuator forces as arrows along the
-sliders' axes (their colour and length by the force, N). Pictures are
-rendered on matplotlib's Agg canvas, without pyplot's global state;
-matplotlib is imported on first use, so importing this module is cheap.
-The GIF is written by matplotlib's ``PillowWriter`` (Pillow).
-
-- :func:`draw`: one platform position -> PNG bytes (with the statics
-  forces, the robot at rest there);
-- :func:`animate`: a trajectory (times, positions, forces) -> GIF bytes;
-  :func:`frame_rows`: which samples of a long trajectory to animate.
+Every body where :func:`bodies.elements` puts it (the joint centres of
+eqs. 1-8), the actuator axes, the paper's tested cube and the actuator
+forces as arrows, on matplotlib's Agg canvas (imported on first use).
+:func:`draw` (one position, the statics forces), :func:`animate` (a
+trajectory), :func:`frame_rows`. See doc/cli.md#draw.
 """
 
 import io

@@ -1,24 +1,12 @@
 """
 An excitation optimized for identification, without ROS.
 
-The log of an excitation identifies the base parameters the better, the
-smaller the condition number of its base regressor (noise is amplified by
-it: :func:`identification.condition_number`), the drives' armature among
-them where the robot has drives
-(:func:`identification.design_law`). :func:`optimize` searches
-the Fourier coefficients of :func:`trajectory.excitation`'s series, from a
-seed's, for a smaller one: each candidate is shaped as every excitation is
-(:func:`trajectory.shaped_excitation`: at home at rest at the start,
-within the box, the speed and the acceleration bounds, inside the
-workspace with the singularity margin), and a candidate whose actuator
-forces (the robot's, friction included) exceed ``max_force`` is refused.
-The search is scipy's L-BFGS-B on the logarithm of the condition number
-with finite differences; it keeps the best candidate met and never
-returns one worse than the seed's.
-
-:func:`check_size` bounds an excitation file before anything is computed:
-its period, its rate and its rows, the last by the readers' own limit
-(:data:`orthoglide_ros.formats.csvfile.MAX_ROWS`).
+:func:`optimize` searches the Fourier coefficients of
+:func:`trajectory.excitation`'s series, from a seed's, for a smaller
+condition number of the base regressor (scipy's L-BFGS-B on its
+logarithm), every candidate shaped and bounded as any excitation and
+never worse than the seed's; :func:`check_size` bounds a file before
+anything is computed. See doc/identification.md#the-excitation.
 """
 
 from collections import namedtuple
@@ -36,7 +24,7 @@ CONDITION_RATE = 100.0
 # Evaluations of the condition number the search may make.
 DEFAULT_EVALUATIONS = 400
 # What a refused candidate costs (the log of a condition number).
-_REFUSED = 1e3
+_REFUSED_COST = 1e3
 # Longest period (s): a log of two periods at 1 kHz within the readers'
 # row limit (2,000,000 rows: 1000 s).
 MAX_PERIOD = csvfile.MAX_ROWS / 2000.0
@@ -142,9 +130,9 @@ def optimize(robot, period, seed=0, max_force=math.inf,
                 period, robot=robot, **bounds)
             condition, force = measure(robot, motion, base)
         except (ValueError, mechanics.WorkspaceError):
-            return _REFUSED
+            return _REFUSED_COST
         if not (math.isfinite(condition) and force <= max_force):
-            return _REFUSED
+            return _REFUSED_COST
         if condition < best[0]:
             best[:] = condition, motion, force
         return math.log(condition)

@@ -1,13 +1,11 @@
 """
 Pictures of the robot from MuJoCo's offscreen renderer (``orthoglide render``).
 
-A PNG at one platform position, or an animated GIF along a trajectory.
-
-The robot's MJCF (:mod:`orthoglide_ros.model.mjcf`) with every joint at the
-closed form's values for a platform position, seen by a fixed camera that
-frames the workspace, rendered by MuJoCo (OpenGL through EGL by default,
-or ``MUJOCO_GL=osmesa``; set before MuJoCo is imported) and written as
-PNG. :class:`RenderError`: no OpenGL backend, or MuJoCo missing.
+The robot's MJCF (:mod:`orthoglide_ros.model.mjcf`) posed by the closed
+form at each platform position, a fixed camera, OpenGL through EGL
+(``MUJOCO_GL`` chooses another): a PNG, or a GIF along a trajectory.
+:class:`RenderError`: no OpenGL backend, or MuJoCo missing. See
+doc/cli.md#render.
 """
 
 import io
@@ -25,7 +23,7 @@ class RenderError(RuntimeError):
     """MuJoCo cannot render here (no OpenGL backend, or no MuJoCo)."""
 
 
-def _mujoco():
+def _import_mujoco():
     os.environ.setdefault('MUJOCO_GL', 'egl')
     try:
         import mujoco
@@ -54,7 +52,7 @@ class Renderer:
     """
 
     def __init__(self, robot, size=(800, 600)):
-        mujoco = self._mujoco = _mujoco()
+        mujoco = self._mujoco = _import_mujoco()
         self.robot = robot
         text = mjcf.mjcf(robot)
         width, height = size

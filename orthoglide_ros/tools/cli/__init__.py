@@ -1,43 +1,12 @@
 """
 The ``orthoglide`` command-line tool: the mechanics without ROS.
 
-Subcommands (``orthoglide SUBCOMMAND --help`` for details):
-
-- ``paper``: the paper's figures 3-8 over the trajectory of eq. (6), as a
-  summary table, a CSV file (``--csv``) and a PNG figure (``--plot``).
-- ``solve``: inverse kinematics and dynamics of one sample.
-- ``batch``: the same for every row of a trajectory CSV file.
-- ``plan``: the fastest motion along a G-code program or CSV waypoints,
-  within the actuators' limits under the robot's dynamics (a ``batch``
-  input file, or a JointTrajectory).
-- ``excitation``: a periodic trajectory for identification (a ``batch``
-  input file), its peaks and the condition number of its regressor.
-- ``identify``: the robot's masses and friction from a log (a CSV file or
-  a rosbag2 bag), written as a parameters file (``--output``), with a
-  report on standard output (and ``--report``, a PNG).
-- ``validate``: a robot's forces against another log's: the error per
-  actuator, the share explained (and ``--report``, a PNG).
-- ``record``: joint states into a rosbag2 bag (MCAP or sqlite3); the one
-  subcommand that needs ROS (rclpy).
-- ``urdf``: the robot's URDF (a cut tree, see :mod:`orthoglide_ros.model.urdf`).
-- ``mjcf``: the robot's MJCF for MuJoCo, loops closed (:mod:`orthoglide_ros.model.mjcf`).
-- ``render``: a picture of the robot from MuJoCo's offscreen renderer.
-- ``draw``: a picture of the robot at one platform position (PNG).
-- ``animate``: the robot moving along a trajectory, with its actuator
-  forces (GIF).
-
 One module per job, each subcommand's parser beside its ``run_``:
 :mod:`.solving` (paper, solve, batch), :mod:`.planning` (plan),
-:mod:`.identifying` (excitation,
-record, identify, validate), :mod:`.models` (urdf, mjcf),
-:mod:`.pictures` (draw, render, animate); :mod:`.common` what they share.
-
-Units are SI throughout: m, m/s, m/s^2, N, W, s. Bad input exits with code 2
-and one line ``orthoglide: error: ...`` on standard error; output files are
-checked first (none the same file as an input or another output: see
-:func:`.common.check_distinct`) and written atomically, only once every
-sample is solved. scipy and rosbags
-are imported by the subcommands that use them, rclpy by ``record`` alone.
+:mod:`.identifying` (excitation, record, identify, validate),
+:mod:`.models` (urdf, mjcf), :mod:`.pictures` (draw, render, animate);
+:mod:`.common` what they share. Units SI; bad input exits 2 with one
+line. See doc/cli.md.
 """
 
 import argparse
@@ -48,8 +17,9 @@ from orthoglide_ros.model.robot import ParameterError, Robot
 from orthoglide_ros.tools.cli import (identifying, models, pictures,
                                       planning, solving)
 from orthoglide_ros.tools.cli.common import (check_distinct, check_output,
-                                             CliError, CSV_COLUMNS, fail,
-                                             OUTPUT_OPTIONS, PROG)
+                                             CliError, CSV_COLUMNS,
+                                             OUTPUT_OPTIONS, print_error,
+                                             PROG)
 
 __all__ = ('CliError', 'CSV_COLUMNS', 'main')
 
@@ -73,10 +43,10 @@ def main(argv=None):
         robot = _robot(args.params) if 'params' in args else None
         return args.run(robot, args)
     except CliError as error:
-        fail(str(error))
+        print_error(str(error))
         return error.code
     except (ParametersFileError, ParameterError) as error:
-        fail(str(error))
+        print_error(str(error))
         return 2
 
 

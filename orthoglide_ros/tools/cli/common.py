@@ -1,17 +1,10 @@
 """
 What the ``orthoglide`` subcommands share: errors, columns, outputs, types.
 
-- :class:`CliError`: bad input, printed as one line and exit code 2;
-- the columns the tool writes and the trajectory files it reads;
-- :func:`check_output`, :func:`check_distinct` and :func:`write_output`:
-  output files checked before anything is read or computed (none the
-  same file as an input or as another output), written atomically once
-  all is;
-- argparse types of finite numbers in range (:func:`within`), and the
-  options several subcommands take (:func:`command`, :func:`add_output`,
-  :func:`add_joint_names`, :func:`add_position`, :func:`add_size`);
-- the CSV and PNG writers and the trajectory reader of several
-  subcommands.
+:class:`CliError` (one line, exit code 2), the columns the tool writes and
+reads, the output files checked before anything is computed and written
+atomically (doc/cli.md#exit-codes), argparse types of finite numbers in
+range and the options several subcommands take.
 """
 
 import argparse
@@ -55,7 +48,7 @@ class CliError(Exception):
         self.code = code
 
 
-def flag(option):
+def option_flag(option):
     """Return the command-line spelling of the option ``dest``."""
     return '--' + option.replace('_', '-')
 
@@ -72,13 +65,13 @@ def check_output(path, option):
         return
     target = os.path.realpath(path)
     if os.path.isdir(target):
-        raise CliError(f'{flag(option)} {path}: is a directory')
+        raise CliError(f'{option_flag(option)} {path}: is a directory')
     directory = os.path.dirname(target)
     if not os.path.isdir(directory):
-        raise CliError(f'{flag(option)} {path}: no such directory: '
+        raise CliError(f'{option_flag(option)} {path}: no such directory: '
                        f'{directory}')
     if not os.path.exists(target) and not os.access(directory, os.W_OK):
-        raise CliError(f'{flag(option)} {path}: cannot write in {directory}')
+        raise CliError(f'{option_flag(option)} {path}: cannot write in {directory}')
 
 
 def check_distinct(args):
@@ -102,8 +95,8 @@ def check_distinct(args):
             if where:
                 why = ('an output must not replace an input' if fd == 0
                        else 'each output needs a file of its own')
-                raise CliError(f'{flag(option)} {path}: {where} '
-                               f'{flag(other)} {other_path}: {why}; nothing '
+                raise CliError(f'{option_flag(option)} {path}: {where} '
+                               f'{option_flag(other)} {other_path}: {why}; nothing '
                                'was written')
         seen.append((option, path, 1))
 
@@ -280,7 +273,7 @@ def table_row(label, *values):
     return f'{label:<26}' + ''.join(f'{c:>14}' for c in cells)
 
 
-def fail(message):
+def print_error(message):
     print(f'{PROG}: error: {" ".join(message.split())}', file=sys.stderr)
 
 
@@ -329,7 +322,7 @@ count = within(int, 0)
 positive_count = within(int, 1)
 
 
-def command(sub, parents, name, run, help, description):
+def add_subcommand(sub, parents, name, run, help, description):
     """Add subcommand ``name``, run by ``run``, with ``parents``' options."""
     parser = sub.add_parser(name, parents=parents, help=help,
                             description=description)

@@ -1,7 +1,7 @@
 """
 Identify a robot: ``excitation``, ``record``, ``identify``, ``validate``.
 
-From the motion to design to the check of the result.
+From the motion to the check of the result; see doc/identification.md.
 """
 
 import argparse
@@ -19,9 +19,9 @@ from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import ROW
 from orthoglide_ros.tools import excitation_design, identification
 from orthoglide_ros.tools.cli.common import (
-    add_joint_names, CliError, command, count, drawn_png, fail, finite_float,
-    INPUT_GROUPS, positive_count, positive_float, robot_range, table_csv,
-    table_row, write_output)
+    add_joint_names, add_subcommand, CliError, count, drawn_png, finite_float,
+    INPUT_GROUPS, positive_count, positive_float, print_error, robot_range,
+    table_csv, table_row, write_output)
 from orthoglide_ros.tools.identification import DEFAULT_CUTOFF, report
 
 TOPIC_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
@@ -29,7 +29,7 @@ TOPIC_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
 
 def add_excitation(sub, common):
     """Add ``excitation``: a periodic motion for identification."""
-    excitation = command(
+    excitation = add_subcommand(
         sub, [common], 'excitation', run_excitation,
         help='a periodic trajectory for identification',
         description='Write one period of an excitation as a trajectory CSV '
@@ -184,7 +184,7 @@ def _excitation(robot, seed, duration, bounds):
 
 def add_record(sub, common):
     """Add ``record``: topics into a rosbag2 bag (rclpy)."""
-    record = command(
+    record = add_subcommand(
         sub, [], 'record', run_record, help='record joint states into a rosbag2 bag (needs ROS 2)',
         description='Record topics (serialized messages, stamped at '
         'reception) into a new rosbag2 bag directory for --duration seconds '
@@ -227,7 +227,7 @@ def run_record(robot, args):
     except ImportError as error:
         raise CliError(f'record needs ROS 2 (rclpy): {error}') from None
     return recorder_node.main(args.output, topics, args.storage,
-                              args.duration, args.wait, report=fail)
+                              args.duration, args.wait, report=print_error)
 
 
 def _topic(name):
@@ -280,7 +280,7 @@ def _log_options():
 
 def add_identify(sub, common):
     """Add ``identify``: the base parameters from a log."""
-    identify = command(
+    identify = add_subcommand(
         sub, [common, _log_options()], 'identify', run_identify,
         help='identify masses, drives and friction from a log',
         description='Identify the base parameters (the combinations of the '
@@ -361,7 +361,7 @@ def run_identify(robot, args):
     if args.validate_report is not None and args.validate is None:
         raise CliError('--validate-report needs --validate LOG')
     joints = tuple(args.joint_names)
-    with _numbers_checked(args.input):
+    with _refusals_in_one_line(args.input):
         log = identification.read_log(args.input, args.topic, joints)
         window = identification.crop(log, args.start, args.end)
         result = identification.identify(
@@ -372,7 +372,7 @@ def run_identify(robot, args):
             stribeck_velocity=args.stribeck_velocity, payload=args.payload)
     validation = None
     if args.validate is not None:
-        with _numbers_checked(args.validate):
+        with _refusals_in_one_line(args.validate):
             other = identification.read_log(args.validate, args.topic, joints)
             # The lag is the drive's: the one given or found.
             validation = [identification.validate(model, other, args.cutoff,
@@ -409,7 +409,7 @@ def run_identify(robot, args):
 
 def add_validate(sub, common):
     """Add ``validate``: a robot against a log."""
-    validate = command(
+    validate = add_subcommand(
         sub, [common, _log_options()], 'validate', run_validate,
         help='predict the forces of a log, report the error',
         description='Predict the actuator forces of a log (another motion '
@@ -434,7 +434,7 @@ def add_validate(sub, common):
 
 def run_validate(robot, args):
     """Compare the robot's forces with a log's; print, draw (--report)."""
-    with _numbers_checked(args.input):
+    with _refusals_in_one_line(args.input):
         log = identification.crop(identification.read_log(
             args.input, args.topic, tuple(args.joint_names)),
             args.start, args.end)
@@ -451,7 +451,7 @@ def run_validate(robot, args):
 
 
 @contextlib.contextmanager
-def _numbers_checked(source):
+def _refusals_in_one_line(source):
     """
     Run identification's work on a log; its refusals become a CliError.
 

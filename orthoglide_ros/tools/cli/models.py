@@ -3,15 +3,15 @@
 from orthoglide_ros.cores.parameters import joint_names
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.tools.cli.common import (
-    add_joint_names, add_output, CliError, command, non_negative_float,
+    add_joint_names, add_output, add_subcommand, CliError, non_negative_float,
     positive_float, within, write_output)
 
-_margin = within(float, 0.0, 0.99)
+_singularity_margin = within(float, 0.0, 0.99)
 
 
 def add_urdf(sub, common):
     """Add ``urdf``: the robot's URDF."""
-    urdf = command(
+    urdf = add_subcommand(
         sub, [common], 'urdf', run_urdf, help='write the robot\'s URDF',
         description='Write the URDF of the robot (lengths m, masses kg, '
         'inertias kg m^2, angles rad): a cut tree of the closed mechanism '
@@ -20,7 +20,7 @@ def add_urdf(sub, common):
         'ranges over the workspace within the singularity margin.')
     add_output(urdf, 'URDF file')
     add_joint_names(urdf, 'the prismatic joints')
-    urdf.add_argument('--singularity-margin', type=_margin,
+    urdf.add_argument('--singularity-margin', type=_singularity_margin,
                       default=mechanics.DEFAULT_SINGULARITY_MARGIN,
                       metavar='D', help='the workspace of the joint limits: '
                       'singularity distance at least D, in [0, 0.99] '
@@ -39,7 +39,7 @@ def run_urdf(robot, args):
 
 def add_mjcf(sub, common):
     """Add ``mjcf``: the robot's MJCF."""
-    mjcf = command(
+    mjcf = add_subcommand(
         sub, [common], 'mjcf', run_mjcf, help='write the robot\'s MJCF (MuJoCo)',
         description='Write the robot as a MuJoCo model (MJCF): the URDF\'s '
         'bodies, masses and inertias, the loops closed by equality '

@@ -4,8 +4,8 @@ import os
 
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools.cli.common import (
-    add_output, add_position, add_size, CliError, command, read_trajectory,
-    within, workspace_reason, write_output)
+    add_output, add_position, add_size, add_subcommand, CliError,
+    read_trajectory, within, workspace_reason, write_output)
 
 # Pictures: size limits (pixels) and the animation's defaults.
 MIN_PIXELS, MAX_PIXELS = 100, 4000
@@ -18,7 +18,7 @@ _fps = within(float, 0.5, 50.0, unit=' frames/s')
 
 def add_draw(sub, common):
     """Add ``draw``: a picture at one position (matplotlib)."""
-    draw = command(
+    draw = add_subcommand(
         sub, [common], 'draw', run_draw, help='draw the robot at a position (PNG)',
         description='Draw the robot in 3D with its platform centre at a '
         'position: every body, the actuator axes, the paper\'s workspace '
@@ -33,7 +33,7 @@ def add_draw(sub, common):
 def run_draw(robot, args):
     """Draw the robot at one platform position; write a PNG."""
     _check_extension(args.output, '.png')
-    drawing = _drawing()
+    drawing = _drawing_module()
     try:
         data = drawing.draw(robot, args.position, args.size)
     except mechanics.WorkspaceError as error:
@@ -44,7 +44,7 @@ def run_draw(robot, args):
 
 def add_render(sub, common):
     """Add ``render``: MuJoCo's picture (PNG, GIF)."""
-    render = command(
+    render = add_subcommand(
         sub, [common], 'render', run_render, help='render the robot at a position '
         'with MuJoCo (PNG)',
         description='Render the robot\'s MuJoCo model (orthoglide mjcf) '
@@ -101,7 +101,7 @@ def run_render(robot, args):
 
 def add_animate(sub, common):
     """Add ``animate``: a motion with its forces (GIF)."""
-    animate = command(
+    animate = add_subcommand(
         sub, [common], 'animate', run_animate, help='animate the robot along a '
         'trajectory (GIF)',
         description='Animate the robot along a trajectory with each '
@@ -123,7 +123,7 @@ def add_animate(sub, common):
 def run_animate(robot, args):
     """Animate the robot along a trajectory; write a GIF."""
     _check_extension(args.output, '.gif')
-    drawing = _drawing()
+    drawing = _drawing_module()
     if args.input is None:
         times = trajectory.paper_times(max(args.frames, 2))
         p, v, a = trajectory.paper_batch(times)
@@ -152,7 +152,7 @@ def run_animate(robot, args):
     return 0
 
 
-def _drawing():
+def _drawing_module():
     try:
         from orthoglide_ros.tools import drawing
         import matplotlib  # noqa: F401

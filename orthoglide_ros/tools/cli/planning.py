@@ -18,9 +18,9 @@ from orthoglide_ros.planning.limits import (limits_from_params_file,
                                             LimitsError, load_limits,
                                             paper_limits)
 from orthoglide_ros.planning.programs import read_program
-from orthoglide_ros.tools.cli.common import (CliError, command, finite_float,
-                                             INPUT_GROUPS, table_csv, within,
-                                             write_output)
+from orthoglide_ros.tools.cli.common import (add_subcommand, CliError,
+                                             finite_float, INPUT_GROUPS,
+                                             table_csv, within, write_output)
 from orthoglide_ros.tools.cli.solving import (_joint_names,
                                               _joint_trajectory_yaml)
 
@@ -35,7 +35,7 @@ _speed = within(float, 0.0, 100.0, above=True, unit=' m/s')
 
 def add_plan(sub, common):
     """Add ``plan``: the fastest motion along a program."""
-    plan = command(
+    plan = add_subcommand(
         sub, [common], 'plan', run_plan,
         help='plan the fastest motion along a G-code program or waypoints',
         description='The fastest motion of the platform centre G that '
@@ -97,8 +97,8 @@ def run_plan(robot, args):
     except ProgramError as error:
         raise CliError(f'{name}: {error}') from None
     if args.format == 'joint_trajectory':
-        ns = np.round(motion.t * 1e9).astype(np.int64)
-        data = _joint_trajectory_yaml(ns, motion.solution, names)
+        nanoseconds = np.round(motion.t * 1e9).astype(np.int64)
+        data = _joint_trajectory_yaml(nanoseconds, motion.solution, names)
     else:
         data = table_csv(PLAN_COLUMNS, motion.t, np.hstack((
             motion.position, motion.velocity, motion.acceleration)))

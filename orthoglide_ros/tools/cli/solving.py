@@ -1,7 +1,7 @@
 """
 Solve the inverse mechanics: ``paper``, ``solve``, ``batch``.
 
-Of eq. (6), of one sample, of a trajectory file.
+Of eq. (6), of one sample, of a trajectory file; see doc/cli.md.
 """
 
 import json
@@ -14,7 +14,7 @@ from orthoglide_ros.model.robot import LEGS
 from orthoglide_ros.formats.params_file import load_parameters
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools.cli.common import (
-    add_output, add_position, CliError, command, CSV_COLUMNS, csv_text,
+    add_output, add_position, add_subcommand, CliError, CSV_COLUMNS, csv_text,
     new_figure, png_bytes, PROG, QUANTITIES, read_trajectory, table_row,
     within, workspace_reason, write_output)
 
@@ -27,7 +27,7 @@ _COLUMNS = ', '.join(CSV_COLUMNS)
 
 def add_paper(sub, common):
     """Add ``paper``: the paper's figures 3-8."""
-    paper = command(
+    paper = add_subcommand(
         sub, [common], 'paper', run_paper, help='reproduce the paper\'s figures 3-8',
         description='Solve the trajectory of eq. (6), r_G(t) = r* (1 - '
         'cos(pi t / 3)) with r* = (0.05, 0.10, -0.20) m, over [0, 2] s: '
@@ -101,7 +101,7 @@ def _plot_png(times, sol):
 
 def add_solve(sub, common):
     """Add ``solve``: one sample."""
-    solve = command(
+    solve = add_subcommand(
         sub, [common], 'solve', run_solve, help='solve one sample',
         description='Inverse kinematics and dynamics of one sample: lambda '
         '(m), lambdadot (m/s), lambdaddot (m/s^2), force (N, on each slider '
@@ -144,7 +144,7 @@ def run_solve(robot, args):
 
 def add_batch(sub, common):
     """Add ``batch``: a trajectory file."""
-    batch = command(
+    batch = add_subcommand(
         sub, [common], 'batch', run_batch, help='solve a trajectory CSV file',
         description='Solve every row of a trajectory CSV file. Columns are '
         'matched by header name, in any order, case-insensitively; others '
@@ -205,17 +205,17 @@ def _time_from_start(times, lines, name):
         raise CliError(f'{name}: no data row: a joint trajectory needs at '
                        'least one point')
     bad = (times < 0.0) | (times >= 2.0 ** 31)
-    ns = np.round(np.where(bad, 0.0, times) * 1e9).astype(np.int64)
-    bad |= np.r_[False, np.diff(ns) <= 0]
+    nanoseconds = np.round(np.where(bad, 0.0, times) * 1e9).astype(np.int64)
+    bad |= np.r_[False, np.diff(nanoseconds) <= 0]
     if bad.any():
         row = int(np.argmax(bad)) + 1
         raise CliError(f'{name}: data row {row} (line {lines[row - 1]}): '
                        't must be in [0, 2**31) s and increase from row to '
                        'row (to the nanosecond)')
-    return ns
+    return nanoseconds
 
 
-def _joint_trajectory_yaml(ns, sol, names):
+def _joint_trajectory_yaml(nanoseconds, sol, names):
     """
     Format a trajectory_msgs/JointTrajectory as YAML (bytes).
 
@@ -223,7 +223,7 @@ def _joint_trajectory_yaml(ns, sol, names):
     header stamp (joint_trajectory_controller starts it on arrival),
     ``names``, one point per row with positions = lambda (m), velocities =
     lambdadot (m/s), accelerations = lambdaddot (m/s^2), effort = f (N)
-    and time_from_start = ``ns`` (int64 nanoseconds). Doubles in full
+    and time_from_start = ``nanoseconds`` (int64). Doubles in full
     precision.
     """
     def row(values):
@@ -232,8 +232,8 @@ def _joint_trajectory_yaml(ns, sol, names):
            "  frame_id: ''",
            'joint_names: [' + ', '.join(map(json.dumps, names)) + ']',
            'points:']
-    for k in range(len(ns)):
-        sec, nanosec = divmod(int(ns[k]), 10**9)
+    for k in range(len(nanoseconds)):
+        sec, nanosec = divmod(int(nanoseconds[k]), 10**9)
         out += [f'- positions: {row(sol.lambda_[k])}',
                 f'  velocities: {row(sol.lambdadot[k])}',
                 f'  accelerations: {row(sol.lambdaddot[k])}',

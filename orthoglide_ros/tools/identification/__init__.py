@@ -1,32 +1,12 @@
 """
 Identify the Orthoglide's masses, drives and friction from a log, no ROS.
 
-The actuator forces are linear in the masses, the drives' armature and the
-friction coefficients: ``f = W(r_G, rdot_G, rddot_G) theta``, with the
-standard parameters ``theta`` of a :class:`Law` (kg, N s/m, N). The
-geometry, gravity and the Coulomb smoothing speed are known (the nominal
-robot's). One module per job:
-
-- :mod:`.laws`: the laws and their standard parameters (viscous + Coulomb,
-  and optionally a Coulomb level per direction, a Stribeck excess, the
-  drives' armature), read off a :class:`Robot` and written back;
-- :mod:`.regressor`: ``W`` from the package's own inverse dynamics, the
-  base parameters a log can identify (a pivoted QR), the condition number
-  of a motion;
-- :mod:`.motion`: a log on uniform grids, its motion and regressor
-  through zero-phase low-passes (parallel filtering), the forces' lag;
-- :mod:`.estimate`: :func:`identify`, the law by held-out error, the
-  least squares, what a log does not excite, the split into a robot;
-- :mod:`.validate`: a robot's forces against another log's;
-- :mod:`.report`: what ``orthoglide identify`` and ``validate`` print and
-  draw.
-
-The logs (CSV files, rosbag2 bags) are read by
-:mod:`orthoglide_ros.formats.logs`. ``doc/identification.md`` states the
-method, its choices and its figures. Units: m, m/s, m/s^2, N, kg, s. scipy
-and rosbags are imported by the functions that use them, so that importing
-this package (as the ``orthoglide`` tool does for every command) costs
-neither.
+The forces are linear in a law's standard parameters:
+``f = W(r_G, rdot_G, rddot_G) theta`` (kg, N s/m, N). :mod:`.laws` (the
+laws and their parameters), :mod:`.regressor` (``W`` from the inverse
+dynamics, the base parameters), :mod:`.motion` (a log filtered and
+differentiated), :mod:`.estimate` (:func:`identify`), :mod:`.validate`,
+:mod:`.report`. scipy is imported where used. See doc/identification.md.
 """
 
 from orthoglide_ros.formats.logs import (  # noqa: F401
