@@ -104,9 +104,9 @@ class SimulatorNode(ManagedNode):
                 publish = self.core.publish_due(tick, instant)
             if publish:
                 self._publish(tick, instant)
-            if tick.event in ('stopped', 'diverged'):
-                if self._throttle(tick.event):  # a reset loop: 1 line/s
-                    self.log('error', self.core.stop_message)
+            if tick.event in ('stopped', 'diverged'):   # a reset loop: 1/s
+                self.log_throttled('error', tick.event,
+                                   self.core.stop_message)
             elif tick.event == 'timeout':
                 self.warn_throttled('timeout', (
                     f'no valid command for command_timeout '
