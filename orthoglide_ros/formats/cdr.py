@@ -1,39 +1,15 @@
 """
-Read setpoints straight from serialized (CDR) messages, without rclpy.
+Read the fields a node uses straight from serialized (CDR) messages.
 
-rclpy turns each received message into Python objects, which costs more CPU
-than everything the feedforward does with it (measured here: about 80 us for
-a MultiDOFJointTrajectory and 60 us for a PoseStamped, against 20-25 us to
-take the raw bytes and read the few fields with ``struct``). The node
-therefore subscribes with ``raw=True`` and reads only what it uses:
-
-- ``PoseStamped``: stamp, frame, position, orientation;
-- ``TwistStamped`` / ``AccelStamped``: stamp, frame, linear part;
-- ``MultiDOFJointTrajectory``: stamp, frame and, of the first point, the
-  first transform, velocity, acceleration and ``time_from_start``;
-- ``JointState``: stamp, frame, names, positions, velocities, efforts;
-- ``Float64MultiArray``: the data (the layout is skipped);
-- ``MultiDOFJointTrajectory`` whole (:func:`cartesian_trajectory`): every
-  point's first transform, velocity and acceleration and its time, as
-  numpy arrays;
-- ``JointTrajectory`` whole (:func:`joint_trajectory_points`): names, every
-  point's arrays and time, as numpy arrays.
-
-and writes one message the same way, :func:`joint_trajectory` (a
-``trajectory_msgs/JointTrajectory`` of three joints from numpy arrays:
-building 10,000 message objects in Python would cost far more than the
-mechanics).
-
-The layout is the OMG CDR encoding of the ROS 2 message definitions
-(XCDR1: a 4-byte encapsulation header, then each primitive aligned to its
-size counted from the end of that header; strings as a length that counts
-the terminating NUL, then the bytes; sequences as a count, then the items).
-A buffer this reader does not understand (big-endian, truncated, bad text)
-raises :class:`CdrError`; the node then falls back to rclpy's deserializer
-(for short messages), so this is a fast path, never the only path. A
-well-formed buffer whose cost to read would grow with a list the node does
-not use (``joint_names``) raises :class:`LimitError` beyond
-:data:`MAX_JOINT_NAMES`: what a message holds cannot make reading it slow.
+Every node subscribes raw and reads only what it uses with ``struct``,
+several times cheaper than rclpy's conversion to Python objects: a
+PoseStamped, a TwistStamped or AccelStamped, a trajectory's first point or
+all its points, a JointState, a JointTrajectory, a Float64MultiArray; and
+:func:`joint_trajectory` writes a JointTrajectory from numpy arrays. The
+layout is XCDR1 little-endian, what every ROS 2 host writes; a buffer in
+another encapsulation, truncated or with bad text raises :class:`CdrError`,
+one whose cost to read would grow with a list the node does not use
+:class:`LimitError`: both are ``malformed`` (``doc/robustness.md``, inputs).
 """
 
 from __future__ import annotations
@@ -61,7 +37,7 @@ BAG_STORAGES = ('mcap', 'sqlite3')
 
 
 class CdrError(ValueError):
-    """A buffer this reader does not understand (use the deserializer)."""
+    """A buffer this reader cannot read: not a message it knows."""
 
 
 class LimitError(ValueError):
@@ -443,7 +419,8 @@ def _put_string(out, text):
 
 def _encapsulation(buf):
     if bytes(buf[:2]) not in _LITTLE_ENDIAN_CDR:
-        raise CdrError('not little-endian CDR')
+        raise CdrError(f'encapsulation {bytes(buf[:2]).hex(" ")} is not '
+                       'read: ROS 2 hosts write little-endian CDR (00 01)')
 
 
 def _string(buf, offset):
