@@ -13,17 +13,17 @@ Upstream behaviour worked around; each is checked by
 
 - rclpy's EventsExecutor queues one event per message, whatever the
   history depth: memory and latency grow without bound under a flood,
-  and the bounded SingleThreadedExecutor costs 2.4x its CPU per message.
-  It can go when an executor is bounded and within 1.3x of the wait-set
-  thread's CPU per message (``flood``, ``executor_cpu``).
+  and the bounded SingleThreadedExecutor costs 3-5x the wait-set thread's
+  CPU per message. It can go when an executor is bounded and within 1.3x
+  of that (``executor_queue``).
 - rmw_fastrtps: a reader's QoS events and its data share one status
   condition, so an executor waiting on the events masks the data from
   the input thread (:meth:`InputThreads.hides`). It can go when a wait-set
   executor spinning the node no longer delays the inputs (``events_mask``;
   test_feedforward_node.py's ``..._whatever_spins_the_node``).
 - Periodic work on the EventsExecutor waits behind a flood of service
-  requests (603 ms measured): it can go when a timer keeps its period
-  under one (``timer_behind_services``).
+  requests (gaps of 170-320 ms measured): it can go when a timer keeps
+  its period under one (``timer_behind_services``).
 """
 
 from contextlib import ExitStack
