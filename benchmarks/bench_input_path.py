@@ -8,9 +8,12 @@ share this process and talk over Fast DDS: ``--count`` PoseStamped at
 input thread's own CPU time (utime + stime of its ``/proc`` task) over
 the setpoints it computed: the path of doc/feedforward.md ("How a
 setpoint becomes forces") from the wait set to the publications, without
-the other threads, the publisher or the machine's load in it.
+the other threads or the publisher. ``--calls N``: instead, this thread's
+CPU per call of ``InputThreads.deliver`` alone, N calls, the core
+inactive (decoded, checked and solved; nothing published).
 
 Usage: python benchmarks/bench_input_path.py [--count 10000] [--rate 1000]
+       [--calls N]
 """
 
 import argparse
@@ -34,6 +37,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
     parser.add_argument('--count', type=int, default=10000)
     parser.add_argument('--rate', type=float, default=1000.0)
+    parser.add_argument('--calls', type=int, default=0)
     args = parser.parse_args()
     import rclpy
     from geometry_msgs.msg import PoseStamped
@@ -47,6 +51,8 @@ def main():
     peer = Node('bench_input_path')
     publisher = peer.create_publisher(PoseStamped, 'setpoint/pose', 10)
     try:
+        if args.calls:
+            return deliver_alone(node, args.calls)
         while publisher.get_subscription_count() == 0:
             time.sleep(0.01)
         time.sleep(0.5)
@@ -72,6 +78,27 @@ def main():
         node.destroy_node()
         peer.destroy_node()
         rclpy.try_shutdown()
+    return 0
+
+
+def deliver_alone(node, calls):
+    """Print this thread's CPU per ``deliver`` of a PoseStamped (us)."""
+    from geometry_msgs.msg import PoseStamped
+    from rclpy.serialization import serialize_message
+    node.core.active = False        # solved, counted, not published
+    pose = node.inputs.sources['pose']
+    messages = []
+    for k in range(1000):
+        message = PoseStamped()
+        message.pose.orientation.w = 1.0
+        message.header.stamp.sec = 1 + k
+        message.pose.position.z = 0.001 * (k % 50)
+        messages.append(serialize_message(message))
+    start = time.thread_time()
+    for k in range(calls):
+        node.inputs.deliver(pose, messages[k % 1000], 1.0)
+    print(f'deliver: {(time.thread_time() - start) / calls * 1e6:.2f} us '
+          f'CPU per call ({node.core.computed} computed)')
     return 0
 
 
