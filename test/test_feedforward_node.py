@@ -21,7 +21,7 @@ from rclpy.qos import ReliabilityPolicy
 from diagnostic_msgs.msg import DiagnosticStatus
 
 from orthoglide_ros.model import mechanics
-from orthoglide_ros.cores.feedforward import PARAMETERS, REASONS
+from orthoglide_ros.cores.feedforward import INPUTS, PARAMETERS, REASONS
 from orthoglide_ros.ros.feedforward_node import FeedforwardNode
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.trajectory import paper_sample, paper_times
@@ -172,6 +172,31 @@ def test_out_of_order_three_topic_input(graph):
     g.probe.send(s2, p2, v2, a2, order=('twist',))
     wait_outputs(g, 14)
     assert_output(g.probe, 13, s2, solve(p2, v2, a2))
+    assert not any(g.node.core.rejected.values())
+
+
+def test_inputs_that_wait_together_are_handled_in_reception_order(graph):
+    """
+    Pose, twist and accel held back together go to the core as received.
+
+    The node's lock held while two setpoints' parts come interleaved (s2's
+    accel first, then s1 whole, then s2's pose and twist): its input thread
+    takes them together once the lock is free. Handled input by input
+    (every pose, then every twist, then every accel), s2 would complete
+    first and drop s1 as unpaired; in reception order both complete.
+    """
+    g = graph({'setpoint_timeout': 60.0, 'pairing_timeout': 60.0})
+    (p1, v1, a1), (p2, v2, a2) = paper_sample(0.3), paper_sample(0.7)
+    s1, s2 = stamp_of(10.0), stamp_of(10.0 + 1e-9)
+    with g.node.lock:
+        g.probe.send(s2, p2, v2, a2, order=('accel',))
+        g.probe.send(s1, p1, v1, a1)
+        g.probe.send(s2, p2, v2, a2, order=('pose', 'twist'))
+        spin_for(g.executor, 0.2)
+        assert g.node.core.received == dict.fromkeys(INPUTS, 0)
+    wait_outputs(g, 2)
+    assert_output(g.probe, 0, s1, solve(p1, v1, a1))
+    assert_output(g.probe, 1, s2, solve(p2, v2, a2))
     assert not any(g.node.core.rejected.values())
 
 

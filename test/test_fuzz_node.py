@@ -1,17 +1,17 @@
 """
 Fuzzed messages into the feedforward node's raw callbacks, in-process.
 
-The node (``FeedforwardNode``) and a probe
-(:class:`orthoglide_testing.probe.Probe`) share one rclpy context and executor.
-Hypothesis builds PoseStamped, TwistStamped, AccelStamped and
-MultiDOFJointTrajectory messages (stamps zero, negative, repeated, near the
-int32 limit; frames base_link, empty or other; orientations identity,
--identity, just below and above 1e-3 rad, zero, huge, tiny, NaN; positions,
-velocities and accelerations of ``fuzz_strategies``; empty points, transforms,
-velocities), serializes them with rclpy, may cut them, overwrite a byte or
-replace them with random bytes, and hands the bytes to the node's raw callbacks
-exactly as DDS delivers them (``node.inputs.deliver(source, data, arrival)``,
-as the input thread does).
+The node (``FeedforwardNode``) and a :class:`orthoglide_testing.probe.Probe` share one
+rclpy context and executor. Hypothesis builds PoseStamped, TwistStamped,
+AccelStamped and MultiDOFJointTrajectory messages (stamps zero, negative,
+repeated, near the int32 limit; frames base_link, empty or other;
+orientations identity, -identity, just below and above 1e-3 rad, zero,
+huge, tiny, NaN; positions, velocities and accelerations of
+``fuzz_strategies``; empty points, transforms, velocities), serializes them
+with rclpy, may cut them, overwrite a byte or replace them with random
+bytes, and hands the bytes to the node's inputs exactly as DDS delivers
+them (``node.inputs.deliver(input, data, arrival)``, as the input thread
+does).
 
 Properties: every callback returns None (nothing escapes), the node counts
 no internal error, every output the probe receives is finite and equals
@@ -45,7 +45,6 @@ from orthoglide_ros.model import mechanics
 from orthoglide_ros.cores.feedforward import INPUTS
 from orthoglide_ros.cores.setpoint_rules import ORIENTATION_TOLERANCE
 from orthoglide_ros.ros.feedforward_node import FeedforwardNode
-from orthoglide_ros.ros.input_threads import fallback_decoder
 
 from fuzz_strategies import any_float, inside, states
 from orthoglide_testing.messages import header_stamp
@@ -197,9 +196,9 @@ READERS = {'pose': cdr.pose_stamped, 'twist': cdr.vector3_stamped,
 
 
 def read_like_node(source, data):
-    """Read a (corrupted) buffer the node's way: cdr, else rclpy, else bad."""
+    """Read a (corrupted) buffer the node's way: the cdr reader, else bad."""
     try:
-        return fallback_decoder(READERS[source], KINDS[source])(data)
+        return READERS[source](data)
     except Exception:
         return MALFORMED
 
@@ -408,7 +407,8 @@ class Run:
         """Deliver one message as the input thread does; check everything."""
         node = self.rig.node
         before = node.get_clock().now().nanoseconds
-        assert node.inputs.deliver(source, data, time.monotonic()) is None
+        assert node.inputs.deliver(node.inputs.sources[source], data,
+                                   time.monotonic()) is None
         after = node.get_clock().now().nanoseconds
         window = None
         if fields is not MALFORMED and source == 'trajectory' and \

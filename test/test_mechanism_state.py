@@ -4,7 +4,7 @@ Tests of the mechanism state publisher's ROS-free logic (mechanism_state).
 The joint state of the sliders is checked against eq. (9) and its
 derivative written independently (the reference model, complex step), by
 name; the rules (matching by name, optional velocities, refusals counted by
-reason, the status ladder) are driven by hand, time included.
+reason, the status rules) are driven by hand, time included.
 """
 
 from mechanics_reference import COMPLEX_STEP, leg_geometry
@@ -142,7 +142,7 @@ def test_configure_takes_new_names():
     assert take(c, ['p', 'q', 'r'], [0.0] * 3, [], 0.0).names[0] == 'p'
 
 
-def test_status_ladder():
+def test_status_rules():
     c = core()
     assert c.status(1.0).level == OK
     assert c.status(1.0).message == 'waiting for joint states'

@@ -6,9 +6,11 @@ middleware received the message (monotonic clock), not the time the
 callback happens to run, so a slow callback or a busy machine does not make
 the inputs behind it look late (the feedforward pairs pose, twist and
 accel within ``pairing_timeout`` of arrival; the simulator and the tracking
-controller judge their timeouts by it too).
+controller judge their timeouts by it too). A message is decoded before the
+node's lock is taken: a long decoding holds no other thread of the node.
 """
 
+import threading
 import time
 
 import pytest
@@ -19,11 +21,13 @@ from std_msgs.msg import Float64
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.parameters import Table
 from orthoglide_testing.probe import spin_until
-from orthoglide_ros.ros.managed_node import default_qos, Input, ManagedNode
+from orthoglide_ros.ros.input_threads import rclpy_decoder
+from orthoglide_ros.ros.managed_node import default_qos, ManagedNode
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 
 SLOW = 0.1      # s spent in each callback
+WAIT = 10.0     # s: generous, the machine is shared
 
 
 class Values(Core):
@@ -48,18 +52,45 @@ class SlowReader(ManagedNode):
     PARAMETERS = Table('SlowReaderSettings', ())
 
     def build(self, settings):
-        """Make the core; return its one input."""
+        """Make the core and its one input."""
         self.core = Values()
-        return (Input('values', Float64, None, self.core.value),)
+        self.inputs.subscribe('values', Float64, self.decode, self.core.value)
+
+    def decode(self, data):
+        """Read one message (rclpy's deserializer)."""
+        return rclpy_decoder(Float64)(data)
+
+
+class BlockedDecoder(SlowReader):
+    """A node whose decoder waits, once it is called, until released."""
+
+    NAME = TITLE = 'blocked_decoder'
+
+    def __init__(self, **kwargs):
+        self.decoding = threading.Event()
+        self.release = threading.Event()
+        super().__init__(**kwargs)
+
+    def decode(self, data):
+        """Say that decoding began; wait until the test releases it."""
+        self.decoding.set()
+        self.release.wait(WAIT)
+        return super().decode(data)
+
+
+def writer_of(ros_context):
+    """Return a writer node, its Float64 publisher on 'values', its executor."""
+    writer = Node('writer', context=ros_context)
+    publisher = writer.create_publisher(Float64, 'values', default_qos())
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(writer)
+    return writer, publisher, executor
 
 
 def test_arrival_is_reception_time_not_callback_time(ros_context):
     """Three messages sent at once, handled SLOW apart: same arrival."""
     reader = SlowReader(context=ros_context)
-    writer = Node('writer', context=ros_context)
-    publisher = writer.create_publisher(Float64, 'values', default_qos())
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(writer)
+    writer, publisher, executor = writer_of(ros_context)
     try:
         assert spin_until(executor, lambda: publisher.get_subscription_count()
                           == 1, 10.0)
@@ -78,6 +109,34 @@ def test_arrival_is_reception_time_not_callback_time(ros_context):
             assert arrival <= call
         assert arrivals[2] < calls[1], (sent, arrivals, calls)
     finally:
+        executor.shutdown()
+        writer.destroy_node()
+        reader.destroy_node()
+
+
+def test_decoding_runs_outside_the_nodes_lock(ros_context):
+    """
+    While a message is being decoded, another thread takes the lock.
+
+    The decoder blocks until released; the test, another thread of the
+    node's process as the tick or the diagnostics are, must get the lock
+    meanwhile (at once: decoding under the lock would hold it until the
+    release, WAIT later). Released, the message reaches the core.
+    """
+    reader = BlockedDecoder(context=ros_context)
+    writer, publisher, executor = writer_of(ros_context)
+    try:
+        assert spin_until(executor, lambda: publisher.get_subscription_count()
+                          == 1, WAIT)
+        publisher.publish(Float64(data=7.0))
+        assert reader.decoding.wait(WAIT)
+        assert reader.lock.acquire(timeout=WAIT / 2), 'decoded under the lock'
+        reader.lock.release()
+        reader.release.set()
+        assert spin_until(executor, lambda: len(reader.core.seen) == 1, WAIT)
+        assert reader.core.seen[0][0] == 7.0
+    finally:
+        reader.release.set()
         executor.shutdown()
         writer.destroy_node()
         reader.destroy_node()

@@ -3,8 +3,8 @@ The status rules of each node's core, without DDS.
 
 Every node publishes ``core.status(now, internal_errors)`` on
 ``/diagnostics`` once a second (one DDS test per node checks that wiring).
-Here each core is driven with its own clock and the ladder is checked
-rule by rule: an internal error is ERROR before anything else; each node's
+Here each core is driven with its own clock and its status rules are
+checked one by one: an internal error is ERROR before anything else; each node's
 WARN conditions hold for the period in which they happened and clear in
 the next; rates are per period; the per-period maxima restart.
 """
@@ -36,17 +36,17 @@ def values(s):
 
 def test_period_reports_growth_and_restarts():
     period = status.Period(10.0, a=5, b=0)
-    seconds, new = period.advance(12.0, a=9, b=3)
-    assert (seconds, new) == (2.0, {'a': 4, 'b': 3})
-    seconds, new = period.advance(12.0, a=9, b=3)
-    assert seconds == 1e-9 and new == {'a': 0, 'b': 0}
+    seconds, increases = period.advance(12.0, a=9, b=3)
+    assert (seconds, increases) == (2.0, {'a': 4, 'b': 3})
+    seconds, increases = period.advance(12.0, a=9, b=3)
+    assert seconds == 1e-9 and increases == {'a': 0, 'b': 0}
 
 
-def test_ladder_takes_the_first_true_step_after_internal_errors():
-    steps = ((False, WARN, 'w1'), (True, WARN, 'w2'), (True, OK, 'o'))
-    assert status.first(0, *steps) == (WARN, 'w2')
-    assert status.first(0, (False, WARN, 'w')) == (OK, 'ok')
-    level, message = status.first(2, *steps)
+def test_the_first_rule_that_holds_wins_after_internal_errors():
+    rules = ((False, WARN, 'w1'), (True, WARN, 'w2'), (True, OK, 'o'))
+    assert status.first_rule_that_holds(0, *rules) == (WARN, 'w2')
+    assert status.first_rule_that_holds(0, (False, WARN, 'w')) == (OK, 'ok')
+    level, message = status.first_rule_that_holds(2, *rules)
     assert level == ERROR and message.startswith('2 internal error')
 
 

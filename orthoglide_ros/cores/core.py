@@ -1,44 +1,32 @@
 """
 The contract between a node and its core, and what every core shares.
 
-A node (:class:`orthoglide_ros.ros.managed_node.ManagedNode`) makes one
-core at configure and drops it at cleanup. It calls nothing but:
-
-- ``configure(settings)``: new settings, whole, from the next input on
-  (run-time parameter changes; the lock is held);
-- ``activate()`` / ``deactivate()``: outputs start, or stop at once; the
-  inputs are still read and counted while inactive (:attr:`Core.active`);
-- one method per row of the node's input table, ``method(*fields, now)``:
-  the decoded message's fields and its arrival time (monotonic s).
-  It returns what to publish, or None; it raises
-  :class:`~orthoglide_ros.cores.inputs.Rejected` when a rule refuses the
-  input, which it has counted;
-- ``reject(source, rejection)``: count a message of input ``source``
-  refused before it was read (``oversize``, ``malformed``);
-- ``status(now, internal_errors)``: the
-  :class:`~orthoglide_ros.cores.status.Status` of the period ending at
-  ``now``, published on ``/diagnostics`` once a second.
-
-:class:`Core` is that contract with the part every core has: the counters
-of what came in (``received``, per input) and what was refused
-(``rejected``, per reason, or per input and reason), the period of the
-status, its ladder with the inactive step first and its counter values.
-A core adds its inputs, its rules and :meth:`Core.ladder` and
-:meth:`Core.values`; every method takes ``now`` so that tests drive time.
+A node (:class:`orthoglide_ros.ros.managed_node.ManagedNode`) makes one core
+at configure, drops it at cleanup, and calls only what :class:`Core` lists:
+``configure``, ``activate``/``deactivate``, one method per input
+(``method(*fields, now)``: the decoded fields and the arrival time, it
+returns what to publish or None, or raises a counted
+:class:`~orthoglide_ros.cores.inputs.Rejected`), ``reject`` and ``status``.
+Every method takes ``now`` so that tests drive time (``doc/decisions.md``,
+nodes).
 """
 
 from orthoglide_ros.cores.inputs import Rejected
-from orthoglide_ros.cores.status import first, OK, Period, Status
+from orthoglide_ros.cores.status import (first_rule_that_holds, OK, Period,
+                                         Status)
 
 
 class Core:
     """
-    The shared part of a node's core (see the module docstring).
+    The shared part of a node's core: counters, status period and rules.
 
-    Subclasses set :attr:`INPUTS` (the inputs' source names), :attr:`REASONS`
-    (the rejection reasons) and :attr:`REJECTED_BY_INPUT` (count refusals
-    per input and reason, shown as ``rejected <input> <reason>``, rather
-    than per reason, ``rejected <reason>``).
+    The counters of what came in (``received``, per input) and what was
+    refused (``rejected``, per reason, or per input and reason). Subclasses
+    set :attr:`INPUTS` (the inputs' source names), :attr:`REASONS` (the
+    rejection reasons) and :attr:`REJECTED_BY_INPUT` (count refusals per
+    input and reason, shown as ``rejected <input> <reason>``, rather than
+    per reason, ``rejected <reason>``), and add their input methods,
+    :meth:`status_rules` and :meth:`values`.
     """
 
     INPUTS = ()
@@ -90,17 +78,17 @@ class Core:
         Return the :class:`Status` of the period ending at ``now``.
 
         The level and message: ERROR after an internal error, then
-        ``inactive`` (OK), then the core's :meth:`ladder`, else OK
+        ``inactive`` (OK), then the core's :meth:`status_rules`, else OK
         ``ok``. The values: the core's :meth:`values`, the counters of
         :meth:`counter_values`, the internal errors.
         """
-        seconds, new = self._period.advance(
+        seconds, increases = self._period.advance(
             now, rejected=sum(self.rejected.values()),
             **self.period_counters())
-        level, message = first(
+        level, message = first_rule_that_holds(
             internal_errors, (not self.active, OK, self.inactive_message()),
-            *self.ladder(now, seconds, new))
-        values = self.values(now, seconds, new) + self.counter_values()
+            *self.status_rules(now, seconds, increases))
+        values = self.values(now, seconds, increases) + self.counter_values()
         values.append(('internal errors', internal_errors))
         return Status(level, message, values)
 
@@ -112,17 +100,18 @@ class Core:
         """Return the counters whose growth per period the status uses."""
         return {}
 
-    def ladder(self, now, seconds, new):
+    def status_rules(self, now, seconds, increases):
         """
-        Return the status steps after ``inactive``, in order.
+        Return the status rules after ``inactive``, in order.
 
-        ``(condition, level, message)`` triples (:func:`first`);
-        ``seconds``: the period's length; ``new``: each counter's growth
-        over it, ``rejected`` among them.
+        ``(condition, level, message)`` triples
+        (:func:`~orthoglide_ros.cores.status.first_rule_that_holds`);
+        ``seconds``: the period's length; ``increases``: each counter's
+        growth over it, ``rejected`` among them.
         """
         return ()
 
-    def values(self, now, seconds, new):
+    def values(self, now, seconds, increases):
         """Return the status pairs of the core's own (a list)."""
         return []
 

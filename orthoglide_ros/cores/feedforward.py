@@ -2,38 +2,12 @@
 The feedforward's logic without ROS: setpoints in, joint targets out.
 
 :class:`Feedforward` pairs the pose, twist and accel of one setpoint by their
-exact stamp, checks the setpoint, runs :func:`mechanics.solve` on it and keeps
-the counters the diagnostics report. The ROS node (``feedforward_node``)
-only converts messages to and from the plain values used here, so every rule
-below is testable without DDS.
-
-Rules (``doc/feedforward.md`` states them for users):
-
-- A setpoint is complete when a pose, a twist and an accel with the same
-  stamp have arrived (or a pose alone with ``pose_only``), or when one
-  trajectory point arrives. A zero or negative stamp cannot be paired and
-  is rejected; so is a trajectory point whose stamp (header plus
-  ``time_from_start``) is zero, negative or beyond an output stamp's int32
-  seconds.
-- A partial setpoint waits at most ``pairing_timeout`` (by arrival time) for
-  its partners; it is dropped as ``unpaired`` when that runs out, or at once
-  when a newer setpoint completes (its partners can no longer come in order).
-- A complete setpoint is rejected, and counted by reason, if a frame is
-  neither empty nor ``base_frame`` (``frame``), its orientation turns more than
-  1e-3 rad from the identity (``orientation``), its speed or acceleration
-  (norms) exceed ``max_speed`` or ``max_acceleration`` (``speed_limit``,
-  ``acceleration_limit``), the mechanics refuse it (``non_finite``,
-  ``unreachable``, ``singular``, ``overflow``) or an actuator would need a
-  force beyond ``max_force`` (``force_limit``): no force beyond it is ever
-  published. A rejected setpoint changes nothing: the previous result
-  stays the newest.
-- Freshness is judged by arrival time on a monotonic clock, never by stamp:
-  the newest result is fresh for ``setpoint_timeout`` after its setpoint
-  completed.
-- A whole Cartesian trajectory (:func:`convert_trajectory`) is converted
-  point by point with :func:`mechanics.solve_batch`, all or nothing: one
-  bad point refuses it whole, with the reason and the point's index
-  (:data:`TRAJECTORY_REASONS`, counted apart from the setpoints').
+exact stamp, checks it (:mod:`setpoint_rules`), solves the inverse dynamics
+(:func:`mechanics.solve`: eqs. (9)-(25)) and keeps the counters of its
+status; :func:`convert_trajectory` converts a whole Cartesian trajectory
+with :func:`mechanics.solve_batch`, all or nothing. The rules (pairing,
+stamps, freshness by arrival time, the reasons of a refusal):
+``doc/feedforward.md``.
 """
 
 from collections import namedtuple
@@ -120,7 +94,7 @@ def convert_trajectory(settings, waypoints):
     with np.errstate(all='ignore'):     # a NaN or an inf: refused inside
         solution = setpoint_rules.solve_setpoints(
             settings, w.position, velocity, acceleration, w.orientation,
-            setpoint_rules.POINTS, per_actuator=True)
+            setpoint_rules.N_POINTS, per_actuator=True)
     return Conversion(w.stamp, w.frame, w.time, solution)
 
 
@@ -373,29 +347,30 @@ class Feedforward(Core):
                     trajectories_rejected=sum(
                         self.trajectory_rejected.values()))
 
-    def ladder(self, now, seconds, new):
+    def status_rules(self, now, seconds, increases):
         """Return the rejections, the wait and staleness steps."""
         age = self._age(now)
         return (
-            (new['rejected'], WARN,
-             f'{new["rejected"]} setpoint(s) rejected in the last period'),
-            (new['trajectories_rejected'], WARN,
-             f'{new["trajectories_rejected"]} trajectory(ies) rejected in '
-             'the last period'),
+            (increases['rejected'], WARN,
+             f'{increases["rejected"]} setpoint(s) rejected in the last '
+             'period'),
+            (increases['trajectories_rejected'], WARN,
+             f'{increases["trajectories_rejected"]} trajectory(ies) '
+             'rejected in the last period'),
             (age is None, OK, 'waiting for the first setpoint'),
             (not self.fresh(now), WARN,
              f'stale: no fresh setpoint for {age or 0.0:.2f} s, outputs '
              'stopped'))
 
-    def values(self, now, seconds, new):
+    def values(self, now, seconds, increases):
         """Return the rates, compute times and counters (maxima restart)."""
         age = self._age(now)
-        mean_us = new['compute_ns'] / new['computed'] / 1e3 \
-            if new['computed'] else 0.0
+        mean_us = increases['compute_ns'] / increases['computed'] / 1e3 \
+            if increases['computed'] else 0.0
         distance = self.latest.solution.singularity_distance \
             if self.latest is not None else math.nan
         values = [
-            ('tick rate (Hz)', new['published'] / seconds),
+            ('tick rate (Hz)', increases['published'] / seconds),
             ('compute time mean (us)', mean_us),
             ('compute time max (us)', self.compute_ns_max / 1e3),
             ('setpoints computed', self.computed),
@@ -471,7 +446,7 @@ class Feedforward(Core):
                 setpoint_rules.check_frame(frame, settings)
             solution = setpoint_rules.solve_setpoints(
                 settings, position, velocity, acceleration, orientation,
-                setpoint_rules.SAMPLE)
+                setpoint_rules.ONE_SAMPLE)
         except Rejected as rejection:
             self.count('setpoint', rejection)
             raise

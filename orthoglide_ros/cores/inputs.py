@@ -1,20 +1,12 @@
 """
 Rules every node applies to what it receives, without ROS.
 
-- :class:`Rejected`: the one exception a core raises when an input breaks
-  a rule; its ``reason`` is the key the node counts it under (and reports
-  in ``/diagnostics`` as ``rejected <reason>``).
-- :func:`check_time`: the one rule for a ``builtin_interfaces`` time
-  (nanosec in [0, 1e9)), on which :func:`check_stamp` (every stamp a node
-  uses or passes on) and :func:`trajectory_times` (every trajectory's
-  points) build;
-- :func:`read_joint_state`: the one way to pick the actuated joints out of
-  a ``sensor_msgs/JointState``, by name, in any order, and
-  :func:`read_joint_trajectory` the same for every point of a
-  ``trajectory_msgs/JointTrajectory``;
-- the byte limits of the inputs: a message longer than its input's limit
-  is refused (``oversize``) before any decoding, so its length cannot
-  cost the node more than taking it from the middleware.
+:class:`Rejected` (the one exception of a refused input, its ``reason`` the
+key it is counted under), :func:`check_time` and :func:`check_stamp` (the
+one rule of a ``builtin_interfaces`` time), :func:`read_joint_state` and
+:func:`read_joint_trajectory` (actuated joints picked by name) and the byte
+limits of the inputs. Pages: ``doc/robustness.md`` (inputs) and each
+node's rules.
 """
 
 from collections import namedtuple

@@ -1,38 +1,11 @@
 """
 The mechanism state publisher's logic without ROS: sliders in, every joint out.
 
-The URDF of the Orthoglide (:mod:`orthoglide_ros.model.urdf`) is a cut tree: the
-three slider positions alone do not tell ``robot_state_publisher`` where the
-bars are. :func:`joint_state` solves every non-fixed joint of the URDF from
-the sliders in closed form: the platform centre G by the forward kinematics
-(eq. 14, :func:`mechanics.forward_kinematics`), its velocity by eq. (15)
-(:func:`mechanics.platform_velocity`), then each leg's angles and rates by
-the inverse kinematics (eqs. 9 and 13, :func:`bodies.leg_joints`). The
-result closes every cut of the URDF (``x_leg_end`` on ``x_platform_mount``,
-``x_a7_bar`` on ``x_a7_rod``). The ROS node
-(``mechanism_state_publisher_node``) only converts messages, so every rule
-below is testable without DDS.
-
-Rules (``doc/mechanism_state_publisher.md`` states them for users):
-
-- Joint states are matched by name, in any order; joints not in
-  ``joint_names`` are ignored. Positions are needed, velocities are used
-  when the message has them (then the output has velocities too).
-- A message is rejected, counted by reason and publishes nothing when its
-  stamp is not a ROS time (``stamp``: nanosec outside [0, 1e9), negative
-  seconds; :func:`check_stamp`, the rule of every input), one
-  of ``joint_names`` is absent (``missing_joint``), names repeat or an
-  array is neither empty nor as long as the names (``malformed``), it has
-  no positions (``missing_position``), a value read is NaN or infinite
-  (``non_finite``), the sliders have no platform position
-  (``unreachable``), the platform is nearer a singularity than
-  ``singularity_margin`` (``singular``) or a rate overflows
-  (``overflow``). Messages refused before they are read count as
-  ``oversize`` or ``malformed``.
-- The output carries the input's stamp and frame id unchanged: the sliders
-  of the input are the robot's state at that stamp, and so is every joint
-  solved from them. A zero stamp passes (unchanged): the time 0 of a
-  simulated clock, which ``robot_state_publisher`` accepts too.
+:func:`joint_state` solves every non-fixed joint of the Orthoglide's cut-tree
+URDF from the three sliders in closed form: G by the forward kinematics
+(eq. 14), its velocity by eq. (15), each leg's angles and rates by eqs. (9)
+and (13). :class:`MechanismState` is the node's core: its rules and
+reasons are in ``doc/mechanism_state_publisher.md``.
 """
 
 from collections import namedtuple
@@ -175,22 +148,22 @@ class MechanismState(Core):
         """Return the counters of the period's rates."""
         return dict(published=self.published)
 
-    def ladder(self, now, seconds, new):
+    def status_rules(self, now, seconds, increases):
         """Return the rejections and the wait steps."""
         last = self.last_rejection
         return (
-            (new['rejected'], WARN,
-             f'{new["rejected"]} joint state(s) rejected in the last '
+            (increases['rejected'], WARN,
+             f'{increases["rejected"]} joint state(s) rejected in the last '
              f'period, the last ({last.reason if last else ""}): {last}'),
             (self.received['joint_states'] == 0, OK,
              'waiting for joint states'))
 
-    def values(self, now, seconds, new):
+    def values(self, now, seconds, increases):
         """Return the rate, the counters and the margin."""
         age = math.nan if self.latest_arrival is None \
             else now - self.latest_arrival
         return [
-            ('publish rate (Hz)', new['published'] / seconds),
+            ('publish rate (Hz)', increases['published'] / seconds),
             ('joint states published', self.published),
             ('joint states received', self.received['joint_states']),
             ('outputs withheld (inactive)', self.withheld),

@@ -1,22 +1,12 @@
 """
 Node parameters: one mechanism for every node of the package, without ROS.
 
-Each node's core module owns one :class:`Table`: its :class:`Spec` rows
-(name, type, default, description, range), the ``robot.*`` rows of
-:data:`ROBOT_SPECS` when the node models the robot, and the rules that
-relate several parameters. Everything else follows from the table:
-
-- the node declares its ROS parameters from ``table.specs``
-  (``node_runtime.declare_specs``: type, default, range, description);
-- :meth:`Table.parse` validates a complete ``{name: value}`` set (at start
-  and for every run-time change) into one immutable settings tuple, or
-  raises :class:`ParameterError` naming the parameter and the rule;
-- the tools read the ``robot.*`` keys of a parameters file with the same
-  rows (:func:`robot_from_parameters`), and ``doc/`` documents each node's
-  table (a test checks that every row is on the node's page).
-
-Types are rcl's: a ``double`` must be a float (``0.0``, not ``0``), an
-array must not mix integers and floats, a bool is not a number.
+Each node's core module owns one :class:`Table` of :class:`Spec` rows (name,
+type, default, description, range; the ``robot.*`` rows of
+:data:`ROBOT_SPECS` when the node models the robot) and the rules across
+them; the node declares its ROS parameters from it and :meth:`Table.parse`
+validates a whole set into one settings tuple or raises
+:class:`ParameterError` (``doc/decisions.md``, parameters).
 
 >>> table = Table('Demo', (Spec('rate_hz', 'double', 10.0, 'rate (Hz)',
 ...                             (0.0, 100.0)),))

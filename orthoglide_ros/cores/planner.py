@@ -194,16 +194,16 @@ class Planner(Core):
         """Return the counters of the period's rates."""
         return dict(planned=self.planned)
 
-    def ladder(self, now, seconds, new):
+    def status_rules(self, now, seconds, increases):
         """Return the rejections and the wait steps."""
         last = self.last_rejection
         return (
-            (new['rejected'], WARN,
-             f'{new["rejected"]} path(s) rejected in the last period, the '
-             f'last ({last.reason if last else ""}): {last}'),
+            (increases['rejected'], WARN,
+             f'{increases["rejected"]} path(s) rejected in the last period, '
+             f'the last ({last.reason if last else ""}): {last}'),
             (self.received['path'] == 0, OK, 'waiting for a path'))
 
-    def values(self, now, seconds, new):
+    def values(self, now, seconds, increases):
         """Return the counters and the last plan's figures."""
         return [
             ('paths planned', self.planned),

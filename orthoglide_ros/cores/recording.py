@@ -1,23 +1,12 @@
 """
 The recorder's logic without ROS: which message goes into the bag.
 
-:class:`Recording` is the core (:mod:`orthoglide_ros.cores.core`) of the
-node behind ``orthoglide record``: one input per topic recorded, each
-message's serialized bytes returned unchanged to be written, and counted
-per topic. A message that does not reach the bag is dropped, counted per
-topic and reason (``rejected <topic> <reason>`` in the diagnostics), and
-said at the end (:meth:`Recording.summary`):
-
-- ``oversize``: longer than its byte limit (RECORD_MESSAGE_BYTES), refused
-  before it is read;
-- ``malformed``: unreadable (the recorder reads nothing of a message: a
-  defect if ever counted);
-- ``inactive``: received while the recorder was not active (a lifecycle
-  client deactivated it), counted without a warning;
-- ``write_failed``: the bag's writer refused it (the disk).
-
-A recording that dropped any is lossy: ``orthoglide record`` then exits
-with LOSSY (doc/cli.md#record), the bag complete and readable.
+:class:`Recording` is the core of the node behind ``orthoglide record``: one
+input per topic, each message's bytes returned unchanged to be written and
+counted per topic; a message dropped (``oversize``, ``malformed``,
+``inactive``, ``write_failed``) is counted per topic and reason and said at
+the end (:meth:`Recording.summary`). The counts and the exit code LOSSY:
+``doc/cli.md`` (record).
 """
 
 from orthoglide_ros.cores.core import Core
@@ -101,15 +90,16 @@ oversize: 1, larger than 4 MiB)'
         """Return the counters of the period's rate."""
         return dict(written=sum(self.written.values()))
 
-    def ladder(self, now, seconds, new):
+    def status_rules(self, now, seconds, increases):
         """Return the drops and the wait steps."""
-        return ((new['rejected'], WARN,
-                 f'{new["rejected"]} message(s) dropped in the last period'),
+        return ((increases['rejected'], WARN,
+                 f'{increases["rejected"]} message(s) dropped in the last '
+                 'period'),
                 (not any(self.received.values()), OK,
                  'waiting for messages'))
 
-    def values(self, now, seconds, new):
+    def values(self, now, seconds, increases):
         """Return the rate and the counts of messages written and dropped."""
-        return [('write rate (Hz)', new['written'] / seconds),
+        return [('write rate (Hz)', increases['written'] / seconds),
                 ('messages written', sum(self.written.values())),
                 ('messages dropped', sum(self.rejected.values()))]

@@ -2,28 +2,10 @@
 The setpoint publisher's logic without ROS: which setpoint, when.
 
 :class:`Stream` turns the node clock's time into setpoints of a motion,
-pass after pass, and keeps the counters of the summary the node logs at
-the end: with ``motion`` ``paper``, the paper's trajectory, eq. (6)
-(:func:`trajectory.paper_sample`); with ``excitation``, the periodic
-motion for identification (:func:`trajectory.excitation` of ``seed``, of
-period ``duration``). Its parameters are one table, :data:`PARAMETERS`
-(all read-only: a stream does not change its motion while it runs). The
-ROS node (``setpoint_publisher_node``) only publishes what
-:meth:`Stream.next` returns, so the rules are testable without DDS:
-
-- every setpoint is stamped with the node clock at publication and sampled
-  at ``t = (stamp - start) / 1e9`` s exactly, ``start`` being the stamp of
-  the first setpoint, so a subscriber recomputes every value from the
-  stamps alone;
-- a pass of eq. (6) lasts ``duration`` s; after it the stream ends, or
-  with ``loop`` the way back follows: :func:`trajectory.quintic` from the
-  pass's end state to its start state (home, at rest, eq. (6)'s initial
-  acceleration) in ``return_duration`` s, then the next pass. The looped
-  motion has period ``duration + return_duration`` and is continuous in
-  position, velocity and acceleration;
-- the excitation is periodic and starts and ends at home at rest: a pass
-  is one period, and with ``loop`` the passes follow each other directly
-  (no way back), continuous in position, velocity and acceleration.
+pass after pass: the paper's trajectory, eq. (6), with a quintic way back
+between passes when it loops, or the periodic excitation for
+identification. Every setpoint is sampled at its own stamp, so a subscriber
+recomputes it from the stamps alone (``doc/setpoint_publisher.md``).
 
 >>> stream = Stream(PARAMETERS.parse({'duration': 1.0}))
 >>> stream.next(5 * 10**9)[0] == (0.0, 0.0, 0.0)
@@ -202,14 +184,14 @@ class Stream(Core):
         """Return the counters of the period's rate."""
         return dict(published=self.published)
 
-    def ladder(self, now, seconds, new):
+    def status_rules(self, now, seconds, increases):
         """Return the end and the wait steps."""
         return ((self.done, OK, f'done: {self.summary()}'),
                 (self.published == 0, OK, 'waiting to start'))
 
-    def values(self, now, seconds, new):
+    def values(self, now, seconds, increases):
         """Return the rate, the counters and the motion."""
-        return [('setpoint rate (Hz)', new['published'] / seconds),
+        return [('setpoint rate (Hz)', increases['published'] / seconds),
                 ('setpoints published', self.published),
                 ('passes', self.passes),
                 ('largest gap (ms)', self.largest_gap_ns / 1e6),

@@ -1,28 +1,13 @@
 """
 The rules of a Cartesian setpoint, written once for one sample and for N.
 
-A setpoint of the feedforward (a pose, twist and accel of one stamp, or one
-trajectory point) and every point of a whole Cartesian trajectory meet the
-same rules (``doc/feedforward.md``), checked in this order by
-:func:`solve_setpoints`:
-
-- ``orientation`` / ``non_finite``: the platform's rotation is finite and
-  within ORIENTATION_TOLERANCE of the identity (the Orthoglide only
-  translates);
-- ``speed_limit`` / ``acceleration_limit``: ``|v|`` and ``|a|`` of G
-  within ``max_speed`` and ``max_acceleration``;
-- the mechanics' refusals (``non_finite``, ``unreachable``, ``singular``,
-  ``overflow``) of :func:`mechanics.solve` / :func:`mechanics.solve_batch`;
-- ``velocity_limit`` / ``force_limit``: ``|lambdadot|`` and ``|f|`` of
-  each actuator within its limit, and ``|f|`` within ``max_force``.
-
-The frame rule (:func:`check_frame`) is the header's, checked by the
-callers before. As in :mod:`orthoglide_ros.model.kernel`, the rules see
-components and the operations passed in: :data:`SAMPLE` (floats and
-``math``, one control tick) or :data:`POINTS` ((N,) arrays and numpy, a
-whole trajectory), so one text serves both. A broken rule raises
-:class:`Rejected` with its reason, for N points naming the first point at
-fault (``point <i>: ``).
+:func:`solve_setpoints` checks a setpoint of the feedforward and every
+point of a whole Cartesian trajectory by the same rules, in the order of
+``doc/feedforward.md`` (rules; whole trajectories): the orientation, the
+speed and acceleration of G, the mechanics' refusals
+(:func:`mechanics.solve`, eqs. (9)-(25)), the actuators' limits. As in
+:mod:`orthoglide_ros.model.kernel`, one text serves floats and ``math``
+(:data:`ONE_SAMPLE`) and (N,) arrays and numpy (:data:`N_POINTS`).
 """
 
 from collections import namedtuple
@@ -37,25 +22,26 @@ from orthoglide_ros.model import mechanics
 # Largest rotation of the platform accepted as "the identity" (rad).
 ORIENTATION_TOLERANCE = 1e-3
 
-Ops = namedtuple('Ops', 'columns isfinite not_ hypot atan2 abs first at '
-                        'where solve')
+Ops = namedtuple('Ops', 'columns isfinite not_ hypot atan2 abs '
+                        'first_bad_index value_at point_prefix solve')
 Ops.__doc__ = """What the rules compute with: ``columns`` splits a vector
-(or an (N, k) array) into its components; ``first(bad)`` is the index of
-the first True (None when none); ``at(values, i)`` the value there;
-``where(i)`` the prefix that names it; ``solve`` the mechanics'."""
+(or an (N, k) array) into its components; ``first_bad_index(bad)`` is the
+index of the first True (None when none); ``value_at(values, i)`` the value
+there; ``point_prefix(i)`` the prefix that names it in a message (``point
+<i>: ``, empty for one sample); ``solve`` the mechanics'."""
 
 
 def _first_true(bad):
     return int(np.argmax(bad)) if bad.any() else None
 
 
-SAMPLE = Ops(tuple, math.isfinite, operator.not_, math.hypot, math.atan2,
-             abs, lambda bad: 0 if bad else None, lambda values, i: values,
-             lambda i: '', mechanics.solve)
-POINTS = Ops(lambda array: tuple(array.T), np.isfinite, np.logical_not,
-             np.hypot, np.arctan2, np.abs, _first_true,
-             lambda values, i: values[i], lambda i: f'point {i}: ',
-             mechanics.solve_batch)
+ONE_SAMPLE = Ops(tuple, math.isfinite, operator.not_, math.hypot,
+                 math.atan2, abs, lambda bad: 0 if bad else None,
+                 lambda values, i: values, lambda i: '', mechanics.solve)
+N_POINTS = Ops(lambda array: tuple(array.T), np.isfinite, np.logical_not,
+               np.hypot, np.arctan2, np.abs, _first_true,
+               lambda values, i: values[i], lambda i: f'point {i}: ',
+               mechanics.solve_batch)
 
 
 def check_frame(frame, settings, what='setpoint'):
@@ -73,10 +59,12 @@ def solve_setpoints(settings, position, velocity, acceleration,
 
     ``position``, ``velocity``, ``acceleration`` (m, m/s, m/s^2) and
     ``orientation`` (quaternion x y z w): 3- and 4-sequences with
-    :data:`SAMPLE`, (N, 3) and (N, 4) arrays with :data:`POINTS`.
+    :data:`ONE_SAMPLE`, (N, 3) and (N, 4) arrays with :data:`N_POINTS`.
     ``per_actuator``: also the per-actuator ``velocity_limit`` and
     ``force_limit`` of a whole trajectory (0.0: none), besides
-    ``max_force``. Raises :class:`Rejected` (see the module docstring).
+    ``max_force``. Raises :class:`Rejected` with the reason of the first
+    rule broken, for N points naming the first point at fault (``point
+    <i>: ``).
     """
     _check_orientation(ops, ops.columns(orientation))
     columns = [ops.columns(v) for v in (position, velocity, acceleration)]
@@ -91,19 +79,19 @@ def solve_setpoints(settings, position, velocity, acceleration,
         # hypot: no squares to overflow. A NaN or an infinity in a
         # setpoint is the mechanics' non_finite, checked next.
         norm = ops.hypot(ops.hypot(cx, cy), cz)
-        i = ops.first(finite & (norm > bound))
+        i = ops.first_bad_index(finite & (norm > bound))
         if i is not None:
             vector = (velocity, acceleration)[reason == 'acceleration_limit']
+            value = mechanics.format_vector(ops.value_at(vector, i))
             raise Rejected(reason, (
-                f'{ops.where(i)}{name.removeprefix("max_")} '
-                f'{mechanics.format_vector(ops.at(vector, i))} {unit} is '
-                f'beyond {name} {bound:g} {unit}'))
+                f'{ops.point_prefix(i)}{name.removeprefix("max_")} '
+                f'{value} {unit} is beyond {name} {bound:g} {unit}'))
     try:
         solution = ops.solve(settings.robot, position, velocity,
                              acceleration, settings.singularity_margin)
     except mechanics.WorkspaceError as error:
-        raise Rejected(error.reason, ops.where(error.row) + error.detail) \
-            from None
+        raise Rejected(error.reason,
+                       ops.point_prefix(error.row) + error.detail) from None
     _check_actuators(settings, solution, ops, per_actuator)
     return solution
 
@@ -113,29 +101,29 @@ def _check_orientation(ops, q):
     x, y, z, w = q
     finite = ops.isfinite(x) & ops.isfinite(y) & ops.isfinite(z) \
         & ops.isfinite(w)
-    i = ops.first(ops.not_(finite))
+    i = ops.first_bad_index(ops.not_(finite))
     if i is not None:
         raise Rejected('non_finite', (
-            f'{ops.where(i)}orientation {_quaternion(ops, q, i)} is not '
-            'finite'))
+            f'{ops.point_prefix(i)}orientation {_quaternion(ops, q, i)} is '
+            'not finite'))
     # hypot: no squares to overflow (1e200) or underflow (1e-200).
     vector = ops.hypot(ops.hypot(x, y), z)
-    i = ops.first((vector == 0.0) & (w == 0.0))
+    i = ops.first_bad_index((vector == 0.0) & (w == 0.0))
     if i is not None:
-        raise Rejected('orientation', f'{ops.where(i)}orientation is the '
-                       'zero quaternion')
+        raise Rejected('orientation', f'{ops.point_prefix(i)}orientation '
+                       'is the zero quaternion')
     angle = 2.0 * ops.atan2(vector, ops.abs(w))
-    i = ops.first(angle > ORIENTATION_TOLERANCE)
+    i = ops.first_bad_index(angle > ORIENTATION_TOLERANCE)
     if i is not None:
         raise Rejected('orientation', (
-            f'{ops.where(i)}platform orientation turns '
-            f'{ops.at(angle, i):.3g} rad from the identity (tolerance '
+            f'{ops.point_prefix(i)}platform orientation turns '
+            f'{ops.value_at(angle, i):.3g} rad from the identity (tolerance '
             f'{ORIENTATION_TOLERANCE:g} rad): the Orthoglide only '
             'translates'))
 
 
 def _quaternion(ops, q, i):
-    return tuple(float(ops.at(c, i)) for c in q)
+    return tuple(float(ops.value_at(c, i)) for c in q)
 
 
 def _check_actuators(settings, solution, ops, per_actuator):
@@ -152,11 +140,13 @@ def _check_actuators(settings, solution, ops, per_actuator):
             if reason == 'force_limit' and not 0.0 < limit < \
                     settings.max_force:
                 limit, name = settings.max_force, 'max_force'
-            i = ops.first(ops.abs(component) > limit) if limit else None
+            i = ops.first_bad_index(ops.abs(component) > limit) \
+                if limit else None
             if i is not None:
-                beyond.append((i, leg, ops.at(component, i), limit, name))
+                beyond.append((i, leg, ops.value_at(component, i), limit,
+                               name))
         if beyond:
             i, leg, value, limit, name = min(beyond)
             raise Rejected(reason, (
-                f'{ops.where(i)}actuator {"ABC"[leg]} needs {value:.6g} '
-                f'{unit}, beyond {name} {limit:g} {unit}'))
+                f'{ops.point_prefix(i)}actuator {"ABC"[leg]} needs '
+                f'{value:.6g} {unit}, beyond {name} {limit:g} {unit}'))

@@ -1,71 +1,12 @@
 """
 The simulator's logic without ROS: actuator forces in, measured state out.
 
-:class:`Simulator` wraps a :class:`plant.Plant` (RK4 with the command
-held over each step, a zero-order hold: see :mod:`orthoglide_ros.model.plant`)
-in the state machine of the ``simulator`` node, and keeps the counters its
-status reports. Its parameters are one table, :data:`PARAMETERS`. The ROS
-node (``simulator_node``) only converts messages and runs the timer, so
-every rule below is testable without DDS.
-
-States (``doc/simulator.md`` states them for users):
-
-- ``held``: brakes on, the platform at rest where it is; nothing is
-  integrated and the simulation time stands still. The start state, and the
-  state after a reset. The first valid command switches to ``running``.
-- ``running``: every tick makes one :meth:`Plant.step` of ``1 / rate_hz`` s
-  with the latest valid command held (zero-order hold), clipped to
-  ``[-force_limit, force_limit]`` N per actuator (a step that clips is
-  counted). When no valid command has arrived for ``command_timeout`` s (by
-  arrival time on a monotonic clock), the drive disables and brakes: back to
-  ``held`` with the velocity set to zero, flagged ``timed_out`` until the
-  next valid command resumes ``running``.
-- ``stopped``: a step that the workspace limits refuse (out of reach, nearer
-  a singularity than ``singularity_margin``:
-  :class:`mechanics.WorkspaceError`) freezes the platform at the last good
-  step with the velocity set to zero. Commands are counted and ignored until
-  :meth:`Simulator.reset`.
-- ``diverged``: a step the engine could not integrate
-  (:class:`plant.Diverged`: the builtin's state not finite, MuJoCo's
-  warnings, e.g. a huge acceleration after which MuJoCo resets its own
-  state) stops the simulation as ``stopped`` does, and more: the plant
-  has no state of the robot to show, so no state is published
-  (:meth:`Simulator.publish_due`) until :meth:`Simulator.reset`; the
-  status is ERROR with the engine's reason. One rule for both engines.
-
-A command is exactly three finite forces (N, actuators A, B, C); any other
-is rejected and counted by reason (``length``, ``non_finite``; a message
-that cannot be read or is too long: ``malformed``, ``oversize``) and never
-applied.
-
-Time: the steps sit on a grid of period ``1 / rate_hz`` of a steady
-clock, each advancing the simulation by exactly that period;
-:meth:`Simulator.step_due` makes the next step of the grid once it is due,
-so a caller woken late catches up (with the command held, as a drive holds
-it), up to MAX_CATCH_UP steps; beyond that the missed time is dropped and
-counted (``overruns``: the plant then runs slower than real time, and the
-status says so). :meth:`Simulator.publish_due` says which states to
-publish: every step's, or with ``publish_rate_hz`` the first at
-or after each instant of a coarser grid (a sampled encoder).
-
-:meth:`Simulator.reset` puts the platform back at ``initial_position``, at
-rest, ``held``, simulation time 0.
-
-Parameters apply as follows: ``force_limit``, ``command_timeout``,
-``rate_hz``, ``publish_rate_hz``, ``joint_names``, ``base_frame`` and
-``robot.payload`` (a part picked up or put down) at once (the next tick);
-the rest of ``robot.*``, ``initial_position``, ``singularity_margin`` and
-``engine`` describe the plant and take effect at the next reset
-(``pending_reset`` says one is waiting), so a running simulation never
-changes model in mid-motion.
-
-Two engines integrate the plant, with the same rules around them:
-``builtin`` (:class:`plant.Plant`: the package's forward dynamics, RK4)
-and ``mujoco`` (:class:`mujoco_plant.MujocoPlant`: the robot's MJCF
-stepped by MuJoCo, an engine no one here wrote; friction by MuJoCo's
-law).
-
-Units: m, m/s, N, s; vectors in the base frame 0.
+:class:`Simulator` runs a plant (:class:`plant.Plant`, the forward dynamics
+by RK4 with the command held over each step, or
+:class:`mujoco_plant.MujocoPlant`) on a fixed grid of ``1 / rate_hz`` s, in
+the states ``held``, ``running``, ``stopped`` and ``diverged``, and keeps
+the counters of its status. The states, the timing, the commands' rules and
+when each parameter applies: ``doc/simulator.md``. Units: m, m/s, N, s.
 """
 
 from collections import namedtuple
@@ -545,29 +486,31 @@ class Simulator(Core):
         return dict(published=self.published, steps=self.steps,
                     step_ns=self.step_ns_total, dropped=self.dropped_time)
 
-    def ladder(self, now, seconds, new):
+    def status_rules(self, now, seconds, increases):
         """Return the stop, lag, timeout, rejections and state steps."""
         return (
             (self.state == STOPPED, ERROR, f'stopped: {self.stop_message}'),
             (self.state == DIVERGED, ERROR,
              f'diverged: {self.stop_message}'),
-            (new['dropped'] > SLOW_FRACTION * seconds, WARN,
-             f'slower than real time: {new["steps"] / seconds:.0f} of '
+            (increases['dropped'] > SLOW_FRACTION * seconds, WARN,
+             f'slower than real time: {increases["steps"] / seconds:.0f} of '
              f'{self.settings.rate_hz:g} steps/s, '
-             f'{new["dropped"]:.3g} s of the last {seconds:.3g} s dropped'),
+             f'{increases["dropped"]:.3g} s of the last {seconds:.3g} s '
+             'dropped'),
             (self.timed_out, WARN,
              f'held: no valid command for command_timeout '
              f'{self.settings.command_timeout:g} s, braked'),
-            (new['rejected'], WARN,
-             f'{new["rejected"]} command(s) rejected in the last period'),
+            (increases['rejected'], WARN,
+             f'{increases["rejected"]} command(s) rejected in the last '
+             'period'),
             (self.valid == 0 or self.state != RUNNING, OK,
              'held: waiting for a command'),
             (True, OK, 'running'))
 
-    def values(self, now, seconds, new):
+    def values(self, now, seconds, increases):
         """Return the state, rates, compute times, counters and position."""
-        mean_us = new['step_ns'] / new['steps'] / 1e3 if new['steps'] \
-            else 0.0
+        mean_us = increases['step_ns'] / increases['steps'] / 1e3 \
+            if increases['steps'] else 0.0
         plant = self.plant
         values = [
             ('state', self.state),
@@ -576,8 +519,8 @@ class Simulator(Core):
             ('sim time (s)', plant.time),
             ('steps', self.steps),
             ('divergences', self.divergences),
-            ('step rate (Hz)', new['steps'] / seconds),
-            ('outputs rate (Hz)', new['published'] / seconds),
+            ('step rate (Hz)', increases['steps'] / seconds),
+            ('outputs rate (Hz)', increases['published'] / seconds),
             ('step compute time mean (us)', mean_us),
             ('step compute time max (us)', self.step_ns_max / 1e3),
             ('commands received', self.valid),

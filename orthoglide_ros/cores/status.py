@@ -1,28 +1,18 @@
 """
-Status rules shared by the nodes' cores, without ROS.
+What the nodes' statuses share, without ROS: levels, periods, rules.
 
-Every node reports one status about once a second on ``/diagnostics``. The
-rules that make it (which level, which message, which values) live in each
-node's core, in a ``status(now, internal_errors)`` method that returns a
-:class:`Status`; the ROS side only turns it into a DiagnosticArray
-(``node_runtime.diagnostic_array``). This module holds what those methods
-share:
-
-- the levels :data:`OK`, :data:`WARN`, :data:`ERROR` (the values of
-  diagnostic_msgs' level bytes, so a Status maps onto a DiagnosticStatus
-  one to one);
-- :class:`Period`: the counters at the start of the period, so a status
-  can report rates and increases "in the last period";
-- :func:`first`: the ladder, the first condition that holds sets the level
-  and the message, an internal error (a defect) always first.
+Every core's ``status(now, internal_errors)`` (:mod:`orthoglide_ros.cores.core`)
+returns a :class:`Status`; the node publishes it on ``/diagnostics`` once a
+second (:mod:`orthoglide_ros.ros.diagnostics`; the keys: each node's page,
+diagnostics). The levels are diagnostic_msgs' level bytes.
 
 >>> period = Period(0.0, published=0)
->>> seconds, new = period.advance(2.0, published=100)
->>> seconds, new['published']
+>>> seconds, increases = period.advance(2.0, published=100)
+>>> seconds, increases['published']
 (2.0, 100)
->>> first(0, (False, WARN, 'stale'), (True, OK, 'ok'))
+>>> first_rule_that_holds(0, (False, WARN, 'stale'), (True, OK, 'ok'))
 (0, 'ok')
->>> first(3, (True, OK, 'ok'))
+>>> first_rule_that_holds(3, (True, OK, 'ok'))
 (2, '3 internal error(s): see the log')
 """
 
@@ -62,17 +52,17 @@ class Period:
         return seconds, increases
 
 
-def first(internal_errors, *steps):
+def first_rule_that_holds(internal_errors, *rules):
     """
-    Return ``(level, message)`` of the first step whose condition holds.
+    Return ``(level, message)`` of the first rule whose condition holds.
 
-    ``steps``: ``(condition, level, message)`` triples, in order; an
+    ``rules``: ``(condition, level, message)`` triples, in order; an
     internal error count above zero comes before all of them (ERROR), and
     when none holds the level is OK with the message ``'ok'``.
     """
     if internal_errors:
         return ERROR, f'{internal_errors} internal error(s): see the log'
-    for condition, level, message in steps:
+    for condition, level, message in rules:
         if condition:
             return level, message
     return OK, 'ok'

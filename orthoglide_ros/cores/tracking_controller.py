@@ -1,76 +1,14 @@
 """
 The tracking controller's logic without ROS: joint states in, forces out.
 
-:class:`Tracking` takes the desired joint states (``feedforward/joint_states``:
-lambda_d, lambdadot_d and the feedforward force f_ff) and the measured ones
-(``joint_states``), and computes for each desired state the actuator forces
+:class:`Tracking` computes, for each desired joint state and the newest
+measured one, the PD plus feedforward of the three actuators,
 
-    f_i = f_ff,i + Kp_i (lambda_d,i - lambda_i) + Kd_i (lambdadot_d,i
-          - lambdadot_i),   clipped to [-force_limit, force_limit]   (N)
+    f_i = f_ff,i + Kp_i (lambda_d,i - lambda_i)
+          + Kd_i (lambdadot_d,i - lambdadot_i),  clipped to force_limit (N),
 
-for the actuators i = A, B, C, in ``joint_names`` order (f_ff left out when
-``feedforward`` is off). A minimal joint-space PD plus feedforward for tests
-and demos, not a replacement for ros2_control. The ROS node
-(``tracking_controller_node``) only converts messages to the plain values
-used here, so every rule below is testable without DDS.
-
-Rules (``doc/tracking_controller.md`` states them for users):
-
-- Joint states are matched by name, in any order; extra joints are ignored.
-  A message is rejected, counted by input and reason and changes nothing
-  when one of ``joint_names`` is absent (``missing_joint``), its names repeat
-  or an array is neither empty nor as long as the names (``malformed``), an
-  array the rule needs is empty (``missing_position``, ``missing_velocity``,
-  ``missing_effort``), a value it needs is NaN or infinite
-  (``non_finite``), or implausible: a position beyond ``max_position``
-  (``position_limit``), a velocity beyond ``max_velocity``
-  (``velocity_limit``) or a desired effort beyond ``force_limit``
-  (``effort_limit``), in magnitude. A measurement needs positions and
-  velocities; a desired state needs them too, and efforts only with
-  ``feedforward`` on. A joint trajectory is refused whole by the same
-  rules on every point.
-- One command per accepted desired state, computed with the newest accepted
-  measurement. When there is none yet, or it arrived more than
-  ``measurement_timeout`` before (monotonic arrival time, never stamps),
-  nothing is computed: the desired state is counted as skipped. New
-  ``joint_names`` forget the measurement read with the old ones.
-- A force that overflows (not finite before clipping) refuses the whole
-  command (``overflow``); a finite one beyond the limit is clipped and
-  counted.
-- Path tolerance, in the manner of joint_trajectory_controller's: when a
-  desired state is farther than ``path_tolerance`` from the measured
-  position on some actuator (0.0: no limit for it), the controller stops
-  following (``holding``, an ERROR in its status, counted in ``trips``):
-  every command then holds the position measured at that moment,
-
-      f_i = b_i + Kp_i (lambda_hold,i - lambda_i) - Kd_i lambdadot_i,
-
-  clipped as above, with the bias ``b`` the last command sent while
-  following that clipped no force (the force that held the robot there;
-  before any, the desired effort with ``feedforward`` on, else zero): a
-  saturated command is never held. It re-arms by itself, back to
-  following, on the first desired state that starts where the robot holds:
-  within half of ``path_tolerance`` of the measured position and within
-  REARM_SPEED of the measured velocity on every actuator, as a new goal
-  (a motion from the robot's state) re-arms joint_trajectory_controller. So
-  a stream that moved on while a process of the loop stalled is never
-  chased, neither when it is far away nor when it passes by at speed.
-- Stall: when more than ``stall_timeout`` passed since the last command
-  while following (this process, its measurements or its desired states
-  stopped; by then the plant has braked), the next desired state is
-  followed only if it starts where the robot is, by the same re-arm rule;
-  else the controller holds as above (counted in ``stall holds``). Within
-  the path tolerance a stream that moved on would otherwise be chased
-  with up to Kp x path_tolerance (1000 N with the defaults).
-- A joint trajectory that replaces the one being followed is planned from
-  the desired state of the old one at that instant (position, velocity and
-  effort continuous, as joint_trajectory_controller starts from its
-  desired state), never from the last command: a flood of replacements
-  cannot feed the commands back into the plan. At most one replacement is
-  taken per ``1 / rate_hz``: one that comes sooner waits for the next tick,
-  a newer one replacing it (counted in ``trajectories superseded``). A plan whose
-  desired velocity would exceed ``max_velocity`` anywhere, its transition
-  from the current state included, is refused (``velocity_limit``).
+holds on a path tolerance or a stall, and follows a whole joint trajectory
+as joint_trajectory_controller does. The rules: ``doc/tracking_controller.md``.
 """
 
 from collections import namedtuple
@@ -529,7 +467,7 @@ class Tracking(Core):
         return dict(commands=self.commands,
                     skipped=sum(self.skipped.values()))
 
-    def ladder(self, now, seconds, new):
+    def status_rules(self, now, seconds, increases):
         """Return the hold, skips, rejections and the wait steps."""
         age = self._age(now)
         what = 'no measurement yet' if age is None \
@@ -537,23 +475,23 @@ class Tracking(Core):
         return (
             (self.mode == HOLDING, ERROR if self.hold_is_fault else WARN,
              self.hold_message),
-            (new['skipped'], WARN,
-             f'{new["skipped"]} desired state(s) without a fresh '
+            (increases['skipped'], WARN,
+             f'{increases["skipped"]} desired state(s) without a fresh '
              f'measurement ({what}): nothing commanded'),
-            (new['rejected'], WARN,
-             f'{new["rejected"]} joint state(s) rejected in the last '
+            (increases['rejected'], WARN,
+             f'{increases["rejected"]} joint state(s) rejected in the last '
              'period'),
             (self.received['desired'] == 0 and self.plan is None, OK,
              'waiting for desired states'))
 
-    def values(self, now, seconds, new):
+    def values(self, now, seconds, increases):
         """Return the rates, errors, skips, trajectory and mode values."""
         settings = self.settings
         age = self._age(now)
         errors = self.latest.error if self.latest is not None \
             else (math.nan,) * 3
         values = [
-            ('command rate (Hz)', new['commands'] / seconds),
+            ('command rate (Hz)', increases['commands'] / seconds),
             ('commands published', self.commands),
             ('clipped forces', self.clipped),
             ('time since last measurement (s)',

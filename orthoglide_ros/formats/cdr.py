@@ -5,9 +5,11 @@ The nodes subscribe raw and read only the fields they use (setpoints,
 joint states, commands, whole trajectories; the logs' bags too), and
 write whole trajectories the same way (a ``JointTrajectory``, the
 planner's ``MultiDOFJointTrajectory``): building message objects would
-cost more than the mechanics. :class:`CdrError`: a buffer this reader
-does not understand; :class:`LimitError`: one whose reading would grow
-with a list the node does not use. See
+cost more than the mechanics. The layout is XCDR1 little-endian, what
+every ROS 2 host writes. :class:`CdrError`: a buffer this reader does not
+understand (another encapsulation, truncated, bad text);
+:class:`LimitError`: one whose reading would grow with a list the node
+does not use; both are ``malformed``. See
 doc/decisions.md#runtime-and-middleware and doc/robustness.md#inputs.
 """
 
@@ -40,7 +42,7 @@ BAG_STORAGES = ('mcap', 'sqlite3')
 
 
 class CdrError(ValueError):
-    """A buffer this reader does not understand (use the deserializer)."""
+    """A buffer this reader cannot read: not a message it knows."""
 
 
 class LimitError(ValueError):
@@ -457,7 +459,8 @@ def _put_string(out, text):
 
 def _encapsulation(buf):
     if bytes(buf[:2]) not in _LITTLE_ENDIAN_CDR:
-        raise CdrError('not little-endian CDR')
+        raise CdrError(f'encapsulation {bytes(buf[:2]).hex(" ")} is not '
+                       'read: ROS 2 hosts write little-endian CDR (00 01)')
 
 
 def _string(buf, offset):

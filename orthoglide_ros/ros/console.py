@@ -1,24 +1,14 @@
 """
 The nodes' console scripts: signals and memory bounds first, then imports.
 
-``ros2 run orthoglide_ros feedforward`` runs :func:`feedforward`, and so on
-for each node. The first things each does, before any import of rclpy,
-numpy or the node's module (about 0.3 s), are
-:func:`orthoglide_ros.cores.memory.bound` (one malloc arena, small thread
-stacks, one OpenBLAS thread: what ``lock_memory`` would lock is bounded
-before the first thread is made) and :func:`install_signal_handlers`:
-from then on SIGINT (Ctrl-C) and SIGTERM only record that a stop was asked.
-The node's ``run()`` (``node_runtime.run``) looks at :data:`STOP` before it
-starts and while it spins, so a signal at any moment, during the imports
-included, ends the process with exit code 0 and nothing on standard error
-(Python's defaults would print a KeyboardInterrupt traceback or die by the
-signal). Once ``main()`` returns, both signals are ignored: Python's
-finalization puts the default action back for any other handler, and a
-signal during the exit (Fast DDS's teardown: tens of
-milliseconds) would kill the process with -2 or -15 instead of its code.
-
-This module imports only the standard library (and the standard-library
-module :mod:`orthoglide_ros.cores.memory`).
+Before any import of rclpy or numpy, each script bounds the process's
+memory (:func:`orthoglide_ros.cores.memory.bound`) and makes SIGINT and
+SIGTERM only record a stop (:data:`STOP`, read by ``node_runtime.run``):
+exit code 0 and nothing on standard error at any moment
+(``doc/robustness.md``, start and stop). Once ``main()`` returns both are
+ignored: a signal during Fast DDS's teardown (138-187 ms) would end the
+process with -2. That can go when the teardown takes no time to speak of
+(``benchmarks/upstream_checks.py``, ``teardown``). Standard library only.
 """
 
 import importlib

@@ -1,16 +1,11 @@
 """
 A node's ``/diagnostics``: its core's status once a second.
 
-:class:`Diagnostics`, owned by a node
-(:class:`~orthoglide_ros.ros.managed_node.ManagedNode`), publishes the
-core's :class:`~orthoglide_ros.cores.status.Status` as one
-DiagnosticStatus named ``'<node name>: <title>'``
-(:func:`diagnostic_array`), from a periodic thread of its own that lives
-as long as the node. The node adds values of its own: ``replies dropped
-(client gone)`` (the service replies no client waited for), its
-``lifecycle state`` and, when it has real-time parameters, the scheduling
-in effect (:func:`orthoglide_ros.cores.realtime.status_values`; WARN when
-what was asked does not hold).
+:class:`Diagnostics`, owned by every node, publishes the core's
+:class:`~orthoglide_ros.cores.status.Status` as one DiagnosticStatus named
+``'<node name>: <title>'`` from a periodic thread that lives as long as the
+node, with the node's own values (replies dropped, lifecycle state, the
+real-time scheduling in effect). The keys: each node's page, diagnostics.
 """
 
 import time
@@ -44,7 +39,7 @@ class Diagnostics:
         self._publisher = node.create_publisher(DiagnosticArray,
                                                 '/diagnostics', 10)
         node.inputs.periodic(lambda: PERIOD, self.publish, 'diagnostics',
-                             lasting=True)
+                             keep_on_cleanup=True)
 
     def status(self):
         """

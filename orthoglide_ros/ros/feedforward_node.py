@@ -1,14 +1,10 @@
 """
 The ``feedforward`` ROS 2 node: setpoints in, joint states and forces out.
 
-A thin layer over :class:`orthoglide_ros.cores.feedforward.Feedforward`: it declares
-the parameters of :data:`orthoglide_ros.cores.feedforward.PARAMETERS`, converts
-messages to plain values and back, publishes, logs throttled warnings and
-publishes the core's status on ``/diagnostics``. A managed node
-(:mod:`orthoglide_ros.ros.managed_node`): configured and activated at start
-unless ``autostart`` is false. Run it with ``ros2 run orthoglide_ros
-feedforward``; ``doc/feedforward.md`` has the topics, parameters and
-rules.
+Glue over :class:`orthoglide_ros.cores.feedforward.Feedforward`: its
+inputs, one line each in :meth:`FeedforwardNode.build`, its publishers and
+its tick. ``ros2 run orthoglide_ros feedforward``; ``doc/feedforward.md``
+has the topics, parameters, rules and the path of a setpoint.
 """
 
 import array
@@ -24,7 +20,7 @@ from orthoglide_ros.cores.feedforward import (convert_trajectory, Feedforward,
 from orthoglide_ros.cores.inputs import (CARTESIAN_TRAJECTORY_BYTES, Rejected,
                                          TRAJECTORY_MESSAGE_BYTES)
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.ros.managed_node import Input, ManagedNode
+from orthoglide_ros.ros.managed_node import ManagedNode
 from orthoglide_ros.ros.node_runtime import run
 
 
@@ -44,7 +40,7 @@ class FeedforwardNode(ManagedNode):
     PARAMETERS = PARAMETERS
 
     def build(self, settings):
-        """Configure: the core, the outputs, the tick; return the inputs."""
+        """Configure: the core, the outputs, the tick and the inputs."""
         core = self.core = Feedforward(settings, time.monotonic())
         self._pub_joints = self.create_output(JointState,
                                               'feedforward/joint_states')
@@ -59,26 +55,22 @@ class FeedforwardNode(ManagedNode):
         self._forces = _vector_message()
         self._power = _vector_message()
         self.inputs.periodic(core.tick_period, self._on_tick, 'tick')
-        # cdr reads the few fields used straight from the serialized
-        # message, several times cheaper than rclpy's conversion. Whole
-        # trajectories on a thread of their own: converting 10,000 points
-        # must not hold the setpoints back.
-        return (
-            Input('setpoint/pose', PoseStamped, cdr.pose_stamped, core.pose,
-                  source='pose', output=self._publish),
-            Input('setpoint/twist', TwistStamped, cdr.vector3_stamped,
-                  core.twist, source='twist', output=self._publish),
-            Input('setpoint/accel', AccelStamped, cdr.vector3_stamped,
-                  core.accel, source='accel', output=self._publish),
-            Input('setpoint/trajectory', MultiDOFJointTrajectory,
-                  self._trajectory_point, core.trajectory_message,
-                  TRAJECTORY_MESSAGE_BYTES, source='trajectory',
-                  output=self._publish),
-            Input('cartesian_trajectory', MultiDOFJointTrajectory,
-                  self._convert, core.cartesian_trajectory,
-                  CARTESIAN_TRAJECTORY_BYTES, group='trajectories',
-                  output=self._pub_trajectory.publish),
-        )
+        # Each input: topic, type, decoder (no lock), core method (lock
+        # held), publisher. Whole trajectories on a thread of their own:
+        # converting 10,000 points must not hold the setpoints back.
+        sub = self.inputs.subscribe
+        sub('setpoint/pose', PoseStamped, cdr.pose_stamped, core.pose,
+            self._publish, source='pose')
+        sub('setpoint/twist', TwistStamped, cdr.vector3_stamped, core.twist,
+            self._publish, source='twist')
+        sub('setpoint/accel', AccelStamped, cdr.vector3_stamped, core.accel,
+            self._publish, source='accel')
+        sub('setpoint/trajectory', MultiDOFJointTrajectory,
+            self._trajectory_point, core.trajectory_message, self._publish,
+            source='trajectory', max_bytes=TRAJECTORY_MESSAGE_BYTES)
+        sub('cartesian_trajectory', MultiDOFJointTrajectory, self._convert,
+            core.cartesian_trajectory, self._pub_trajectory.publish,
+            max_bytes=CARTESIAN_TRAJECTORY_BYTES, thread='trajectories')
 
     def reconfigure(self, settings):
         """Swap in the new settings (lock held): the next setpoint uses them."""

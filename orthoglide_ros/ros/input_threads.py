@@ -1,56 +1,44 @@
 """
-Inputs and periodic work on threads of their own, from rcl wait sets.
+A node's inputs and periodic work, on threads of their own.
 
-:class:`InputThreads`, owned by a node
-(:class:`~orthoglide_ros.ros.managed_node.ManagedNode`), reads the node's
-inputs, the rows of its input table (:class:`Input`), and runs its
-periodic work; the executor of the node serves only its services.
+:class:`InputThreads`, owned by every node, reads the inputs subscribed
+with :meth:`InputThreads.subscribe` from rcl wait sets and runs the work
+added with :meth:`InputThreads.periodic`; the executor serves only the
+services. The path of one message (:meth:`InputThreads.deliver`) and
+the rules it follows are in ``doc/decisions.md`` (runtime and
+middleware) and ``doc/robustness.md`` (inputs).
 
-Upstream behaviour it works around:
+Upstream behaviour worked around; each is checked by
+``benchmarks/upstream_checks.py``, which prints "still needed" or "can go":
 
-- rclpy's EventsExecutor queues one event per message received, whatever
-  the subscription's history depth: when messages come faster than the
-  callbacks run, the queue (and the memory) grows without bound and the
-  timers and services wait behind it. A wait set is level triggered: it
-  says *that* a subscription holds messages, and the reader takes what the
-  middleware kept, at most the history depth
-  ([measured](../../doc/measurements.md#reliability)).
-- With rmw_fastrtps a reader's QoS events and its data share one status
-  condition: a second wait set holding the events (an executor's) masks
-  the data out of the input thread's wait, so the events are waited on
-  here too (:attr:`InputThreads.waitables`).
-- Periodic work on the executor's thread waits behind a service reply that
-  rmw_fastrtps holds, GIL held, for a departed client (see
-  :mod:`reply_guard`).
-
-How to tell when it can go: when rclpy's executors bound their queue by
-the history depth (test_flood.py keeps its memory and latency bounds on
-a plain ``create_subscription`` with the default executor), and a
-reader's events no longer mask its data (test_node_runtime.py's input
-with a second executor spinning the node).
-
-Every input is taken raw: a message longer than its input's byte limit is
-refused (``oversize``) before any decoding, the decoding runs outside the
-node's lock (:func:`fallback_decoder`: the fast reader of
-:mod:`orthoglide_ros.formats.cdr`, rclpy for another encoding), and only
-the core's rule runs under it. Inputs of different cost are read on
-different threads (``group``).
+- rclpy's EventsExecutor queues one event per message, whatever the
+  history depth: memory and latency grow without bound under a flood,
+  and the bounded SingleThreadedExecutor costs 2-6x the wait-set thread's
+  CPU per message. It can go when an executor is bounded and within 1.3x
+  of that (``executor_queue``).
+- rmw_fastrtps: a reader's QoS events and its data share one status
+  condition, so an executor waiting on the events masks the data from
+  the input thread (:meth:`InputThreads.hides`). It can go when a wait-set
+  executor spinning the node no longer delays the inputs (``events_mask``;
+  test_feedforward_node.py's ``..._whatever_spins_the_node``).
+- Periodic work on the EventsExecutor waits behind a flood of service
+  requests (gaps of 47-316 ms at 100 Hz measured): it can go when a
+  timer keeps within 3 periods under one (``timer_behind_services``).
 """
 
-from collections import namedtuple
 from contextlib import ExitStack
-import functools
+from copy import copy
 import threading
 import time
 
 from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
-from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos_overriding_options import QoSOverridingOptions
+from rclpy.serialization import deserialize_message
 
 from orthoglide_ros.cores.inputs import Rejected, SMALL_MESSAGE_BYTES
-from orthoglide_ros.formats import cdr
 from orthoglide_ros.formats.text import clip
-
 
 # Longest wait of an input thread before it looks at its stop flag and the
 # context again (a stop also wakes it at once through a guard condition).
@@ -58,85 +46,49 @@ INPUT_WAIT = 0.1    # s
 # Shortest wait of a periodic thread between two runs (s), however late,
 # and of an input thread after a wake-up that found a history full.
 MIN_IDLE = 0.0005
-# Longest message of another encoding than little-endian CDR that is read.
-FALLBACK_BYTES = SMALL_MESSAGE_BYTES
-# The encapsulation of the CDR the fast reader reads (the buffer's first
-# two bytes): a buffer of it that the reader refuses is malformed.
-LITTLE_ENDIAN_CDR = b'\x00\x01'
 
-Input = namedtuple('Input', 'topic type decode method max_bytes source group '
-                            'output qos', defaults=(
-                                SMALL_MESSAGE_BYTES, None, 'inputs', None,
-                                None))
-Input.__doc__ = """One row of a node's input table.
-
-``topic`` and ``type`` (the message class) of the subscription;
-``decode(bytes)`` returns the message's fields as a tuple, outside the lock
-(None: rclpy's deserializer, the message as a 1-tuple);
-``method(*fields, arrival)`` is the core's, run with the node's lock held,
-and returns what to publish or None; ``output(result)`` publishes it (None:
-the input publishes nothing). ``max_bytes``: the byte limit; ``source``:
-the input's name in the core's counters (default the topic); ``group``:
-the thread that reads it; ``qos``: its profile (default the package's,
-with the standard QoS overrides)."""
+# Reliable, keep-last 10 on every input and output; users override it with
+# the standard qos_overrides.<topic>.<publisher|subscription>.* parameters.
+_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
+                  reliability=ReliabilityPolicy.RELIABLE)
 
 
-def fallback_decoder(decode, kind):
+def default_qos():
     """
-    Return ``decode`` that falls back to rclpy for a foreign encoding.
+    Return a new reliable keep-last 10 profile.
 
-    A buffer that the fast reader refuses (:class:`cdr.CdrError`: not the
-    little-endian CDR it knows) is decoded by rclpy and written again in
-    the local encoding, if it is at most FALLBACK_BYTES long (rclpy's
-    conversion costs ~10 us per kB); a longer one, one in little-endian
-    CDR (the reader's own: broken) and one rclpy cannot read either are
-    refused (``malformed``). ROS 2 writes little-endian CDR on every
-    little-endian host, so the fallback only serves foreign writers.
+    A new one per entity: rclpy writes the QoS overrides into the profile
+    it is given, so a shared one would leak them between entities (still
+    so in rclpy 7.1.6: ``benchmarks/upstream_checks.py``, ``qos_profile``).
     """
-    def decoded(data):
-        try:
-            return decode(data)
-        except cdr.CdrError as error:
-            if data[:2] == LITTLE_ENDIAN_CDR:     # its own encoding: broken
-                raise Rejected('malformed', f'{kind.__name__}: {error}') \
-                    from None
-            if len(data) > FALLBACK_BYTES:
-                raise Rejected('malformed', (
-                    f'{kind.__name__} of {len(data)} bytes that the fast '
-                    f'reader cannot read ({error}): other encodings are '
-                    f'read up to {FALLBACK_BYTES} bytes')) from None
-            try:
-                message = deserialize_message(data, kind)
-            except Exception as refused:    # rclpy's RMWError: not a message
-                raise Rejected('malformed', (
-                    f'{kind.__name__} that neither the fast reader ({error}) '
-                    f'nor rclpy ({_first_line(refused)}) can read')) from None
-            return decode(serialize_message(message))
-    return decoded
+    return copy(_QOS)
 
 
-def _first_line(error):
-    return str(error).strip().split('\n')[0]
+def rclpy_decoder(msg_type):
+    """Return a decoder that gives rclpy's message as the one field."""
+    return lambda data: (deserialize_message(data, msg_type),)
 
 
-class _Reader:
-    """One input: its row, its raw subscription, its decoder."""
+class _Input:
+    """One input: its subscription and where each message goes."""
 
-    def __init__(self, row, subscription):
-        self.row = row
-        self.subscription = subscription
-        kind = row.type
-        self.decode = fallback_decoder(row.decode, kind) if row.decode \
-            else (lambda data: (deserialize_message(data, kind),))
+    __slots__ = ('topic', 'type', 'decode', 'core_method', 'publish',
+                 'max_bytes', 'source', 'subscription', 'handle', 'depth')
+
+    def __init__(self, topic, msg_type, decode, core_method, publish,
+                 max_bytes, source):
+        self.topic, self.type, self.decode = topic, msg_type, decode
+        self.core_method, self.publish = core_method, publish
+        self.max_bytes, self.source = max_bytes, source
 
 
-class _Thread:
+class _NodeThread:
     """A thread of the node's, made at start, with a stop flag of its own."""
 
-    def __init__(self, name, target, lasting=False):
+    def __init__(self, name, target, keep_on_cleanup=False):
         self.name = name
         self.target = target
-        self.lasting = lasting
+        self.keep_on_cleanup = keep_on_cleanup
         self.stop = threading.Event()
         self.thread = None
 
@@ -148,13 +100,13 @@ class _Thread:
             self.thread.start()
 
 
-class _Group(_Thread):
+class _InputThread(_NodeThread):
     """Inputs read by one thread from one wait set."""
 
     def __init__(self, key, name, context):
         super().__init__(name, None)
         self.key = key
-        self.readers = []
+        self.inputs = []
         self.events = []
         self.pending = []   # taken, not handled when a stop came
         self.wake = GuardCondition(None, None, context=context)
@@ -164,73 +116,106 @@ class InputThreads:
     """
     Inputs and periodic work of a node, each on a thread of its own.
 
-    Inputs added with :meth:`add` are raw subscriptions hidden from
-    executors (:meth:`hides`) and read by one thread per group. For each
-    message: the byte limit first, then its decoder (outside the lock),
-    then the node's ``take(row, fields, arrival, rejection)`` with the
-    node's ``lock`` held, ``arrival`` the time the middleware received
-    the message on the ``time.monotonic()`` clock (timeouts that judge
-    inputs by arrival use it, so a handler run late does not make its
-    input look late). Each wake-up takes every message a ready
-    subscription holds (at most its history depth), in arrival order.
-    Work added with :meth:`periodic` runs on a thread of its own, on a
-    steady schedule. :meth:`start` starts what is not started yet;
-    :meth:`release` ends the inputs and the work added at configure,
-    :meth:`stop` everything.
+    :meth:`subscribe` declares one input, :meth:`periodic` one periodic
+    work; :meth:`start` starts what is not started yet; :meth:`release`
+    ends the inputs and the work added at configure, :meth:`stop`
+    everything, and :meth:`drain` then handles what the inputs still hold.
     """
 
     def __init__(self, node):
         self._node = node
-        self._groups = {}
-        self._readers = {}
+        self._threads = {}
         self._periodic = []
         self._hidden = set()
+        self.sources = {}       # source name: its input
+
+    def subscribe(self, topic, msg_type, decode, core_method, publish=None,
+                  *, source=None, max_bytes=SMALL_MESSAGE_BYTES,
+                  thread='inputs', qos=None):
+        """
+        Subscribe to ``topic``: messages to ``core_method``, results out.
+
+        ``decode(bytes)`` returns the message's fields as a tuple (a
+        reader of :mod:`orthoglide_ros.formats.cdr`, or
+        :func:`rclpy_decoder`), run outside the node's lock;
+        ``core_method(*fields, arrival)`` returns what ``publish`` takes,
+        or None (``publish`` None: nothing to publish). ``source``: the
+        input's name in the core's counters (default the topic);
+        ``max_bytes``: the byte limit; ``thread``: the input thread that
+        reads it; ``qos``: its profile (default :func:`default_qos` with
+        the standard QoS overrides).
+        """
+        node = self._node
+        entry = _Input(topic, msg_type, decode, core_method, publish,
+                       max_bytes, source or topic)
+        entry.subscription = node.create_subscription(
+            msg_type, topic, lambda data: None, qos or default_qos(),
+            raw=True, qos_overriding_options=None if qos else
+            QoSOverridingOptions.with_default_policies())
+        entry.handle = entry.subscription.handle
+        entry.depth = entry.subscription.qos_profile.depth  # 0: keep-all
+        group = self._threads.get(thread)
+        if group is None:
+            group = self._threads[thread] = _InputThread(
+                thread, f'{node.get_name()} {thread}', node.context)
+            group.target = lambda: self._serve(group)
+        group.inputs.append(entry)
+        group.events.extend(entry.subscription.event_handlers)
+        self.sources[entry.source] = entry
+        self._hidden.add(entry.subscription)
+        self._hidden.update(entry.subscription.event_handlers)
 
     def hides(self, entity):
         """
         Say whether an executor must leave ``entity`` to these threads.
 
-        The input subscriptions, and their QoS event handlers (incompatible
-        QoS or type warnings): with rmw_fastrtps, a reader's events and its
-        data share one status condition, and a second wait set holding its
-        events (an executor's) masks the data out of the input thread's
-        wait (measured: inputs delayed by 100 ms and more while a
-        SingleThreadedExecutor spun the node).
+        The input subscriptions and their QoS event handlers: waited on
+        here, so that an executor's wait set does not mask their data
+        (see the module docstring).
         """
         return entity in self._hidden
 
-    def add(self, row, qos, **kwargs):
-        """Subscribe to one :class:`Input` row with ``qos``; return it."""
+    def deliver(self, entry, data, arrival):
+        """
+        Handle one serialized message of input ``entry`` as it came.
+
+        The byte limit, then the decoder, outside the lock; with the
+        node's lock held, the core's method with the fields and
+        ``arrival`` (monotonic s), and its result to the publisher. A
+        message refused (``oversize``, ``malformed``, or a
+        :class:`Rejected` of the core's, which counts it) becomes a
+        warning, at most one a second per input and reason; any other
+        exception is a defect: nothing is published, the node goes on.
+        """
+        if len(data) > entry.max_bytes:
+            refused = Rejected('oversize', (
+                f'message of {len(data)} bytes on {entry.topic}: the limit '
+                f'is {entry.max_bytes} bytes'))
+        else:
+            try:
+                fields, refused = entry.decode(data), None
+            except Rejected as rejection:
+                refused = rejection
+            except Exception as error:   # any decoding failure: malformed
+                refused = Rejected('malformed', (
+                    f'unreadable {entry.type.__name__}: {clip(error, 200)}'))
         node = self._node
-        if row.source is None:
-            row = row._replace(source=row.topic)
-        subscription = node.create_subscription(
-            row.type, row.topic, lambda data: None, qos, raw=True, **kwargs)
-        group = self._groups.get(row.group)
-        if group is None:
-            group = self._groups[row.group] = _Group(
-                row.group, f'{node.get_name()} {row.group}', node.context)
-            group.target = functools.partial(self._read_inputs, group)
-        reader = _Reader(row, subscription)
-        group.readers.append(reader)
-        self._readers[row.source] = reader
-        group.events.extend(subscription.event_handlers)
-        self._hidden.add(subscription)
-        self._hidden.update(subscription.event_handlers)
-        return subscription
-
-    def deliver(self, source, data, arrival):
-        """
-        Handle one serialized message of input ``source`` as it came.
-
-        What the input threads do with each message taken: the byte
-        limit, the decoder (outside the lock), then the node's ``take``
-        with its lock held and ``arrival`` (monotonic s).
-        """
-        reader = self._readers[source]
-        fields, rejection = _decoded(reader, data)
-        with self._node.lock:
-            self._node.take(reader.row, fields, arrival, rejection)
+        with node.lock:
+            try:
+                if refused is None:
+                    result = entry.core_method(*fields, arrival)
+                    if result is not None:
+                        entry.publish(result)
+                    return
+                node.core.reject(entry.source, refused)
+            except Rejected as rejection:   # counted by the core
+                refused = rejection
+            except Exception:   # a defect: nothing published, the node goes on
+                node.report_defect(f'on {entry.source}, nothing published')
+                return
+        node.warn_throttled((entry.source, refused.reason),
+                            f'{entry.source} rejected ({refused.reason}): '
+                            f'{refused}')
 
     def drain(self):
         """
@@ -240,15 +225,10 @@ class InputThreads:
         then what waits in the subscriptions' histories, in arrival order:
         for a node that must lose nothing it received (the recorder).
         """
-        for group in self._groups.values():
-            pending, group.pending = group.pending, []
-            ready = [(r, r.subscription.handle) for r in group.readers]
-            with ExitStack() as stack:
-                for _, handle in ready:
-                    stack.enter_context(handle)
-                self._deliver_all(pending + self._take(ready)[0])
+        for group in self._threads.values():
+            self._serve(group, draining=True)
 
-    def periodic(self, period, work, name, lasting=False):
+    def periodic(self, period, work, name, keep_on_cleanup=False):
         """
         Run ``work()`` every ``period()`` s on a thread of its own.
 
@@ -258,10 +238,10 @@ class InputThreads:
         one period late are dropped, not made up, and a run late anyway
         waits MIN_IDLE first, so work that cannot keep up (the simulator
         at 10 kHz) still leaves the inputs their turn. ``work`` takes the
-        lock itself when it needs it; what it raises goes to the node's
-        ``outcome`` as that of ``name`` (a :class:`Rejected` is warned
-        about, anything else is a defect), and the next period runs
-        anyway. ``lasting``: kept by :meth:`release` (the diagnostics).
+        lock itself when it needs it; a :class:`Rejected` it raises is
+        warned about, anything else is a defect, and the next period runs
+        anyway. ``keep_on_cleanup``: kept by :meth:`release` (the
+        diagnostics).
         """
         node = self._node
 
@@ -277,32 +257,39 @@ class InputThreads:
                 # lock in between (Python's lock is not fair to a waiter).
                 if entry.stop.wait(max(delay, MIN_IDLE)):
                     return
-                node.outcome(name, work)
-        entry = _Thread(f'{node.get_name()} {name}', loop, lasting)
+                try:
+                    work()
+                except Rejected as refused:
+                    node.warn_throttled((name, refused.reason),
+                                        f'{name} rejected ({refused.reason})'
+                                        f': {refused}')
+                except Exception:   # a defect: report it, keep running
+                    node.report_defect(f'in {name}')
+        entry = _NodeThread(f'{node.get_name()} {name}', loop,
+                            keep_on_cleanup)
         self._periodic.append(entry)
 
     def start(self):
-        """Start the input groups' and periodic threads not started yet."""
-        for entry in (*self._groups.values(), *self._periodic):
+        """Start the input and periodic threads not started yet."""
+        for entry in (*self._threads.values(), *self._periodic):
             entry.start()
 
     def stop(self):
         """Stop every input and periodic thread (before destroying)."""
-        self._end([*self._groups.values(), *self._periodic])
+        self._end([*self._threads.values(), *self._periodic])
 
     def release(self):
         """
-        Stop the inputs and the work that is not lasting; destroy the inputs.
+        Stop the inputs and the work not kept on cleanup; destroy the inputs.
 
         What a lifecycle cleanup does; new ones can be added.
         """
-        self._end([*self._groups.values(),
-                   *(p for p in self._periodic if not p.lasting)])
-        for group in self._groups.values():
-            for reader in group.readers:
-                self._node.destroy_subscription(reader.subscription)
-        self._groups, self._readers, self._hidden = {}, {}, set()
-        self._periodic = [p for p in self._periodic if p.lasting]
+        self._end([*self._threads.values(),
+                   *(p for p in self._periodic if not p.keep_on_cleanup)])
+        for entry in self.sources.values():
+            self._node.destroy_subscription(entry.subscription)
+        self._threads, self.sources, self._hidden = {}, {}, set()
+        self._periodic = [p for p in self._periodic if p.keep_on_cleanup]
 
     @staticmethod
     def _end(entries):
@@ -310,138 +297,111 @@ class InputThreads:
         entries = [entry for entry in entries if not entry.stop.is_set()]
         for entry in entries:
             entry.stop.set()
-            if isinstance(entry, _Group):
+            if isinstance(entry, _InputThread):
                 entry.wake.trigger()
         for entry in entries:
             if entry.thread is not None:
                 entry.thread.join()
-            if isinstance(entry, _Group):
+            if isinstance(entry, _InputThread):
                 entry.wake.destroy()
 
-    def _read_inputs(self, group):
+    def _serve(self, group, draining=False):
+        """
+        Read the inputs of one input thread (``group``) until its stop.
+
+        Each wake-up takes every message a ready input holds (at most its
+        history depth), orders them by reception time across the inputs
+        and delivers them (:meth:`deliver`) with their reception time on
+        the ``time.monotonic()`` clock as ``arrival``. After a wake-up
+        that found a history full (a flood or a stall), a MIN_IDLE pause:
+        the node's other threads of the same real-time priority get their
+        turn. A stop keeps what is taken, not handled; ``draining``: one
+        pass over every input after the stop, that included.
+        """
+        context = self._node.context
+        handles = [entry.handle for entry in group.inputs]
+        waited = () if draining else (*group.events, group.wake.handle)
         try:
-            self._wait_and_take(group)
+            with ExitStack() as stack:
+                # Held meanwhile: the handles stay valid.
+                for handle in (*handles, *waited, context.handle):
+                    stack.enter_context(handle)
+                wait_set = None if draining else _rclpy.WaitSet(
+                    len(handles), 1, 0, 0, 0, len(group.events),
+                    context.handle)
+                while draining or (not group.stop.is_set()
+                                   and context.ok()):
+                    if draining:
+                        ready = group.inputs
+                    elif not self._wait(group, wait_set):
+                        return      # the context shut down meanwhile
+                    else:
+                        pointers = wait_set.get_ready_entities('subscription')
+                        ready = [entry for entry in group.inputs
+                                 if entry.handle.pointer in pointers]
+                    batch, full = group.pending, False
+                    group.pending = []
+                    for entry in ready:
+                        taken_here = 0
+                        while (taken := entry.handle.take_message(
+                                entry.type, True)) is not None:
+                            taken_here += 1
+                            batch.append((taken[1]['received_timestamp'],
+                                          len(batch), entry, taken[0]))
+                        full |= 0 < entry.depth <= taken_here
+                    batch.sort(key=lambda item: item[:2])
+                    # Reception (system clock, ns) to the monotonic clock;
+                    # never later than now, now without a reception time.
+                    now = time.monotonic()
+                    offset = now - time.time_ns() * 1e-9
+                    for index, (received, _, entry, data) in enumerate(batch):
+                        if group.stop.is_set() and not draining:
+                            group.pending = batch[index:]
+                            break
+                        self.deliver(entry, data, min(
+                            received * 1e-9 + offset, now)
+                            if received > 0 else now)
+                    if draining:
+                        return
+                    if full:
+                        group.stop.wait(MIN_IDLE)
+                    else:
+                        self._idle(group)
         except Exception:   # a defect: no input is read any more
             self._node.log_exception('fatal', f'input thread {group.name} '
                                      'stopped by an error')
 
-    def _wait_and_take(self, group):
+    def _wait(self, group, wait_set):
+        """Wait on the inputs, their QoS events and the wake-up; run events."""
         context = self._node.context
-        readers = group.readers
-        handles = [r.subscription.handle for r in readers]
-        events = group.events
-        with ExitStack() as stack:
-            # Held for the thread's life: the handles stay valid meanwhile.
-            for handle in (*handles, *events, group.wake.handle,
-                           context.handle):
-                stack.enter_context(handle)
-            wait_set = _rclpy.WaitSet(len(handles), 1, 0, 0, 0, len(events),
-                                      context.handle)
-            timeout = int(INPUT_WAIT * 1e9)
-            while not group.stop.is_set() and context.ok():
-                wait_set.clear_entities()
-                for handle in handles:
-                    wait_set.add_subscription(handle)
-                for event in events:
-                    event.add_to_wait_set(wait_set)
-                wait_set.add_guard_condition(group.wake.handle)
+        wait_set.clear_entities()
+        for entry in group.inputs:
+            wait_set.add_subscription(entry.handle)
+        for event in group.events:
+            event.add_to_wait_set(wait_set)
+        wait_set.add_guard_condition(group.wake.handle)
+        try:
+            wait_set.wait(int(INPUT_WAIT * 1e9))
+        except Exception:   # the context shut down meanwhile
+            if context.ok():
+                raise
+            return False
+        for event in group.events:
+            data = event.take_data() if event.is_ready(wait_set) else None
+            if data:    # rclpy's default callback: a warning
+                with self._node.lock:
+                    try:
+                        event.callback(data)
+                    except Exception:   # a defect: report it, go on
+                        self._node.report_defect('in an input QoS event')
+        return True
+
+    def _idle(self, group):
+        """Run ``inputs_idle`` (lock held) after a wake-up of ``inputs``."""
+        node = self._node
+        if group.key == 'inputs' and not group.stop.is_set():
+            with node.lock:
                 try:
-                    wait_set.wait(timeout)
-                except Exception:   # the context shut down meanwhile
-                    if context.ok():
-                        raise
-                    return
-                for event in events:
-                    if event.is_ready(wait_set):
-                        self._handle_event(event)
-                ready = wait_set.get_ready_entities('subscription')
-                if ready and self._dispatch(group, [
-                        (r, h) for r, h in zip(readers, handles)
-                        if h.pointer in ready]):
-                    # A flood (or a stall): its CPU is bounded, and the
-                    # node's other threads of the same real-time priority
-                    # (services, ticks), which a SCHED_FIFO thread that
-                    # never blocks would keep off its CPU, get their turn.
-                    group.stop.wait(MIN_IDLE)
-                elif group.key == 'inputs' and not group.stop.is_set():
-                    with self._node.lock:
-                        self._node.outcome('inputs idle',
-                                           self._node.inputs_idle)
-
-    def _handle_event(self, event):
-        """Run a QoS event's callback (rclpy's default: a warning)."""
-        data = event.take_data()
-        if data:
-            with self._node.lock:
-                self._node.outcome('input QoS event',
-                                   lambda: event.callback(data))
-
-    def _dispatch(self, group, ready):
-        """
-        Take every message the ready inputs hold; handle them in order.
-
-        Arrival order across inputs (the middleware's reception time): a
-        pose, twist and accel published in that order are handled in that
-        order even when they wait together. At most the history depth per
-        subscription. Each message is checked against its input's byte
-        limit and decoded before the lock is taken. Returns whether a
-        subscription held its whole history depth (it may have dropped
-        messages: a flood, or a stall of this thread). A stop keeps what
-        is not handled yet for :meth:`drain`.
-        """
-        batch, full = self._take(ready)
-        group.pending = self._deliver_all(batch, group.stop)
-        return full
-
-    @staticmethod
-    def _take(ready):
-        """
-        Take every message the ``(reader, handle)`` pairs hold.
-
-        Returns them in arrival order, and whether a subscription held its
-        whole history depth.
-        """
-        batch, full = [], False
-        for reader, handle in ready:
-            taken_here = 0
-            subscription = reader.subscription
-            while True:
-                taken = handle.take_message(subscription.msg_type, True)
-                if taken is None:
-                    break
-                taken_here += 1
-                batch.append((taken[1]['received_timestamp'], len(batch),
-                              reader, taken[0]))
-            depth = subscription.qos_profile.depth     # 0: keep-all
-            full |= 0 < depth <= taken_here
-        batch.sort(key=lambda entry: entry[:2])
-        return batch, full
-
-    def _deliver_all(self, batch, stop=None):
-        """Deliver a taken ``batch``; return what a set ``stop`` left."""
-        # Reception (system clock, ns) to the monotonic clock; never later
-        # than now, and now when the middleware gives no reception time.
-        monotonic_now = time.monotonic()
-        offset = monotonic_now - time.time_ns() * 1e-9
-        for index, (received, _, reader, data) in enumerate(batch):
-            if stop is not None and stop.is_set():
-                return batch[index:]
-            self.deliver(reader.row.source, data,
-                         min(received * 1e-9 + offset, monotonic_now)
-                         if received > 0 else monotonic_now)
-        return []
-
-
-def _decoded(reader, data):
-    """Return ``(fields, None)`` or ``(None, Rejected)`` for one message."""
-    if len(data) > reader.row.max_bytes:
-        return None, Rejected('oversize', (
-            f'message of {len(data)} bytes on {reader.row.topic}: the limit '
-            f'is {reader.row.max_bytes} bytes'))
-    try:
-        return reader.decode(data), None
-    except Rejected as rejection:
-        return None, rejection
-    except Exception as error:   # any decoding failure is malformed
-        return None, Rejected('malformed', (
-            f'unreadable {reader.row.type.__name__}: {clip(error, 200)}'))
+                    node.inputs_idle()
+                except Exception:   # a defect: report it, go on
+                    node.report_defect('in inputs idle')

@@ -1,48 +1,15 @@
 """
 The one shape of the package's nodes: a managed node around one core.
 
-:class:`ManagedNode` is rclpy's ``LifecycleNode`` with the standard
-``~/change_state`` and ``~/get_state`` services and the states of the ROS 2
-design, around one core of :mod:`orthoglide_ros.cores` (the contract:
-:mod:`orthoglide_ros.cores.core`). It owns, rather than inherits, what
-works around upstream behaviour: :class:`InputThreads` (its inputs and
-periodic work, on threads of their own) and :class:`ReplyGuard` (its
-services), and :class:`Diagnostics` (``/diagnostics`` once a second).
-
-- made: the parameters of the node's table (``autostart`` among them, and
-  the real-time ones, applied at once: :mod:`orthoglide_ros.cores.realtime`),
-  the diagnostics and the lifecycle services; ``unconfigured``, nothing
-  published but the diagnostics;
-- configure: the parameters are checked as a whole (an invalid set:
-  FAILURE, stays unconfigured, the reason logged), then the subclass's
-  :meth:`ManagedNode.build` makes the core, the outputs and the periodic
-  work and returns the node's input table (rows of :class:`Input`), which
-  the input threads serve; ``inactive``: inputs are read and counted,
-  nothing is published;
-- activate / deactivate: the core's ``activate()`` / ``deactivate()``,
-  under the lock: outputs start, or stop at once;
-- cleanup / shutdown: the threads stop, inputs, outputs and services made
-  at configure are destroyed, the core is dropped;
-- an exception in a transition: one line at ERROR (no traceback), the
-  error state, whose handler releases what configure made and returns to
-  ``unconfigured``.
-
-``autostart`` (default true) configures and activates as the node is made,
-so that ``ros2 run`` and code that makes the node get a running node: an
-invalid start-up set raises ValueError, and the process exits 2
-(:func:`~orthoglide_ros.ros.node_runtime.run`). Its inputs are read from
-the activation on: what comes between configure and activate waits in the
-subscriptions' histories and is handled as the active node's.
-
-One input, as it goes: the input thread takes the message, checks its byte
-limit and decodes it (outside the lock); with the lock held,
-:meth:`ManagedNode.take` calls the row's core method with the fields and
-the arrival time and hands what it returns to the row's output; a
-:class:`Rejected` (counted by the core) becomes a throttled warning, any
-other exception a defect report.
+:class:`ManagedNode` is rclpy's ``LifecycleNode`` around one core of
+:mod:`orthoglide_ros.cores` (the contract: :mod:`orthoglide_ros.cores.core`).
+It owns its :class:`InputThreads` (inputs and periodic work),
+:class:`ReplyGuard` (services) and :class:`Diagnostics`; a subclass's
+:meth:`ManagedNode.build` makes the core, its outputs and its inputs at
+configure. What each state and transition does: ``doc/feedforward.md``
+(lifecycle), ``doc/decisions.md`` (nodes).
 """
 
-from copy import copy
 import sys
 import threading
 import time
@@ -50,22 +17,20 @@ import traceback
 
 from rclpy.exceptions import ParameterException
 from rclpy.lifecycle import LifecycleNode, TransitionCallbackReturn
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
 from rcl_interfaces.msg import SetParametersResult
 
 from orthoglide_ros.cores import realtime
-from orthoglide_ros.cores.inputs import Rejected
 from orthoglide_ros.cores.parameters import Spec
 from orthoglide_ros.formats.text import clip, printable
 from orthoglide_ros.ros.diagnostics import Diagnostics
-from orthoglide_ros.ros.input_threads import Input, InputThreads
+from orthoglide_ros.ros.input_threads import default_qos, InputThreads
 from orthoglide_ros.ros.node_runtime import NotStarting
 from orthoglide_ros.ros.parameters import declare_specs, spec_values
 from orthoglide_ros.ros.reply_guard import ReplyGuard
 
-__all__ = ('AUTOSTART', 'default_qos', 'Input', 'ManagedNode')
+__all__ = ('AUTOSTART', 'default_qos', 'ManagedNode')
 
 AUTOSTART = Spec(
     'autostart', 'bool', True,
@@ -73,10 +38,6 @@ AUTOSTART = Spec(
     'wait unconfigured for ~/change_state', read_only=True)
 WARNING_PERIOD = 1.0        # s between two warnings of the same reason
 
-# Reliable, keep-last 10 on every input and output; users override it with
-# the standard qos_overrides.<topic>.<publisher|subscription>.* parameters.
-_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10,
-                  reliability=ReliabilityPolicy.RELIABLE)
 SUCCESS = TransitionCallbackReturn.SUCCESS
 FAILURE = TransitionCallbackReturn.FAILURE
 ERROR = TransitionCallbackReturn.ERROR
@@ -84,16 +45,6 @@ ERROR = TransitionCallbackReturn.ERROR
 _STATE_AFTER = {'configure': 'inactive', 'activate': 'active',
                 'deactivate': 'inactive', 'cleanup': 'unconfigured',
                 'shutdown': 'finalized'}
-
-
-def default_qos():
-    """
-    Return a new reliable keep-last 10 profile.
-
-    A new one per entity: rclpy writes the QoS overrides into the profile
-    it is given, so a shared one would leak them between entities.
-    """
-    return copy(_QOS)
 
 
 class ManagedNode(LifecycleNode):
@@ -136,9 +87,10 @@ class ManagedNode(LifecycleNode):
     # What a node provides -------------------------------------------------
     def build(self, settings):
         """
-        Override: make the core, outputs and periodic work (configure).
+        Override: make the core, outputs, inputs and periodic work (configure).
 
-        Returns the node's input table: rows of :class:`Input`.
+        One ``self.inputs.subscribe(...)`` per input: its topic, type,
+        decoder, core method and publisher, the whole path of a message.
         """
         raise NotImplementedError
 
@@ -148,14 +100,13 @@ class ManagedNode(LifecycleNode):
 
     def inputs_idle(self):
         """
-        Override: run when a wait of the ``inputs`` group ends with no input.
+        Override: run after each wake-up of the ``inputs`` thread.
 
-        That is after INPUT_WAIT without input, or a QoS event alone; the
-        lock is held. Every message the middleware had received is
-        handled by then, so a timeout judged here by ``time.monotonic()``
-        cannot drop what a message still waiting in a queue would have
-        completed (a timer could: its thread may run while this one is
-        stalled).
+        Once it has handled what its inputs held (or after INPUT_WAIT
+        without input), the lock held: a timeout judged here by
+        ``time.monotonic()`` cannot drop what a message still waiting in
+        a queue would have completed (a timer could: its thread may run
+        while this one is stalled).
         """
 
     @property
@@ -196,50 +147,6 @@ class ManagedNode(LifecycleNode):
     def waitables(self):
         """Return the waitables an executor serves (not the inputs' events)."""
         return (w for w in super().waitables if not self.inputs.hides(w))
-
-    # Inputs ---------------------------------------------------------------
-    def take(self, row, fields, arrival, rejection):
-        """
-        Handle one input, the lock held: the one place for it.
-
-        ``row.method(*fields, arrival)`` and its result to ``row.output``,
-        or the core counts ``rejection`` (a message refused before it was
-        read). A :class:`Rejected` (the core has counted it) becomes a
-        warning, at most one a second per source and reason; any other
-        exception is a defect (:meth:`report_defect`).
-        """
-        try:
-            if rejection is not None:
-                self.core.reject(row.source, rejection)
-            else:
-                result = row.method(*fields, arrival)
-                if result is not None:
-                    row.output(result)
-                return
-        except Rejected as refused:
-            rejection = refused
-        except Exception:   # a defect: nothing published, the node goes on
-            self.report_defect(f'on {row.source}, nothing published')
-            return
-        self.warn_throttled((row.source, rejection.reason),
-                            f'{row.source} rejected ({rejection.reason}): '
-                            f'{rejection}')
-
-    def outcome(self, name, work):
-        """
-        Run ``work()`` of a thread of the node; report what it raises.
-
-        A :class:`Rejected` becomes a throttled warning, any other
-        exception a defect: the thread goes on.
-        """
-        try:
-            work()
-        except Rejected as refused:
-            self.warn_throttled((name, refused.reason),
-                                f'{name} rejected ({refused.reason}): '
-                                f'{refused}')
-        except Exception:   # a defect: report it, keep running
-            self.report_defect(f'in {name}')
 
     # Parameters -----------------------------------------------------------
     def parse_settings(self):
@@ -314,8 +221,10 @@ class ManagedNode(LifecycleNode):
         a frame id, a parameter name), it cannot break the line or forge
         another. ``frames``: lines of the package's own that follow it
         as they are (a traceback's stack, clipped), never a peer's text.
-        One call per level: rclpy's logger keys its state by call site and
-        refuses two severities from one line.
+        One call per level: rclpy 7.1.6's logger keys its state by call
+        site and refuses two severities from one line; this can be one call
+        when it no longer does (``benchmarks/upstream_checks.py``,
+        ``logger_severity``).
         """
         logger, text = self.get_logger(), printable(text)
         if frames:
@@ -398,10 +307,15 @@ class ManagedNode(LifecycleNode):
 
     def _refuse_unavailable_transitions(self):
         """
-        Answer a transition the state does not offer with success false.
+        Answer a transition the state does not offer: success false, a warning.
 
-        rclpy raises on it inside the service (rclcpp answers false): it
-        would be reported as a defect of the node.
+        Works around rclpy 7.1.6, which raises inside the service on a
+        transition *id* the state does not offer (rclcpp answers false; a
+        label rclpy answers false itself): ``ros2 lifecycle set`` and
+        lifecycle managers send ids. It can go when rclpy answers such an
+        id false (``benchmarks/upstream_checks.py``, ``lifecycle_by_id``);
+        the throttled warning, for ids and labels alike, is the package's
+        own rule (``doc/robustness.md``, logs).
         """
         service = self._service_change_state
         callback = service.callback
@@ -461,10 +375,7 @@ class ManagedNode(LifecycleNode):
         return self._transition('configure', self._build, settings)
 
     def _build(self, settings):
-        for row in self.build(settings):
-            self.inputs.add(row, row.qos or default_qos(),
-                            qos_overriding_options=None if row.qos else
-                            QoSOverridingOptions.with_default_policies())
+        self.build(settings)
         self.core.active = False
         if self._announce:      # not autostart's: it starts them once active
             self.inputs.start()

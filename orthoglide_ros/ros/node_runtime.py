@@ -1,10 +1,11 @@
 """
 The process around a node: start-up, signals, spinning, the exit code.
 
-- :func:`run`: ``main()`` of every node (and of ``orthoglide record``):
-  start-up errors, Ctrl-C and SIGTERM, the executor's loop;
-- :func:`freeze_start_up_objects`: no garbage-collector stalls over the
-  start-up objects (called by :func:`run`).
+:func:`run` is ``main()`` of every node and of ``orthoglide record``.
+Works around rclpy 7.1.6's ``EventsExecutor.spin()``, which busy-loops
+without running callbacks or seeing Ctrl-C: the executor is spun by
+``spin_once`` in a loop. It can go when ``spin()`` runs a timer's
+callbacks (``benchmarks/upstream_checks.py``, ``events_spin``).
 """
 
 import gc

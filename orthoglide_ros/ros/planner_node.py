@@ -26,7 +26,7 @@ from orthoglide_ros.cores.inputs import Rejected
 from orthoglide_ros.cores.planner import (MAX_POSES, PARAMETERS, PATH_BYTES,
                                           Planner)
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.ros.managed_node import Input, ManagedNode
+from orthoglide_ros.ros.managed_node import ManagedNode
 from orthoglide_ros.ros.node_runtime import run
 
 
@@ -61,12 +61,13 @@ class PlannerNode(ManagedNode):
     PARAMETERS = PARAMETERS
 
     def build(self, settings):
-        """Configure: the core and the output; return the input."""
+        """Configure: the core, the output and the input."""
         self.core = Planner(settings, time.monotonic())
         self._publisher = self.create_output(MultiDOFJointTrajectory,
                                              'cartesian_trajectory')
-        return (Input('path', Path, read_path, self.core.path,
-                      max_bytes=PATH_BYTES, output=self._publish),)
+        # Low rate and whole: rclpy's reader, named here (read_path).
+        self.inputs.subscribe('path', Path, read_path, self.core.path,
+                              self._publish, max_bytes=PATH_BYTES)
 
     def _publish(self, planned):
         """Publish one planned motion, serialized once."""

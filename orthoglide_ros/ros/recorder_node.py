@@ -1,29 +1,12 @@
 """
 The recorder behind ``orthoglide record``: topics into a rosbag2 bag.
 
-A thin rclpy node over the writer of the ``rosbags`` library, managed as
-every node of the package (:mod:`orthoglide_ros.ros.managed_node`) around
-its core (:class:`orthoglide_ros.cores.recording.Recording`). Each topic
-is an input (a raw subscription read on the input thread, with a byte
-limit), and each message's serialized bytes go into the bag unchanged, as
-rosbag2 stores them (CDR), stamped with the node clock at reception. The
-bag is opened, written and closed by one thread of its own
-(:class:`BagThread`; sqlite3 refuses a connection used from another thread
-than its own), fed through a queue, so the input thread never waits for
-the disk. MCAP (the default) or sqlite3 storage, bag format
-version 9 (ROS 2 Jazzy's); ``ros2 bag info`` and ``orthoglide identify``
-read it. The topics' types are taken from the graph (their publishers) and
-must be in the ROS 2 Jazzy type store of ``rosbags``, which writes their
-definitions into the bag. The subscription's reliability follows the
-publishers' (reliable when all of them are), keep-last RECORD_DEPTH.
-
-Run by ``orthoglide record`` through :func:`node_runtime.run`: Ctrl-C or
-SIGTERM ends it with a complete bag, as does the end of ``duration``;
-every message received before the stop is in it or counted as dropped,
-and the last line says how many of each (:meth:`Recording.summary`).
-Exit code 0 when none was dropped, LOSSY (3) when some were; a topic
-without a publisher after ``wait`` seconds, an unknown type or an
-existing output ends it with exit code 2.
+A managed node around :class:`orthoglide_ros.cores.recording.Recording`:
+each topic an input whose bytes go into the bag unchanged, stamped with the
+node clock at reception, through a queue to the thread that owns the bag
+(:class:`BagThread`: sqlite3 refuses a connection used from another thread,
+and the input thread never waits for the disk). ``doc/cli.md`` (record)
+has the options, what is dropped and the exit codes.
 """
 
 import functools
@@ -38,7 +21,7 @@ from orthoglide_ros.cores.inputs import RECORD_MESSAGE_BYTES
 from orthoglide_ros.cores.parameters import Table
 from orthoglide_ros.cores.recording import LOSSY, Recording
 from orthoglide_ros.ros import console
-from orthoglide_ros.ros.managed_node import Input, ManagedNode
+from orthoglide_ros.ros.managed_node import ManagedNode
 from orthoglide_ros.ros.node_runtime import run
 
 # History of each subscription: the messages that may wait for the writer.
@@ -115,7 +98,7 @@ class Recorder(ManagedNode):
         super().__init__(**kwargs)
 
     def build(self, settings):
-        """Configure: find the topics' types, open the bag; the inputs."""
+        """Configure: find the topics' types, open the bag, the inputs."""
         from rosbags.typesys import get_typestore, Stores
         output, topics, storage, wait = self._request
         typestore = get_typestore(Stores.ROS2_JAZZY)
@@ -138,13 +121,12 @@ class Recorder(ManagedNode):
         self.log('info', (
             f'recording {", ".join(f"{t} ({n})" for t, n in found.items())}'
             f' into {output} ({storage})'))
-        # The publishers' QoS, not the package's.
-        return tuple(
-            Input(topic, _message_class(type_name), _raw,
-                  functools.partial(self.core.message, topic),
-                  RECORD_MESSAGE_BYTES, output=self._write,
-                  qos=self._qos(topic))
-            for topic, type_name in found.items())
+        for topic, type_name in found.items():
+            # The publishers' QoS, not the package's.
+            self.inputs.subscribe(
+                topic, _message_class(type_name), _raw,
+                functools.partial(self.core.message, topic), self._write,
+                max_bytes=RECORD_MESSAGE_BYTES, qos=self._qos(topic))
 
     def _topic_types(self, topics, wait):
         """Return ``{resolved topic: type}`` once each has a publisher."""

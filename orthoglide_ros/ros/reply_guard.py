@@ -26,13 +26,15 @@ Upstream behaviour it works around:
   :func:`requester` reads it from the header's memory, checked against the
   fields rclpy does expose).
 
-How to tell when it can go: when rclpy validates a request's parameter
-types (test_hostile_peers.py's malformed requests then pass without it),
-and when rmw_fastrtps drops a reply to a departed or unmatched client at
-once (``benchmarks/bench_replies.py`` on a plain rclpy node shows no
-stall). If :func:`requester` stops finding the reader (a new rclpy or
-pybind11), ``test_service_replies.py`` fails and every reply is sent as
-plain rclpy would.
+How to tell when it can go (``benchmarks/upstream_checks.py``, on plain
+rclpy): the request check, when rclpy answers a parameter value of type 99
+without raising (``parameter_type``); the reply rule, when rmw_fastrtps
+sends a reply to an unmatched reader at once (``reply_stall``;
+``benchmarks/bench_replies.py`` measures the stalls of a node). The read
+of the header's memory, when rclpy exposes ``request_id.writer_guid``
+(``writer_guid``); if :func:`requester` stops finding the reader (a new
+rclpy or pybind11), ``test_service_replies.py`` fails and every reply is
+sent as plain rclpy would.
 """
 
 import ctypes

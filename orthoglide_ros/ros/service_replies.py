@@ -37,6 +37,10 @@ The rules, for the reply reader ``R`` of the request:
 - the requester unknown (a header rclpy did not let us read): ``SEND``, as
   rclpy itself would.
 
+It goes with :mod:`reply_guard`'s workaround, once rmw_fastrtps sends a
+reply to an unmatched reader at once (``benchmarks/upstream_checks.py``,
+``reply_stall``).
+
 >>> routes = ReplyRoutes()
 >>> a_writer, a_reader = bytes(12) + b'wwww', bytes(12) + b'rrrr'
 >>> routes.poll(0.0, writers=[a_writer], readers=[(a_reader, True)])

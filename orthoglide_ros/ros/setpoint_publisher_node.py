@@ -1,20 +1,12 @@
 """
 The ``setpoint_publisher`` ROS 2 node: streams eq. (6) or the excitation.
 
-A thin layer over :class:`orthoglide_ros.cores.setpoint_publisher.Stream` (the
-paper's trajectory or, with ``motion: excitation``, the periodic motion
-for identification): it declares the parameters of
-:data:`orthoglide_ros.cores.setpoint_publisher.PARAMETERS`, waits for its
-subscribers, publishes one setpoint per timer tick and logs a summary at
-the end. With ``input`` ``trajectory`` a setpoint is one
-MultiDOFJointTrajectory on ``setpoint/trajectory`` (one point,
-``time_from_start`` 0); with ``topics`` it is a PoseStamped, TwistStamped
-and AccelStamped of equal stamp on ``setpoint/pose|twist|accel``. After
-one pass the node exits with code 0, or with ``loop`` goes back smoothly
-and starts the next pass. The setpoints are published from a thread of
-their own, on a steady schedule, not from the executor. Run it with
-``ros2 run orthoglide_ros setpoint_publisher --ros-args -p
-input:=topics``; ``doc/setpoint_publisher.md`` has the parameters.
+Glue over :class:`orthoglide_ros.cores.setpoint_publisher.Stream`: once its
+subscribers have matched, one setpoint per period from a thread of its
+own, on ``setpoint/trajectory`` or ``setpoint/pose|twist|accel``
+(``input``); after one pass it exits 0, or with ``loop`` goes on. ``ros2 run
+orthoglide_ros setpoint_publisher``; ``doc/setpoint_publisher.md`` has the
+parameters.
 """
 
 import time
@@ -80,7 +72,6 @@ class SetpointPublisher(ManagedNode):
         self._started = False
         self.inputs.periodic(lambda: 1.0 / settings.rate_hz,
                              self._on_timer, 'setpoints')
-        return ()
 
     @property
     def published(self):

@@ -1,20 +1,11 @@
 """
 The ``simulator`` ROS 2 node: actuator forces in, measured joint states out.
 
-A thin layer over :class:`orthoglide_ros.cores.simulator.Simulator`: it declares
-the parameters of :data:`orthoglide_ros.cores.simulator.PARAMETERS`, reads
-the commands, runs the step timer, publishes, serves ``~/reset`` and
-publishes the core's status on ``/diagnostics``. A managed node
-(:mod:`orthoglide_ros.ros.managed_node`), configured and activated at
-start unless ``autostart`` is false; inactive, it holds. Run it with ``ros2 run
-orthoglide_ros simulator``; ``doc/simulator.md`` has the topics,
-parameters and states.
-
-Timing: real time on a fixed grid (``Simulator.step_due``), stepped by a
-thread of its own that wakes once per period of the grid and makes every
-step due, releasing the lock between steps so the commands keep being
-taken. The published stamp is the grid time of the state published (the
-node clock at that instant), not the time of publication.
+Glue over :class:`orthoglide_ros.cores.simulator.Simulator`: its inputs,
+one line each in :meth:`SimulatorNode.build`, ``~/reset``, and the steps on
+a thread of their own, each published with the node-clock time of its grid
+instant (:meth:`SimulatorNode._node_time`). ``ros2 run orthoglide_ros
+simulator``; ``doc/simulator.md`` has the topics, parameters and states.
 """
 
 import array
@@ -28,7 +19,7 @@ from std_msgs.msg import Float64MultiArray
 from std_srvs.srv import Trigger
 
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.ros.managed_node import Input, ManagedNode
+from orthoglide_ros.ros.managed_node import ManagedNode
 from orthoglide_ros.ros.node_runtime import run
 from orthoglide_ros.cores.simulator import PARAMETERS, Simulator
 
@@ -62,12 +53,10 @@ class SimulatorNode(ManagedNode):
         self._apply_names()
         self.inputs.periodic(lambda: 1.0 / self.core.settings.rate_hz,
                              self._on_steps, 'steps')
-        return (
-            Input('commands', Float64MultiArray, _forces, core.command),
-            # The same commands by joint name: topic-based ros2_control.
-            Input('joint_commands', JointState, cdr.joint_state,
-                  core.joint_command),
-        )
+        sub = self.inputs.subscribe
+        sub('commands', Float64MultiArray, _forces, core.command)
+        # The same commands by joint name: topic-based ros2_control.
+        sub('joint_commands', JointState, cdr.joint_state, core.joint_command)
 
     def reconfigure(self, settings):
         """Apply the live settings at once (lock held); the plant's wait."""

@@ -1,15 +1,11 @@
 """
 The ``tracking_controller`` ROS 2 node: desired and measured joints in, forces out.
 
-A thin layer over :class:`orthoglide_ros.cores.tracking_controller.Tracking`: it declares the
-parameters of :data:`orthoglide_ros.cores.tracking_controller.PARAMETERS`, hands the
-joint states' arrays to the core, publishes the commands, logs throttled
-warnings and publishes the core's status on ``/diagnostics``. A managed
-node (:mod:`orthoglide_ros.ros.managed_node`): configured and activated at
-start unless ``autostart`` is false; deactivated, it holds (see
-:meth:`~orthoglide_ros.cores.tracking_controller.Tracking.deactivate`).
-Run it with ``ros2 run orthoglide_ros tracking_controller``;
-``doc/tracking_controller.md`` has the topics, parameters and rules.
+Glue over :class:`orthoglide_ros.cores.tracking_controller.Tracking`: its
+inputs, one line each in :meth:`TrackingControllerNode.build`, the command
+publisher and the trajectory loop. ``ros2 run orthoglide_ros
+tracking_controller``; ``doc/tracking_controller.md`` has the topics,
+parameters and rules.
 """
 
 import array
@@ -20,7 +16,7 @@ from trajectory_msgs.msg import JointTrajectory
 from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.ros.managed_node import Input, ManagedNode
+from orthoglide_ros.ros.managed_node import ManagedNode
 from orthoglide_ros.ros.node_runtime import run
 from orthoglide_ros.cores.inputs import JOINT_TRAJECTORY_BYTES
 from orthoglide_ros.cores.tracking_controller import (FOLLOWING, HOLDING,
@@ -43,7 +39,7 @@ class TrackingControllerNode(ManagedNode):
     PARAMETERS = PARAMETERS
 
     def build(self, settings):
-        """Configure: the core, the command output, the loop; the inputs."""
+        """Configure: the core, the command output, the loop, the inputs."""
         core = self.core = Tracking(settings, time.monotonic())
         self._mode = FOLLOWING
         self._pub_commands = self.create_output(Float64MultiArray, 'commands')
@@ -52,19 +48,16 @@ class TrackingControllerNode(ManagedNode):
             MultiArrayDimension(label='actuator', size=3, stride=3)]
         self.inputs.periodic(lambda: 1.0 / self.core.settings.rate_hz,
                              self._on_tick, 'trajectory')
-        # Measured first: when both inputs are ready in one wake-up of the
-        # input thread, the measurements are taken before the desired
-        # states, so a command uses the newest measurement. Trajectories,
-        # a joint_trajectory_controller's input, on a thread of their own.
-        return (
-            Input('joint_states', JointState, cdr.joint_state, core.measured,
-                  source='measured'),
-            Input('feedforward/joint_states', JointState, cdr.joint_state,
-                  core.desired, source='desired', output=self._send),
-            Input('joint_trajectory', JointTrajectory, self._trajectory,
-                  core.trajectory, JOINT_TRAJECTORY_BYTES,
-                  source='trajectory', group='trajectories'),
-        )
+        # Trajectories, a joint_trajectory_controller's input, on a thread
+        # of their own.
+        sub = self.inputs.subscribe
+        sub('joint_states', JointState, cdr.joint_state, core.measured,
+            source='measured')
+        sub('feedforward/joint_states', JointState, cdr.joint_state,
+            core.desired, self._send, source='desired')
+        sub('joint_trajectory', JointTrajectory, self._trajectory,
+            core.trajectory, source='trajectory',
+            max_bytes=JOINT_TRAJECTORY_BYTES, thread='trajectories')
 
     def _trajectory(self, data):
         """Read a joint trajectory's points, and the node clock now (s)."""
