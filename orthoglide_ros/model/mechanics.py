@@ -39,6 +39,9 @@ REASONS = ('non_finite', 'unreachable', 'singular', 'overflow')
 
 ZERO = (0.0, 0.0, 0.0)
 
+# The unit accelerations of the forward dynamics' columns.
+_UNITS = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+
 # Samples per kernel call in solve_batch: arrays of this size stay in the
 # processor's cache (measured: 4096 is about 1.3x faster than 10,000).
 BATCH_CHUNK = 4096
@@ -298,10 +301,17 @@ def forward_dynamics(robot: Robot, position: Vector, velocity: Vector,
         raise _overflow_error(position, velocity, force, None,
                               'force') from None
     inertia = _inertia(robot)
+    k = inertia.constants
     x, y, z = float(position[0]), float(position[1]), float(position[2])
-    columns = tuple(_unit_column(inertia, x, y, z, unit)
-                    for unit in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0),
-                                 (0.0, 0.0, 1.0)))
+    columns = []
+    for unit in _UNITS:
+        force, lamdd = _unit_column(k, x, y, z, unit)
+        if inertia.active_terms:    # the drives' terms: their part of M
+            extra = terms.forces(inertia, inertia.active_terms, ZERO, lamdd,
+                                 FLOATS)
+            force = (force[0] + extra[0], force[1] + extra[1],
+                     force[2] + extra[2])
+        columns.append(force)
     rhs = (fa - bias[0], fb - bias[1], fc - bias[2])
     # det F = det M / det J_lambda is not zero where solve accepts the
     # position (M >= m5 I): a zero or an infinity can only be a numeric
@@ -569,9 +579,9 @@ _INERTIA = {}
 
 def _inertia(robot):
     """Return ``robot`` less gravity and friction (built once per robot)."""
-    key = (robot.constants,) + tuple(
-        getattr(robot, terms.coefficient_name(term))
-        for term in robot.active_terms if not term.friction)
+    drives = [getattr(robot, terms.coefficient_name(term))
+              for term in robot.active_terms if not term.friction]
+    key = (robot.constants, *drives) if drives else robot.constants
     inertia = _INERTIA.get(key)
     if inertia is None:
         if len(_INERTIA) >= 16:
@@ -581,19 +591,11 @@ def _inertia(robot):
     return inertia
 
 
-def _unit_column(inertia, x, y, z, unit):
-    """
-    Return ``F e_i``: the forces at rest of the unit acceleration ``unit``.
-
-    ``inertia``: a robot without gravity or friction (:func:`_inertia`), so
-    that the kernel's forces and its terms' (the drives') are ``M``'s.
-    """
-    _, lamd, lamdd, force, *_ = kernel.solve(
-        inertia.constants, x, y, z, 0.0, 0.0, 0.0, *unit, math.sqrt)
-    if not inertia.active_terms:
-        return force
-    extra = terms.forces(inertia, inertia.active_terms, lamd, lamdd, FLOATS)
-    return (force[0] + extra[0], force[1] + extra[1], force[2] + extra[2])
+def _unit_column(k, x, y, z, unit):
+    """Return the kernel's forces and ``lambdaddot`` at rest under ``unit``."""
+    out = kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, unit[0], unit[1], unit[2],
+                       math.sqrt)
+    return out[3], out[2]
 
 
 def _solve3(columns, rhs):
