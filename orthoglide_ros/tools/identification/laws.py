@@ -6,7 +6,8 @@ Coulomb friction always, and any of the others a log may identify). The
 forces are linear in its standard parameters ``theta`` (the masses ``m1``
 ... ``m6`` of eq. 20-24, then each term's coefficient per slider:
 ``armature_a``, ``viscous_a``, ``coulomb_a`` ...): ``f = W theta``, a
-term's column its force at coefficient 1. See doc/identification.md#the-laws.
+term's column its force at coefficient 1. See
+doc/identification.md#friction-laws-chosen-by-the-data.
 """
 
 from __future__ import annotations
