@@ -4,11 +4,11 @@ The documentation agrees with the code: parameter tables, links, size.
 Pure: no DDS, no rclpy (the cores' modules never import it).
 
 **Parameters.** For each node page, every row of the node's
-``PARAMETERS`` table (``spec.name`` for ``spec`` in ``PARAMETERS.specs``,
-the ``robot.*`` rows included) must have a row in a Markdown table of that
-page whose first cell holds the name in backticks (`` `rate_hz` ``) and
-whose ``default`` column holds the default as a ROS 2 parameters file
-writes it, in backticks:
+``PARAMETERS`` table (``spec.name`` for ``spec`` in ``PARAMETERS.specs``)
+must have a row in a Markdown table of that page (the ``robot.*`` rows:
+of doc/model.md's, which the page links to) whose first cell holds the
+name in backticks (`` `rate_hz` ``) and whose ``default`` column holds
+the default as a ROS 2 parameters file writes it, in backticks:
 
 - a float as Python's ``repr`` (`` `0.1` ``, `` `1000.0` ``,
   `` `0.7853981633974483` ``);
@@ -22,6 +22,10 @@ A row declared without a default (``spec.default is None``: ``robot.m4``,
 code ("defaults to m2"): its default cell must name that parameter in
 backticks with its prefix (`` `robot.m2` ``). A row whose description names
 no such parameter must say ``none`` in its default cell.
+
+**Model tables.** doc/model.md's tables of the ``robot.*`` parameters
+and of the terms are what ``test/model_tables.py`` writes from the code
+(``.venv/bin/python test/model_tables.py --write`` after a change).
 
 **Links.** Every relative link and image of README.md and doc/*.md
 (outside code) points to an existing file; a ``#fragment`` must match a
@@ -54,6 +58,7 @@ import os
 import re
 import tokenize
 
+import model_tables
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -61,6 +66,10 @@ DOC = os.path.join(ROOT, 'doc')
 README = os.path.join(ROOT, 'README.md')
 README_MAX_LINES = 250
 FORBIDDEN = ('these machines', 'shared/')
+# The robot.* parameters, every node's, have their table on the model's page.
+ROBOT_PREFIX = 'robot.'
+MODEL_PAGE = 'model.md'
+MODEL_ANCHOR = 'parameters'
 
 # Node page -> module holding the node's PARAMETERS table.
 NODE_PAGES = {
@@ -177,9 +186,19 @@ def node_specs():
             yield page, spec
 
 
+def documenting_page(page, spec):
+    """Return the page whose table documents ``spec`` of ``page``'s node."""
+    return MODEL_PAGE if spec.name.startswith(ROBOT_PREFIX) else page
+
+
 @pytest.mark.parametrize('page,spec', list(node_specs()),
                          ids=lambda x: x if isinstance(x, str) else x.name)
 def test_every_parameter_is_on_its_page_with_its_default(page, spec):
+    if spec.name.startswith(ROBOT_PREFIX):
+        assert f'model.md#{MODEL_ANCHOR}' in read(os.path.join(DOC, page)), (
+            f'doc/{page}: no link to the robot.* table '
+            f'(model.md#{MODEL_ANCHOR})')
+    page = documenting_page(page, spec)
     path = os.path.join(DOC, page)
     assert os.path.exists(path), f'doc/{page}: the page does not exist'
     cells = parameter_rows(read(path), spec.name)
@@ -207,6 +226,16 @@ def test_rows_with_the_same_name_agree_across_tables():
             repeated = {n for n in names if names.count(n) > 1}
             assert not repeated, (
                 f'doc/{page}: rows repeat in one table: {sorted(repeated)}')
+
+
+def test_the_model_tables_are_the_codes():
+    text = read(os.path.join(DOC, MODEL_PAGE))
+    for name in model_tables.TABLES:
+        assert model_tables.block(name).search(text), (
+            f'doc/{MODEL_PAGE}: no generated block {name!r}')
+    assert text == model_tables.written(text), (
+        f'doc/{MODEL_PAGE}: its tables are not the code\'s: run '
+        '.venv/bin/python test/model_tables.py --write')
 
 
 def test_file_default_writes_what_a_parameters_file_holds():

@@ -48,7 +48,7 @@ import pytest
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.tools import identification
-from orthoglide_ros.tools.identification import Law, Log, PLAIN
+from orthoglide_ros.tools.identification import Log, parse_law, PLAIN
 
 NOMINAL = Robot()
 # The robot as the package's model can hold it ...
@@ -128,7 +128,7 @@ def test_the_law_chosen_holds_both_terms(found):
               f'{candidate.held_out_rms:.4f} N, v_b '
               f'{candidate.stribeck_velocity}')
     print(found.law_chosen)
-    assert found.law == Law(True, True)
+    assert found.law == parse_law('coulomb+direction+stribeck')
     assert found.stribeck_velocity == pytest.approx(
         TRUE.friction_stribeck_velocity, rel=0.5)
 
@@ -155,7 +155,7 @@ def test_the_stribeck_speed_is_found_from_the_smoothing_to_the_top_speed(
     found = identification.identify(NOMINAL, log)
     print(f'v_b {speed} m/s: found {found.stribeck_velocity:.5g} m/s, '
           f'{identification.law_name(found.law)}')
-    assert found.law == Law(True, True)
+    assert found.law == parse_law('coulomb+direction+stribeck')
     assert found.stribeck_velocity == pytest.approx(speed, rel=0.05)
 
 
@@ -180,11 +180,11 @@ def test_a_law_is_scored_by_the_robot_it_would_give():
     found = identification.identify(NOMINAL, log, force_lag=0.0)
     scores = {c.law: c.held_out_rms for c in found.candidates}
     print(found.law_chosen, scores)
-    assert found.law == Law(True, True)
+    assert found.law == parse_law('coulomb+direction+stribeck')
     for law, score in scores.items():
-        if law.armature:
-            assert score >= scores[law._replace(armature=False)] * (
-                1.0 - 1e-6), law
+        if 'armature' in law.name:
+            without = parse_law(law.name.replace('+armature', ''))
+            assert score >= scores[without] * (1.0 - 1e-6), law
 
 
 def validation_rms(log, force_lag, **results):
@@ -316,7 +316,7 @@ def drives():
 def test_drives_are_found_and_the_platform_is_the_robots_own(drives):
     logs, found = drives
     print(found.law_chosen, *found.held, sep='\n')
-    assert found.law == Law(True, True, True)
+    assert found.law == parse_law('coulomb+direction+stribeck+armature')
     assert found.payload == PAYLOAD and found.robot.payload == 0.0
     assert found.robot.m5 + 3 * found.robot.m4 == pytest.approx(
         DRIVES.m5 + 3 * DRIVES.m4, rel=0.02)
@@ -336,7 +336,7 @@ def test_drives_predict_another_motion_within_10_percent_of_the_best(
         NOMINAL, logs['clean'], friction=found.law, force_lag=0.0,
         stribeck_velocity=found.stribeck_velocity, payload=PAYLOAD)
     without = identification.identify(NOMINAL, logs['identify'],
-                                      friction=Law(True, True, False),
+                                      friction=parse_law('coulomb+direction+stribeck'),
                                       payload=PAYLOAD)
     rms = validation_rms(logs['validate'], found.force_lag, found=found,
                          best=best, **{'no armature': without})

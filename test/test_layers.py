@@ -16,6 +16,10 @@ message package) imports every module of ``model``, ``formats``,
 ``urdf``, ``draw`` and ``identify`` on a CSV log: where ROS is not
 installed they work the same. Only ``ros`` (and ``orthoglide_testing``)
 may import rclpy.
+
+No module of the package imports one that imports it back, through any
+chain: every import counts, those under ``TYPE_CHECKING`` and inside
+functions included.
 """
 
 import ast
@@ -160,6 +164,76 @@ def test_record_says_it_needs_ros_without_it(tmp_path):
         str(tmp_path / 'bag'), '--duration', '1')
     assert result.returncode == 2
     assert 'record needs ROS 2 (rclpy)' in result.stderr
+
+
+def package_modules():
+    """Return ``{module name: source path}`` of every module of the package."""
+    root = os.path.dirname(orthoglide_ros.__file__)
+    found = {'orthoglide_ros': os.path.join(root, '__init__.py')}
+    for module in pkgutil.walk_packages([root], 'orthoglide_ros.'):
+        found[module.name] = __import__('importlib.util').util.find_spec(
+            module.name).origin
+    return found
+
+
+def imported_modules(name, path, known):
+    """Return the modules of ``known`` that module ``name`` imports."""
+    with open(path) as f:
+        tree = ast.parse(f.read())
+    package = name if path.endswith('__init__.py') else name.rpartition('.')[0]
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ''
+            if node.level:
+                parts = package.split('.')
+                parent = '.'.join(parts[:len(parts) - node.level + 1])
+                base = f'{parent}.{base}' if base else parent
+            for alias in node.names:
+                full = f'{base}.{alias.name}'
+                found.add(full if full in known else base)
+    return {module for module in found if module in known and module != name}
+
+
+def find_cycle(graph):
+    """Return one cycle of ``graph`` (``{node: successors}``) as a list."""
+    state = {}
+
+    def visit(node, path):
+        state[node] = 'open'
+        for successor in sorted(graph.get(node, ())):
+            if state.get(successor) == 'open':
+                return path[path.index(successor):] + [successor]
+            if successor not in state:
+                cycle = visit(successor, path + [successor])
+                if cycle:
+                    return cycle
+        state[node] = 'done'
+        return None
+    for start in sorted(graph):
+        if start not in state:
+            cycle = visit(start, [start])
+            if cycle:
+                return cycle
+    return None
+
+
+def test_find_cycle_finds_one():
+    """The test below can fail: a cycle two imports long is found."""
+    assert find_cycle({'a': {'b'}, 'b': {'c'}, 'c': {'a'}}) == \
+        ['a', 'b', 'c', 'a']
+    assert find_cycle({'a': {'b', 'c'}, 'b': {'c'}, 'c': set()}) is None
+
+
+def test_no_module_imports_one_that_imports_it_back():
+    modules = package_modules()
+    graph = {name: imported_modules(name, path, modules)
+             for name, path in modules.items()}
+    assert graph['orthoglide_ros.model.robot'], 'the graph holds no import'
+    cycle = find_cycle(graph)
+    assert cycle is None, 'an import cycle: ' + ' -> '.join(cycle)
 
 
 pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning')

@@ -29,7 +29,7 @@ import numpy as np
 import pytest
 
 from orthoglide_ros.model import mechanics
-from orthoglide_ros.model.mjcf import coulomb_mean, joint_values, mjcf
+from orthoglide_ros.model.mjcf import joint_values, mjcf
 from orthoglide_ros.model.robot import JOINT_NAMES, Robot
 from orthoglide_ros.model.trajectory import PAPER_DURATION, paper_sample
 
@@ -280,7 +280,7 @@ def test_friction_mujoco_cannot_hold_is_applied_by_the_plant():
     model, _ = load(robot)
     assert [float(model.joint(n).frictionloss[0]) for n in JOINT_NAMES] \
         == pytest.approx([4.0, 10.5, 5.25], rel=1e-12)
-    mean = coulomb_mean(robot)
+    mean = (4.0, 10.5, 5.25)      # N: each slider's two levels' mean
     plain = robot.replace(friction_coulomb=mean,
                           friction_coulomb_negative=mean,
                           friction_stribeck=(0.0,) * 3)

@@ -46,7 +46,7 @@ def test_defaults_are_the_paper_robot():
     for name in FRICTION:
         assert getattr(robot, name) == (0.0,) * 3, name
     assert not robot.has_friction
-    assert robot.plain_friction
+    assert robot.active_terms == ()
 
 
 @pytest.mark.parametrize('name, value', [
@@ -111,12 +111,19 @@ def test_m4_and_m6_default_to_m2_and_m3():
 def test_coulomb_friction_is_the_same_both_ways_unless_set_apart():
     robot = Robot(friction_coulomb=(5.0, 3.0, 4.0))
     assert robot.friction_coulomb_negative == (5.0, 3.0, 4.0)
-    assert robot.plain_friction
+    assert term_names(robot) == ['coulomb']
     apart = robot.replace(friction_coulomb_negative=(6.0, 3.0, 2.0))
     assert apart.friction_coulomb == (5.0, 3.0, 4.0)
-    assert not apart.plain_friction and apart.has_friction
-    assert not Robot(friction_stribeck=(0.0, 1.0, 0.0)).plain_friction
+    assert term_names(apart) == ['coulomb', 'direction'] \
+        and apart.has_friction
+    assert term_names(Robot(friction_stribeck=(0.0, 1.0, 0.0))) == \
+        ['stribeck']
     assert Robot(friction_stribeck=(0.0, 1.0, 0.0)).has_friction
+
+
+def term_names(robot):
+    """Return the names of the terms whose force ``robot`` has."""
+    return [term.name for term in robot.active_terms]
 
 
 def test_replace_keeps_a_follower_following():

@@ -2,61 +2,25 @@
 The arithmetic kernel of the paper's recursive matrix method.
 
 One implementation of the recursion of sections 2 and 3 of the paper
-(Chablat, Wenger, Staicu), corrected as ``doc/model.md`` lists, written as scalar
-arithmetic on the components of the paper's vectors with the zeros of the
-constant matrices ``a1 ... a6`` exploited. Only ``+ - * /`` and a ``sqrt``
-passed in are used, so the same code runs on Python floats (one control tick,
-``math.sqrt``) and on numpy arrays of N samples (a whole trajectory,
-``numpy.sqrt``) and gives the same numbers.
-
-Conventions. Each leg is evaluated in its own coordinates: leg A sees the
-platform centre as ``(x, y, z)``, leg B as ``(y, z, x)`` and leg C as
-``(z, x, y)`` (``b10 = a1 P``, ``c10 = a1 P^2`` with ``P`` the cyclic
-permutation), so one leg function serves all three. Inside a leg, a vector
-with the index ``k`` is expressed in the frame of body ``k``; ``c1, s1`` are
-``cos, sin(phi21)`` and ``c2, s2`` are ``cos, sin(phi32)``; ``w1, w2`` and
-``e1, e2`` the relative rates ``omega21 = omega54``, ``omega32 = omega43 =
-omega62`` and their derivatives. The slider's rate and acceleration are
-``lambdadot`` and ``lambdaddot``.
-
-The kernel does not validate: callers (``mechanics``) check that the inputs
-are finite and reachable before calling it, and check the conditioning and
-the finiteness of what it returns.
+(Chablat, Wenger, Staicu), eqs. (9)-(25) for rigid bodies, corrected as
+doc/model.md#errata-and-traps lists: scalar arithmetic on the components
+of the paper's vectors, the zeros of ``a1 ... a6`` exploited, only ``+ -
+* /`` and a ``sqrt`` passed in, so that the same code runs on floats (one
+tick) and on numpy arrays (a trajectory) with the same numbers. It does
+not validate: :mod:`mechanics` checks what goes in and comes out. See
+doc/model.md#the-method.
 """
 
 from __future__ import annotations
 
-from typing import Any, Callable, Optional, TYPE_CHECKING
+from typing import Any, Callable, Optional
 from collections import namedtuple
-from math import sin
 
-if TYPE_CHECKING:   # annotations only: no import cycle at run time
-    from orthoglide_ros.model.robot import Robot
-
-# Constants of the kernel derived once from a Robot (see kernel_constants).
+# Constants of the kernel derived once from a Robot
+# (:func:`robot.kernel_constants`).
 KernelConstants = namedtuple('KernelConstants', (
     'l3', 'minus_inv_l3', 'h3', 'i3', 'm1', 'm2', 'm3', 'm4', 'm5', 'm6',
-    'h4', 'p5', 'q5', 'gx', 'gy', 'gz', 'ja', 'jb', 'jc'))
-
-
-def kernel_constants(robot: Robot) -> 'KernelConstants':
-    """
-    Pack the robot's values the kernel uses (lengths m, masses kg).
-
-    ``h3 = l3 / 2`` and ``i3 = l3^2 / 3`` give body 3's centre of mass on
-    its -y3 axis and its inertia per unit mass about A3; ``h4 = l2 / 2`` is
-    body 4's centre of mass on its x4 axis;
-    ``(p5, q5, 0) = (l1 sin(alpha), -l / 2, 0)`` is ``r5G``, the platform's
-    centre G seen from A5 in frame 5 (eq. 8). The platform's mass is
-    ``m5 + payload`` (a payload rides with it); ``ja, jb, jc`` the drives'
-    armature (kg).
-    """
-    gx, gy, gz = robot.gravity
-    return KernelConstants(
-        robot.l3, -1.0 / robot.l3, robot.l3 / 2.0, robot.l3 ** 2 / 3.0,
-        robot.m1, robot.m2, robot.m3, robot.m4, robot.m5 + robot.payload,
-        robot.m6, robot.l2 / 2.0, robot.l1 * sin(robot.alpha),
-        -robot.l / 2.0, gx, gy, gz, *robot.armature)
+    'h4', 'p5', 'q5', 'gx', 'gy', 'gz'))
 
 
 def solve(k: 'KernelConstants', x: Any, y: Any, z: Any, vx: Any, vy: Any,
@@ -78,10 +42,7 @@ def solve(k: 'KernelConstants', x: Any, y: Any, z: Any, vx: Any, vy: Any,
     the relative virtual rates, which are linear in the platform's virtual
     velocity ``delta r``. Summing a leg's joint terms into a generalised
     force ``Q_leg`` on ``delta r`` and using ``delta r = J_lambda^-1 e_j``
-    gives ``f = F1 + J_lambda^-T sum(Q_leg)``. Each drive's armature adds
-    ``armature_j lambdaddot_j`` to its actuator's force (the kinetic
-    energy ``armature_j lambdadot_j^2 / 2`` of a rotor geared to the
-    slider).
+    gives ``f = F1 + J_lambda^-T sum(Q_leg)``.
 
     ``record``, if a dict, receives the per-element quantities of every leg
     (``record['A']``, ``['B']``, ``['C']``; see ``_leg``).
@@ -106,9 +67,9 @@ def solve(k: 'KernelConstants', x: Any, y: Any, z: Any, vx: Any, vy: Any,
     (c11, c12, c13, c21, c22, c23, c31, c32, c33), det, inverse_condition = \
         jacobian_cofactors(x, y, z, al_a, al_b, al_c, sqrt)
     rd = 1.0 / det
-    f_a = f1_a + (c11 * qx + c12 * qy + c13 * qz) * rd + k.ja * lamdd_a
-    f_b = f1_b + (c21 * qx + c22 * qy + c23 * qz) * rd + k.jb * lamdd_b
-    f_c = f1_c + (c31 * qx + c32 * qy + c33 * qz) * rd + k.jc * lamdd_c
+    f_a = f1_a + (c11 * qx + c12 * qy + c13 * qz) * rd
+    f_b = f1_b + (c21 * qx + c22 * qy + c23 * qz) * rd
+    f_c = f1_c + (c31 * qx + c32 * qy + c33 * qz) * rd
 
     return ((lam_a, lam_b, lam_c), (lamd_a, lamd_b, lamd_c),
             (lamdd_a, lamdd_b, lamdd_c), (f_a, f_b, f_c),
@@ -153,6 +114,14 @@ def _leg(k, x, y, z, vx, vy, vz, ax, ay, az, gx, gy, gz, platform, sqrt,
     ``(0, Qy, Qz)`` that the leg's joint moments put on the platform's
     virtual velocity (leg coordinates). ``platform`` says whether the
     platform (body 5) belongs to this leg's tree (leg A only).
+
+    Leg A sees the platform centre as ``(x, y, z)``, leg B as ``(y, z,
+    x)`` and leg C as ``(z, x, y)`` (``b10 = a1 P``, ``c10 = a1 P^2``, P
+    the cyclic permutation), so one function serves all three. A vector
+    with the index ``k`` is in the frame of body ``k``; ``c1, s1`` are
+    ``cos, sin(phi21)``, ``c2, s2`` ``cos, sin(phi32)``; ``w1, w2`` and
+    ``e1, e2`` the relative rates ``omega21 = omega54``, ``omega32 =
+    omega43 = omega62`` and their derivatives.
     """
     l3 = k.l3
     # Inverse geometry, eq. (9); alpha_i = l3 cos(phi21) cos(phi32), eq. (17).
@@ -319,12 +288,12 @@ def _record_leg(record, l3, s1, c1, s2, c2, lam, lamd, lamdd, w1, w2, e1,
         epsilon={1: (zero, zero, zero), 2: (zero, zero, e1), 3: e3, 6: e3,
                  4: (e1, zero, zero), 5: (zero, zero, zero)},
         v={1: (zero, zero, lamd), 2: (c1 * lamd, -s1 * lamd, zero), 3: v30,
-           6: v30, 4: v40, 5: _a54(s1, c1, v40)},
+           6: v30, 4: v40, 5: _frame4_to_frame5(s1, c1, v40)},
         gamma={1: (zero, zero, lamdd),
                2: (c1 * lamdd, -s1 * lamdd, zero), 3: g30, 6: g30, 4: g40,
-               5: _a54(s1, c1, g40)})
+               5: _frame4_to_frame5(s1, c1, g40)})
 
 
-def _a54(s1, c1, u):
+def _frame4_to_frame5(s1, c1, u):
     """Apply ``a54 = a^phi21 a2`` (eq. 1) to a vector of frame 4."""
     return (c1 * u[2] + s1 * u[1], c1 * u[1] - s1 * u[2], -u[0])

@@ -1,27 +1,13 @@
 """
 Inverse and forward mechanics of the Orthoglide: the package's math API.
 
-Plain numpy, no ROS. Every function takes a validated :class:`Robot` first.
-
-- :func:`solve`: one sample (a control tick) -> joint states, forces, powers.
-- :func:`friction_force`: the sliders' friction, part of those forces.
-- :func:`solve_batch`: N samples as arrays, vectorised, the same numbers.
-- :func:`forward_dynamics`: platform state and actuator forces -> platform
-  acceleration (one sample); :func:`forward_dynamics_batch`: N samples.
-- :func:`forward_kinematics`: actuator displacements -> platform centre
-  (:func:`forward_kinematics_rows` without refusals);
-  :func:`platform_velocity`: actuator rates -> platform velocity.
-- :func:`payload_force`: what carrying a payload adds, at a joint state.
-- :func:`workspace_status`: reachability and distance to singularity.
-- :func:`jacobians`: J1 and J2 of eq. (16).
-
-Every body's state (:func:`bodies.elements`) and every joint's
-(:func:`bodies.leg_joints`) are in :mod:`orthoglide_ros.model.bodies`.
-
-Units: m, m/s, m/s^2, N, W; vectors in the base frame 0. An input that is
-not finite, not reachable or nearer a singularity than the margin raises
-:class:`WorkspaceError` (whose ``reason`` a caller can test); no result ever
-holds a NaN or an infinity.
+:func:`solve` (one sample) and :func:`solve_batch` (N, vectorised): the
+inverse kinematics and dynamics of eqs. (9), (13), (18) and (25), plus
+the terms beyond the rigid bodies (:mod:`terms`); the forward dynamics
+and kinematics, the workspace and its singularities, eqs. (14)-(17).
+Plain numpy, no ROS; SI units, vectors in frame 0. An input refused
+raises :class:`WorkspaceError` with its ``reason``; no result holds a NaN.
+See doc/mechanics.md.
 
 >>> from orthoglide_ros.model.robot import Robot
 >>> s = solve(Robot(), (0.0, 0.0, 0.0))
@@ -34,11 +20,11 @@ from __future__ import annotations
 from typing import Any, Optional, TYPE_CHECKING
 from collections import namedtuple
 import math
-from types import SimpleNamespace
 
 import numpy as np
 
-from orthoglide_ros.model import kernel
+from orthoglide_ros.model import kernel, terms
+from orthoglide_ros.model.terms import ARRAYS, FLOATS
 from orthoglide_ros.model.types import Array, Rows, Triple, Vector
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
@@ -52,6 +38,9 @@ DEFAULT_SINGULARITY_MARGIN = 0.2
 REASONS = ('non_finite', 'unreachable', 'singular', 'overflow')
 
 ZERO = (0.0, 0.0, 0.0)
+
+# The unit accelerations of the forward dynamics' columns.
+_UNITS = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 # Samples per kernel call in solve_batch: arrays of this size stay in the
 # processor's cache (measured: 4096 is about 1.3x faster than 10,000).
@@ -135,8 +124,9 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
         raise WorkspaceError('singular', (
             f'position {format_vector(position)} m is on a singularity')) from None
     lam, lamd, lamdd, force, power, alphas, conditioning = out
-    if robot.has_friction:
-        fa, fb, fc = _friction(robot, lamd[0], lamd[1], lamd[2], _FLOATS)
+    if robot.active_terms:
+        fa, fb, fc = terms.forces(robot, robot.active_terms, lamd, lamdd,
+                                  FLOATS)
         force = (force[0] + fa, force[1] + fb, force[2] + fc)
         power = (lamd[0] * force[0], lamd[1] * force[1], lamd[2] * force[2])
     if conditioning < margin:
@@ -202,11 +192,11 @@ def solve_batch(robot: Robot, positions: Rows,
         for j, triple in enumerate(values):
             for leg in range(3):
                 out[j, leg, chunk] = triple[leg]
-    if robot.has_friction:
+    if robot.active_terms:
         with np.errstate(all='ignore'):     # checked below, row by row
-            for leg, friction in enumerate(_friction(robot, *out[1],
-                                                     _ARRAYS)):
-                out[3, leg] += friction
+            for leg, force in enumerate(terms.forces(
+                    robot, robot.active_terms, out[1], out[2], ARRAYS)):
+                out[3, leg] += force
             np.multiply(out[1], out[3], out=out[4])
     out = out.transpose(0, 2, 1)
     conditioning = np.nan_to_num(conditioning, nan=0.0)
@@ -238,22 +228,12 @@ def friction_force(robot: Robot, lambdadot: Any) -> Any:
     """
     Friction the actuators overcome on their sliders (N), per actuator.
 
-    ``f_j = c_j v + (F_j if v > 0 else F_j^-) tanh(v / v_s) + S_j
-    exp(-(v / v_b)^2) tanh(v / v_s)`` at the slider speed ``v =
-    lambdadot_j``: viscous friction ``c_j`` (N s/m), Coulomb friction
-    ``F_j`` and ``F_j^-`` (N, moving +lambda and -lambda) smoothed over
-    the speed ``v_s`` (m/s), and a Stribeck excess ``S_j`` (N) that fades
-    over the speed ``v_b`` (m/s) (``robot.friction_viscous``,
-    ``friction_coulomb``, ``friction_coulomb_negative``,
-    ``friction_stribeck``, ``friction_velocity``,
-    ``friction_stribeck_velocity``). The paper neglects friction;
-    :func:`solve` adds this to the rigid bodies' forces, so the forward
-    dynamics (built on it) sees it as a resistance. It vanishes at rest
-    (the smoothing has no sticking); with ``F_j^- = F_j`` it is odd in
-    ``lambdadot``, and without a Stribeck term (the default) it is
-    computed as ``c_j v + F_j tanh(v / v_s)`` exactly. ``lambdadot``
-    (m/s): a 3-sequence (returns a 3-tuple) or an (N, 3) array (returns
-    one).
+    The sum of the friction terms of :mod:`terms` at the slider speeds
+    ``lambdadot`` (m/s): a 3-sequence (returns a 3-tuple) or an (N, 3)
+    array (returns one). The law (doc/model.md#terms): ``f_j = c_j v +
+    (F_j if v > 0 else F_j^-) tanh(v / v_s) + S_j exp(-(v / v_b)^2)
+    tanh(v / v_s)``, ``v = lambdadot_j``. Part of the forces of
+    :func:`solve`; zero at rest.
 
     >>> from orthoglide_ros.model.robot import Robot
     >>> robot = Robot(friction_viscous=(10.0, 0.0, 0.0),
@@ -261,34 +241,17 @@ def friction_force(robot: Robot, lambdadot: Any) -> Any:
     >>> [round(f, 6) for f in friction_force(robot, (0.1, -1.0, 0.3))]
     [1.0, -2.0, 0.0]
     """
+    friction = tuple(term for term in robot.active_terms if term.friction)
     if isinstance(lambdadot, np.ndarray):
-        return np.column_stack(_friction(robot, *lambdadot.T, _ARRAYS))
-    return _friction(robot, *(float(v) for v in lambdadot), _FLOATS)
-
-
-# The functions _friction needs, on floats and on arrays.
-_FLOATS = SimpleNamespace(tanh=math.tanh, exp=math.exp,
-                          where=lambda c, a, b: a if c else b)
-_ARRAYS = SimpleNamespace(tanh=np.tanh, exp=np.exp, where=np.where)
-
-
-def _friction(robot, la, lb, lc, ops):
-    """Friction of :func:`friction_force` on floats or arrays (N)."""
-    ca, cb, cc = robot.friction_viscous
-    fa, fb, fc = robot.friction_coulomb
-    r = 1.0 / robot.friction_velocity
-    tanh = ops.tanh
-    if robot.plain_friction:
-        return (ca * la + fa * tanh(la * r), cb * lb + fb * tanh(lb * r),
-                cc * lc + fc * tanh(lc * r))
-    rb = 1.0 / robot.friction_stribeck_velocity
-    return tuple(
-        c * v + (ops.where(v > 0.0, f, g) + s * ops.exp(-(v * rb) ** 2))
-        * tanh(v * r)
-        for v, c, f, g, s in zip((la, lb, lc), robot.friction_viscous,
-                                 robot.friction_coulomb,
-                                 robot.friction_coulomb_negative,
-                                 robot.friction_stribeck))
+        out = np.zeros(lambdadot.shape)
+        for leg, force in enumerate(terms.forces(
+                robot, friction, lambdadot.T, ZERO, ARRAYS)):
+            out[:, leg] += force
+        return out
+    values = tuple(float(v) for v in lambdadot)
+    if not friction:
+        return ZERO
+    return terms.forces(robot, friction, values, ZERO, FLOATS)
 
 
 def forward_dynamics(robot: Robot, position: Vector, velocity: Vector,
@@ -337,15 +300,18 @@ def forward_dynamics(robot: Robot, position: Vector, velocity: Vector,
             raise
         raise _overflow_error(position, velocity, force, None,
                               'force') from None
-    k = _inertia(robot).constants
+    inertia = _inertia(robot)
+    k = inertia.constants
     x, y, z = float(position[0]), float(position[1]), float(position[2])
-    sqrt = math.sqrt
-    columns = (kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0,
-                            sqrt)[3],
-               kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0,
-                            sqrt)[3],
-               kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
-                            sqrt)[3])
+    columns = []
+    for unit in _UNITS:
+        force, lamdd = _unit_column(k, x, y, z, unit)
+        if inertia.active_terms:    # the drives' terms: their part of M
+            extra = terms.forces(inertia, inertia.active_terms, ZERO, lamdd,
+                                 FLOATS)
+            force = (force[0] + extra[0], force[1] + extra[1],
+                     force[2] + extra[2])
+        columns.append(force)
     rhs = (fa - bias[0], fb - bias[1], fc - bias[2])
     # det F = det M / det J_lambda is not zero where solve accepts the
     # position (M >= m5 I): a zero or an infinity can only be a numeric
@@ -550,8 +516,8 @@ def payload_force(robot: Robot, payload: float, lambda_: Any, lambdadot: Any,
     rest = solve(robot, position, tuple(velocity.tolist()), ZERO, 0.0)
     acceleration = np.linalg.solve(
         j_lambda, np.asarray(lambdaddot, dtype=float) - rest.lambdaddot)
-    force = payload * np.linalg.solve(j_lambda.T, acceleration
-                                      - np.asarray(robot.gravity))
+    gravity: Array = np.asarray(robot.gravity, dtype=np.float64)
+    force = payload * np.linalg.solve(j_lambda.T, acceleration - gravity)
     return tuple(force.tolist())
 
 
@@ -604,21 +570,32 @@ def _overflow_error(position, velocity, third, row=None,
         'finite'), row)
 
 
-# Copies of the robots seen without gravity or friction, keyed by their
-# kernel constants: the inverse dynamics at zero velocity of such a copy is
-# ``M`` applied.
+# Copies of the robots seen without gravity or friction, keyed by what
+# their mass matrix depends on (the kernel's constants and the terms that
+# are no friction, the drives): the inverse dynamics at zero velocity of
+# such a copy is ``M`` applied.
 _INERTIA = {}
 
 
 def _inertia(robot):
     """Return ``robot`` less gravity and friction (built once per robot)."""
-    inertia = _INERTIA.get(robot.constants)
+    drives = [getattr(robot, terms.coefficient_name(term))
+              for term in robot.active_terms if not term.friction]
+    key = (robot.constants, *drives) if drives else robot.constants
+    inertia = _INERTIA.get(key)
     if inertia is None:
         if len(_INERTIA) >= 16:
             _INERTIA.clear()
         inertia = robot.frictionless().replace(gravity=ZERO)
-        _INERTIA[robot.constants] = inertia
+        _INERTIA[key] = inertia
     return inertia
+
+
+def _unit_column(k, x, y, z, unit):
+    """Return the kernel's forces and ``lambdaddot`` at rest under ``unit``."""
+    out = kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, unit[0], unit[1], unit[2],
+                       math.sqrt)
+    return out[3], out[2]
 
 
 def _solve3(columns, rhs):

@@ -1,41 +1,13 @@
 """
 The Orthoglide as MJCF: MuJoCo's model, with the loops closed, without ROS.
 
-The same bodies, frames, masses, centres and inertias as :mod:`urdf`
-(:func:`urdf.inertials`, frames from :func:`bodies.elements` at home,
-full precision), nested as a tree that MuJoCo closes with ``connect``
-equality constraints where :mod:`mechanics` cuts the mechanism:
-
-- per leg, body 6 (``x_bar_a6a7``) on body 2 and body 4 (``x_rod_a4a7``)
-  on body 3; the parallelogram closes at A7 (``x_a7``);
-- the ``platform`` (origin G, axes parallel to frame 0 at home) is a child
-  of leg A's body 4 through the hinge ``a_phi54`` at A5; legs B and C end
-  at their body 4 and meet the platform in a hinge about their z5 axis:
-  two ``connect`` constraints on that axis, at A5 (``x_a5``) and one
-  ``l2`` along it (``x_a5_axis``), which leave exactly the rotation about
-  it free, as the joint ``phi54`` of doc/model.md does.
-
-Contract (doc/mujoco.md): world frame = frame 0, z up, gravity the
-model's; the slide joints named ``joint_names`` with qpos = lambda (0 at
-home); the hinges named as the URDF's revolute joints (``x_phi21``,
-``x_phi32``, ``x_phi62``, ``x_phi43`` and ``a_phi54``); three ``motor``
-actuators named as the slide joints, gear 1, force along +lambda (N),
-control-limited only by a robot's force limit; qpos0 is the home pose,
-closed. ``friction_viscous`` is the sliders' ``damping`` and the mean of
-``friction_coulomb`` and ``friction_coulomb_negative`` their
-``frictionloss`` (MuJoCo's dry friction, a constraint that holds a slider
-at rest up to that force: not the package's ``tanh`` law at low speed);
-MuJoCo's joints have no direction-dependent or Stribeck friction, which
-:class:`mujoco_plant.MujocoPlant` applies as forces
-(:func:`friction_beyond`). MuJoCo refuses zero principal
-inertias (a slender rod about its axis, the translating slider): those
-are MIN_INERTIA. No collisions (``contype`` 0): the mechanism's limits are
-its workspace's, not contacts.
-
-Solver settings (``<option>``, ``<default>``): RK4 at 1 ms and stiff
-equality constraints (SOLREF, SOLIMP), for which the loops stay closed to
-about a micrometre and an open-loop run follows the rigid model; MuJoCo's
-defaults let them sag by millimetres (doc/mujoco.md has the figures).
+The bodies, frames, masses and inertias of :mod:`urdf` (the bodies of eqs.
+20-24 at home, full precision), nested as a tree that MuJoCo closes with
+``connect`` equality constraints where :mod:`mechanics` cuts the
+mechanism (A7; A5 of legs B and C, as a hinge); slide joints and motors
+named as the sliders; the :mod:`terms` MuJoCo's joints hold as their
+attributes, the others for :class:`mujoco_plant.MujocoPlant` to apply
+(:func:`friction_beyond`). See doc/mujoco.md (the contract, the settings).
 """
 
 from __future__ import annotations
@@ -46,14 +18,14 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from orthoglide_ros.model import mechanics
+from orthoglide_ros.model import mechanics, terms
 from orthoglide_ros.model.bodies import elements, LEG_LABELS
 from orthoglide_ros.model.mechanics import ZERO
 from orthoglide_ros.model.robot import JOINT_NAMES
 from orthoglide_ros.model.urdf import (CHAIN, GREY, header_comment,
                                        inertials, LEG_COLOURS, link_name,
                                        PLATFORM)
-from orthoglide_ros.model.types import Triple, Vector
+from orthoglide_ros.model.types import Vector
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.robot import Robot
@@ -65,41 +37,27 @@ SOLREF = (0.002, 1.0)       # the stiffest MuJoCo allows at TIMESTEP (2 dt)
 SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 
 
-def coulomb_mean(robot: Robot) -> Triple:
-    """Return the sliders' mean Coulomb friction of both directions (N)."""
-    return tuple(0.5 * (f + g) for f, g in zip(
-        robot.friction_coulomb, robot.friction_coulomb_negative))
+# The terms MuJoCo's slide joints hold (their MJCF attribute).
+HELD = tuple(term for term in terms.FORCES if term.mujoco)
 
 
 def friction_beyond(robot: Robot, lambdadot: Any) -> Any:
     """
     Return the friction MuJoCo's joints leave out (N, 3-tuple), at speeds.
 
-    The package's law (:func:`mechanics.friction_force`) less viscous +
-    the mean Coulomb friction: the direction-dependent part and the
-    Stribeck excess. Zero for a robot of the plain law.
+    The package's law (:func:`mechanics.friction_force`) less the
+    friction of the terms MuJoCo holds (HELD, with their coefficients
+    there: one Coulomb level, the mean of both directions').
     """
-    if robot.plain_friction:
-        return ZERO
     return tuple(a - b for a, b in zip(
         mechanics.friction_force(robot, lambdadot),
-        mechanics.friction_force(_held_by_mujoco(robot), lambdadot)))
+        mechanics.friction_force(held_by_mujoco(robot), lambdadot)))
 
 
 @functools.lru_cache(maxsize=16)
-def _held_by_mujoco(robot):
-    """Return ``robot`` with the friction MuJoCo's joints hold (made once)."""
-    mean = coulomb_mean(robot)
-    return robot.replace(friction_coulomb=mean,
-                         friction_coulomb_negative=mean,
-                         friction_stribeck=ZERO)
-
-
-def equality_names(leg: str) -> tuple[str, ...]:
-    """Return the names of ``leg``'s loop closures (A7; A5 for B, C)."""
-    prefix = leg.lower()
-    return (f'{prefix}_a7',) + (() if leg == 'A' else (
-        f'{prefix}_a5', f'{prefix}_a5_axis'))
+def held_by_mujoco(robot: Robot) -> Robot:
+    """Return ``robot`` as MuJoCo's joints hold it (made once)."""
+    return terms.reduced(robot, HELD)
 
 
 def mjcf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
@@ -145,8 +103,11 @@ def mjcf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
         ET.SubElement(world, 'geom', type='cylinder', material='rail',
                       size=_number(radius), fromto=_vector(np.concatenate(
                           (a1 - robot.l3 * axis, a1 + robot.l3 * axis))))
-    for leg, name, rotor in zip(LEG_LABELS, joint_names, robot.armature):
-        _leg(world, robot, leg, name, home, masses, radius, rotor)
+    held = held_by_mujoco(robot)
+    for j, (leg, name) in enumerate(zip(LEG_LABELS, joint_names)):
+        slide = {term.mujoco: _number(getattr(
+            held, terms.coefficient_name(term))[j]) for term in HELD}
+        _leg(world, robot, leg, name, home, masses, radius, slide)
 
     equality = ET.SubElement(root, 'equality')
     for leg in LEG_LABELS:
@@ -173,7 +134,7 @@ def mjcf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
     return ET.tostring(root, encoding='unicode') + '\n'
 
 
-def _leg(world, robot, leg, slider_joint, home, masses, radius, armature):
+def _leg(world, robot, leg, slider_joint, home, masses, radius, slide):
     """Add one leg's bodies (1, 2, 3, 6, 4; the platform on leg A's 4)."""
     bodies, joints = home[leg]['bodies'], home[leg]['joints']
     prefix = leg.lower()
@@ -187,11 +148,7 @@ def _leg(world, robot, leg, slider_joint, home, masses, radius, armature):
         parents[body] = element
         if body == 1:
             ET.SubElement(element, 'joint', name=slider_joint, type='slide',
-                          axis='0 0 1', damping=_number(
-                              robot.friction_viscous[LEG_LABELS.index(leg)]),
-                          frictionloss=_number(
-                              coulomb_mean(robot)[LEG_LABELS.index(leg)]),
-                          armature=_number(armature))
+                          axis='0 0 1', **slide)
         else:
             ET.SubElement(element, 'joint', name=f'{prefix}_{suffix}',
                           type='hinge', axis='0 0 1')

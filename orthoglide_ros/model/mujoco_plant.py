@@ -2,24 +2,12 @@
 MuJoCo as the plant: the Orthoglide of :mod:`mjcf`, stepped by MuJoCo.
 
 :class:`MujocoPlant` has the interface of :class:`plant.Plant` (the
-``simulator``'s ``engine`` ``mujoco``): the state is the platform centre's
-position and velocity in frame 0, a step applies actuator forces held over
-it (MuJoCo's ``ctrl``, clipped to the force limits) and refuses, leaving
-the state unchanged, what the builtin plant refuses (a non-finite force, an
-end state out of reach or nearer a singularity than the margin). A step
-in which MuJoCo raised any of its warnings (``mjData.warning``: a bad
-QPOS, QVEL, QACC or CTRL, after which MuJoCo resets its own state to
-qpos0; a singular inertia; constraint or contact memory full) or whose
-end state is not finite raises :class:`plant.Diverged`, state unchanged.
-MuJoCo's warning handler is taken over (:func:`quiet_warnings`): nothing
-printed, no ``MUJOCO_LOG.TXT``; the text reaches the caller in the
-exception. The
-model is :func:`mjcf.mjcf` of the plant's robot: its own integrator (RK4)
-and constraint settings, at the largest sub-step of at most
-:data:`mjcf.TIMESTEP` that divides the step. Friction is MuJoCo's (slider
-``damping`` and ``frictionloss``, doc/mujoco.md), not the package's law.
-
-Units: m, m/s, N, s; vectors in the base frame 0.
+``simulator``'s ``engine`` ``mujoco``): the platform's state in frame 0,
+a step under forces held over it, refused (state unchanged) where the
+builtin plant refuses, :class:`plant.Diverged` on any warning MuJoCo
+raises in the step (its handler taken over: nothing printed, no file).
+The terms MuJoCo's joints cannot hold are applied as forces
+(:func:`mjcf.friction_beyond`). See doc/mujoco.md#warnings-and-divergence.
 """
 
 from __future__ import annotations
@@ -149,7 +137,7 @@ class MujocoPlant:
         # The friction MuJoCo's joints cannot hold, applied as forces (a
         # model given as text has its own friction).
         self._extra_friction = model_text is None \
-            and not robot.plain_friction
+            and mjcf.held_by_mujoco(robot) != robot
         self._set(position, velocity)
         self.data.time = float(time)
 

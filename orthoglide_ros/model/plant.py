@@ -1,41 +1,14 @@
 """
 Time integration of the Orthoglide's platform: a plant to simulate.
 
-Plain Python floats on top of :func:`mechanics.forward_dynamics`, no ROS.
-
-- :func:`rk4_step`: one step of the state ``(r_G, rdot_G)`` under actuator
-  forces held over the step.
-- :class:`Plant`: a mutable state (position, velocity, time) with force
-  limits, stepped by :func:`rk4_step`, that reports its joint state.
-- :class:`Diverged`: what a plant raises for a step it could not
-  integrate (a state that is not finite, an engine's own alarm), as
-  opposed to a step the workspace refuses (:class:`mechanics.WorkspaceError`).
-
-Why RK4 with a zero-order hold. A drive holds its last command until the
-next one, so the force is piecewise constant: over one step the equations
-of motion ``rddot_G = forward_dynamics(r_G, rdot_G, f)`` are smooth (no
-switch inside the step), and the classic fourth-order Runge-Kutta method
-keeps its order: local error O(dt^5), global error O(dt^4) for the
-piecewise-constant force it is given. The motion's own rates (at most
-about 5 /s on the tested trajectories) are far below 1 / (1 ms), so at
-1 kHz the truncation error is tiny: over 2 s the energy balance holds to
-about 1e-15 of the energy on slow motions (rounding) and 3e-12 on fast
-ones (truncation: 16x less when dt halves). An energy-conserving
-(symplectic) scheme would not help: the actuators do work on the system,
-and the mass matrix depends on the position, which makes the
-Stormer-Verlet schemes implicit.
-
-Two facts for whoever drives the plant. Forces taken from a trajectory
-and held over a step are best sampled at the step's midpoint (the
-midpoint rule: the right impulse to O(dt^3)); sampled at its start they
-lag by dt/2. And under constant forces the robot is open-loop unstable:
-holding the weight on the vertical leg C is an inverted pendulum (a
-negative stiffness of about ``f_C / l3 = 300 N/m`` in x and y, errors
-growing like ``e^(3.5 t)``), so open-loop feedforward drifts away from
-its trajectory (1.4e-6 m in the paper's 2 s with midpoint samples, 5e-3 m
-with start samples; a 1 N disturbance, 0.1 m).
-
-Units: m, m/s, m/s^2, N, s; vectors in the base frame 0.
+:func:`rk4_step` integrates ``rddot_G = forward_dynamics(r_G, rdot_G, f)``
+(the inverse dynamics of eq. 25 solved for the acceleration) by classic
+RK4 with the forces held over the step (a drive's zero-order hold);
+:class:`Plant` is a state with force limits stepped by it;
+:class:`Diverged` what a plant raises for a step it could not integrate,
+as opposed to one the workspace refuses (:class:`mechanics.WorkspaceError`).
+Units: m, m/s, m/s^2, N, s; frame 0. See
+doc/mechanics.md#forward-dynamics-and-simulation (why RK4, open loop).
 """
 
 from __future__ import annotations

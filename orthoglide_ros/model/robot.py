@@ -1,60 +1,36 @@
 """
-The Orthoglide's constant description: lengths, masses, gravity, friction.
+The Orthoglide's constant description: lengths, masses, gravity, terms.
 
-One immutable :class:`Robot` is built and validated once; every algorithm of
-the package takes it as its first argument (in the manner of Pinocchio's
-``Model``) and never validates it again on the hot path.
-
-The parameter names are the paper's (section 2) and those of the
-``robot.*`` ROS parameters of ``config/orthoglide.yaml``; see ``doc/model.md``
-for the bodies they describe.
+One immutable :class:`Robot` is built and validated once; every algorithm
+of the package takes it as its first argument (in the manner of Pinocchio's
+``Model``) and never validates it again on the hot path. Its fields are
+:data:`ROWS`: the paper's (section 2: the bodies 1-6 of eq. 20-24) and
+those of each force beyond them (:mod:`terms`), the ``robot.*`` ROS
+parameters. See doc/model.md#parameters.
 """
 
 from __future__ import annotations
 
-from collections import namedtuple
 from dataclasses import dataclass, fields
 import math
 from typing import Any, Tuple
 
-from orthoglide_ros.model.kernel import kernel_constants
+from orthoglide_ros.model import terms
+from orthoglide_ros.model.kernel import KernelConstants
+from orthoglide_ros.model.terms import (  # noqa: F401 (the rows' names)
+    FORCE_LIMITS, LENGTH_LIMITS, MASS_LIMITS, NO_FRICTION, Row,
+    SPEED_LIMITS)
 
 # The legs' suffixes, in the order of every per-actuator triple.
 LEGS = ('a', 'b', 'c')
 # The prismatic joints of actuators A, B, C: the default joint_names of
 # every node, of the URDF and of the logs.
 JOINT_NAMES = tuple(f'slider_{leg}' for leg in LEGS)
-# Friction on the sliders (not in the paper, which neglects it): none by
-# default, so that the paper's figures stand. The smoothing speed of the
-# Coulomb term: tanh(1) = 76 % of the Coulomb force at 1 mm/s. The Stribeck
-# excess falls to exp(-1) = 37 % of itself at its velocity. No drive
-# inertia reflected onto the sliders, nothing on the platform.
-NO_FRICTION = (0.0, 0.0, 0.0)
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 
 Vector = Tuple[float, float, float]
 
-# Bounds of every value (inclusive unless said): far beyond any
-# Orthoglide, they keep every derived quantity of the kernel finite (a
-# length of 1e200 m would overflow its l3^2).
-LENGTH_LIMITS = (1e-4, 100.0)       # m
-MASS_LIMITS = (1e-6, 1e6)           # kg
-FORCE_LIMITS = (0.0, 1e6)           # N, N s/m: friction, each actuator
-SPEED_LIMITS = (1e-6, 10.0)         # m/s
-
-Row = namedtuple('Row', ('name', 'default', 'unit', 'limits', 'description',
-                         'follows', 'open'), defaults=(None, False))
-Row.__doc__ = """One robot parameter: the one home of its rules.
-
-``name`` (the ``robot.*`` parameter less ``robot.``, the paper's);
-``default`` (a float, or a 3-tuple for a vector; None when it
-``follows`` another parameter until given); ``unit``; ``limits``
-``(low, high)`` of the value or of each component, inclusive unless
-``open``; ``description``, in words. The :class:`Robot`'s fields and
-checks, the nodes' ``robot.*`` parameters
-(:data:`orthoglide_ros.cores.parameters.ROBOT_SPECS`) and the docs' tables
-(``test/test_docs.py``) all come from :data:`ROWS`."""
-
+# The paper's parameters (section 2), then every term's.
 ROWS = (
     Row('l', 0.20, 'm', LENGTH_LIMITS, 'side of the cubic platform (body 5)'),
     Row('l1', 0.15, 'm', LENGTH_LIMITS,
@@ -77,34 +53,7 @@ ROWS = (
         'mass of each bar A6A7 (body 6); defaults to m3', 'm3'),
     Row('gravity', DEFAULT_GRAVITY, 'm/s^2', (-100.0, 100.0),
         'gravity vector in the base frame 0'),
-    Row('friction_viscous', NO_FRICTION, 'N s/m', FORCE_LIMITS,
-        'viscous friction of the sliders A, B, C: a force c lambdadot '
-        'against the motion'),
-    Row('friction_coulomb', NO_FRICTION, 'N', FORCE_LIMITS,
-        'Coulomb friction of the sliders A, B, C: a force F tanh(lambdadot / '
-        'friction_velocity) against the motion (moving +lambda, and both '
-        'ways unless friction_coulomb_negative is set)'),
-    Row('friction_velocity', 0.001, 'm/s', SPEED_LIMITS,
-        'slider speed that smooths the Coulomb friction (tanh(1) = 76 % of '
-        'it at this speed)'),
-    Row('friction_coulomb_negative', None, 'N', FORCE_LIMITS,
-        'Coulomb friction of the sliders A, B, C moving -lambda; defaults to '
-        'friction_coulomb', 'friction_coulomb'),
-    Row('friction_stribeck', NO_FRICTION, 'N', FORCE_LIMITS,
-        'Stribeck friction of the sliders A, B, C: the breakaway excess S, a '
-        'force S exp(-(lambdadot / friction_stribeck_velocity)^2) '
-        'tanh(lambdadot / friction_velocity) against the motion'),
-    Row('friction_stribeck_velocity', 0.01, 'm/s', SPEED_LIMITS,
-        'slider speed at which the Stribeck excess has fallen to exp(-1) = '
-        '37 % of itself'),
-    Row('armature', (0.0, 0.0, 0.0), 'kg', (0.0, 1e6),
-        'inertia of the drives of A, B, C reflected onto their sliders, J (2 '
-        'pi / lead)^2 for a ball screw: a force armature lambdaddot on each '
-        'actuator'),
-    Row('payload', 0.0, 'kg', (0.0, 1e6),
-        'mass carried rigidly on the platform (a tool, a part): exactly a '
-        'heavier platform'),
-)
+) + tuple(row for term in terms.TERMS for row in term.rows)
 ROW = {row.name: row for row in ROWS}
 
 
@@ -112,11 +61,6 @@ def is_vector(row: 'Row') -> bool:
     """Whether ``row``'s value is a 3-vector (its own or its leader's)."""
     return isinstance(ROW[row.follows].default if row.follows
                       else row.default, tuple)
-
-
-# The friction parameters that are forces (zero: a frictionless robot).
-FRICTION_FORCES = ('friction_viscous', 'friction_coulomb',
-                   'friction_coulomb_negative', 'friction_stribeck')
 
 
 class ParameterError(ValueError):
@@ -134,62 +78,34 @@ class ParameterError(ValueError):
         self.rule = rule
 
 
+def _row_fields(cls):
+    """Give ``cls`` a field per row of ROWS: its name, type and default."""
+    cls.__annotations__ = {row.name: Vector if is_vector(row) else float
+                           for row in ROWS}
+    for row in ROWS:
+        setattr(cls, row.name, row.default)
+    return cls
+
+
 @dataclass(frozen=True)
+@_row_fields
 class Robot:
     """
-    Geometry (m, rad), masses (kg), gravity (m/s^2, frame 0), friction.
+    Geometry (m, rad), masses (kg), gravity (m/s^2, frame 0), the terms.
 
-    Each field is a row of :data:`ROWS`, its default, unit, limits and
-    meaning there. ``m4`` and ``m6`` default to ``m2`` and ``m3`` (the
-    paper's ``m4 = m2``, ``m6 = m3``). Every value must be finite and
-    within its row's limits, a vector a 3-vector; otherwise
-    :class:`ParameterError` names the parameter (``robot.l3``).
-
-    Friction on each slider (actuators A, B, C), which the paper neglects:
-    ``friction_viscous`` ``c_j`` (N s/m), ``friction_coulomb`` ``F_j`` and
-    ``friction_coulomb_negative`` ``F_j^-`` (N, moving +lambda and -lambda;
-    the second defaults to the first), ``friction_stribeck`` ``S_j`` (N),
-    3-vectors of values >= 0, and the speeds ``friction_velocity`` ``v_s``
-    and ``friction_stribeck_velocity`` ``v_b`` (m/s, > 0): the actuator
-    must add the force of :func:`mechanics.friction_force`. None by
-    default: the paper's robot.
-
-    The drives and what the platform carries, which the paper does not
-    have either: ``armature`` (kg, a 3-vector of values >= 0), each drive's
-    inertia reflected onto its slider (a motor of rotor inertia ``J`` on a
-    ball screw of lead ``p``: ``J (2 pi / p)^2``), a force ``armature_j
-    lambdaddot_j`` on actuator j; ``payload`` (kg, >= 0), a mass rigidly on
-    the platform, which only translates: the dynamics of a platform of
-    mass ``m5 + payload``. Both 0 by default.
+    One field per row of :data:`ROWS`, its default, unit, limits and
+    meaning there (doc/model.md#parameters). A row that ``follows``
+    another (``m4`` and ``m6`` the paper's ``m2`` and ``m3``,
+    ``friction_coulomb_negative`` ``friction_coulomb``) takes its value
+    until given. Every value must be finite and within its row's limits, a
+    vector a 3-vector; otherwise :class:`ParameterError` names the
+    parameter (``robot.l3``). By default no term: the paper's robot.
 
     >>> Robot().l3
     0.85
     >>> Robot(m5=18.0).m4 == Robot().m2
     True
     """
-
-    l: float = ROW['l'].default
-    l1: float = ROW['l1'].default
-    l2: float = ROW['l2'].default
-    l3: float = ROW['l3'].default
-    alpha: float = ROW['alpha'].default
-    m1: float = ROW['m1'].default
-    m2: float = ROW['m2'].default
-    m3: float = ROW['m3'].default
-    m4: float = ROW['m4'].default       # None given: follows m2
-    m5: float = ROW['m5'].default
-    m6: float = ROW['m6'].default       # None given: follows m3
-    gravity: Vector = ROW['gravity'].default
-    friction_viscous: Vector = ROW['friction_viscous'].default
-    friction_coulomb: Vector = ROW['friction_coulomb'].default
-    friction_velocity: float = ROW['friction_velocity'].default
-    friction_coulomb_negative: Vector = \
-        ROW['friction_coulomb_negative'].default
-    friction_stribeck: Vector = ROW['friction_stribeck'].default
-    friction_stribeck_velocity: float = \
-        ROW['friction_stribeck_velocity'].default
-    armature: Vector = ROW['armature'].default
-    payload: float = ROW['payload'].default
 
     def __post_init__(self):
         # (Not a field: no part of eq or repr.)
@@ -202,15 +118,12 @@ class Robot:
             object.__setattr__(self, row.name, _checked(
                 row, getattr(self, row.name)))
         # Derived once (not fields: no part of eq or repr): the kernel's
-        # constants, whether the sliders have friction at all, and whether
-        # it goes beyond viscous + symmetric Coulomb (mechanics' general
-        # law, else its plain one).
+        # constants, the terms whose force the robot has, and whether
+        # friction is among them.
         object.__setattr__(self, 'constants', kernel_constants(self))
+        object.__setattr__(self, 'active_terms', terms.active(self))
         object.__setattr__(self, 'has_friction', any(
-            sum((getattr(self, n) for n in FRICTION_FORCES), ())))
-        object.__setattr__(self, 'plain_friction', not any(
-            self.friction_stribeck) and (self.friction_coulomb_negative
-                                         == self.friction_coulomb))
+            term.friction for term in self.active_terms))
 
     @classmethod
     def parameter_names(cls) -> tuple[str, ...]:
@@ -245,8 +158,28 @@ class Robot:
         return Robot(**values)
 
     def frictionless(self) -> 'Robot':
-        """Return a copy with no friction (every FRICTION_FORCES zero)."""
-        return self.replace(**dict.fromkeys(FRICTION_FORCES, NO_FRICTION))
+        """Return a copy with no friction (every friction term's zero)."""
+        return self.replace(**{terms.coefficient_name(term): NO_FRICTION
+                               for term in terms.FRICTION})
+
+
+def kernel_constants(robot: Robot) -> KernelConstants:
+    """
+    Pack the robot's values the kernel uses (lengths m, masses kg).
+
+    ``h3 = l3 / 2`` and ``i3 = l3^2 / 3`` give body 3's centre of mass on
+    its -y3 axis and its inertia per unit mass about A3; ``h4 = l2 / 2`` is
+    body 4's centre of mass on its x4 axis;
+    ``(p5, q5, 0) = (l1 sin(alpha), -l / 2, 0)`` is ``r5G``, the platform's
+    centre G seen from A5 in frame 5 (eq. 8). The platform's mass is
+    :func:`terms.platform_mass` (a payload rides with it).
+    """
+    gx, gy, gz = robot.gravity
+    return KernelConstants(
+        robot.l3, -1.0 / robot.l3, robot.l3 / 2.0, robot.l3 ** 2 / 3.0,
+        robot.m1, robot.m2, robot.m3, robot.m4, terms.platform_mass(robot),
+        robot.m6, robot.l2 / 2.0, robot.l1 * math.sin(robot.alpha),
+        -robot.l / 2.0, gx, gy, gz)
 
 
 def _checked(row, value):

@@ -1,44 +1,14 @@
 """
 The Orthoglide as a URDF: a cut tree of the closed mechanism, without ROS.
 
-URDF describes trees, and the Orthoglide has loops: each leg's
-parallelogram closes at A7, and the three legs meet at the platform. The
-tree is cut where :mod:`mechanics` cuts it for virtual work (doc/model.md):
-body 6 (the bar A6A7) is a branch of body 2, so the parallelogram is open
-at A7, and legs B and C end at their own frame 5 (B5, C5) while leg A
-carries the platform. A joint state from :mod:`mechanism_state` (every
-passive joint from the three sliders, closed form) closes every cut, so
-``robot_state_publisher`` then gives every body its pose.
-
-Names (fixed; tools and users rely on them), with ``x`` in ``a, b, c``:
-
-- links ``base_link`` (frame 0) and ``platform`` (origin G, axes parallel
-  to frame 0);
-- per leg, the bodies of doc/model.md: ``x_slider`` (1, origin A1),
-  ``x_rod_a3a6`` (2, origin A2), ``x_bar_a3a4`` (3, origin A3),
-  ``x_bar_a6a7`` (6, origin A6), ``x_rod_a4a7`` (4, origin A4) and
-  ``x_leg_end`` (frame 5 reached through the leg, origin A5: the
-  platform's orientation); ``x_platform_mount``, a fixed child of
-  ``platform`` at A5 that coincides with ``x_leg_end`` in a consistent
-  state; ``x_a7_bar`` and ``x_a7_rod``, the two sides of the
-  parallelogram's cut at A7 (fixed children of bodies 6 and 4: same
-  origin in a consistent state, turned by ``-phi32`` about their common
-  z axis);
-- the non-fixed joints (:func:`moving_joints`): the prismatic sliders
-  named ``joint_names`` (zero at home, positive along +x0, +y0, +z0), and
-  per leg the revolute ``x_phi21``, ``x_phi32``, ``x_phi62``, ``x_phi43``,
-  ``x_phi54`` (body 2 on 1, 3 on 2, 6 on 2, 4 on 3, 5 on 4), each about the
-  child frame's z axis with the angle of the model's ``a^phi`` convention:
-  ``phi21``, ``phi32``, ``phi32``, ``phi32``, ``phi21`` (eq. 5);
-- fixed joints are named after their child: ``platform_joint``,
-  ``x_platform_mount_joint``, ``x_a7_bar_joint``, ``x_a7_rod_joint``.
-
-Every frame comes from :func:`bodies.elements` at home, where every
-joint variable is zero: a joint's origin is its child's frame seen from
-its parent's. The inertials are the bodies table of doc/model.md (the
-platform once, on ``platform``; links that are no body of the model carry
-none). Joint limits are the ranges over the workspace within the
-singularity margin (:func:`joint_limits`). Shapes are boxes and cylinders.
+URDF describes trees; the Orthoglide has loops. The tree is cut where
+:mod:`mechanics` cuts it for virtual work (eq. 23): each parallelogram at
+A7, legs B and C at their frame 5, leg A carrying the platform. Frames from
+:func:`bodies.elements` at home, inertials from the bodies table
+(:func:`inertials`), joint limits over the workspace within the
+singularity margin (:func:`joint_limits`); a joint state of every joint
+closes every cut. The names are fixed (tools rely on them): see
+doc/mechanism_state_publisher.md#joints-and-links.
 """
 
 from __future__ import annotations
@@ -50,7 +20,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from orthoglide_ros.model import bodies, mechanics
+from orthoglide_ros.model import bodies, mechanics, terms
 from orthoglide_ros.model.bodies import LEG_LABELS
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
 from orthoglide_ros.model.robot import JOINT_NAMES
@@ -208,11 +178,13 @@ def inertials(robot: Robot) -> dict[int, Any]:
     centre of mass (m, from the body's frame origin, in its frame) and
     inertia about the centre of mass (kg m^2, 3x3, in the body's frame).
     Body 1 only translates and the model gives it no inertia: zero. The
-    platform carries ``robot.payload``: its mass is ``m5 + payload`` (a
-    body that only translates, its inertia scaled alike).
+    platform carries ``robot.payload``: its mass is
+    :func:`terms.platform_mass` (a body that only translates, its inertia
+    scaled alike).
     """
     l2, l3 = robot.l2, robot.l3
     sa, ca = math.sin(robot.alpha), math.cos(robot.alpha)
+    platform = terms.platform_mass(robot)
     return {
         1: (robot.m1, (0.0, robot.l1 * sa / 2.0, robot.l1 * ca / 2.0),
             np.zeros((3, 3))),
@@ -223,8 +195,7 @@ def inertials(robot: Robot) -> dict[int, Any]:
             robot.m6 * l3 ** 2 / 12.0 * np.diag((1, 0, 1))),
         4: (robot.m4, (l2 / 2.0, 0.0, 0.0),
             robot.m4 * l2 ** 2 / 12.0 * np.diag((0, 1, 1))),
-        5: (robot.m5 + robot.payload, ZERO,
-            (robot.m5 + robot.payload) * robot.l ** 2 / 6.0 * np.eye(3)),
+        5: (platform, ZERO, platform * robot.l ** 2 / 6.0 * np.eye(3)),
     }
 
 

@@ -322,11 +322,11 @@ def add_identify(sub, common):
                               identification.law_name(law)
                               for law in identification.LAWS),
                           help='the law: viscous + Coulomb friction '
-                          '(coulomb), with a Coulomb level per direction '
-                          '(+direction), with a Stribeck excess at low '
-                          'speed (+stribeck), with the drives\' armature '
-                          '(+armature); auto (default): the simplest law '
-                          'within '
+                          '(coulomb), with ' + ', '.join(
+                              f'{term.meaning.format("each slider")} '
+                              f'(+{term.name})'
+                              for term in identification.OPTIONAL)
+                          + '; auto (default): the simplest law within '
                           f'{100 * identification.SELECTION_MARGIN:g} %% of '
                           'the least RMS error on held-out parts of the '
                           'log')

@@ -17,8 +17,8 @@ from orthoglide_ros.tools.identification.estimate import (  # noqa: F401
     MAX_RELATIVE_STD, RESOLUTION, SELECTION_MARGIN, split,
     STRIBECK_STEP, stribeck_velocities)
 from orthoglide_ros.tools.identification.laws import (  # noqa: F401
-    ARMATURES, friction_columns, Law, LAWS, law_name, MASSES, MEANINGS,
-    parse_law, PLAIN, STANDARD, standard_names, standard_parameters, UNITS,
+    Law, LAWS, law_name, MASSES, MEANINGS, OPTIONAL, parse_law, PLAIN,
+    STANDARD, standard_names, standard_parameters, term_columns, UNITS,
     with_parameters)
 from orthoglide_ros.tools.identification.motion import (  # noqa: F401
     Coverage, DEFAULT_CUTOFF, estimate_lag, LAG_SEARCH, Motion, prepare,

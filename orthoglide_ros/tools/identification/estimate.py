@@ -1,28 +1,14 @@
 """
 The estimate: the lag, the law, the least squares, the identified robot.
 
-:func:`identify` takes a log and the nominal robot, and in this order:
-
-1. the forces' lag on the states (:func:`motion.estimate_lag`, with the
-   richest law tried) unless given;
-2. the law (:data:`laws.LAWS`, each with the Stribeck speed of the least
-   held-out error) by the RMS error on FOLDS held-out blocks of the log:
-   the simplest within SELECTION_MARGIN of the best, a share of that error
-   (the scale of what the laws explain, not of a force that gravity
-   dominates);
-3. least squares for the base parameters (bounded where the ordinary one
-   leaves what a robot can be), with their standard deviations;
-4. a base parameter the log does not excite (its relative standard
-   deviation above ``max_relative_std``) is held at its nominal value, as
-   the essential-parameters method does, unless the held-out error says
-   the log needs it: then it is kept and said. A log is refused only
-   where it cannot be used at all (it shows no motion);
-5. a complete :class:`Robot` by the split rule (:func:`split`).
-
-What the nominal robot knows and a law leaves out is known force, taken
-off the measured forces: the payload the log was recorded with (through
-the platform's column), and the drives' armature when the law does not
-identify it.
+:func:`identify` takes a log and the nominal robot: the forces' lag on the
+states (unless given), the law by its error on held-out parts of the log,
+least squares for the base parameters (bounded where the ordinary ones
+leave what a robot can be) with their standard deviations, the parameters
+the log does not excite held at their nominal values, then a complete
+robot by the split rule (:func:`split`). What the nominal robot knows and
+the law leaves out (the payload, the drives) is known force, taken off the
+measured forces. See doc/identification.md#least-squares-and-statistics.
 """
 
 from __future__ import annotations
@@ -40,7 +26,9 @@ from orthoglide_ros.tools.identification.motion import (
     check_lag, DEFAULT_CUTOFF, estimate_lag, Motion)
 from orthoglide_ros.tools.identification.regressor import base_of
 from orthoglide_ros.formats.logs import LogError
+from orthoglide_ros.model import terms
 from orthoglide_ros.model.robot import ROW
+from orthoglide_ros.model.terms import STRIBECK
 from orthoglide_ros.model.types import Array
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
@@ -87,7 +75,7 @@ PAYLOAD_SIGMAS = 3.0
 # gaps first.
 GAP_LOSS = 0.8
 # The index of the platform's mass among the rigid columns.
-_M5 = MASSES.index('m5')
+_PLATFORM = MASSES.index('m5')
 
 Candidate = namedtuple('Candidate', ('law', 'stribeck_velocity',
                                      'held_out_rms'))
@@ -174,7 +162,7 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
                >= MIN_SAMPLES_PER_PARAMETER * parameters(law)]
     if not fitting:
         count = parameters(laws[0])
-        raise LogError(f'{log.source}: {_gaps_first(motion)}'
+        raise LogError(f'{log.source}: {_gaps_prefix(motion)}'
                        f'{len(motion.times)} usable '
                        f'samples, at least {MIN_SAMPLES_PER_PARAMETER * count}'
                        f' needed ({MIN_SAMPLES_PER_PARAMETER} per base '
@@ -184,10 +172,11 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
 
     def known(law):
         """Return the forces the nominal robot knows and ``law`` leaves out."""
-        forces = payload * motion.rigid[:, :, _M5]
-        if not law.armature:
-            forces = forces + motion.rigid[:, :, len(MASSES):] @ np.array(
-                robot.armature)
+        forces = payload * motion.rigid[:, :, _PLATFORM]
+        for term in terms.FORCES:
+            if not term.friction and term not in law:
+                forces = forces + motion.own_columns(term, (term,)) * np.array(
+                    getattr(robot, terms.coefficient_name(term)))
         return forces
 
     grid = stribeck_velocities(robot, motion)
@@ -214,7 +203,7 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
         chosen, why = candidates[0], f'{law_name(laws[0])}: as asked'
     law, speed = chosen.law, chosen.stribeck_velocity
     target = forces - known(law)
-    if law.stribeck and stribeck_velocity is None:
+    if STRIBECK in law and stribeck_velocity is None:
         speed = _refined_speed(motion, law, target, speed, grid)
     base = base or base_of(robot, law)
     count = len(base.independent)
@@ -236,7 +225,7 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
               if names[j].startswith('viscous_')]
     if moving and all(i in unexcited for i in moving):
         raise IdentificationError(
-            f'{log.source}: {_gaps_first(motion)}the log shows no motion '
+            f'{log.source}: {_gaps_prefix(motion)}the log shows no motion '
             'to identify from: no '
             'slider\'s friction is excited (relative standard deviations '
             + ', '.join(f'{base.names[i]} {relative[i]:.3g} %'
@@ -345,7 +334,7 @@ def stribeck_velocities(robot: Robot, motion: Motion) -> tuple[float, ...]:
 
 def _speeds(law, stribeck_velocity, grid):
     """Return the Stribeck speeds to try for ``law`` (None: no term)."""
-    if not law.stribeck:
+    if STRIBECK not in law:
         return (None,)
     return (stribeck_velocity,) if stribeck_velocity is not None else grid
 
@@ -392,7 +381,7 @@ def _refined_speed(motion, law, target, speed, speeds):
 def _chosen(candidates):
     """Return the simplest candidate within the selection margin, why."""
     best = min(candidates, key=lambda c: c.held_out_rms)
-    for candidate in sorted(candidates, key=lambda c: (sum(c.law),
+    for candidate in sorted(candidates, key=lambda c: (len(c.law),
                                                        c.held_out_rms)):
         if candidate.held_out_rms <= best.held_out_rms * (
                 1.0 + SELECTION_MARGIN):
@@ -540,7 +529,7 @@ def _check_payload(source, base, payload, found, std, lower):
     platform of negative mass, and every other parameter bent to make up
     for it.
     """
-    rows = np.flatnonzero(base.matrix[:, _M5])
+    rows = np.flatnonzero(base.matrix[:, _PLATFORM])
     if payload <= 0.0 or len(rows) != 1:
         return
     i = int(rows[0])
@@ -646,7 +635,7 @@ def split(robot: Robot, base: Base, values: Array,
                                   f'{error}') from None
 
 
-def _gaps_first(motion):
+def _gaps_prefix(motion):
     """
     Name the log's gaps when they lost much of it, to lead a refusal.
 

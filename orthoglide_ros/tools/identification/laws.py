@@ -1,176 +1,192 @@
 """
 The parameters identification finds: masses, drives and friction, by law.
 
-A :class:`Law` says which terms the forces hold beyond the rigid masses,
-viscous and Coulomb friction: a Coulomb level per direction, a Stribeck
-excess, the drives' armature. Its standard parameters ``theta``
-(:func:`standard_names`: ``m1`` ... ``m6``, ``armature_a`` ...,
-``viscous_a`` ..., ``coulomb_a`` ...) are what the forces are linear in;
-:func:`standard_parameters` reads them off a :class:`Robot`,
-:func:`with_parameters` writes them back, and :func:`friction_columns`
-gives their friction columns (the law of
-:func:`mechanics.friction_force` with one coefficient 1).
+A :class:`Law` is a choice of the terms of :mod:`model.terms` (viscous and
+Coulomb friction always, and any of the others a log may identify). The
+forces are linear in its standard parameters ``theta`` (the masses ``m1``
+... ``m6`` of eq. 20-24, then each term's coefficient per slider:
+``armature_a``, ``viscous_a``, ``coulomb_a`` ...): ``f = W theta``, a
+term's column its force at coefficient 1. See
+doc/identification.md#friction-laws-chosen-by-the-data.
 """
 
 from __future__ import annotations
 
 from typing import Any, Optional, TYPE_CHECKING
-from collections import namedtuple
+from itertools import combinations
 
 import numpy as np
 
-from orthoglide_ros.model import mechanics
+from orthoglide_ros.model import terms
 from orthoglide_ros.model.robot import LEGS, ROW
+from orthoglide_ros.model.terms import ARRAYS, COULOMB, VISCOUS
 from orthoglide_ros.model.types import Array
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.robot import Robot
+    from orthoglide_ros.model.terms import Term
 
 MASSES = ('m1', 'm2', 'm3', 'm4', 'm5', 'm6')
-# The drives' reflected inertia (kg), one per actuator: robot.armature.
-ARMATURES = tuple(f'armature_{leg}' for leg in LEGS)
-# The friction coefficients by kind: the Robot field each sets, its meaning.
-FRICTION_KINDS = {
-    'viscous': ('friction_viscous', 'viscous friction'),
-    'coulomb': ('friction_coulomb', 'Coulomb friction'),
-    'coulomb_negative': ('friction_coulomb_negative',
-                         'Coulomb friction moving -lambda'),
-    'stribeck': ('friction_stribeck', 'Stribeck excess'),
-}
-
-Law = namedtuple('Law', ('direction', 'stribeck', 'armature'),
-                 defaults=(False,))
-Law.__doc__ = """The terms to identify beyond masses, viscous and Coulomb
-friction: a Coulomb level per direction (``direction``), a Stribeck excess
-(``stribeck``), the drives' armature (``armature``). Named by
-:func:`law_name`, read by :func:`parse_law`."""
-PLAIN = Law(False, False, False)
-# Every law identify chooses from, the simplest first.
-LAWS = tuple(sorted((Law(d, s, a) for d in (False, True)
-                     for s in (False, True) for a in (False, True)),
-                    key=lambda law: (sum(law), law.armature, law.stribeck)))
 
 
-def law_name(law: 'Law') -> str:
+class Law(tuple):
+    """
+    The terms a law identifies, in :data:`terms.TERMS`' order.
+
+    Named by :attr:`name` (``coulomb+direction+stribeck+armature``: the
+    plain law, then the other terms'), read by :func:`parse_law`.
+    """
+
+    def __new__(cls, members):
+        """Hold ``members`` (terms) in :data:`terms.TERMS`' order."""
+        return super().__new__(cls, (t for t in terms.TERMS if t in members))
+
+    @property
+    def name(self) -> str:
+        """Return ``coulomb``, ``coulomb+direction``, ..."""
+        return '+'.join(['coulomb'] + [
+            term.name for term in self if term not in PLAIN])
+
+    def __repr__(self) -> str:
+        """Show the law by its name."""
+        return f'Law({self.name!r})'
+
+    def columns_order(self) -> tuple[Term, ...]:
+        """Return the terms in the order of ``theta``: drives, friction."""
+        return tuple(sorted(self, key=lambda term: term.friction))
+
+
+# Viscous and Coulomb friction, every law's; the terms a law may add.
+PLAIN = Law((VISCOUS, COULOMB))
+OPTIONAL = tuple(t for t in terms.FORCES if t.identified and t not in PLAIN)
+# Every law identify chooses from: the fewest terms first, and among as
+# many, the later terms of OPTIONAL last.
+LAWS = tuple(sorted(
+    (Law(PLAIN + chosen) for count in range(len(OPTIONAL) + 1)
+     for chosen in combinations(OPTIONAL, count)),
+    key=lambda law: (len(law), [t in law for t in reversed(OPTIONAL)])))
+
+
+def law_name(law: Law) -> str:
     """Name a :class:`Law`: ``coulomb``, ``coulomb+direction``, ..."""
-    return 'coulomb' + '+direction' * law.direction \
-        + '+stribeck' * law.stribeck + '+armature' * law.armature
+    return law.name
 
 
-def parse_law(text: str) -> 'Law':
+def parse_law(text: str) -> Law:
     """Return the :class:`Law` named ``text`` (ValueError if none is)."""
     for law in LAWS:
-        if law_name(law) == text:
+        if law.name == text:
             return law
     raise ValueError(f'unknown law {text!r}: one of '
-                     + ', '.join(law_name(law) for law in LAWS))
+                     + ', '.join(law.name for law in LAWS))
 
 
-def friction_kinds(law: 'Law') -> tuple[str, ...]:
-    """Return the friction coefficients' kinds of ``law``, in order."""
-    return ('viscous', 'coulomb') + ('coulomb_negative',) * law.direction \
-        + ('stribeck',) * law.stribeck
+def parameter(term: Term, leg: str) -> str:
+    """Return a standard parameter's name: ``coulomb_negative_a``."""
+    return f'{terms.coefficient_name(term).removeprefix("friction_")}_{leg}'
 
 
-def standard_names(law: 'Law' = PLAIN) -> tuple[str, ...]:
+def standard_names(law: Law = PLAIN) -> tuple[str, ...]:
     """Return the standard parameters' names of ``law`` (``m1``, ...)."""
-    return MASSES + ARMATURES * law.armature + tuple(
-        f'{kind}_{leg}' for kind in friction_kinds(law) for leg in LEGS)
+    return MASSES + tuple(parameter(term, leg)
+                          for term in law.columns_order() for leg in LEGS)
 
 
 # The standard parameters of the plain law.
 STANDARD = standard_names(PLAIN)
-# Each standard parameter's unit, its Robot field's.
-UNITS = {m: ROW[m].unit for m in MASSES} | dict.fromkeys(
-    ARMATURES, ROW['armature'].unit) | {
-    f'{kind}_{leg}': ROW[field].unit
-    for kind, (field, _) in FRICTION_KINDS.items() for leg in LEGS}
-# What each standard parameter is, in words (the masses' from the robot's
-# parameter descriptions).
+# Each standard parameter's unit, meaning in words and lowest value: its
+# robot.* row's (the masses' meaning from the row's description).
+_ROWS = {m: ROW[m] for m in MASSES} | {
+    parameter(term, leg): term.rows[0]
+    for term in OPTIONAL + PLAIN for leg in LEGS}
+UNITS = {name: row.unit for name, row in _ROWS.items()}
 MEANINGS = {m: ROW[m].description.split(';')[0] for m in MASSES} | {
-    f'armature_{leg}': f'drive inertia reflected onto slider {leg.upper()}'
-    for leg in LEGS} | {
-    f'{kind}_{leg}': f'{words} of slider {leg.upper()}'
-    for kind, (_, words) in FRICTION_KINDS.items() for leg in LEGS}
-# Lowest value of each standard parameter (a Robot's bound).
-LOWER = dict.fromkeys(MASSES, ROW['m1'].limits[0]) | dict.fromkeys(
-    ARMATURES, ROW['armature'].limits[0]) | {
-    f'{kind}_{leg}': ROW[field].limits[0]
-    for kind, (field, _) in FRICTION_KINDS.items() for leg in LEGS}
+    parameter(term, leg): term.meaning.format(f'slider {leg.upper()}')
+    for term in OPTIONAL + PLAIN for leg in LEGS}
+LOWER = {name: row.limits[0] for name, row in _ROWS.items()}
 
 
-def standard_parameters(robot: Robot, law: 'Law' = PLAIN) -> Array:
+def standard_parameters(robot: Robot, law: Law = PLAIN) -> Array:
     """
     Return ``theta`` of ``robot``: its values of :func:`standard_names`.
 
-    Without the ``direction`` term, the Coulomb coefficient is the mean of
-    the robot's two levels; without ``stribeck`` or ``armature`` those
-    terms are left out.
+    Each term's coefficient as a model of ``law`` has it
+    (:func:`terms.coefficient`: without ``direction``, the mean of the
+    robot's two Coulomb levels); terms outside ``law`` are left out.
     """
-    coulomb = robot.friction_coulomb if law.direction else tuple(
-        0.5 * (f + g) for f, g in zip(robot.friction_coulomb,
-                                      robot.friction_coulomb_negative))
     values = [getattr(robot, m) for m in MASSES]
-    if law.armature:
-        values += robot.armature
-    values += list(robot.friction_viscous) + list(coulomb)
-    if law.direction:
-        values += robot.friction_coulomb_negative
-    if law.stribeck:
-        values += robot.friction_stribeck
+    for term in law.columns_order():
+        values += terms.coefficient(robot, term, law)
     return np.array(values, dtype=float)
 
 
-def with_parameters(robot: Robot, theta: Array, law: 'Law' = PLAIN,
+def with_parameters(robot: Robot, theta: Array, law: Law = PLAIN,
                     stribeck_velocity: Optional[float] = None) -> Robot:
     """
     Return ``robot`` with the standard parameters ``theta`` of ``law``.
 
-    Validated. Without the ``direction`` term both Coulomb levels take the
-    Coulomb coefficient; without ``stribeck`` there is no Stribeck term;
-    without ``armature`` the drives keep ``robot``'s; ``stribeck_velocity``
-    (m/s), if given, sets its speed.
+    Validated. Outside ``law``, as :func:`terms.reduced` says: both
+    Coulomb levels take the Coulomb coefficient, no other friction, the
+    drives keep ``robot``'s; ``stribeck_velocity`` (m/s), if given, sets
+    the Stribeck term's speed.
     """
     values = dict(zip(standard_names(law), (float(v) for v in theta)))
     changes: dict[str, Any] = {m: values[m] for m in MASSES}
-    if law.armature:
-        changes['armature'] = tuple(values[a] for a in ARMATURES)
-    for kind in ('viscous', 'coulomb', 'coulomb_negative', 'stribeck'):
-        source = kind if kind in friction_kinds(law) else (
-            'coulomb' if kind == 'coulomb_negative' else None)
-        changes[FRICTION_KINDS[kind][0]] = tuple(
-            values[f'{source}_{leg}'] if source else 0.0 for leg in LEGS)
     if stribeck_velocity is not None:
         changes['friction_stribeck_velocity'] = float(stribeck_velocity)
-    return robot.replace(**changes)
+    given = {term: tuple(values[parameter(term, leg)] for leg in LEGS)
+             for term in law}
+    return terms.reduced(robot.replace(**changes), law, given)
 
 
-def friction_columns(robot: Robot, lambdadot: Array,
-                     law: 'Law' = PLAIN) -> Array:
+def acting(term: Term, law: tuple[Term, ...]) -> tuple[Term, ...]:
     """
-    Return the friction part of ``W`` (N, 3, k) at slider speeds (m/s).
+    Return the terms of ``law`` that ``term``'s coefficient acts through.
 
-    One column per friction coefficient of ``law``: the force of
-    :func:`mechanics.friction_force` for ``robot`` without friction but
-    that coefficient 1 (``friction_velocity`` and
-    ``friction_stribeck_velocity`` are ``robot``'s). Without the
-    ``direction`` term a Coulomb coefficient acts both ways.
+    ``term`` and those whose coefficient follows it (``direction``, the
+    excess over ``coulomb``'s level, acts with it: -1 times).
     """
-    return np.concatenate([kind_columns(robot, lambdadot, kind,
-                                        law.direction)
-                           for kind in friction_kinds(law)], axis=2)
+    return tuple(t for t in law if t is term or terms.leader(t) is term)
 
 
-def kind_columns(robot: Robot, lambdadot: Array, kind: str,
-                 direction: bool) -> Array:
-    """Return the columns (N, 3, 3) of ``kind``'s three coefficients."""
-    bare = robot.frictionless()
-    out = np.empty(lambdadot.shape + (3,))
+def columns(robot: Robot, term: Term, law: tuple[Term, ...],
+            lambdadot: Array, lambdaddot: Array) -> Array:
+    """
+    Return ``term``'s own columns of ``W`` in ``law`` (N, 3): per actuator.
+
+    The forces of ``law``'s terms (:func:`terms.forces`) with ``term``'s
+    coefficient 1 and the others' 0, at the slider rates ``lambdadot``
+    (m/s) and accelerations ``lambdaddot`` (m/s^2), (N, 3) arrays; the
+    column of slider j's coefficient is zero on the other actuators.
+    """
+    unit = robot.replace(**{terms.coefficient_name(t): (
+        1.0 if t is term else 0.0,) * 3 for t in law})
+    out = np.zeros(lambdadot.shape)
+    for j, force in enumerate(terms.forces(unit, acting(term, law),
+                                           lambdadot.T, lambdaddot.T,
+                                           ARRAYS)):
+        out[:, j] += force
+    return out
+
+
+def term_columns(robot: Robot, lambdadot: Array, lambdaddot: Array,
+                 law: Law = PLAIN) -> Array:
+    """
+    Return the terms' part of ``W`` (N, 3, k) at the slider motion.
+
+    One column per coefficient of ``law`` (:func:`standard_names` less the
+    masses), the force of its term with that coefficient 1 and the others
+    0 (:func:`columns`; ``friction_velocity`` and
+    ``friction_stribeck_velocity`` are ``robot``'s).
+    """
+    return np.concatenate([diagonal(columns(robot, term, law, lambdadot,
+                                            lambdaddot))
+                           for term in law.columns_order()], axis=2)
+
+
+def diagonal(own: Array) -> Array:
+    """Return (N, 3, 3) columns from each actuator's own (N, 3)."""
+    out = np.zeros(own.shape + (3,))
     for j in range(3):
-        one = tuple(float(j == i) for i in range(3))
-        unit = {FRICTION_KINDS[kind][0]: one}
-        if kind == 'coulomb' and not direction:
-            unit['friction_coulomb_negative'] = one
-        out[:, :, j] = mechanics.friction_force(bare.replace(**unit),
-                                                lambdadot)
+        out[:, j, j] = own[:, j]
     return out

@@ -1,16 +1,13 @@
 """
 A log on uniform grids, filtered as the least squares need it.
 
-:class:`Motion` cuts a :class:`formats.logs.Log` into pieces between its
-gaps, puts each on a uniform grid, takes the platform's motion from the
-measured ``lambda`` (:func:`mechanics.forward_kinematics`) through a
-zero-phase Butterworth low-pass (``scipy.signal.sosfiltfilt``), its
-velocity and acceleration by central differences, the rigid columns of
-``W`` at every sample, and filters, trims and decimates whatever is
-computed from them alike: the forces at any lag, the friction columns at
-any Stribeck speed, a robot's forces. :func:`prepare` gives the
-:class:`Samples` of one law; :func:`estimate_lag` the forces' delay on the
-states. ``doc/identification.md`` gives the reasons for each choice.
+:class:`Motion` cuts a :class:`formats.logs.Log` at its gaps, puts each
+piece on a uniform grid, takes the platform's motion from the measured
+``lambda`` (eq. 14, through a zero-phase Butterworth low-pass), its rates
+by central differences, and filters, trims and decimates alike whatever is
+computed from it: the forces at any lag, the columns of ``W``, a robot's
+forces. :func:`prepare` gives the :class:`Samples` of one law;
+:func:`estimate_lag` the forces' delay. See doc/identification.md#the-filter.
 """
 
 from __future__ import annotations
@@ -24,14 +21,14 @@ import numpy as np
 from orthoglide_ros.formats.logs import check_log, LogError
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.tools.identification.laws import (
-    friction_kinds, kind_columns, PLAIN)
-from orthoglide_ros.tools.identification.regressor import (
-    rigid_columns, rigid_of)
+    acting, columns as own_columns, diagonal, PLAIN)
+from orthoglide_ros.tools.identification.regressor import rigid_columns
 from orthoglide_ros.model.types import Array
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.formats.logs import Log
     from orthoglide_ros.model.robot import Robot
+    from orthoglide_ros.model.terms import Term
     from orthoglide_ros.tools.identification.laws import Law
 
 # The log's processing (doc/identification.md): a 4th-order Butterworth
@@ -99,18 +96,17 @@ interpolated).
 
 Piece = namedtuple('Piece', ('grid', 'stamps', 'forces', 'position',
                              'velocity', 'acceleration', 'lambdas',
-                             'lambdadot', 'rigid'))
+                             'lambdadot', 'lambdaddot', 'rigid'))
 
 
 class Motion:
     """
     A log on uniform grids, piece by piece between its gaps (:func:`prepare`).
 
-    Holds each piece's motion and the rigid columns of ``W`` (the masses
-    and the drives: :data:`regressor.RIGID`) at the log's rate, and
-    filters, trims and decimates whatever is computed from them alike
-    (:meth:`filtered`): the forces at any lag (:meth:`forces`), the
-    friction columns at any Stribeck speed (:meth:`friction`), a law's
+    Holds each piece's motion and the masses' columns of ``W`` at the
+    log's rate, and filters, trims and decimates whatever is computed from
+    them alike (:meth:`filtered`): the forces at any lag (:meth:`forces`),
+    a term's columns at any Stribeck speed (:meth:`own_columns`), a law's
     whole ``W`` (:meth:`columns`), a robot's forces
     (:meth:`model_forces`).
     """
@@ -186,7 +182,8 @@ class Motion:
                                f'{grid[error.row]:.6g} s: {error}') from None
             self.pieces.append(Piece(
                 grid, t, forces[start:end], position, velocity, acceleration,
-                reference.lambda_, reference.lambdadot, rigid))
+                reference.lambda_, reference.lambdadot,
+                reference.lambdaddot, rigid))
             self.inner.append(slice(trim, len(grid) - trim, self.step))
         if not self.pieces:
             raise LogError(f'{log.source}: no piece of the log lasts more '
@@ -204,7 +201,7 @@ class Motion:
                          / period - 1.0).sum()))
         self.times = self.kept([p.grid for p in self.pieces])
         self.rigid = self.filtered([p.rigid for p in self.pieces])
-        self._kinds = {}
+        self._own = {}
 
     def kept(self, arrays: Sequence[Array]) -> Array:
         """Return the samples kept of per-piece arrays, joined."""
@@ -225,38 +222,30 @@ class Motion:
     def columns(self, law: Law,
                 stribeck_velocity: Optional[float] = None) -> Array:
         """Return ``W`` (M, 3, n) of ``law`` along the motion (kept)."""
-        return np.concatenate((rigid_of(self.rigid, law),
-                               self.friction(law, stribeck_velocity)),
-                              axis=2)
+        robot = self.robot if stribeck_velocity is None else \
+            self.robot.replace(friction_stribeck_velocity=stribeck_velocity)
+        return np.concatenate([self.rigid] + [
+            diagonal(self.own_columns(term, law, robot))
+            for term in law.columns_order()], axis=2)
 
-    def friction(self, law: Law,
-                 stribeck_velocity: Optional[float] = None) -> Array:
-        """Return the friction columns of ``law`` (at that Stribeck speed)."""
-        return np.concatenate([self._kind(kind, law.direction,
-                                          stribeck_velocity)
-                               for kind in friction_kinds(law)], axis=2)
-
-    def _kind(self, kind, direction, stribeck_velocity):
+    def own_columns(self, term: Term, law: Law,
+                    robot: Optional[Robot] = None) -> Array:
         """
-        Return the filtered columns (M, 3, 3) of one kind (kept).
+        Return ``term``'s filtered columns (M, 3) in ``law`` (kept).
 
-        A coefficient's column acts on its own actuator only: that one
-        series is filtered.
+        Each actuator's own (:func:`laws.columns`): that one series is
+        filtered. ``robot`` (default the motion's) gives the parameters of
+        the term's other rows (the Stribeck speed searched).
         """
-        key = (kind, direction and kind == 'coulomb',
-               stribeck_velocity if kind == 'stribeck' else None)
-        if key not in self._kinds:
-            robot = self.robot if key[2] is None else self.robot.replace(
-                friction_stribeck_velocity=key[2])
-            own = self.filtered([
-                np.einsum('njj->nj', kind_columns(robot, p.lambdadot, kind,
-                                                  direction))
+        robot = robot or self.robot
+        members = acting(term, law)
+        key = (term.name, tuple(t.name for t in members), tuple(
+            getattr(robot, row.name) for t in members for row in t.rows[1:]))
+        if key not in self._own:
+            self._own[key] = self.filtered([
+                own_columns(robot, term, law, p.lambdadot, p.lambdaddot)
                 for p in self.pieces])
-            columns = np.zeros(own.shape + (3,))
-            for j in range(3):
-                columns[:, j, j] = own[:, j]
-            self._kinds[key] = columns
-        return self._kinds[key]
+        return self._own[key]
 
     def model_forces(self, robot: Robot) -> Array:
         """

@@ -1,19 +1,14 @@
 """
 The regressor ``W`` of the forces, and the base parameters a log can find.
 
-``f = W(r_G, rdot_G, rddot_G) theta``: the forces are linear in the
-standard parameters of a :class:`laws.Law`. :func:`regressor` builds ``W``
-from the package's own inverse dynamics, not from a second model: a mass's
-or a drive's column is the difference of the forces of two robots that
-differ by 1 kg in it (exact, the forces being linear in them), a friction
-coefficient's the friction law with that coefficient 1.
-:func:`base_parameters` finds which combinations act together (the slider
-and the rod it carries move as one; so do the two bars of a
-parallelogram; the rods 4 ride with the platform; with the drives, the
-slider's own mass and its drive's inertia are seen apart only through
-gravity) by a QR decomposition with column pivoting of ``W`` at random
-states: the base parameters ``beta = P theta`` are those a log can
-identify. :func:`condition_number` says how well a motion excites them.
+``f = W(r_G, rdot_G, rddot_G) theta``, linear in the standard parameters
+of a :class:`laws.Law`: :func:`regressor` builds ``W`` from the package's
+own inverse dynamics (eq. 25; a mass's column a difference of two
+robots' forces, a term's its force at coefficient 1), not from a second
+model; :func:`base_parameters` finds the combinations a log can identify
+by a QR decomposition with column pivoting at random states;
+:func:`condition_number` says how well a motion excites them. See
+doc/identification.md#base-parameters.
 """
 
 from __future__ import annotations
@@ -24,19 +19,15 @@ import math
 
 import numpy as np
 
-from orthoglide_ros.model import mechanics
+from orthoglide_ros.model import mechanics, terms
 from orthoglide_ros.tools.identification.laws import (
-    ARMATURES, friction_columns, MASSES, MEANINGS, PLAIN, standard_names,
-    standard_parameters)
+    Law, MASSES, MEANINGS, OPTIONAL, PLAIN, standard_names,
+    standard_parameters, term_columns)
 from orthoglide_ros.model.types import Array, Rows
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.robot import Robot
-    from orthoglide_ros.tools.identification.laws import Law
 
-# The columns of the rigid part of W, whatever the law: the masses, then
-# the drives' armature (a law without it leaves those out).
-RIGID = MASSES + ARMATURES
 # States at which the base parameters are found: random, uniform in a
 # cube of half side BASE_BOX (m) inside the workspace, with speeds up to
 # BASE_SPEED (m/s) and accelerations up to BASE_ACCELERATION (m/s^2) per
@@ -74,20 +65,16 @@ def regressor(robot: Robot, positions: Rows, velocities: Rows,
     ``positions`` (m), ``velocities`` (m/s), ``accelerations`` (m/s^2):
     (N, 3) arrays of the platform centre in frame 0. Built from
     :func:`mechanics.solve_batch` on ``robot``'s geometry and gravity (its
-    masses, drives and friction do not matter): the rigid columns of
-    :func:`rigid_columns` the law holds, the friction columns
-    :func:`laws.friction_columns` of ``law`` at the samples' ``lambdadot``.
-    Raises :class:`mechanics.WorkspaceError` as ``solve_batch`` does.
+    masses, drives and friction do not matter): the masses' columns of
+    :func:`rigid_columns`, then the terms' of ``law``
+    (:func:`laws.term_columns`) at the samples' ``lambdadot`` and
+    ``lambdaddot``. Raises :class:`mechanics.WorkspaceError` as
+    ``solve_batch`` does.
     """
     rigid, reference = rigid_columns(robot, positions, velocities,
                                      accelerations, margin)
-    return np.concatenate((rigid_of(rigid, law), friction_columns(
-        robot, reference.lambdadot, law)), axis=2)
-
-
-def rigid_of(rigid: Array, law: Law) -> Array:
-    """Return the columns of ``rigid`` (..., 9) that ``law`` holds."""
-    return rigid if law.armature else rigid[..., :len(MASSES)]
+    return np.concatenate((rigid, term_columns(
+        robot, reference.lambdadot, reference.lambdaddot, law)), axis=2)
 
 
 def rigid_columns(robot: Robot, positions: Rows, velocities: Rows,
@@ -95,26 +82,21 @@ def rigid_columns(robot: Robot, positions: Rows, velocities: Rows,
                   margin: float = mechanics.DEFAULT_SINGULARITY_MARGIN
                   ) -> tuple[Array, mechanics.Solution]:
     """
-    Return the columns (N, 3, 9) of RIGID and the kinematics.
+    Return the masses' columns (N, 3, 6) and the kinematics.
 
     Column ``m_i`` is the force of a robot whose masses are all 1 kg but
-    ``m_i``, 2 kg, less that of the robot whose masses are all 1 kg;
-    ``armature_j`` that of the robot with 1 kg of armature on drive j less
-    the one without (no payload, no friction). The kinematics: a
+    ``m_i``, 2 kg, less that of the robot whose masses are all 1 kg (no
+    term: no payload, drive or friction). The kinematics: a
     :class:`mechanics.Solution` along the motion.
     """
-    unit = robot.frictionless().replace(
-        payload=0.0, armature=(0.0, 0.0, 0.0), **dict.fromkeys(MASSES, 1.0))
+    unit = terms.rigid(robot).replace(**dict.fromkeys(MASSES, 1.0))
     reference = mechanics.solve_batch(unit, positions, velocities,
                                       accelerations, margin)
-    changes = [{name: 2.0} for name in MASSES] + [
-        {'armature': tuple(float(i == j) for i in range(3))}
-        for j in range(3)]
-    out = np.empty(reference.force.shape + (len(changes),))
-    for i, change in enumerate(changes):
+    out = np.empty(reference.force.shape + (len(MASSES),))
+    for i, name in enumerate(MASSES):
         out[:, :, i] = mechanics.solve_batch(
-            unit.replace(**change), positions, velocities, accelerations,
-            margin).force - reference.force
+            unit.replace(**{name: 2.0}), positions, velocities,
+            accelerations, margin).force - reference.force
     return out, reference
 
 
@@ -209,11 +191,12 @@ def design_law(robot: Robot) -> Law:
     """
     Return the law an excitation for ``robot`` is designed for.
 
-    The plain law, with the armature where ``robot`` has drives: a motion
-    that tells each drive's inertia from the masses (which gravity alone
-    does for ``m1 + m2``).
+    The plain law, with the terms that are no friction (the drives) that
+    ``robot`` has: a motion that tells each drive's inertia from the
+    masses (which gravity alone does for ``m1 + m2``).
     """
-    return PLAIN._replace(armature=any(robot.armature))
+    return Law(PLAIN + tuple(term for term in OPTIONAL if not term.friction
+                             and term in robot.active_terms))
 
 
 def condition_number(robot: Robot, positions: Rows, velocities: Rows,
