@@ -6,10 +6,10 @@ README's test command:
 
 - ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``: Fast DDS discovers only on the
   loopback interface (otherwise it multicasts out of the network card);
-- ``ROS_DOMAIN_ID``: one per test session (drawn from the process id, and
-  never the caller's own domain; ``ORTHOGLIDE_TEST_DOMAIN_ID`` overrides),
-  so parallel runs and a live ROS graph on the same machine do not see each
-  other;
+- ``ROS_DOMAIN_ID``: one per test process (each pytest-xdist worker too),
+  held with a lock file so that no other session of this suite on the host
+  takes it, and never the caller's own domain (see :func:`_claim_domain`;
+  ``ORTHOGLIDE_TEST_DOMAIN_ID`` overrides);
 - ``ROS_LOG_DIR``: a temporary directory, so tests leave no logs behind.
 
 It names the checkout the proving ground runs from
@@ -17,21 +17,66 @@ It names the checkout the proving ground runs from
 """
 
 from contextlib import contextmanager
+import fcntl
 import os
+from pathlib import Path
+import re
 import sys
 import tempfile
 
 import pytest
 
+# The domains a session may take: odd ones, so that a test's neighbour
+# domain (test_isolation.py: domain + 1) and the network namespaces' domain
+# (orthoglide_testing.live_graph.namespace_domain: domain + 117, modulo)
+# are even and never another session's.
+SESSION_DOMAINS = range(1, 232, 2)
+DOMAIN_LOCKS = Path(tempfile.gettempdir()) / 'orthoglide-test-domains'
+
+
+def _claim_domain():
+    """
+    Return this process's ROS domain, and the lock that holds it.
+
+    ``ORTHOGLIDE_TEST_DOMAIN_ID`` (the N-th xdist worker: that plus 2 N)
+    wins. Otherwise the first of SESSION_DOMAINS, from one drawn from the
+    process id on, whose lock file no other process holds (an exclusive
+    ``flock``, released when the process ends), other than the domain of
+    the caller (``ROS_DOMAIN_ID`` as the session found it).
+    """
+    worker = os.environ.get('PYTEST_XDIST_WORKER', 'gw0')   # gw0, gw1, ...
+    explicit = os.environ.get('ORTHOGLIDE_TEST_DOMAIN_ID')
+    if explicit:
+        return int(explicit) + 2 * int(worker[2:]), None
+    # The xdist controller runs first: its workers see the caller's domain.
+    caller = os.environ.setdefault('ORTHOGLIDE_CALLER_DOMAIN_ID',
+                                   os.environ.get('ROS_DOMAIN_ID', '0'))
+    start = os.getpid() % len(SESSION_DOMAINS)
+    DOMAIN_LOCKS.mkdir(exist_ok=True)
+    for k in range(len(SESSION_DOMAINS)):
+        domain = SESSION_DOMAINS[(start + k) % len(SESSION_DOMAINS)]
+        if str(domain) == caller:
+            continue
+        lock = open(DOMAIN_LOCKS / f'{domain}.lock', 'a')
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            lock.close()
+            continue
+        return domain, lock
+    raise RuntimeError(f'every test domain is taken ({DOMAIN_LOCKS})')
+
+
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-_CALLER_DOMAIN = os.environ.get('ROS_DOMAIN_ID', '0')
-_DOMAIN = 1 + os.getpid() % 232
-if str(_DOMAIN) == _CALLER_DOMAIN:
-    _DOMAIN = _DOMAIN % 232 + 1
-# An explicit choice wins (e.g. a range agreed on a shared machine).
-_DOMAIN = int(os.environ.get('ORTHOGLIDE_TEST_DOMAIN_ID', _DOMAIN))
+_DOMAIN, _DOMAIN_LOCK = _claim_domain()
 os.environ['ROS_DOMAIN_ID'] = str(_DOMAIN)
 os.environ.setdefault('ROS_LOG_DIR', tempfile.mkdtemp(prefix='orthoglide-ros-log-'))
+
+
+def _soak(config):
+    """Whether this is the soak run: ``-m soak`` or ``ORTHOGLIDE_SOAK=1``."""
+    return os.environ.get('ORTHOGLIDE_SOAK') == '1' or bool(re.search(
+        r'(?<!not )\bsoak\b', config.getoption('markexpr') or ''))
 
 
 @contextmanager
@@ -106,8 +151,7 @@ def pytest_collection_modifyitems(config, items):
     or ``ORTHOGLIDE_SOAK=1`` runs them; the default run has a short version
     of each.
     """
-    if os.environ.get('ORTHOGLIDE_SOAK') == '1' \
-            or 'soak' in (config.getoption('markexpr') or ''):
+    if _soak(config):
         return
     skip = pytest.mark.skip(
         reason='soak test: select it with -m soak or ORTHOGLIDE_SOAK=1')
