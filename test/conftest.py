@@ -10,7 +10,9 @@ README's test command:
   held with a lock file so that no other session of this suite on the host
   takes it, and never the caller's own domain (see :func:`_claim_domain`;
   ``ORTHOGLIDE_TEST_DOMAIN_ID`` overrides);
-- ``ROS_LOG_DIR``: a temporary directory, so tests leave no logs behind.
+- ``ROS_LOG_DIR``: a temporary directory, so tests leave no logs behind;
+- the hypothesis profile (:mod:`hypothesis_profiles`): ``default``, or
+  ``thorough`` in the soak run.
 
 It names the checkout the proving ground runs from
 (:func:`orthoglide_testing.use_checkout`, pytest's root directory).
@@ -24,6 +26,8 @@ import re
 import sys
 import tempfile
 
+from hypothesis import settings
+import hypothesis_profiles  # noqa: F401 (registers the profiles)
 import pytest
 
 # The domains a session may take: odd ones, so that a test's neighbour
@@ -124,14 +128,19 @@ def closed_loop():
         yield running
 
 
+@pytest.hookimpl(trylast=True)
 def pytest_configure(config):
     """
     Name the checkout to ``orthoglide_testing`` (its ``config/``, its cwd).
 
     ``scripts/setup_venv.sh`` installs it; where it is not installed
     (``colcon test``), it is taken from the checkout's ``testing/``, for
-    the processes the tests start too.
+    the processes the tests start too. Load the ``thorough`` hypothesis
+    profile for the soak run, unless one is named (after hypothesis' own
+    hook: trylast).
     """
+    if _soak(config) and not config.getoption('hypothesis_profile'):
+        settings.load_profile('thorough')
     try:
         import orthoglide_testing
     except ImportError:

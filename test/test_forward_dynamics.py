@@ -31,6 +31,7 @@ quotient and the comparison is to rounding.
 import math
 
 from hypothesis import given, settings, strategies as st
+from hypothesis_profiles import examples
 from mechanics_reference import (
     cube_points, lagrange_forces, lambda_jacobian, mass_matrix,
     OTHER_ROBOT_VALUES, potential_gradient, vectors)
@@ -62,7 +63,7 @@ def actuator_inertia(robot, position):
                            mass_matrix(robot, position))
 
 
-@settings(deadline=None, max_examples=150)
+@settings(deadline=None, max_examples=examples(150))
 @given(position=cube_points(), velocity=vectors(3.0),
        acceleration=vectors(30.0), gravity=st.sampled_from(sorted(GRAVITIES)),
        robot_name=st.sampled_from(sorted(ROBOTS)))
@@ -81,7 +82,7 @@ def test_forward_dynamics_inverts_the_inverse_dynamics(
     assert np.abs(np.array(got) - acceleration).max() <= bound + 1e-300
 
 
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points(), velocity=vectors(3.0), force=vectors(300.0),
        gravity=st.sampled_from(sorted(GRAVITIES)),
        robot_name=st.sampled_from(sorted(ROBOTS)))
@@ -104,7 +105,7 @@ def test_acceleration_equals_lagrange_model(position, velocity, force,
     assert np.abs(got - expected).max() <= bound + 1e-300
 
 
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points(), force=vectors(300.0), gravity=vectors(10.0),
        robot_name=st.sampled_from(sorted(ROBOTS)))
 def test_acceleration_at_rest_equals_the_exact_reference(

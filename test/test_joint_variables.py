@@ -8,6 +8,7 @@ reference's complex-step ``J_lambda``); both refuse what ``solve`` refuses.
 """
 
 from hypothesis import given, settings
+from hypothesis_profiles import examples
 from mechanics_reference import (
     COMPLEX_STEP, cube_points, lambda_jacobian, leg_geometry, LEGS,
     vectors)
@@ -30,7 +31,7 @@ def reference(robot, position, velocity):
     return out
 
 
-@settings(deadline=None, max_examples=60)
+@settings(deadline=None, max_examples=examples(60))
 @given(position=cube_points(), velocity=vectors(1.0))
 def test_leg_joints_are_eq9_and_its_derivative(robot, position, velocity):
     legs = leg_joints(robot, position, velocity)
@@ -65,7 +66,7 @@ def test_refusals_are_those_of_solve():
     assert error.value.reason == 'singular' and error.value.row == 1
 
 
-@settings(deadline=None, max_examples=60)
+@settings(deadline=None, max_examples=examples(60))
 @given(position=cube_points(), velocity=vectors(1.0))
 def test_platform_velocity_inverts_j_lambda(robot, position, velocity):
     rates = lambda_jacobian(robot, position) @ velocity

@@ -21,6 +21,7 @@ most its norm, which the bound includes.
 """
 
 from hypothesis import given, settings, strategies as st
+from hypothesis_profiles import examples
 from mechanics_reference import (
     cube_points, DRIVES_ROBOT_VALUES, lagrange_forces, lambda_jacobian,
     mass_matrix, OTHER_ROBOT_VALUES, potential_gradient, vectors)
@@ -48,7 +49,7 @@ def tolerance(ref, velocity, acceleration):
     return inverse_t * (fd_part + exact_part) + 1e-300
 
 
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points(), velocity=vectors(3.0),
        acceleration=vectors(30.0), gravity=st.sampled_from(sorted(GRAVITIES)),
        robot_name=st.sampled_from(sorted(ROBOTS)))
@@ -61,7 +62,7 @@ def test_forces_equal_lagrange_forces(position, velocity, acceleration,
         ref, velocity, acceleration)
 
 
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points(), acceleration=vectors(30.0),
        gravity=vectors(10.0), robot_name=st.sampled_from(sorted(ROBOTS)))
 def test_forces_at_zero_velocity_equal_the_exact_reference(
