@@ -123,8 +123,13 @@ def tool_commands():
     for path in DOCUMENTS:
         for step in tool_steps(path):
             if step.line.startswith(TOOL):
-                yield pytest.param(step, id=f'{path.name}:{step.number} '
-                                   f'{step.line.split()[1]}')
+                words = step.line.split()
+                # 1.5 s of CPU or more (as conftest.SLOW): a GIF, an
+                # optimisation.
+                slow = words[1] == 'animate' or '--optimize' in words
+                yield pytest.param(
+                    step, id=f'{path.name}:{step.number} {words[1]}',
+                    marks=[pytest.mark.slow] if slow else [])
 
 
 def node_commands():
