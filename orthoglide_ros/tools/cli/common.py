@@ -8,6 +8,7 @@ range and the options several subcommands take.
 """
 
 import argparse
+from collections import namedtuple
 import io
 import math
 import os
@@ -322,12 +323,18 @@ count = within(int, 0)
 positive_count = within(int, 1)
 
 
-def add_subcommand(sub, parents, name, run, help, description):
-    """Add subcommand ``name``, run by ``run``, with ``parents``' options."""
-    parser = sub.add_parser(name, parents=parents, help=help,
-                            description=description)
-    parser.set_defaults(run=run)
-    return parser
+class Subcommand(namedtuple('Subcommand',
+                            'name run add help description robot',
+                            defaults=(True,))):
+    """
+    One subcommand: a row of its module's ``SUBCOMMANDS`` table.
+
+    ``run(robot, args)`` does the work; ``add(parser)`` adds its own
+    options; ``help`` (the line in the list of commands) and
+    ``description`` (its ``--help``); ``robot``: it takes ``--params``.
+    """
+
+    __slots__ = ()
 
 
 def add_output(parser, what, required=False, metavar='FILE'):
