@@ -41,31 +41,19 @@ def _run(module):
             signal.signal(number, signal.SIG_IGN)
 
 
-def feedforward():
-    """Run the ``feedforward`` node; return its exit code."""
-    return _run('feedforward_node')
+def _node(name):
+    """Return node ``name``'s console script: run it, return its exit code."""
+    def script():
+        return _run(f'{name}_node')
+    script.__name__ = script.__qualname__ = name
+    script.__doc__ = f'Run the ``{name}`` node; return its exit code.'
+    return script
 
 
-def simulator():
-    """Run the ``simulator`` node; return its exit code."""
-    return _run('simulator_node')
-
-
-def tracking_controller():
-    """Run the ``tracking_controller`` node; return its exit code."""
-    return _run('tracking_controller_node')
-
-
-def setpoint_publisher():
-    """Run the ``setpoint_publisher`` node; return its exit code."""
-    return _run('setpoint_publisher_node')
-
-
-def mechanism_state_publisher():
-    """Run the ``mechanism_state_publisher`` node; return its exit code."""
-    return _run('mechanism_state_publisher_node')
-
-
-def planner():
-    """Run the ``planner`` node; return its exit code."""
-    return _run('planner_node')
+# The console scripts of setup.py, one per node.
+feedforward = _node('feedforward')
+simulator = _node('simulator')
+tracking_controller = _node('tracking_controller')
+setpoint_publisher = _node('setpoint_publisher')
+mechanism_state_publisher = _node('mechanism_state_publisher')
+planner = _node('planner')
