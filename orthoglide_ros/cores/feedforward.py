@@ -286,7 +286,7 @@ class Feedforward(Core):
         if source == 'cartesian_trajectory':
             self.trajectory_rejected[rejection.reason] += 1
         else:
-            self.rejected[rejection.reason] += 1
+            super().count(source, rejection)
 
     def expire(self, now):
         """Drop the partial setpoints older than pairing_timeout; count them."""
