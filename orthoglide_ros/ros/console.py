@@ -5,7 +5,7 @@ Before any import of rclpy or numpy, each script bounds the process's
 memory (:func:`orthoglide_ros.cores.memory.bound`) and makes SIGINT and
 SIGTERM only record a stop (:data:`STOP`, read by ``node_runtime.run``):
 exit code 0 and nothing on standard error at any moment
-(``doc/robustness.md``, start and stop). Once ``main()`` returns both are
+(``doc/robustness.md``, start and stop). Once the node has run, both are
 ignored: a signal during Fast DDS's teardown (138-187 ms) would end the
 process with -2. That can go when the teardown takes no time to speak of
 (``benchmarks/upstream_checks.py``, ``teardown``). Standard library only.
@@ -31,29 +31,32 @@ def _record(number, frame):
     STOP.append(number)
 
 
-def _run(module):
+def _run(name, node_class):
     install_signal_handlers()
     memory.bound()
     try:
-        return importlib.import_module(f'orthoglide_ros.ros.{module}').main()
+        module = importlib.import_module(f'orthoglide_ros.ros.{name}_node')
+        from orthoglide_ros.ros.node_runtime import run
+        return run(getattr(module, node_class), name)
     finally:
         for number in (signal.SIGINT, signal.SIGTERM):
             signal.signal(number, signal.SIG_IGN)
 
 
-def _node(name):
+def _node(name, node_class):
     """Return node ``name``'s console script: run it, return its exit code."""
     def script():
-        return _run(f'{name}_node')
+        return _run(name, node_class)
     script.__name__ = script.__qualname__ = name
     script.__doc__ = f'Run the ``{name}`` node; return its exit code.'
     return script
 
 
-# The console scripts of setup.py, one per node.
-feedforward = _node('feedforward')
-simulator = _node('simulator')
-tracking_controller = _node('tracking_controller')
-setpoint_publisher = _node('setpoint_publisher')
-mechanism_state_publisher = _node('mechanism_state_publisher')
-planner = _node('planner')
+# The console scripts of setup.py, one per node: its module, its class.
+feedforward = _node('feedforward', 'FeedforwardNode')
+simulator = _node('simulator', 'SimulatorNode')
+tracking_controller = _node('tracking_controller', 'TrackingControllerNode')
+setpoint_publisher = _node('setpoint_publisher', 'SetpointPublisher')
+mechanism_state_publisher = _node('mechanism_state_publisher',
+                                  'MechanismStatePublisherNode')
+planner = _node('planner', 'PlannerNode')
