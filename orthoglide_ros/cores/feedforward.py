@@ -16,15 +16,15 @@ import time
 
 import numpy as np
 
-from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.mechanics import ZERO
 from orthoglide_ros.cores import realtime, setpoint_rules
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.inputs import (check_stamp, check_time,
                                          NANOSECONDS, Rejected,
                                          trajectory_times)
-from orthoglide_ros.cores.parameters import joint_names_spec, \
-    nonnegative_triple, ParameterError, Spec, Table
+from orthoglide_ros.cores.parameters import (
+    arrival_timeout_spec, base_frame_spec, joint_names_spec,
+    nonnegative_triple, ParameterError, singularity_margin_spec, Spec, Table)
 from orthoglide_ros.cores.status import OK, WARN
 
 # Most partial setpoints held at once; beyond, the oldest is dropped.
@@ -114,25 +114,24 @@ def _pairing_within_setpoint_timeout(settings):
 PARAMETERS = Table('Settings', (
     joint_names_spec('names of the prismatic joints of actuators A, B, C '
                      'in feedforward/joint_states'),
-    Spec('base_frame', 'string', 'base_link',
-         'frame of the setpoints (the paper\'s frame 0); a setpoint stamped '
-         'with another non-empty frame is rejected'),
+    base_frame_spec('frame of the setpoints (the paper\'s frame 0); a '
+                    'setpoint stamped with another non-empty frame is '
+                    'rejected'),
     Spec('rate_hz', 'double', 0.0,
          'control tick in Hz: 0.0 computes and publishes once per new '
          'setpoint; a positive value publishes the newest setpoint\'s '
          'result at this fixed rate', (0.0, 10000.0)),
-    Spec('setpoint_timeout', 'double', 0.1,
-         'seconds (by arrival time) without a fresh setpoint after which '
-         'the node stops publishing until the next fresh setpoint',
-         (0.001, 3600.0)),
+    arrival_timeout_spec('setpoint_timeout', 0.1, 0.001,
+                         'without a fresh setpoint after which the node '
+                         'stops publishing until the next fresh setpoint'),
     Spec('pairing_timeout', 'double', 0.05,
          'seconds a partial setpoint (pose, twist or accel of one stamp) '
          'waits for its partners before it is dropped; at most '
          'setpoint_timeout', (0.0001, 3600.0)),
-    Spec('singularity_margin', 'double', mechanics.DEFAULT_SINGULARITY_MARGIN,
-         'smallest accepted singularity distance, min(alpha_i / l3, '
-         '1 / kappa_F(J_lambda)), both 1 at home and 0 at a singularity of '
-         'J1 or J2', (0.0, 0.99)),
+    singularity_margin_spec(
+        'smallest accepted singularity distance, min(alpha_i / l3, '
+        '1 / kappa_F(J_lambda)), both 1 at home and 0 at a singularity of '
+        'J1 or J2'),
     Spec('pose_only', 'bool', False,
          'serve each pose alone as a setpoint with zero velocity and '
          'acceleration (twist and accel topics ignored); trajectory points '

@@ -16,7 +16,8 @@ from orthoglide_ros.cores.inputs import (check_stamp, read_joint_state,
                                          Rejected)
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
 from orthoglide_ros.cores import realtime
-from orthoglide_ros.cores.parameters import joint_names_spec, Spec, Table
+from orthoglide_ros.cores.parameters import (joint_names_spec,
+                                             singularity_margin_spec, Table)
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.status import OK
 from orthoglide_ros.model.urdf import moving_joints, RATES
@@ -29,10 +30,10 @@ PARAMETERS = Table('MechanismStateSettings', (
         'names of the prismatic joints of actuators A, B, C: read from '
         'joint_states by name, and the sliders\' names in the URDF and in '
         'mechanism/joint_states'),
-    Spec('singularity_margin', 'double', DEFAULT_SINGULARITY_MARGIN,
-         'smallest singularity distance min(alpha_i / l3, 1 / '
-         'kappa_F(J_lambda)) of a published state; nearer a singularity '
-         'the joint state is refused (singular)', (0.0, 0.99)),
+    singularity_margin_spec(
+        'smallest singularity distance min(alpha_i / l3, 1 / '
+        'kappa_F(J_lambda)) of a published state; nearer a singularity '
+        'the joint state is refused (singular)'),
     *realtime.SPECS,
 ), robot=True)
 

@@ -30,7 +30,8 @@ import numpy as np
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.inputs import Rejected
-from orthoglide_ros.cores.parameters import field, Spec, Table
+from orthoglide_ros.cores.parameters import (base_frame_spec, field, Spec,
+                                             Table)
 from orthoglide_ros.cores.status import OK
 from orthoglide_ros.model.robot import JOINT_NAMES, ParameterError
 from orthoglide_ros.planning.gcode import ProgramError
@@ -73,8 +74,7 @@ def _limits_rule(settings):
 
 
 PARAMETERS = Table('PlannerSettings', (
-    Spec('base_frame', 'string', 'base_link',
-         'frame of the path\'s poses and of the published motion'),
+    base_frame_spec('frame of the path\'s poses and of the published motion'),
     Spec('max_speed', 'double', 0.0,
          'largest speed of G (m/s); 0.0: none beside the limits',
          (0.0, 100.0)),

@@ -15,11 +15,11 @@ import time
 
 from orthoglide_ros.model import mechanics, mujoco_plant
 from orthoglide_ros.cores.inputs import joint_columns, Rejected
-from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, \
-    format_vector, ZERO
+from orthoglide_ros.model.mechanics import format_vector, ZERO
 from orthoglide_ros.cores import realtime
-from orthoglide_ros.cores.parameters import joint_names_spec, ParameterError, \
-    Spec, Table, triple
+from orthoglide_ros.cores.parameters import (
+    arrival_timeout_spec, base_frame_spec, joint_names_spec, ParameterError,
+    singularity_margin_spec, Spec, Table, triple)
 from orthoglide_ros.model.plant import Diverged, Plant
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.status import ERROR, OK, WARN
@@ -121,21 +121,20 @@ PARAMETERS = Table('SimulatorSettings', (
          'position of the platform centre G (m, base frame) at start and '
          'after ~/reset, at rest; must lie in the workspace (applies at the '
          'next reset)', check=triple),
-    Spec('command_timeout', 'double', 0.1,
-         'seconds (by arrival time) without a valid command after which a '
-         'running simulation brakes: back to held, velocity zero; at least '
-         'one step (1/rate_hz)', (0.001, 3600.0)),
+    arrival_timeout_spec('command_timeout', 0.1, 0.001,
+                         'without a valid command after which a running '
+                         'simulation brakes: back to held, velocity zero; '
+                         'at least one step (1/rate_hz)'),
     Spec('force_limit', 'double', 1000.0,
          'largest actuator force magnitude (N, each actuator); commands '
          'beyond it are clipped and the clipping counted', (0.001, 1.0e6)),
-    Spec('singularity_margin', 'double', DEFAULT_SINGULARITY_MARGIN,
-         'workspace limit: smallest singularity distance a step may reach, '
-         'min(alpha_i / l3, 1 / kappa_F(J_lambda)); a step beyond it stops '
-         'the simulation (applies at the next reset)', (0.01, 0.99)),
+    singularity_margin_spec(
+        'workspace limit: smallest singularity distance a step may reach, '
+        'min(alpha_i / l3, 1 / kappa_F(J_lambda)); a step beyond it stops '
+        'the simulation (applies at the next reset)', low=0.01),
     joint_names_spec('names of the prismatic joints of actuators A, B, C '
                      'in joint_states'),
-    Spec('base_frame', 'string', 'base_link',
-         'frame_id of platform/pose (the paper\'s frame 0)'),
+    base_frame_spec('frame_id of platform/pose (the paper\'s frame 0)'),
     Spec('engine', 'string', 'builtin',
          'what integrates the plant: builtin (the package\'s forward '
          'dynamics, RK4) or mujoco (the robot\'s MJCF in MuJoCo); applies '
