@@ -5,7 +5,7 @@ import os
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools.cli.common import (
     add_output, add_position, add_size, CliError, read_trajectory,
-    Subcommand, within, workspace_reason, write_output)
+    solve_trajectory, Subcommand, within, write_output)
 
 # Pictures: size limits (pixels) and the animation's defaults.
 MIN_PIXELS, MAX_PIXELS = 100, 4000
@@ -104,18 +104,10 @@ def run_animate(robot, args):
         where = 'the paper trajectory'
         lines = None
     else:
-        where = '<stdin>' if args.input == '-' else args.input
-        times, p, v, a, lines = read_trajectory(args.input, where)
+        where, times, p, v, a, lines = read_trajectory(args.input)
         if not len(p):
             raise CliError(f'{where}: no data row')
-    try:
-        sol = mechanics.solve_batch(robot, p, v, a)
-    except mechanics.WorkspaceError as error:
-        if lines is None:
-            raise CliError(f'{where} at t = {times[error.row]:.6g} s: '
-                           f'{workspace_reason(error)}') from None
-        raise CliError(f'{where}: data row {error.row + 1} (line '
-                       f'{lines[error.row]}): {workspace_reason(error)}') from None
+    sol = solve_trajectory(robot, where, times, lines, p, v, a)
     rows = drawing.frame_rows(len(p), args.frames)
     data = drawing.animate(
         robot, None if times is None else times[rows], p[rows],

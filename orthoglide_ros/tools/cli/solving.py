@@ -15,8 +15,8 @@ from orthoglide_ros.formats.params_file import load_parameters
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools.cli.common import (
     add_output, add_position, CliError, CSV_COLUMNS, csv_text, new_figure,
-    png_bytes, PROG, QUANTITIES, read_trajectory, Subcommand, table_row,
-    within, workspace_reason, write_output)
+    png_bytes, PROG, QUANTITIES, read_trajectory, solve_trajectory,
+    Subcommand, table_row, within, write_output)
 
 DEFAULT_SAMPLES = 201
 UNITS = {'lambda': 'm', 'lambdadot': 'm/s', 'lambdaddot': 'm/s^2',
@@ -41,11 +41,8 @@ def run_paper(robot, args):
     """Solve the trajectory of eq. (6); write the CSV, plot or summary."""
     times = trajectory.paper_times(args.samples)
     p, v, a = trajectory.paper_batch(times)
-    try:
-        sol = mechanics.solve_batch(robot, p, v, a)
-    except mechanics.WorkspaceError as error:
-        raise CliError(f'the paper trajectory at t = {times[error.row]:.6g} '
-                       f's: {workspace_reason(error)}') from None
+    sol = solve_trajectory(robot, 'the paper trajectory', times, None, p, v,
+                           a)
     outputs = []
     if args.plot is not None:
         outputs.append((args.plot, _plot_png(times, sol)))
@@ -143,13 +140,8 @@ def add_batch(parser):
 
 def run_batch(robot, args):
     """Solve every row of a trajectory file; write CSV or a JointTrajectory."""
-    name = '<stdin>' if args.input == '-' else args.input
-    times, p, v, a, lines = read_trajectory(args.input, name)
-    try:
-        sol = mechanics.solve_batch(robot, p, v, a)
-    except mechanics.WorkspaceError as error:
-        raise CliError(f'{name}: data row {error.row + 1} (line '
-                       f'{lines[error.row]}): {workspace_reason(error)}') from None
+    name, times, p, v, a, lines = read_trajectory(args.input)
+    sol = solve_trajectory(robot, name, times, lines, p, v, a)
     if args.format == 'joint_trajectory':
         data = _joint_trajectory_yaml(_time_from_start(times, lines, name),
                                       sol, _joint_names(args.params))
