@@ -16,7 +16,7 @@ import re
 
 import yaml
 
-from orthoglide_ros.formats.text import clip
+from orthoglide_ros.formats.text import clip, read_text
 from orthoglide_ros.model.robot import (is_vector, ParameterError, Robot,
                                         ROW, ROWS)
 from orthoglide_ros.model.types import Path
@@ -77,17 +77,11 @@ def read_yaml(path: Path, error: type = ParametersFileError) -> Any:
     path: the parameters file's or another YAML file's (joint limits).
     """
     try:
-        with open(path, 'rb') as stream:
-            data = stream.read(MAX_FILE_BYTES + 1)
-    except OSError as failure:
-        raise error(f'{path}: {failure.strerror}') from None
-    if len(data) > MAX_FILE_BYTES:
-        raise error(f'{path}: larger than {MAX_FILE_BYTES} bytes')
+        text = read_text(path, MAX_FILE_BYTES)
+    except ValueError as failure:
+        raise error(f'{path}: {failure}') from None
     try:
-        return yaml.load(data.decode('utf-8'), Loader=_RclLoader)
-    except UnicodeDecodeError as failure:
-        raise error(f'{path}: not UTF-8 text (byte {failure.start})') \
-            from None
+        return yaml.load(text, Loader=_RclLoader)
     except yaml.YAMLError as failure:
         raise error(f'{path}: not valid YAML: '
                     f'{" ".join(str(failure).split())}') from None
