@@ -23,8 +23,8 @@ from orthoglide_ros.cores.inputs import (check_stamp, check_time,
                                          NANOSECONDS, Rejected,
                                          trajectory_times)
 from orthoglide_ros.cores.parameters import (
-    arrival_timeout_spec, base_frame_spec, joint_names_spec,
-    nonnegative_triple, ParameterError, singularity_margin_spec, Spec, Table)
+    arrival_timeout_spec, at_most, base_frame_spec, joint_names_spec,
+    nonnegative_triple, singularity_margin_spec, Spec, Table)
 from orthoglide_ros.cores.status import OK, WARN
 
 # Most partial setpoints held at once; beyond, the oldest is dropped.
@@ -104,13 +104,6 @@ def _first_bad(reason, bad, what):
         raise Rejected(reason, f'point {int(np.argmax(bad))} {what}')
 
 
-def _pairing_within_setpoint_timeout(settings):
-    if settings.pairing_timeout > settings.setpoint_timeout:
-        raise ParameterError('pairing_timeout', (
-            f'must not exceed setpoint_timeout ({settings.pairing_timeout} '
-            f'> {settings.setpoint_timeout} s)'))
-
-
 PARAMETERS = Table('Settings', (
     joint_names_spec('names of the prismatic joints of actuators A, B, C '
                      'in feedforward/joint_states'),
@@ -156,7 +149,7 @@ PARAMETERS = Table('Settings', (
          'setpoint or trajectory that needs more is refused (force_limit)',
          (0.001, 1.0e7)),
     *realtime.SPECS,
-), rules=(_pairing_within_setpoint_timeout,), robot=True)
+), rules=(at_most('pairing_timeout', 'setpoint_timeout', 's'),), robot=True)
 
 
 class Feedforward(Core):

@@ -143,6 +143,16 @@ def joint_names(value):
     return names
 
 
+def one_of(choices):
+    """Return a Spec check: the value one of ``choices``."""
+    def check(value):
+        if value not in choices:
+            raise ValueError(f'must be one of {", ".join(choices)}, got '
+                             f'{value!r}')
+        return value
+    return check
+
+
 def triple(value):
     """Return a double array of exactly three values as a tuple."""
     if len(value) != 3:
@@ -157,6 +167,16 @@ def nonnegative_triple(value):
     if not all(v >= 0.0 for v in value):
         raise ValueError(f'must be >= 0, got {list(value)!r}')
     return value
+
+
+def at_most(name, other, unit):
+    """Return a rule across rows: parameter ``name`` at most ``other``."""
+    def rule(settings):
+        value, bound = getattr(settings, name), getattr(settings, other)
+        if value > bound:
+            raise ParameterError(name, f'must not exceed {other} ({value} > '
+                                 f'{bound} {unit})')
+    return rule
 
 
 # Rows several nodes declare: name, type, default and range once, the
