@@ -26,6 +26,16 @@ from orthoglide_ros.tools.identification import DEFAULT_CUTOFF, report
 TOPIC_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
 
 
+# The excitation's bounds (trajectory.excitation's keywords), as options.
+_EXCITATION_BOUNDS = (
+    ('box', trajectory.EXCITATION_BOX, 'M', 'largest |x|, |y|, |z| from '
+     'home (m'),
+    ('max_velocity', trajectory.EXCITATION_MAX_VELOCITY, 'M/S',
+     'largest speed per axis (m/s'),
+    ('max_acceleration', trajectory.EXCITATION_MAX_ACCELERATION, 'M/S2',
+     'largest acceleration per axis (m/s^2'))
+
+
 def add_excitation(parser):
     """Add the options of ``excitation``: a periodic motion for identification."""
     parser.add_argument('--duration', type=positive_float,
@@ -48,18 +58,11 @@ def add_excitation(parser):
     parser.add_argument('--rate', type=positive_float, default=1000.0,
                         metavar='HZ', help='samples per second of the '
                         'file (default 1000)')
-    parser.add_argument('--box', type=positive_float,
-                        default=trajectory.EXCITATION_BOX, metavar='M',
-                        help='largest |x|, |y|, |z| from home (m; '
-                        'default %(default)g)')
-    parser.add_argument('--max-velocity', type=positive_float,
-                        default=trajectory.EXCITATION_MAX_VELOCITY,
-                        metavar='M/S', help='largest speed per axis '
-                        '(m/s; default %(default)g)')
-    parser.add_argument('--max-acceleration', type=positive_float,
-                        default=trajectory.EXCITATION_MAX_ACCELERATION,
-                        metavar='M/S2', help='largest acceleration per '
-                        'axis (m/s^2; default %(default)g)')
+    for bound, default, metavar, what in _EXCITATION_BOUNDS:
+        parser.add_argument('--' + bound.replace('_', '-'),
+                            type=positive_float, default=default,
+                            metavar=metavar, help=f'{what}; default '
+                            '%(default)g)')
     parser.add_argument('--max-force', type=positive_float,
                         default=math.inf, metavar='N',
                         help='largest actuator force of the --params '
@@ -84,8 +87,7 @@ def run_excitation(robot, args):
         raise CliError(str(error)) from None
     base = identification.base_parameters(
         robot, identification.design_law(robot))
-    bounds = dict(box=args.box, max_velocity=args.max_velocity,
-                  max_acceleration=args.max_acceleration)
+    bounds = {bound: getattr(args, bound) for bound, *_ in _EXCITATION_BOUNDS}
     rows = []
     for seed in range(args.seed, args.seed + args.seeds):
         motion = _excitation(robot, seed, args.duration, bounds)
