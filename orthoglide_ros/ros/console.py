@@ -32,12 +32,12 @@ def _record(number, frame):
 
 
 def _run(name, node_class):
-    install_signal_handlers()
+    stop = install_signal_handlers()
     memory.bound()
     try:
         module = importlib.import_module(f'orthoglide_ros.ros.{name}_node')
         from orthoglide_ros.ros.node_runtime import run
-        return run(getattr(module, node_class), name)
+        return run(getattr(module, node_class), name, stop)
     finally:
         for number in (signal.SIGINT, signal.SIGTERM):
             signal.signal(number, signal.SIG_IGN)
