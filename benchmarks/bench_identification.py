@@ -25,6 +25,7 @@ import subprocess
 import sys
 import time
 
+from orthoglide_testing.arguments import script_parser
 
 TARGET_S = 5.0
 TARGET_SAMPLES = 30_000
@@ -76,13 +77,9 @@ def one_run(samples):
 
 def main(argv=None):
     """Run the benchmark and print its figures; return 0."""
-    parser = argparse.ArgumentParser(
-        description=__doc__.strip().split('\n\n')[0])
-    parser.add_argument('--samples', type=int, default=TARGET_SAMPLES,
-                        help='log length at 1 kHz (default %(default)s)')
-    parser.add_argument('--repeat', type=int, default=3,
-                        help='fresh processes, best kept (default '
-                        '%(default)s)')
+    parser = script_parser(
+        __doc__, ('--samples', TARGET_SAMPLES, 'log length at 1 kHz'),
+        ('--repeat', 3, 'fresh processes, best kept'))
     parser.add_argument('--one', action='store_true', help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.one:

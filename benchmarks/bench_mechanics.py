@@ -24,7 +24,6 @@ robot with viscous and Coulomb friction (the default robot has none, and
 Usage: python benchmarks/bench_mechanics.py [--samples N] [--repeat R]
 """
 
-import argparse
 import os
 import platform
 import sys
@@ -36,6 +35,7 @@ import numpy as np
 from orthoglide_ros.model import trajectory  # noqa: E402
 from orthoglide_ros.model import mechanics  # noqa: E402
 from orthoglide_ros.model.robot import Robot  # noqa: E402
+from orthoglide_testing.arguments import script_parser  # noqa: E402
 
 SINGLE_TARGET_US = 25.0
 FORWARD_TARGET_US = 100.0
@@ -86,18 +86,12 @@ def verdict(ok):
 
 def main(argv=None):
     """Run the benchmark and print its figures; return 0."""
-    parser = argparse.ArgumentParser(
-        description=__doc__.strip().split('\n\n')[0])
-    parser.add_argument('--samples', type=int, default=BATCH_TARGET_N,
-                        help='batch size N (default %(default)s)')
-    parser.add_argument('--repeat', type=int, default=7,
-                        help='batch repeats, best kept (default %(default)s;'
-                        ' the slow loop baseline runs min(3, R))')
-    parser.add_argument('--calls', type=int, default=20000,
-                        help='timed single-sample calls (default '
-                        '%(default)s)')
-    parser.add_argument('--warmup', type=int, default=2000,
-                        help='untimed warm-up calls (default %(default)s)')
+    parser = script_parser(
+        __doc__, ('--samples', BATCH_TARGET_N, 'batch size N'),
+        ('--repeat', 7, 'batch repeats, best kept; the slow loop baseline '
+         'runs min(3, R)'),
+        ('--calls', 20000, 'timed single-sample calls'),
+        ('--warmup', 2000, 'untimed warm-up calls'))
     args = parser.parse_args(argv)
 
     robot = Robot()

@@ -23,7 +23,6 @@ Usage: python benchmarks/bench_memory.py [--rate 1000] [--settle 5]
        [--scripts DIR] [--json FILE]
 """
 
-import argparse
 import json
 import os
 import platform
@@ -39,6 +38,7 @@ from rclpy.node import Node  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 
 from orthoglide_testing import use_checkout  # noqa: E402
+from orthoglide_testing.arguments import script_parser  # noqa: E402
 from orthoglide_testing.messages import qos_profile  # noqa: E402
 from orthoglide_testing.probe import spin_until  # noqa: E402
 from orthoglide_testing.processes import (memory_kb,  # noqa: E402
@@ -141,16 +141,11 @@ def table(results, window):
 
 def main():
     """Run the benchmark; return the exit code."""
-    parser = argparse.ArgumentParser(
-        description=__doc__.strip().split('\n')[0])
-    parser.add_argument('--rate', type=float, default=1000.0,
-                        help='setpoints per second (default 1000)')
-    parser.add_argument('--settle', type=float, default=5.0,
-                        help='seconds of flow before the window (default 5)')
-    parser.add_argument('--window', type=float, default=10.0,
-                        help='seconds measured (default 10)')
-    parser.add_argument('--rounds', default='lock,plain',
-                        help='lock and/or plain, comma-separated')
+    parser = script_parser(
+        __doc__, ('--rate', 1000.0, 'setpoints per second'),
+        ('--settle', 5.0, 'seconds of flow before the window'),
+        ('--window', 10.0, 'seconds measured'),
+        ('--rounds', 'lock,plain', 'lock and/or plain, comma-separated'))
     parser.add_argument('--engine', default='builtin',
                         choices=('builtin', 'mujoco'),
                         help="the simulator's engine (default builtin)")

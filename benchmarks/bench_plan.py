@@ -99,24 +99,6 @@ def plan_times(robot, limits, repeat):
               f'{motion.duration:>12.4f}')
 
 
-def _grid(path, per_metre=20000):
-    """Return a fine grid of every piece, junctions twice (index, w, s, stops)."""
-    index, w, s, stops = [], [], [], []
-    start = 0.0
-    for k, piece in enumerate(path.pieces):
-        n = max(16, int(piece.length * per_metre))
-        ws = np.linspace(0.0, piece.length, n + 1)
-        index.append(np.full(n + 1, k))
-        w.append(ws)
-        s.append(start + ws)
-        flags = np.zeros(n + 1, bool)
-        flags[0], flags[-1] = path.stops[k], path.stops[k + 1]
-        stops.append(flags)
-        start += piece.length
-    return (np.concatenate(index), np.concatenate(w), np.concatenate(s),
-            np.concatenate(stops))
-
-
 def kinematic(robot, path, limits):
     """
     Return the CNC-style planner's largest Cartesian acceleration limit.
@@ -124,23 +106,11 @@ def kinematic(robot, path, limits):
     Returns ``(acceleration, duration)``: the largest per-axis limit
     (m/s^2) whose motion keeps every force within ``limits.effort``.
     """
-    index, w, s, stops = _grid(path, 4000)
-    p, d1, d2 = path.evaluate(index, w)
-    feed = np.array([path.pieces[k].feed for k in index])
+    kinematic_motion = phase_plane.kinematic_planner(path, RATE)
 
     def motion(acceleration):
-        rows = phase_plane.cartesian_rows(s, d1, d2, feed, acceleration,
-                                          stops)
-        x = phase_plane.optimal_profile(rows)
-        t, law, sdot, sddot = phase_plane.timed_law(s, x, RATE)
-        k = np.clip(np.searchsorted(s, law, side='right') - 1, 0,
-                    len(s) - 2)
-        piece = index[k]
-        pos, e1, e2 = path.evaluate(piece, np.clip(
-            w[k] + law - s[k], 0.0, [path.pieces[j].length for j in piece]))
-        force = mechanics.solve_batch(
-            robot, pos, e1 * sdot[:, None],
-            e1 * sddot[:, None] + e2 * (sdot ** 2)[:, None]).force
+        t, p, v, a = kinematic_motion(acceleration)
+        force = mechanics.solve_batch(robot, p, v, a).force
         return float(t[-1]), float((np.abs(force) / limits.effort).max())
 
     low, high = 0.1, 200.0
@@ -201,7 +171,7 @@ def acceptance(robot, limits):
         cpu = time.process_time() - start
         worst = lagrange_check(robot, motion, limits, range(len(motion.t)))
         if optimum_path is None:
-            index, w, _, _ = _grid(path, 20000)
+            index, w, _, _ = phase_plane.fine_grid(path, 20000)
             dense = path.evaluate(index, w)[0]
             distance = path_distance(motion.position, dense).max()
             what = 'the programmed path'
@@ -229,8 +199,8 @@ def independent_optimum(robot, path, limits, reference, friction):
     about one point per millimetre, interpolated along each piece onto a
     grid of 20 points per millimetre.
     """
-    index, w, s, stops = _grid(path, 20000)
-    coarse_index, coarse_w, _, _ = _grid(path, 1000)
+    index, w, s, stops = phase_plane.fine_grid(path, 20000)
+    coarse_index, coarse_w, _, _ = phase_plane.fine_grid(path, 1000)
     p, d1, d2 = path.evaluate(coarse_index, coarse_w)
     frictionless = robot.frictionless()
     inertia = frictionless.replace(gravity=(0.0, 0.0, 0.0))

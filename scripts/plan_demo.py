@@ -53,41 +53,15 @@ RATE = 1000.0       # Hz, the planned samples
 
 def kinematic(path, duration):
     """Return ``(acceleration, t, p, v, a)``: the same path, same duration."""
-    index, w, s, stops = [], [], [], []
-    start = 0.0
-    for k, piece in enumerate(path.pieces):
-        n = max(16, int(piece.length * 4000))
-        ws = np.linspace(0.0, piece.length, n + 1)
-        index.append(np.full(n + 1, k))
-        w.append(ws)
-        s.append(start + ws)
-        flags = np.zeros(n + 1, bool)
-        flags[0], flags[-1] = path.stops[k], path.stops[k + 1]
-        stops.append(flags)
-        start += piece.length
-    index, w, s, stops = map(np.concatenate, (index, w, s, stops))
-    _, d1, d2 = path.evaluate(index, w)
-    feed = np.array([path.pieces[k].feed for k in index])
-
-    def law(acceleration):
-        rows = phase_plane.cartesian_rows(s, d1, d2, feed, acceleration,
-                                          stops)
-        return phase_plane.timed_law(s, phase_plane.optimal_profile(rows),
-                                     RATE)
+    motion = phase_plane.kinematic_planner(path, RATE)
     low, high = 0.05, 500.0
     for _ in range(40):     # the acceleration that takes ``duration``
         middle = math.sqrt(low * high)
-        if law(middle)[0][-1] > duration:
+        if motion(middle)[0][-1] > duration:
             low = middle
         else:
             high = middle
-    t, law_s, sdot, sddot = law(high)
-    k = np.clip(np.searchsorted(s, law_s, side='right') - 1, 0, len(s) - 2)
-    lengths = np.array([path.pieces[j].length for j in index[k]])
-    p, e1, e2 = path.evaluate(index[k], np.clip(w[k] + law_s - s[k], 0.0,
-                                                lengths))
-    return (high, t, p, e1 * sdot[:, None],
-            e1 * sddot[:, None] + e2 * (sdot ** 2)[:, None])
+    return (high, *motion(high))
 
 
 def as_motion(t, p, v, a):

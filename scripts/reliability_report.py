@@ -33,7 +33,6 @@ output, a setpoint lost under reliable QoS, a fuzz failure, a run that
 could not be done), else 0; missed time or memory bounds are reported.
 """
 
-import argparse
 import os
 import re
 import subprocess
@@ -56,6 +55,7 @@ os.environ.setdefault('ROS_LOG_DIR',
 import numpy as np  # noqa: E402
 
 from orthoglide_testing import use_checkout  # noqa: E402
+from orthoglide_testing.arguments import script_parser  # noqa: E402
 from orthoglide_testing import hostile  # noqa: E402
 from orthoglide_testing.hostile import logs as hostile_logs  # noqa: E402
 from orthoglide_testing.hostile.streams import \
@@ -220,169 +220,197 @@ def report(results, fuzz, args, elapsed):
     return lines, bool(hard)
 
 
+def _parameter_requests(r):
+    return (all(o.refused and o.alive and o.answers_after and o.code == 0
+                for o in r.values()),
+            'malformed parameter request (type 200), set and atomic: '
+            + ', '.join(n + (' refused, up' if o.refused and o.alive
+                             else ' FAILED') for n, o in r.items()))
+
+
+def _absurd_parameters(r):
+    refused = all(not ok for changes in r.runtime.values()
+                  for ok, _ in changes.values())
+    return (refused and all(r.alive.values()) and all(
+        code == 2 for code, _ in r.startup.values()),
+        f'absurd values ({", ".join(hostile.ABSURD["simulator"])}, ...): '
+        f'refused at run time {refused}, nodes up {all(r.alive.values())}; '
+        '-p robot.l3:=1e200 at start: exit '
+        f'{[code for code, _ in r.startup.values()]}')
+
+
+def _big_messages(r):
+    return (r['missing'] == 0 and r['crashes'] == 0
+            and r['latency_during_max'] <= r['latency_outside_max'] + 0.1,
+            f'{r["attacks"]} messages of 3-16 MB on setpoint/trajectory '
+            f'beside a reliable {r["rate"]} Hz stream: {r["sent"]} sent, '
+            f'{r["missing"]} lost; latency max '
+            f'{r["latency_outside_max"] * 1e3:.1f} ms without, '
+            f'{r["latency_during_max"] * 1e3:.1f} ms during the attack (p99 '
+            f'{r["latency_outside_p99"] * 1e3:.1f} / '
+            f'{r["latency_during_p99"] * 1e3:.1f}); {r["rejected"]}')
+
+
+def _stall_resume(r):
+    worst_f = max(s.max_force for s in r.stalls.values())
+    worst_v = max(s.max_speed for s in r.stalls.values())
+    return (worst_f < r.force_limit and worst_v <= 2 * r.peak_speed,
+            f'2 s SIGSTOP of each process of the closed loop: largest '
+            f'|command| {worst_f:.0f} N (limit {r.force_limit:.0f}), largest '
+            f'|lambdadot| {worst_v:.3f} m/s (trajectory peak '
+            f'{r.peak_speed:.3f}); per process '
+            + ', '.join(f'{n} {s.max_force:.0f} N {s.max_speed:.3f} m/s'
+                        for n, s in r.stalls.items()))
+
+
+def _stamps(r):
+    return (r.outputs == 0 and r.good == 2,
+            f'nanosec >= 1e9 on every input: {r.outputs} outputs, '
+            f'{r.rejected_stamp} rejected (stamp); the same instants '
+            f'written right: {r.good} of 2 served')
+
+
+def _startup_signals(r):
+    bad = [(t.name, t.signal, t.delay, t.code) for t in r
+           if t.code != 0 or not hostile.quiet(t.stderr)]
+    return (not bad, 'SIGINT/SIGTERM 0-0.3 s after the first line, every '
+            f'node, and at the end of a pass: {len(r)} tries, {len(bad)} '
+            f'not exit 0 quietly {bad[:3]}')
+
+
+def _log_amplification(r):
+    return (all(o.longest <= hostile.LOG_LINE_LIMIT for o in r.values()),
+            'long text and malformed floods: longest log line '
+            + ', '.join(f'{n} {o.longest} chars ({o.lines} lines)'
+                        for n, o in r.items()))
+
+
+def _departed_clients(r):
+    return (max(r.gaps.values()) <= 0.2,
+            f'{r.requests} requests then gone, x3 (simulator set and '
+            '~/reset, feedforward set): longest output gap '
+            + ', '.join(f'{n} {g * 1e3:.0f} ms' for n, g in r.gaps.items())
+            + f'; replies dropped {r.dropped}; while the clients joined '
+            '(apart): ' + ', '.join(f'{n} {g * 1e3:.0f} ms'
+                                    for n, g in r.joining.items()))
+
+
+def _isolated_clients(r):
+    return (all(n == r.fresh for n in r.answered.values())
+            and all(n == r.stalls for n in r.after_stalls.values()),
+            'a TRANSIENT_LOCAL client stays: fresh clients answered '
+            f'{r.answered} of {r.fresh}; after {r.stalls} 150 ms stalls '
+            f'{r.after_stalls} of {r.stalls}; its requests carried out '
+            f'{r.carried_out}')
+
+
+def _fast_simulator(r):
+    spurious = r.timeouts - 1 - r.stall_brakes
+    return (r.received == r.sent and spurious == 0,
+            'simulator rate_hz 10000, commands at 500 Hz: '
+            f'{r.received}/{r.sent} taken, {spurious} spurious timeouts '
+            f'({r.stall_brakes} after its own stalls), {r.step_rate:.0f} '
+            f'steps/s, status {r.message!r}')
+
+
+def _setpoint_loop(r):
+    return (r.jump_p <= r.jump_p_bound and r.jump_v <= r.jump_v_bound,
+            f'looping setpoint publisher, {r.passes} passes: largest step '
+            f'{r.jump_p * 1e3:.3f} mm (bound {r.jump_p_bound * 1e3:.3f}), '
+            f'largest velocity step {r.jump_v * 1e3:.3f} mm/s (bound '
+            f'{r.jump_v_bound * 1e3:.3f})')
+
+
+def _trajectory_flood(r):
+    return (r.saturated == 0 and r.max_speed <= 0.5
+            and r.mode == 'following' and r.final_error < 1e-3,
+            f'a new joint trajectory every ms ({r.sent}), targets 0/10 mm: '
+            f'{r.saturated} of {r.commands} commands saturated, largest '
+            f'{r.max_force:.0f} N, {r.max_speed:.3f} m/s; {r.superseded} '
+            f'superseded; then home within {r.final_error * 1e3:.3f} mm '
+            f'({r.mode})')
+
+
+def _absurd_values(r):
+    return (r.feedforward_outputs == 0 and r.commands == 0,
+            f'1e200 m/s^2, 1e300 N and m/s, 5 m: {r.feedforward_outputs} '
+            f'outputs, {r.commands} commands; {r.feedforward_rejected}, '
+            f'{r.controller_rejected}')
+
+
+def _fast_client(label):
+    def judge(r):
+        return (r.code == 0 and r.after and r.lines <= int(r.seconds) + 1,
+                f'{label}, one client as fast as answered: {r.answered} in '
+                f'{r.seconds:.1f} s, {r.lines} log lines (said left out '
+                f'{r.left_out}), the service still works {r.after}')
+    return judge
+
+
+def _forged_text(r):
+    return (not r.not_log_lines and not r.control,
+            '"\\n[FATAL] ... FORGED" as a label, a parameter value, a frame '
+            f'id: {len(r.not_log_lines)} forged lines, {len(r.control)} with '
+            'a control character')
+
+
+def _mechanism_stamps(r):
+    return (r.bad_outputs == 0 and r.stamps_out == [(0, 0), (9, 5)],
+            'nanosec 2e9, negative seconds at the mechanism state '
+            f'publisher: {r.bad_outputs} outputs, {r.rejected_stamp} '
+            f'rejected (stamp); zero and valid stamps served {r.stamps_out}')
+
+
+def hostile_cases():
+    """Return the hostile-peer cases: (label, run, kwargs, judge) rows."""
+    return (
+        ('malformed parameter requests', hostile.malformed_parameters, {},
+         _parameter_requests),
+        ('absurd parameters', hostile.absurd_parameters, {},
+         _absurd_parameters),
+        ('big messages', harness.big_messages, {'say': say}, _big_messages),
+        ('stall and resume', hostile.stall_resume, {}, _stall_resume),
+        ('stamps', hostile.stamps, {}, _stamps),
+        ('signals while starting', hostile.startup_signals, {},
+         _startup_signals),
+        ('log amplification', hostile.log_amplification, {},
+         _log_amplification),
+        ('departed clients', hostile.departed_clients, {}, _departed_clients),
+        ('isolated clients', hostile.isolated_clients, {}, _isolated_clients),
+        ('simulator at 10 kHz', hostile.fast_simulator, {}, _fast_simulator),
+        ('setpoint loop', hostile.setpoint_loop, {}, _setpoint_loop),
+        ('trajectory flood', hostile.trajectory_flood, {}, _trajectory_flood),
+        ('absurd values', hostile.absurd_values, {}, _absurd_values),
+        ('refused transitions', hostile_logs.refused_transitions, {},
+         _fast_client('refused transitions')),
+        ('resets', hostile_logs.resets, {}, _fast_client('resets')),
+        ('forged log lines', hostile_logs.forged_text, {}, _forged_text),
+        ('mechanism state stamps', mechanism_stamps, {}, _mechanism_stamps))
+
+
 def hostile_report():
     """Run the hostile-peer cases; return the report's lines and a failure."""
     lines, hard = ['', 'Hostile peers and stalls:'], False
-
-    def line(ok, text):
-        nonlocal hard
-        hard = hard or not ok
-        lines.append(f'- {"ok    " if ok else "MISSED"} {text}')
-
-    def run(label, function, **kwargs):
+    for label, function, kwargs, judge in hostile_cases():
         say(f'{label} ...')
         try:
-            return function(**kwargs)
+            ok, text = judge(function(**kwargs))
         except (hostile.HarnessError, harness.HarnessError) as error:
-            line(False, f'{label}: NOT DONE: {error}')
-            return None
-
-    r = run('malformed parameter requests', hostile.malformed_parameters)
-    if r is not None:
-        line(all(o.refused and o.alive and o.answers_after and o.code == 0
-                 for o in r.values()),
-             'malformed parameter request (type 200), set and atomic: '
-             + ', '.join(n + (' refused, up' if o.refused and o.alive
-                              else ' FAILED') for n, o in r.items()))
-    r = run('absurd parameters', hostile.absurd_parameters)
-    if r is not None:
-        refused = all(not ok for changes in r.runtime.values()
-                      for ok, _ in changes.values())
-        line(refused and all(r.alive.values()) and all(
-            code == 2 for code, _ in r.startup.values()),
-             f'absurd values ({", ".join(hostile.ABSURD["simulator"])}, '
-             f'...): refused at run time {refused}, nodes up '
-             f'{all(r.alive.values())}; -p robot.l3:=1e200 at start: '
-             f'exit {[code for code, _ in r.startup.values()]}')
-    r = run('big messages', harness.big_messages, say=say)
-    if r is not None:
-        line(r['missing'] == 0 and r['crashes'] == 0
-             and r['latency_during_max'] <= r['latency_outside_max'] + 0.1,
-             f'{r["attacks"]} messages of 3-16 MB on setpoint/trajectory '
-             f'beside a reliable {r["rate"]} Hz stream: {r["sent"]} sent, '
-             f'{r["missing"]} lost; latency max '
-             f'{r["latency_outside_max"] * 1e3:.1f} ms without, '
-             f'{r["latency_during_max"] * 1e3:.1f} ms during '
-             f'the attack (p99 {r["latency_outside_p99"] * 1e3:.1f} / '
-             f'{r["latency_during_p99"] * 1e3:.1f}); {r["rejected"]}')
-    r = run('stall and resume', hostile.stall_resume)
-    if r is not None:
-        worst_f = max(s.max_force for s in r.stalls.values())
-        worst_v = max(s.max_speed for s in r.stalls.values())
-        line(worst_f < r.force_limit and worst_v <= 2 * r.peak_speed,
-             f'2 s SIGSTOP of each process of the closed loop: largest '
-             f'|command| {worst_f:.0f} N (limit {r.force_limit:.0f}), '
-             f'largest |lambdadot| {worst_v:.3f} m/s (trajectory peak '
-             f'{r.peak_speed:.3f}); per process '
-             + ', '.join(f'{n} {s.max_force:.0f} N {s.max_speed:.3f} m/s'
-                         for n, s in r.stalls.items()))
-    r = run('stamps', hostile.stamps)
-    if r is not None:
-        line(r.outputs == 0 and r.good == 2,
-             f'nanosec >= 1e9 on every input: {r.outputs} outputs, '
-             f'{r.rejected_stamp} rejected (stamp); the same instants '
-             f'written right: {r.good} of 2 served')
-    r = run('signals while starting', hostile.startup_signals)
-    if r is not None:
-        bad = [(t.name, t.signal, t.delay, t.code) for t in r
-               if t.code != 0 or not hostile.quiet(t.stderr)]
-        line(not bad, f'SIGINT/SIGTERM 0-0.3 s after the first line, every '
-             f'node, and at the end of a pass: {len(r)} tries, '
-             f'{len(bad)} not exit 0 quietly {bad[:3]}')
-    r = run('log amplification', hostile.log_amplification)
-    if r is not None:
-        line(all(o.longest <= hostile.LOG_LINE_LIMIT for o in r.values()),
-             'long text and malformed floods: longest log line '
-             + ', '.join(f'{n} {o.longest} chars ({o.lines} lines)'
-                         for n, o in r.items()))
-    r = run('departed clients', hostile.departed_clients)
-    if r is not None:
-        line(max(r.gaps.values()) <= 0.2,
-             f'{r.requests} requests then gone, x3 (simulator set and '
-             f'~/reset, feedforward set): longest output gap '
-             + ', '.join(f'{n} {g * 1e3:.0f} ms' for n, g in r.gaps.items())
-             + f'; replies dropped {r.dropped}; while the clients '
-             f'joined (apart): '
-             + ', '.join(f'{n} {g * 1e3:.0f} ms'
-                         for n, g in r.joining.items()))
-    r = run('isolated clients', hostile.isolated_clients)
-    if r is not None:
-        line(all(n == r.fresh for n in r.answered.values())
-             and all(n == r.stalls for n in r.after_stalls.values()),
-             f'a TRANSIENT_LOCAL client stays: fresh clients answered '
-             f'{r.answered} of {r.fresh}; after {r.stalls} 150 ms stalls '
-             f'{r.after_stalls} of {r.stalls}; its requests carried out '
-             f'{r.carried_out}')
-    r = run('simulator at 10 kHz', hostile.fast_simulator)
-    if r is not None:
-        spurious = r.timeouts - 1 - r.stall_brakes
-        line(r.received == r.sent and spurious == 0,
-             f'simulator rate_hz 10000, commands at 500 Hz: {r.received}'
-             f'/{r.sent} taken, {spurious} spurious timeouts '
-             f'({r.stall_brakes} after its own stalls), '
-             f'{r.step_rate:.0f} steps/s, status {r.message!r}')
-    r = run('setpoint loop', hostile.setpoint_loop)
-    if r is not None:
-        line(r.jump_p <= r.jump_p_bound and r.jump_v <= r.jump_v_bound,
-             f'looping setpoint publisher, {r.passes} passes: largest '
-             f'step {r.jump_p * 1e3:.3f} mm (bound '
-             f'{r.jump_p_bound * 1e3:.3f}), largest velocity step '
-             f'{r.jump_v * 1e3:.3f} mm/s (bound '
-             f'{r.jump_v_bound * 1e3:.3f})')
-    r = run('trajectory flood', hostile.trajectory_flood)
-    if r is not None:
-        line(r.saturated == 0 and r.max_speed <= 0.5
-             and r.mode == 'following' and r.final_error < 1e-3,
-             f'a new joint trajectory every ms ({r.sent}), targets 0/10 mm: '
-             f'{r.saturated} of {r.commands} commands saturated, largest '
-             f'{r.max_force:.0f} N, {r.max_speed:.3f} m/s; '
-             f'{r.superseded} superseded; then home within '
-             f'{r.final_error * 1e3:.3f} mm ({r.mode})')
-    r = run('absurd values', hostile.absurd_values)
-    if r is not None:
-        line(r.feedforward_outputs == 0 and r.commands == 0,
-             f'1e200 m/s^2, 1e300 N and m/s, 5 m: {r.feedforward_outputs} '
-             f'outputs, {r.commands} commands; {r.feedforward_rejected}, '
-             f'{r.controller_rejected}')
-    for label, function in (('refused transitions',
-                             hostile_logs.refused_transitions),
-                            ('resets', hostile_logs.resets)):
-        r = run(label, function)
-        if r is not None:
-            line(r.code == 0 and r.after
-                 and r.lines <= int(r.seconds) + 1,
-                 f'{label}, one client as fast as answered: {r.answered} '
-                 f'in {r.seconds:.1f} s, {r.lines} log lines (said left '
-                 f'out {r.left_out}), the service still works {r.after}')
-    r = run('forged log lines', hostile_logs.forged_text)
-    if r is not None:
-        line(not r.not_log_lines and not r.control,
-             f'"\\n[FATAL] ... FORGED" as a label, a parameter value, a '
-             f'frame id: {len(r.not_log_lines)} forged lines, '
-             f'{len(r.control)} with a control character')
-    r = run('mechanism state stamps', mechanism_stamps)
-    if r is not None:
-        line(r.bad_outputs == 0 and r.stamps_out == [(0, 0), (9, 5)],
-             f'nanosec 2e9, negative seconds at the mechanism state '
-             f'publisher: {r.bad_outputs} outputs, {r.rejected_stamp} '
-             f'rejected (stamp); zero and valid stamps served '
-             f'{r.stamps_out}')
+            ok, text = False, f'{label}: NOT DONE: {error}'
+        hard = hard or not ok
+        lines.append(f'- {"ok    " if ok else "MISSED"} {text}')
     return lines, hard
 
 
 def main():
     """Run everything; print the report; return the exit code."""
-    parser = argparse.ArgumentParser(
-        description=__doc__.strip().split('\n')[0])
-    parser.add_argument('--duration', type=float, default=10.0,
-                        help='seconds of each flood and stream (10)')
-    parser.add_argument('--cycles', type=int, default=5,
-                        help='kill/restart cycles per discovery setting (5)')
-    parser.add_argument('--seed', type=int, default=20240404,
-                        help='hypothesis seed of the fuzz tests')
-    parser.add_argument('--fuzz-examples', type=int, default=2000,
-                        help=f'{FUZZ_VARIABLE} when the fuzz files read it')
-    parser.add_argument('--fuzz-timeout', type=float, default=1800.0)
+    parser = script_parser(
+        __doc__, ('--duration', 10.0, 'seconds of each flood and stream'),
+        ('--cycles', 5, 'kill/restart cycles per discovery setting'),
+        ('--seed', 20240404, 'hypothesis seed of the fuzz tests'),
+        ('--fuzz-examples', 2000,
+         f'{FUZZ_VARIABLE} when the fuzz files read it'),
+        ('--fuzz-timeout', 1800.0, 'seconds the fuzz tests may take'))
     parser.add_argument('--skip-fuzz', action='store_true')
     parser.add_argument('--hostile-only', action='store_true',
                         help='run only the hostile peers and stalls')

@@ -6,12 +6,12 @@ runs it; the test talks to it over DDS (on localhost, in the session's
 domain: see conftest) and stops it with SIGINT, as Ctrl-C does.
 """
 
+import contextlib
 from pathlib import Path
 import sys
 import time
 
 import pytest
-from rclpy.executors import SingleThreadedExecutor
 
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.formats.params_file import load_robot
@@ -19,7 +19,7 @@ from orthoglide_ros.model.trajectory import paper_sample, paper_times
 
 from node_checks import assert_vector, needs_scripts  # noqa: E402
 from orthoglide_testing.messages import header_stamp  # noqa: E402
-from orthoglide_testing.probe import Probe, spin_until  # noqa: E402
+from orthoglide_testing.probe import probed, spin_until  # noqa: E402
 from orthoglide_testing.processes import (start_node_process,  # noqa: E402
                                           stop_process, wait_exit)
 
@@ -35,19 +35,9 @@ pytestmark = [pytest.mark.ros, needs_scripts()]
 @pytest.fixture
 def probe_graph(ros_context):
     """Return make(**probe_kwargs) -> (probe, executor); cleaned up after."""
-    made = []
-
-    def make(**kwargs):
-        probe = Probe(ros_context, **kwargs)
-        executor = SingleThreadedExecutor(context=ros_context)
-        executor.add_node(probe)
-        made.append((executor, probe))
-        return probe, executor
-
-    yield make
-    for executor, probe in made:
-        executor.shutdown()
-        probe.destroy_node()
+    with contextlib.ExitStack() as made:
+        yield lambda **kwargs: made.enter_context(
+            probed(ros_context, **kwargs))
 
 
 def wait_count(executor, probe, count, timeout=WAIT):

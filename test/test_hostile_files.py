@@ -110,72 +110,38 @@ def test_every_output_is_checked_before_any_is_written(capsys, tmp_path):
 # -- an output that is an input or another output ------------------------------
 
 # '@name' is a file of the case's directory: log.csv and other.csv (logs),
-# traj.csv and traj.gif (trajectories), params.yaml and params.png
+# traj.csv and traj.gif (trajectories), link.csv (a symbolic link to
+# traj.csv) and hard.csv (a hard link of it), params.yaml and params.png
 # (parameters files), bag (a bag directory); others do not exist.
-SAME_FILE = {
-    'identify_output_is_input': (
-        ['identify', '--input', '@log.csv', '--output', '@log.csv'],
-        '--output', '--input'),
-    'identify_output_is_validate': (
-        ['identify', '--input', '@log.csv', '--validate', '@other.csv',
-         '--output', '@other.csv'], '--output', '--validate'),
-    'identify_output_is_params': (
-        ['identify', '--input', '@log.csv', '--params', '@params.yaml',
-         '--output', '@params.yaml'], '--output', '--params'),
-    'identify_report_is_output': (
-        ['identify', '--input', '@log.csv', '--output', '@new.yaml',
-         '--report', '@new.yaml'], '--report', '--output'),
-    'identify_validate_report_is_report': (
-        ['identify', '--input', '@log.csv', '--output', '@new.yaml',
-         '--report', '@new.png', '--validate', '@other.csv',
-         '--validate-report', '@sub/../new.png'],
-        '--validate-report', '--report'),
-    'identify_output_inside_an_input_bag': (
-        ['identify', '--input', '@bag', '--output', '@bag/metadata.yaml'],
-        '--output', 'inside the directory --input'),
-    'validate_report_is_input': (
-        ['validate', '--input', '@log.csv', '--report', '@log.csv'],
-        '--report', '--input'),
-    'validate_report_is_params': (
-        ['validate', '--input', '@log.csv', '--params', '@params.png',
-         '--report', '@params.png'], '--report', '--params'),
-    'mjcf_output_is_params': (
-        ['mjcf', '--params', '@params.yaml', '--output', '@params.yaml'],
-        '--output', '--params'),
-    'urdf_output_is_params': (
-        ['urdf', '--params', '@params.yaml', '--output', '@params.yaml'],
-        '--output', '--params'),
-    'batch_output_is_input': (
-        ['batch', '--input', '@traj.csv', '--output', '@traj.csv'],
-        '--output', '--input'),
-    'batch_output_is_input_through_a_link': (
-        ['batch', '--input', '@link.csv', '--output', '@traj.csv'],
-        '--output', '--input'),
-    'batch_output_is_a_hard_link_of_input': (
-        ['batch', '--input', '@traj.csv', '--output', '@hard.csv'],
-        '--output', '--input'),
-    'animate_output_is_input': (
-        ['animate', '--input', '@traj.gif', '--output', '@traj.gif'],
-        '--output', '--input'),
-    'plan_output_is_input': (
-        ['plan', '--input', '@traj.csv', '--output', '@traj.csv'],
-        '--output', '--input'),
-    'plan_output_is_limits': (
-        ['plan', '--input', '@traj.csv', '--limits', '@params.yaml',
-         '--output', '@params.yaml'], '--output', '--limits'),
-    'paper_plot_is_csv': (
-        ['paper', '--csv', '@new.csv', '--plot', '@./new.csv'],
-        '--plot', '--csv'),
-    'excitation_output_is_params': (
-        ['excitation', '--duration', '1', '--params', '@params.yaml',
-         '--output', '@params.yaml'], '--output', '--params'),
-    'draw_output_is_params': (
-        ['draw', '--position', '0', '0', '0', '--params', '@params.png',
-         '--output', '@params.png'], '--output', '--params'),
-    'render_output_is_params': (
-        ['render', '--position', '0', '0', '0', '--params', '@params.png',
-         '--output', '@params.png'], '--output', '--params'),
-}
+SAME_FILE = (     # (the command line, the option refused, the one it names again)
+    ('identify --input @log.csv --output @log.csv', '--output', '--input'),
+    ('identify --input @log.csv --validate @other.csv --output @other.csv',
+     '--output', '--validate'),
+    ('identify --input @log.csv --params @params.yaml --output @params.yaml',
+     '--output', '--params'),
+    ('identify --input @log.csv --output @new.yaml --report @new.yaml', '--report', '--output'),
+    ('identify --input @log.csv --output @new.yaml --report '
+     '@new.png --validate @other.csv --validate-report @sub/../new.png',
+     '--validate-report', '--report'),
+    ('identify --input @bag --output @bag/metadata.yaml',
+     '--output', 'inside the directory --input'),
+    ('validate --input @log.csv --report @log.csv', '--report', '--input'),
+    ('validate --input @log.csv --params @params.png --report @params.png',
+     '--report', '--params'),
+    ('mjcf --params @params.yaml --output @params.yaml', '--output', '--params'),
+    ('urdf --params @params.yaml --output @params.yaml', '--output', '--params'),
+    ('batch --input @traj.csv --output @traj.csv', '--output', '--input'),
+    ('batch --input @link.csv --output @traj.csv', '--output', '--input'),
+    ('batch --input @traj.csv --output @hard.csv', '--output', '--input'),
+    ('animate --input @traj.gif --output @traj.gif', '--output', '--input'),
+    ('plan --input @traj.csv --output @traj.csv', '--output', '--input'),
+    ('plan --input @traj.csv --limits @params.yaml --output @params.yaml', '--output', '--limits'),
+    ('paper --csv @new.csv --plot @./new.csv', '--plot', '--csv'),
+    ('excitation --duration 1 --params @params.yaml --output @params.yaml',
+     '--output', '--params'),
+    ('draw --position 0 0 0 --params @params.png --output @params.png', '--output', '--params'),
+    ('render --position 0 0 0 --params @params.png --output @params.png', '--output', '--params'),
+)
 
 
 @pytest.fixture(scope='module')
@@ -205,11 +171,10 @@ def snapshot(directory):
         for path in sorted(directory.rglob('*')) if not path.is_dir()}
 
 
-@pytest.mark.parametrize('name', sorted(SAME_FILE))
+@pytest.mark.parametrize('line,option,other', SAME_FILE)
 def test_an_output_that_is_an_input_or_another_output_is_refused(
-        capsys, tmp_path, case_files, name):
+        capsys, tmp_path, case_files, line, option, other):
     """`identify --input rec.csv --output rec.csv` leaves the log as it was."""
-    argv, option, other = SAME_FILE[name]
     files, bag = case_files
     for file, data in files.items():
         (tmp_path / file).write_bytes(data)
@@ -220,7 +185,7 @@ def test_an_output_that_is_an_input_or_another_output_is_refused(
     os.link(tmp_path / 'traj.csv', tmp_path / 'hard.csv')
     before = snapshot(tmp_path)
     code, out, err = run(capsys, *(str(tmp_path / a[1:]) if a[0] == '@'
-                                   else a for a in argv))
+                                   else a for a in line.split()))
     assert_bad_input(code, out, err, option, other, 'nothing was written')
     assert snapshot(tmp_path) == before
 

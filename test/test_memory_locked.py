@@ -13,10 +13,9 @@ for pages. The process is stopped (SIGINT) whatever happens.
 """
 
 import pytest
-from rclpy.executors import SingleThreadedExecutor
 
 from node_checks import needs_scripts
-from orthoglide_testing.probe import paced, Probe
+from orthoglide_testing.probe import paced, probed
 from orthoglide_testing.processes import (memory_kb, page_faults,
                                           start_node_process, stop_process)
 from orthoglide_ros.model.trajectory import paper_sample
@@ -32,12 +31,8 @@ START_WAIT = 40.0           # s for the process to come up and answer
 
 @pytest.fixture
 def probe_graph(ros_context):
-    probe = Probe(ros_context, name='memory_probe')
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(probe)
-    yield probe, executor
-    executor.shutdown()
-    probe.destroy_node()
+    with probed(ros_context, name='memory_probe') as graph:
+        yield graph
 
 
 def stream(probe, executor, seconds, first):

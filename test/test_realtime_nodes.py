@@ -20,12 +20,11 @@ import shutil
 import time
 
 import pytest
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 
 from node_checks import needs_scripts
-from orthoglide_testing.probe import Probe, spin_until, wait_diagnostics
+from orthoglide_testing.probe import probed, spin_until, wait_diagnostics
 from orthoglide_testing.processes import (node_executable, run_to_exit,
                                           start_node_process, stop_process)
 from orthoglide_ros.cores import realtime
@@ -82,12 +81,8 @@ def locked_kb(pid):
 
 @pytest.fixture
 def graph(ros_context):
-    probe = Probe(ros_context, name='realtime_probe')
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(probe)
-    yield probe, executor
-    executor.shutdown()
-    probe.destroy_node()
+    with probed(ros_context, name='realtime_probe') as made:
+        yield made
 
 
 def answering(probe, executor, name):

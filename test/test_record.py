@@ -16,6 +16,7 @@ counts what went into the bag and what was dropped, as the bag's own
 metadata does (read by rosbags), and the exit code is LOSSY (3).
 """
 
+import contextlib
 import threading
 import time
 
@@ -129,6 +130,23 @@ def test_record_writes_every_joint_state_into_an_mcap_bag(ros_context,
                     lambda proc: None, '.mcap')
 
 
+@contextlib.contextmanager
+def recording_here(ros_context, tmp_path):
+    """Yield a joint state source, its publisher and a Recorder of ours."""
+    from orthoglide_ros.ros.recorder_node import Recorder
+    node = rclpy.create_node('joint_state_source', context=ros_context)
+    recorder = None
+    try:
+        publisher = node.create_publisher(JointState, 'joint_states', QOS)
+        recorder = Recorder(str(tmp_path / 'bag'), ['joint_states'],
+                            context=ros_context)
+        yield node, publisher, recorder
+    finally:
+        if recorder is not None:
+            recorder.destroy_node()
+        node.destroy_node()
+
+
 def test_a_stop_drains_what_the_recorder_had_not_handled(
         ros_context, tmp_path):
     """
@@ -140,13 +158,8 @@ def test_a_stop_drains_what_the_recorder_had_not_handled(
     before the lock is free: what the thread holds and what the history
     holds are drained into the bag, not dropped.
     """
-    from orthoglide_ros.ros.recorder_node import Recorder
-    node = rclpy.create_node('joint_state_source', context=ros_context)
-    recorder = None
-    try:
-        publisher = node.create_publisher(JointState, 'joint_states', QOS)
-        recorder = Recorder(str(tmp_path / 'bag'), ['joint_states'],
-                            context=ros_context)
+    with recording_here(ros_context, tmp_path) as (node, publisher,
+                                                   recorder):
         stopping = threading.Thread(target=recorder.on_stop, args=(True,))
         with recorder.lock:
             publish_states(node, publisher, None)
@@ -155,10 +168,6 @@ def test_a_stop_drains_what_the_recorder_had_not_handled(
         stopping.join(timeout=MATCH_TIMEOUT)
         assert not stopping.is_alive()
         check_bag(tmp_path / 'bag')
-    finally:
-        if recorder is not None:
-            recorder.destroy_node()
-        node.destroy_node()
 
 
 def test_record_stops_by_itself_into_a_sqlite3_bag(ros_context, tmp_path):
@@ -232,13 +241,7 @@ def test_a_deactivated_recorder_counts_what_it_did_not_record(
     first and the last 50, the 50 between are counted as dropped
     (``inactive``) in the last line, and the recording is lossy.
     """
-    from orthoglide_ros.ros.recorder_node import Recorder
-    node = rclpy.create_node('joint_state_source', context=ros_context)
-    recorder = None
-    try:
-        publisher = node.create_publisher(JointState, 'joint_states', QOS)
-        recorder = Recorder(str(tmp_path / 'bag'), ['joint_states'],
-                            context=ros_context)
+    with recording_here(ros_context, tmp_path) as (_, publisher, recorder):
         wait_subscribed(publisher, None)
         for part, change in ((range(0, 50), recorder.trigger_deactivate),
                              (range(50, 100), recorder.trigger_activate),
@@ -259,10 +262,6 @@ def test_a_deactivated_recorder_counts_what_it_did_not_record(
             '50 (/joint_states inactive: 50, received while the recorder was '
             'not active)')
         check_bag(tmp_path / 'bag', np.r_[0:50, 100:150])
-    finally:
-        if recorder is not None:
-            recorder.destroy_node()
-        node.destroy_node()
 
 
 BIG = 5_000_000     # bytes of image data: above the 4 MiB limit

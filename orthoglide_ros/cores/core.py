@@ -13,7 +13,7 @@ nodes).
 
 from orthoglide_ros.cores.inputs import Rejected
 from orthoglide_ros.cores.status import (first_rule_that_holds, OK, Period,
-                                         Status)
+                                         Status, WARN)
 
 
 class Core:
@@ -42,6 +42,7 @@ class Core:
         self.rejected = {(i, r): 0 for i in self.INPUTS
                          for r in self.REASONS} if self.REJECTED_BY_INPUT \
             else dict.fromkeys(self.REASONS, 0)
+        self.last_rejection = None      # the last Rejected counted
         self._period = Period(now)
 
     def configure(self, settings):
@@ -66,6 +67,7 @@ class Core:
         key = (source, rejection.reason) if self.REJECTED_BY_INPUT \
             else rejection.reason
         self.rejected[key] += 1
+        self.last_rejection = rejection
 
     def refuse(self, source, reason, message):
         """Count a refusal of input ``source`` and raise it."""
@@ -110,6 +112,13 @@ class Core:
         growth over it, ``rejected`` among them.
         """
         return ()
+
+    def rejected_rule(self, increases, what):
+        """Return the WARN rule of the period's refusals, the last named."""
+        last = self.last_rejection
+        return (increases['rejected'], WARN,
+                f'{increases["rejected"]} {what} rejected in the last period, '
+                f'the last ({last.reason if last else ""}): {last}')
 
     def values(self, now, seconds, increases):
         """Return the status pairs of the core's own (a list)."""

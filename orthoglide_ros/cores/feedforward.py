@@ -16,15 +16,15 @@ import time
 
 import numpy as np
 
-from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.mechanics import ZERO
 from orthoglide_ros.cores import realtime, setpoint_rules
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.inputs import (check_stamp, check_time,
                                          NANOSECONDS, Rejected,
                                          trajectory_times)
-from orthoglide_ros.cores.parameters import joint_names_spec, \
-    nonnegative_triple, ParameterError, Spec, Table
+from orthoglide_ros.cores.parameters import (
+    arrival_timeout_spec, at_most, base_frame_spec, joint_names_spec,
+    nonnegative_triple, singularity_margin_spec, Spec, Table)
 from orthoglide_ros.cores.status import OK, WARN
 
 # Most partial setpoints held at once; beyond, the oldest is dropped.
@@ -104,35 +104,27 @@ def _first_bad(reason, bad, what):
         raise Rejected(reason, f'point {int(np.argmax(bad))} {what}')
 
 
-def _pairing_within_setpoint_timeout(settings):
-    if settings.pairing_timeout > settings.setpoint_timeout:
-        raise ParameterError('pairing_timeout', (
-            f'must not exceed setpoint_timeout ({settings.pairing_timeout} '
-            f'> {settings.setpoint_timeout} s)'))
-
-
 PARAMETERS = Table('Settings', (
     joint_names_spec('names of the prismatic joints of actuators A, B, C '
                      'in feedforward/joint_states'),
-    Spec('base_frame', 'string', 'base_link',
-         'frame of the setpoints (the paper\'s frame 0); a setpoint stamped '
-         'with another non-empty frame is rejected'),
+    base_frame_spec('frame of the setpoints (the paper\'s frame 0); a '
+                    'setpoint stamped with another non-empty frame is '
+                    'rejected'),
     Spec('rate_hz', 'double', 0.0,
          'control tick in Hz: 0.0 computes and publishes once per new '
          'setpoint; a positive value publishes the newest setpoint\'s '
          'result at this fixed rate', (0.0, 10000.0)),
-    Spec('setpoint_timeout', 'double', 0.1,
-         'seconds (by arrival time) without a fresh setpoint after which '
-         'the node stops publishing until the next fresh setpoint',
-         (0.001, 3600.0)),
+    arrival_timeout_spec('setpoint_timeout', 0.1, 0.001,
+                         'without a fresh setpoint after which the node '
+                         'stops publishing until the next fresh setpoint'),
     Spec('pairing_timeout', 'double', 0.05,
          'seconds a partial setpoint (pose, twist or accel of one stamp) '
          'waits for its partners before it is dropped; at most '
          'setpoint_timeout', (0.0001, 3600.0)),
-    Spec('singularity_margin', 'double', mechanics.DEFAULT_SINGULARITY_MARGIN,
-         'smallest accepted singularity distance, min(alpha_i / l3, '
-         '1 / kappa_F(J_lambda)), both 1 at home and 0 at a singularity of '
-         'J1 or J2', (0.0, 0.99)),
+    singularity_margin_spec(
+        'smallest accepted singularity distance, min(alpha_i / l3, '
+        '1 / kappa_F(J_lambda)), both 1 at home and 0 at a singularity of '
+        'J1 or J2'),
     Spec('pose_only', 'bool', False,
          'serve each pose alone as a setpoint with zero velocity and '
          'acceleration (twist and accel topics ignored); trajectory points '
@@ -157,7 +149,7 @@ PARAMETERS = Table('Settings', (
          'setpoint or trajectory that needs more is refused (force_limit)',
          (0.001, 1.0e7)),
     *realtime.SPECS,
-), rules=(_pairing_within_setpoint_timeout,), robot=True)
+), rules=(at_most('pairing_timeout', 'setpoint_timeout', 's'),), robot=True)
 
 
 class Feedforward(Core):
@@ -286,7 +278,7 @@ class Feedforward(Core):
         if source == 'cartesian_trajectory':
             self.trajectory_rejected[rejection.reason] += 1
         else:
-            self.rejected[rejection.reason] += 1
+            super().count(source, rejection)
 
     def expire(self, now):
         """Drop the partial setpoints older than pairing_timeout; count them."""

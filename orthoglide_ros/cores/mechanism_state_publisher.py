@@ -16,9 +16,10 @@ from orthoglide_ros.cores.inputs import (check_stamp, read_joint_state,
                                          Rejected)
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, ZERO
 from orthoglide_ros.cores import realtime
-from orthoglide_ros.cores.parameters import joint_names_spec, Spec, Table
+from orthoglide_ros.cores.parameters import (joint_names_spec,
+                                             singularity_margin_spec, Table)
 from orthoglide_ros.cores.core import Core
-from orthoglide_ros.cores.status import OK, WARN
+from orthoglide_ros.cores.status import OK
 from orthoglide_ros.model.urdf import moving_joints, RATES
 
 REASONS = ('stamp', 'missing_joint', 'malformed', 'missing_position',
@@ -29,10 +30,10 @@ PARAMETERS = Table('MechanismStateSettings', (
         'names of the prismatic joints of actuators A, B, C: read from '
         'joint_states by name, and the sliders\' names in the URDF and in '
         'mechanism/joint_states'),
-    Spec('singularity_margin', 'double', DEFAULT_SINGULARITY_MARGIN,
-         'smallest singularity distance min(alpha_i / l3, 1 / '
-         'kappa_F(J_lambda)) of a published state; nearer a singularity '
-         'the joint state is refused (singular)', (0.0, 0.99)),
+    singularity_margin_spec(
+        'smallest singularity distance min(alpha_i / l3, 1 / '
+        'kappa_F(J_lambda)) of a published state; nearer a singularity '
+        'the joint state is refused (singular)'),
     *realtime.SPECS,
 ), robot=True)
 
@@ -101,7 +102,6 @@ class MechanismState(Core):
         self.withheld = 0               # not published while inactive
         self.latest = None              # the last MechanismJoints published
         self.latest_arrival = None
-        self.last_rejection = None      # the last Rejected
 
     def joint_state(self, stamp, frame, names, position, velocity, effort,
                     now):
@@ -136,11 +136,6 @@ class MechanismState(Core):
         self.latest, self.latest_arrival = state, now
         return stamp, frame, state
 
-    def count(self, source, rejection):
-        """Count a refusal, and keep it for the status message."""
-        super().count(source, rejection)
-        self.last_rejection = rejection
-
     # Status: ERROR after an internal error; WARN when joint states were
     # rejected in the period (the message gives the last reason); else OK
     # (``waiting for joint states`` until one came).
@@ -150,11 +145,8 @@ class MechanismState(Core):
 
     def status_rules(self, now, seconds, increases):
         """Return the rejections and the wait steps."""
-        last = self.last_rejection
         return (
-            (increases['rejected'], WARN,
-             f'{increases["rejected"]} joint state(s) rejected in the last '
-             f'period, the last ({last.reason if last else ""}): {last}'),
+            self.rejected_rule(increases, 'joint state(s)'),
             (self.received['joint_states'] == 0, OK,
              'waiting for joint states'))
 

@@ -25,6 +25,7 @@ import math
 from orthoglide_ros.formats.params_file import (rcl_typed, ROBOT_PREFIX,
                                                 robot_from_parameters)
 from orthoglide_ros.formats.text import clip
+from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN
 from orthoglide_ros.model.robot import (is_vector, JOINT_NAMES,
                                         ParameterError, ROWS)
 
@@ -142,6 +143,16 @@ def joint_names(value):
     return names
 
 
+def one_of(choices):
+    """Return a Spec check: the value one of ``choices``."""
+    def check(value):
+        if value not in choices:
+            raise ValueError(f'must be one of {", ".join(choices)}, got '
+                             f'{value!r}')
+        return value
+    return check
+
+
 def triple(value):
     """Return a double array of exactly three values as a tuple."""
     if len(value) != 3:
@@ -158,11 +169,40 @@ def nonnegative_triple(value):
     return value
 
 
+def at_most(name, other, unit):
+    """Return a rule across rows: parameter ``name`` at most ``other``."""
+    def rule(settings):
+        value, bound = getattr(settings, name), getattr(settings, other)
+        if value > bound:
+            raise ParameterError(name, f'must not exceed {other} ({value} > '
+                                 f'{bound} {unit})')
+    return rule
+
+
+# Rows several nodes declare: name, type, default and range once, the
+# text each node's own.
 def joint_names_spec(description):
     """Return the ``joint_names`` row every node shares (its own text)."""
     return Spec('joint_names', 'string_array', list(JOINT_NAMES),
                 description + ' (three distinct, non-empty)',
                 check=joint_names)
+
+
+def base_frame_spec(description):
+    """Return a ``base_frame`` row: ``base_link`` by default."""
+    return Spec('base_frame', 'string', 'base_link', description)
+
+
+def singularity_margin_spec(description, low=0.0):
+    """Return a ``singularity_margin`` row: the model's default, below 1."""
+    return Spec('singularity_margin', 'double', DEFAULT_SINGULARITY_MARGIN,
+                description, (low, 0.99))
+
+
+def arrival_timeout_spec(name, default, low, description):
+    """Return a timeout row: seconds by arrival time, ``low`` to an hour."""
+    return Spec(name, 'double', default,
+                'seconds (by arrival time) ' + description, (low, 3600.0))
 
 
 def _short(value):

@@ -30,8 +30,9 @@ import numpy as np
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.inputs import Rejected
-from orthoglide_ros.cores.parameters import field, Spec, Table
-from orthoglide_ros.cores.status import OK, WARN
+from orthoglide_ros.cores.parameters import (base_frame_spec, field, Spec,
+                                             Table)
+from orthoglide_ros.cores.status import OK
 from orthoglide_ros.model.robot import JOINT_NAMES, ParameterError
 from orthoglide_ros.planning.gcode import ProgramError
 from orthoglide_ros.planning.limits import (KINDS, limits_from_parameters,
@@ -73,8 +74,7 @@ def _limits_rule(settings):
 
 
 PARAMETERS = Table('PlannerSettings', (
-    Spec('base_frame', 'string', 'base_link',
-         'frame of the path\'s poses and of the published motion'),
+    base_frame_spec('frame of the path\'s poses and of the published motion'),
     Spec('max_speed', 'double', 0.0,
          'largest speed of G (m/s); 0.0: none beside the limits',
          (0.0, 100.0)),
@@ -121,7 +121,6 @@ class Planner(Core):
         self.limits = limits_of(settings)
         self.planned = 0
         self.withheld = 0
-        self.last_rejection = None
         self.last_seconds = math.nan      # planning time of the last path
         self.last_duration = math.nan     # its motion's duration
         self.last_points = 0
@@ -185,22 +184,14 @@ class Planner(Core):
         self.last_points = len(motion.t)
         return motion
 
-    def count(self, source, rejection):
-        """Count a refusal, and keep it for the status message."""
-        super().count(source, rejection)
-        self.last_rejection = rejection
-
     def period_counters(self):
         """Return the counters of the period's rates."""
         return dict(planned=self.planned)
 
     def status_rules(self, now, seconds, increases):
         """Return the rejections and the wait steps."""
-        last = self.last_rejection
         return (
-            (increases['rejected'], WARN,
-             f'{increases["rejected"]} path(s) rejected in the last period, '
-             f'the last ({last.reason if last else ""}): {last}'),
+            self.rejected_rule(increases, 'path(s)'),
             (self.received['path'] == 0, OK, 'waiting for a path'))
 
     def values(self, now, seconds, increases):

@@ -18,20 +18,12 @@ from orthoglide_ros.model import trajectory
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.status import OK
-from orthoglide_ros.cores.parameters import ParameterError, Spec, Table, triple
+from orthoglide_ros.cores.parameters import (one_of, ParameterError, Spec,
+                                             Table, triple)
 
 INPUTS = ('trajectory', 'topics')
 MOTIONS = ('paper', 'excitation')
 SEED_RANGE = (0, 2**31 - 1)
-
-
-def _one_of(choices):
-    def check(value):
-        if value not in choices:
-            raise ValueError(f'must be one of {", ".join(choices)}, got '
-                             f'{value!r}')
-        return value
-    return check
 
 
 def _excitation_has_a_period(settings):
@@ -47,11 +39,11 @@ PARAMETERS = Table('SetpointSettings', (
     Spec('input', 'string', 'trajectory',
          "'trajectory': one MultiDOFJointTrajectory on setpoint/trajectory; "
          "'topics': pose, twist and accel of equal stamp on "
-         'setpoint/pose|twist|accel', check=_one_of(INPUTS), read_only=True),
+         'setpoint/pose|twist|accel', check=one_of(INPUTS), read_only=True),
     Spec('motion', 'string', 'paper',
          "'paper': eq. (6) (target, omega); 'excitation': the periodic "
          'motion for identification (seed; period duration)',
-         check=_one_of(MOTIONS), read_only=True),
+         check=one_of(MOTIONS), read_only=True),
     Spec('duration', 'double', trajectory.PAPER_DURATION,
          'length of one pass (s): of eq. (6), or the period of the '
          'excitation (then above 0)', (0.0, 3600.0), read_only=True),

@@ -15,14 +15,15 @@ import time
 
 from orthoglide_ros.model import mechanics, mujoco_plant
 from orthoglide_ros.cores.inputs import joint_columns, Rejected
-from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN, \
-    format_vector, ZERO
+from orthoglide_ros.model.mechanics import format_vector, ZERO
 from orthoglide_ros.cores import realtime
-from orthoglide_ros.cores.parameters import joint_names_spec, ParameterError, \
-    Spec, Table, triple
+from orthoglide_ros.cores.parameters import (
+    arrival_timeout_spec, at_most, base_frame_spec, joint_names_spec, one_of,
+    ParameterError, singularity_margin_spec, Spec, Table, triple)
 from orthoglide_ros.model.plant import Diverged, Plant
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.status import ERROR, OK, WARN
+from orthoglide_ros.formats.text import read_text
 
 HELD, RUNNING, STOPPED, DIVERGED = 'held', 'running', 'stopped', 'diverged'
 # Why a command was rejected: the keys of Simulator.rejected.
@@ -48,20 +49,11 @@ def _initial_position_in_workspace(settings):
             f'({error.reason}): {error}')) from None
 
 
-def _publish_rate_within_rate(settings):
-    if settings.publish_rate_hz > settings.rate_hz:
-        raise ParameterError('publish_rate_hz', (
-            f'must not exceed rate_hz ({settings.publish_rate_hz} > '
-            f'{settings.rate_hz} Hz)'))
-
-
 ENGINES = ('builtin', 'mujoco')
 
 
 def _engine(value):
-    if value not in ENGINES:
-        raise ValueError(f'must be one of {", ".join(ENGINES)}, got '
-                         f'{value!r}')
+    one_of(ENGINES)(value)
     if value == 'mujoco' and mujoco_plant.unavailable():
         raise ValueError(mujoco_plant.unavailable())
     return value
@@ -78,18 +70,7 @@ def _mjcf_file(path):
     if mujoco_plant.unavailable():
         raise ValueError(mujoco_plant.unavailable())
     try:
-        with open(path, 'rb') as f:
-            data = f.read(MJCF_FILE_BYTES + 1)
-    except OSError as error:
-        raise ValueError(f'cannot read {path!r}: {error.strerror}') \
-            from None
-    if len(data) > MJCF_FILE_BYTES:
-        raise ValueError(f'{path!r} is longer than {MJCF_FILE_BYTES} bytes')
-    try:
-        text = data.decode('utf-8')
-    except UnicodeDecodeError:
-        raise ValueError(f'{path!r} is not UTF-8 text') from None
-    try:
+        text = read_text(path, MJCF_FILE_BYTES)
         mujoco_plant.check_model(text)
     except ValueError as error:
         raise ValueError(f'{path!r}: {error}') from None
@@ -121,21 +102,20 @@ PARAMETERS = Table('SimulatorSettings', (
          'position of the platform centre G (m, base frame) at start and '
          'after ~/reset, at rest; must lie in the workspace (applies at the '
          'next reset)', check=triple),
-    Spec('command_timeout', 'double', 0.1,
-         'seconds (by arrival time) without a valid command after which a '
-         'running simulation brakes: back to held, velocity zero; at least '
-         'one step (1/rate_hz)', (0.001, 3600.0)),
+    arrival_timeout_spec('command_timeout', 0.1, 0.001,
+                         'without a valid command after which a running '
+                         'simulation brakes: back to held, velocity zero; '
+                         'at least one step (1/rate_hz)'),
     Spec('force_limit', 'double', 1000.0,
          'largest actuator force magnitude (N, each actuator); commands '
          'beyond it are clipped and the clipping counted', (0.001, 1.0e6)),
-    Spec('singularity_margin', 'double', DEFAULT_SINGULARITY_MARGIN,
-         'workspace limit: smallest singularity distance a step may reach, '
-         'min(alpha_i / l3, 1 / kappa_F(J_lambda)); a step beyond it stops '
-         'the simulation (applies at the next reset)', (0.01, 0.99)),
+    singularity_margin_spec(
+        'workspace limit: smallest singularity distance a step may reach, '
+        'min(alpha_i / l3, 1 / kappa_F(J_lambda)); a step beyond it stops '
+        'the simulation (applies at the next reset)', low=0.01),
     joint_names_spec('names of the prismatic joints of actuators A, B, C '
                      'in joint_states'),
-    Spec('base_frame', 'string', 'base_link',
-         'frame_id of platform/pose (the paper\'s frame 0)'),
+    base_frame_spec('frame_id of platform/pose (the paper\'s frame 0)'),
     Spec('engine', 'string', 'builtin',
          'what integrates the plant: builtin (the package\'s forward '
          'dynamics, RK4) or mujoco (the robot\'s MJCF in MuJoCo); applies '
@@ -147,7 +127,8 @@ PARAMETERS = Table('SimulatorSettings', (
          'applies at the next reset', check=_mjcf_file),
     *realtime.SPECS,
 ), rules=(_mjcf_file_needs_mujoco, _initial_position_in_workspace,
-          _publish_rate_within_rate, _timeout_of_a_step_at_least),
+          at_most('publish_rate_hz', 'rate_hz', 'Hz'),
+          _timeout_of_a_step_at_least),
     robot=True)
 
 Tick = namedtuple('Tick', (

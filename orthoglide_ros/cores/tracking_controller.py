@@ -22,8 +22,8 @@ from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.mechanics import ZERO
 from orthoglide_ros.model.joint_plan import JointPlan
 from orthoglide_ros.cores import realtime
-from orthoglide_ros.cores.parameters import joint_names_spec, \
-    nonnegative_triple, Spec, Table
+from orthoglide_ros.cores.parameters import (
+    arrival_timeout_spec, joint_names_spec, nonnegative_triple, Spec, Table)
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.status import ERROR, OK, WARN
 
@@ -56,10 +56,10 @@ PARAMETERS = Table('ControllerSettings', (
     joint_names_spec(
         'names of the prismatic joints of actuators A, B, C: the order of '
         'the command\'s values; joint states are matched by these names'),
-    Spec('measurement_timeout', 'double', 0.05,
-         'seconds (by arrival time) after which a measurement is too old '
-         'to compute a command with: nothing is published until a fresh '
-         'one arrives', (0.0001, 3600.0)),
+    arrival_timeout_spec('measurement_timeout', 0.05, 0.0001,
+                         'after which a measurement is too old to compute a '
+                         'command with: nothing is published until a fresh '
+                         'one arrives'),
     Spec('rate_hz', 'double', 250.0,
          'loop rate (Hz) at which a received joint_trajectory is sampled '
          'and a command published while it is followed',
@@ -69,12 +69,13 @@ PARAMETERS = Table('ControllerSettings', (
          'following; beyond it the controller holds the measured position '
          '(ERROR) until a desired state comes within half of it; 0.0: no '
          'limit for that actuator', check=nonnegative_triple),
-    Spec('stall_timeout', 'double', 0.1,
-         'seconds (by arrival time) between two commands while following '
-         'beyond which the loop stalled: the next desired state is followed '
-         'only if it starts where the robot is (the re-arm rule of '
-         'path_tolerance), else the controller holds the measured position '
-         '(ERROR) until one does; 0.0: off', (0.0, 3600.0)),
+    arrival_timeout_spec('stall_timeout', 0.1, 0.0,
+                         'between two commands while following beyond which '
+                         'the loop stalled: the next desired state is '
+                         'followed only if it starts where the robot is (the '
+                         're-arm rule of path_tolerance), else the controller '
+                         'holds the measured position (ERROR) until one '
+                         'does; 0.0: off'),
     Spec('max_position', 'double', 1.0,
          'largest |lambda| (m) of a measured or desired slider position, '
          'trajectory points included: a joint state or trajectory beyond '

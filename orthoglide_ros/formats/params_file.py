@@ -16,7 +16,7 @@ import re
 
 import yaml
 
-from orthoglide_ros.formats.text import clip
+from orthoglide_ros.formats.text import clip, read_text
 from orthoglide_ros.model.robot import (is_vector, ParameterError, Robot,
                                         ROW, ROWS)
 from orthoglide_ros.model.types import Path
@@ -49,8 +49,8 @@ class _RclLoader(yaml.SafeLoader):
         """Compose one node; refuse an alias or a node too deep."""
         if self.check_event(yaml.AliasEvent):
             raise yaml.composer.ComposerError(
-                None, None, 'aliases (*name) are not supported in a '
-                'parameters file', self.peek_event().start_mark)
+                None, None, 'aliases (*name) are not supported',
+                self.peek_event().start_mark)
         if self._depth >= MAX_DEPTH:
             raise yaml.composer.ComposerError(
                 None, None, f'nested more than {MAX_DEPTH} deep',
@@ -68,32 +68,35 @@ _RclLoader.add_implicit_resolver(
     list('-+0123456789.'))
 
 
+def read_yaml(path: Path, error: type = ParametersFileError) -> Any:
+    """
+    Return the YAML document in ``path``, read as a parameters file is.
+
+    UTF-8, at most MAX_FILE_BYTES, no aliases, nested at most MAX_DEPTH
+    deep, ``1e-3`` a double. Raises ``error`` (a ValueError) naming the
+    path: the parameters file's or another YAML file's (joint limits).
+    """
+    try:
+        text = read_text(path, MAX_FILE_BYTES)
+    except ValueError as failure:
+        raise error(f'{path}: {failure}') from None
+    try:
+        return yaml.load(text, Loader=_RclLoader)
+    except yaml.YAMLError as failure:
+        raise error(f'{path}: not valid YAML: '
+                    f'{" ".join(str(failure).split())}') from None
+    except ValueError as failure:   # e.g. an integer of over 4300 digits
+        raise error(f'{path}: a value cannot be read: {failure}') from None
+
+
 def load_parameters(path: Path, node: str = NODE_NAME) -> dict[str, Any]:
     """
     Return node ``node``'s parameters in ``path`` as a flat ``{name: value}``.
 
     Raises :class:`ParametersFileError` if the file cannot be read, is not
-    YAML, or has no section for the node.
+    YAML (:func:`read_yaml`), or has no section for the node.
     """
-    try:
-        with open(path, 'rb') as stream:
-            data = stream.read(MAX_FILE_BYTES + 1)
-    except OSError as error:
-        raise ParametersFileError(f'{path}: {error.strerror}') from None
-    if len(data) > MAX_FILE_BYTES:
-        raise ParametersFileError(
-            f'{path}: larger than {MAX_FILE_BYTES} bytes: not a parameters '
-            'file')
-    try:
-        document = yaml.load(data.decode('utf-8'), Loader=_RclLoader)
-    except UnicodeDecodeError as error:
-        raise ParametersFileError(
-            f'{path}: not UTF-8 text (byte {error.start})') from None
-    except yaml.YAMLError as error:
-        raise ParametersFileError(f'{path}: not valid YAML: {error}') from None
-    except ValueError as error:     # e.g. an integer of over 4300 digits
-        raise ParametersFileError(f'{path}: a value cannot be read: '
-                                  f'{error}') from None
+    document = read_yaml(path)
     if not isinstance(document, dict):
         raise ParametersFileError(f'{path}: not a ROS 2 parameters file')
     keys = ('/**', node, '/' + node)

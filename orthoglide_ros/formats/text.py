@@ -1,12 +1,17 @@
 """
-The one place text from messages, requests and files is made safe to show.
+The one place text from messages, requests and files is made safe.
 
 :func:`clip` cuts a text to about TEXT_LIMIT characters; :func:`printable`
 also escapes every character that is not printable, so no text a peer
-gives can start, forge or colour a log line. See doc/robustness.md#logs.
+gives can start, forge or colour a log line (doc/robustness.md#logs);
+:func:`read_text` reads a small text file within a bound.
 """
 
 from __future__ import annotations
+
+from typing import BinaryIO, Union
+
+from orthoglide_ros.model.types import Path
 
 # Longest log line or reply reason made from a message's text (characters).
 TEXT_LIMIT = 2000
@@ -49,3 +54,27 @@ def printable(text: object, limit: int = TEXT_LIMIT) -> str:
         text = ''.join(c if c.isprintable() else repr(c)[1:-1]
                        for c in text)
     return clip(text, limit)
+
+
+def read_text(source: Union[Path, BinaryIO], max_bytes: int) -> str:
+    """
+    Return the UTF-8 text of ``source``: a path, or a binary stream.
+
+    At most ``max_bytes`` are read (a larger source is refused before it
+    is held); a byte-order mark is dropped. Raises ValueError with the
+    reason, without the path: cannot read, too large, not UTF-8.
+    """
+    try:
+        if hasattr(source, 'read'):
+            data = source.read(max_bytes + 1)
+        else:
+            with open(source, 'rb') as stream:
+                data = stream.read(max_bytes + 1)
+    except OSError as error:
+        raise ValueError(f'cannot read: {error.strerror}') from None
+    if len(data) > max_bytes:
+        raise ValueError(f'larger than {max_bytes} bytes')
+    try:
+        return data.decode('utf-8-sig')
+    except UnicodeDecodeError as error:
+        raise ValueError(f'not UTF-8 text (byte {error.start})') from None

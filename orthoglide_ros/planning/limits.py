@@ -37,11 +37,10 @@ import math
 from typing import Any, Mapping, Optional, Sequence
 
 import numpy as np
-import yaml
 
-from orthoglide_ros.formats.params_file import (load_parameters, MAX_DEPTH,
-                                                MAX_FILE_BYTES,
-                                                ParametersFileError)
+from orthoglide_ros.formats.params_file import (load_parameters,
+                                                ParametersFileError,
+                                                read_yaml)
 from orthoglide_ros.model.robot import JOINT_NAMES
 from orthoglide_ros.model.types import Array, Path
 
@@ -199,51 +198,17 @@ def load_limits(path: Path, names: Sequence[str] = JOINT_NAMES) -> Limits:
     """
     Return the limits of a YAML file's top-level ``joint_limits:``.
 
-    The file is read as a parameters file is (UTF-8, at most 1 MiB, no
-    aliases, nested at most 32 deep). Raises :class:`LimitsError`.
+    The file is read as a parameters file is (:func:`read_yaml`: UTF-8, at
+    most 1 MiB, no aliases, nested at most 32 deep). Raises
+    :class:`LimitsError`.
     """
-    try:
-        with open(path, 'rb') as stream:
-            data = stream.read(MAX_FILE_BYTES + 1)
-    except OSError as error:
-        raise LimitsError(f'{path}: {error.strerror}') from None
-    if len(data) > MAX_FILE_BYTES:
-        raise LimitsError(f'{path}: larger than {MAX_FILE_BYTES} bytes')
-    try:
-        document = yaml.load(data.decode('utf-8'), Loader=_LimitsLoader)
-    except UnicodeDecodeError as error:
-        raise LimitsError(f'{path}: not UTF-8 text (byte {error.start})') \
-            from None
-    except (yaml.YAMLError, ValueError) as error:
-        raise LimitsError(f'{path}: not valid YAML: '
-                          f'{" ".join(str(error).split())}') from None
+    document = read_yaml(path, LimitsError)
     if not isinstance(document, dict) or 'joint_limits' not in document:
         raise LimitsError(f'{path}: no top-level joint_limits: mapping')
     try:
         return limits_from_mapping(document['joint_limits'], names)
     except LimitsError as error:
         raise LimitsError(f'{path}: {error}') from None
-
-
-class _LimitsLoader(yaml.SafeLoader):
-    """SafeLoader refusing aliases and deep nesting, as parameters files."""
-
-    _depth = 0
-
-    def compose_node(self, parent, index):
-        if self.check_event(yaml.AliasEvent):
-            raise yaml.composer.ComposerError(
-                None, None, 'aliases (*name) are not supported',
-                self.peek_event().start_mark)
-        if self._depth >= MAX_DEPTH:
-            raise yaml.composer.ComposerError(
-                None, None, f'nested more than {MAX_DEPTH} deep',
-                self.peek_event().start_mark)
-        self._depth += 1
-        try:
-            return super().compose_node(parent, index)
-        finally:
-            self._depth -= 1
 
 
 def limits_from_parameters(params: Mapping[str, Any],

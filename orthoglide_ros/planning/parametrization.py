@@ -279,24 +279,20 @@ def _add_reversals(models, path, grid, dyn):
 
 def _check_rest(path, grid, dyn, limits):
     """Refuse positions beyond the position limits or statics beyond effort."""
-    names = limits.names
     low, high = limits.position[:, 0], limits.position[:, 1]
-    outside = (dyn.lam < low) | (dyn.lam > high)
-    if outside.any():
-        row, j = np.argwhere(outside)[0]
-        raise PlanningError(
-            path.pieces[grid.index[row]].line,
-            f'at {mechanics.format_vector(dyn.position[row])} m {names[j]} is '
-            f'at lambda = {dyn.lam[row, j]:.6g} m, beyond its position limits '
-            f'[{low[j]:g}, {high[j]:g}] m')
-    over = np.abs(dyn.c) > limits.effort
-    if over.any():
-        row, j = np.argwhere(over)[0]
-        raise PlanningError(
-            path.pieces[grid.index[row]].line,
-            f'at {mechanics.format_vector(dyn.position[row])} m {names[j]} '
-            f'needs {dyn.c[row, j]:.6g} N at rest, beyond its max_effort '
-            f'{limits.effort[j]:g} N')
+    for bad, why in (
+            ((dyn.lam < low) | (dyn.lam > high), lambda row, j: (
+                f'is at lambda = {dyn.lam[row, j]:.6g} m, beyond its position '
+                f'limits [{low[j]:g}, {high[j]:g}] m')),
+            (np.abs(dyn.c) > limits.effort, lambda row, j: (
+                f'needs {dyn.c[row, j]:.6g} N at rest, beyond its max_effort '
+                f'{limits.effort[j]:g} N'))):
+        if bad.any():
+            row, j = np.argwhere(bad)[0]
+            raise PlanningError(
+                path.pieces[grid.index[row]].line,
+                f'at {mechanics.format_vector(dyn.position[row])} m '
+                f'{limits.names[j]} {why(row, j)}')
 
 
 def _plan_on(models, path, grid, dyn, limits, rate, max_speed):

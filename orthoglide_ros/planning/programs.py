@@ -20,6 +20,7 @@ from typing import Sequence
 import numpy as np
 
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
+from orthoglide_ros.formats.text import read_text
 from orthoglide_ros.model.types import Path as FilePath
 from orthoglide_ros.planning.gcode import ProgramError, read_gcode
 from orthoglide_ros.planning.path import from_moves, from_waypoints, Path
@@ -55,20 +56,10 @@ def read_program(path: FilePath, start: Sequence[float],
 
 def _read_text(path):
     try:
-        if path == '-':
-            data = sys.stdin.buffer.read(MAX_PROGRAM_BYTES + 1)
-        else:
-            with open(path, 'rb') as stream:
-                data = stream.read(MAX_PROGRAM_BYTES + 1)
-    except OSError as error:
-        raise ProgramError(None, f'cannot read: {error.strerror}') from None
-    if len(data) > MAX_PROGRAM_BYTES:
-        raise ProgramError(None, f'larger than {MAX_PROGRAM_BYTES} bytes')
-    try:
-        return data.decode('utf-8-sig')
-    except UnicodeDecodeError as error:
-        raise ProgramError(None, f'not UTF-8 text (byte {error.start})') \
-            from None
+        return read_text(sys.stdin.buffer if path == '-' else path,
+                         MAX_PROGRAM_BYTES)
+    except ValueError as error:
+        raise ProgramError(None, str(error)) from None
 
 
 def _waypoints(text):

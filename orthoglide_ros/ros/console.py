@@ -5,7 +5,7 @@ Before any import of rclpy or numpy, each script bounds the process's
 memory (:func:`orthoglide_ros.cores.memory.bound`) and makes SIGINT and
 SIGTERM only record a stop (:data:`STOP`, read by ``node_runtime.run``):
 exit code 0 and nothing on standard error at any moment
-(``doc/robustness.md``, start and stop). Once ``main()`` returns both are
+(``doc/robustness.md``, start and stop). Once the node has run, both are
 ignored: a signal during Fast DDS's teardown (138-187 ms) would end the
 process with -2. That can go when the teardown takes no time to speak of
 (``benchmarks/upstream_checks.py``, ``teardown``). Standard library only.
@@ -31,41 +31,32 @@ def _record(number, frame):
     STOP.append(number)
 
 
-def _run(module):
-    install_signal_handlers()
+def _run(name, node_class):
+    stop = install_signal_handlers()
     memory.bound()
     try:
-        return importlib.import_module(f'orthoglide_ros.ros.{module}').main()
+        module = importlib.import_module(f'orthoglide_ros.ros.{name}_node')
+        from orthoglide_ros.ros.node_runtime import run
+        return run(getattr(module, node_class), name, stop)
     finally:
         for number in (signal.SIGINT, signal.SIGTERM):
             signal.signal(number, signal.SIG_IGN)
 
 
-def feedforward():
-    """Run the ``feedforward`` node; return its exit code."""
-    return _run('feedforward_node')
+def _node(name, node_class):
+    """Return node ``name``'s console script: run it, return its exit code."""
+    def script():
+        return _run(name, node_class)
+    script.__name__ = script.__qualname__ = name
+    script.__doc__ = f'Run the ``{name}`` node; return its exit code.'
+    return script
 
 
-def simulator():
-    """Run the ``simulator`` node; return its exit code."""
-    return _run('simulator_node')
-
-
-def tracking_controller():
-    """Run the ``tracking_controller`` node; return its exit code."""
-    return _run('tracking_controller_node')
-
-
-def setpoint_publisher():
-    """Run the ``setpoint_publisher`` node; return its exit code."""
-    return _run('setpoint_publisher_node')
-
-
-def mechanism_state_publisher():
-    """Run the ``mechanism_state_publisher`` node; return its exit code."""
-    return _run('mechanism_state_publisher_node')
-
-
-def planner():
-    """Run the ``planner`` node; return its exit code."""
-    return _run('planner_node')
+# The console scripts of setup.py, one per node: its module, its class.
+feedforward = _node('feedforward', 'FeedforwardNode')
+simulator = _node('simulator', 'SimulatorNode')
+tracking_controller = _node('tracking_controller', 'TrackingControllerNode')
+setpoint_publisher = _node('setpoint_publisher', 'SetpointPublisher')
+mechanism_state_publisher = _node('mechanism_state_publisher',
+                                  'MechanismStatePublisherNode')
+planner = _node('planner', 'PlannerNode')

@@ -21,7 +21,6 @@ from orthoglide_ros.cores.inputs import (CARTESIAN_TRAJECTORY_BYTES, Rejected,
                                          TRAJECTORY_MESSAGE_BYTES)
 from orthoglide_ros.formats import cdr
 from orthoglide_ros.ros.managed_node import ManagedNode
-from orthoglide_ros.ros.node_runtime import run
 
 
 class FeedforwardNode(ManagedNode):
@@ -144,12 +143,3 @@ def _vector_message():
     msg = Float64MultiArray()
     msg.layout.dim = [MultiArrayDimension(label='actuator', size=3, stride=3)]
     return msg
-
-
-def main(args=None):
-    """Run the node until Ctrl-C or shutdown; return the exit code."""
-    return run(FeedforwardNode, 'feedforward', args)
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())

@@ -18,7 +18,6 @@ from orthoglide_ros.cores.mechanism_state_publisher import (MechanismState,
                                                             PARAMETERS)
 from orthoglide_ros.formats import cdr
 from orthoglide_ros.ros.managed_node import ManagedNode
-from orthoglide_ros.ros.node_runtime import run
 
 
 class MechanismStatePublisherNode(ManagedNode):
@@ -56,12 +55,3 @@ class MechanismStatePublisherNode(ManagedNode):
         message.position = array.array('d', state.position)
         message.velocity = array.array('d', state.velocity)
         self._publisher.publish(message)
-
-
-def main(args=None):
-    """Run the node until Ctrl-C or shutdown; return the exit code."""
-    return run(MechanismStatePublisherNode, 'mechanism_state_publisher', args)
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())

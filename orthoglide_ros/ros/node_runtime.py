@@ -1,7 +1,7 @@
 """
 The process around a node: start-up, signals, spinning, the exit code.
 
-:func:`run` is ``main()`` of every node and of ``orthoglide record``.
+:func:`run` runs every node (``console.py``) and ``orthoglide record``.
 Works around rclpy 7.1.6's ``EventsExecutor.spin()``, which busy-loops
 without running callbacks or seeing Ctrl-C: the executor is spun by
 ``spin_once`` in a loop. It can go when ``spin()`` runs a timer's
@@ -16,7 +16,6 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.signals import SignalHandlerOptions
 
 from orthoglide_ros.formats.text import clip
-from orthoglide_ros.ros.console import install_signal_handlers
 
 SPIN_PERIOD = 0.1   # s: the main loop sees a signal within this time
 
@@ -25,7 +24,7 @@ class NotStarting(ValueError):
     """A node that refuses to start; its message says why (exit 2)."""
 
 
-def run(node_class, name, args=None, report=None):
+def run(node_class, name, stop, args=None, report=None):
     """
     Run one node until Ctrl-C, SIGTERM or shutdown; return the exit code.
 
@@ -33,13 +32,13 @@ def run(node_class, name, args=None, report=None):
     the node refuses its start-up parameters (ValueError or
     ParameterException, logged as FATAL, or given to ``report(reason)``:
     a tool's own one-line error) or rcl refuses the arguments.
-    Ctrl-C and SIGTERM only set a flag (``console.STOP``) that this loop
-    reads within SPIN_PERIOD: rclpy's handlers would raise or shut the
-    context down inside a callback, breaking off a publish. An exception
-    out of the executor once the node runs (a defect of a callback) is
-    counted and the node goes on.
+    Ctrl-C and SIGTERM only append to ``stop`` (``console.STOP``, from
+    :func:`console.install_signal_handlers`), which this loop reads within
+    SPIN_PERIOD: rclpy's handlers would raise or shut the context down
+    inside a callback, breaking off a publish. An exception out of the
+    executor once the node runs (a defect of a callback) is counted and
+    the node goes on.
     """
-    stop = install_signal_handlers()
     if stop:
         return 0
     logger = rclpy.logging.get_logger(name)

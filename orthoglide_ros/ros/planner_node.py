@@ -27,7 +27,6 @@ from orthoglide_ros.cores.planner import (MAX_POSES, PARAMETERS, PATH_BYTES,
                                           Planner)
 from orthoglide_ros.formats import cdr
 from orthoglide_ros.ros.managed_node import ManagedNode
-from orthoglide_ros.ros.node_runtime import run
 
 
 def read_path(data):
@@ -77,12 +76,3 @@ class PlannerNode(ManagedNode):
         self._publisher.publish(cdr.multi_dof_trajectory(
             (0, 0), frame, ('platform',), times, motion.position,
             motion.velocity, motion.acceleration))
-
-
-def main(args=None):
-    """Run the node until Ctrl-C or shutdown; return the exit code."""
-    return run(PlannerNode, 'planner', args)
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())

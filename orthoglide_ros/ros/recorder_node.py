@@ -230,5 +230,6 @@ def main(output, topics, storage='mcap', duration=None, wait=10.0,
     def make():
         made.append(Recorder(output, topics, storage, duration, wait))
         return made[-1]
-    code = run(make, 'orthoglide_record', args=[], report=report)
+    code = run(make, 'orthoglide_record', console.install_signal_handlers(),
+               args=[], report=report)
     return LOSSY if code == 0 and made and made[-1].lossy else code

@@ -20,7 +20,6 @@ from trajectory_msgs.msg import (MultiDOFJointTrajectory,
                                  MultiDOFJointTrajectoryPoint)
 
 from orthoglide_ros.ros.managed_node import ManagedNode
-from orthoglide_ros.ros.node_runtime import run
 from orthoglide_ros.cores.setpoint_publisher import PARAMETERS, Stream
 
 # The platform centre G as the one multi-DOF "joint" of a trajectory.
@@ -149,12 +148,3 @@ class SetpointPublisher(ManagedNode):
         for publisher in () if interrupted else self._stream_publishers:
             publisher.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT))
         self.log('info', self.core.summary())
-
-
-def main(args=None):
-    """Stream setpoints until the pass ends or Ctrl-C; return the exit code."""
-    return run(SetpointPublisher, 'setpoint_publisher', args)
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())

@@ -20,7 +20,6 @@ from std_srvs.srv import Trigger
 
 from orthoglide_ros.formats import cdr
 from orthoglide_ros.ros.managed_node import ManagedNode
-from orthoglide_ros.ros.node_runtime import run
 from orthoglide_ros.cores.simulator import PARAMETERS, Simulator
 
 # Longest span (s) of the two monotonic reads around a node-clock read.
@@ -144,12 +143,3 @@ class SimulatorNode(ManagedNode):
 def _forces(data):
     """Read a command: its forces, as the core's one field."""
     return (cdr.float64_array(data),)
-
-
-def main(args=None):
-    """Run the node until Ctrl-C or shutdown; return the exit code."""
-    return run(SimulatorNode, 'simulator', args)
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())

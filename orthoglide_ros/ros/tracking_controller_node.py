@@ -17,7 +17,6 @@ from std_msgs.msg import Float64MultiArray, MultiArrayDimension
 
 from orthoglide_ros.formats import cdr
 from orthoglide_ros.ros.managed_node import ManagedNode
-from orthoglide_ros.ros.node_runtime import run
 from orthoglide_ros.cores.inputs import JOINT_TRAJECTORY_BYTES
 from orthoglide_ros.cores.tracking_controller import (FOLLOWING, HOLDING,
                                                       PARAMETERS, Tracking)
@@ -87,12 +86,3 @@ class TrackingControllerNode(ManagedNode):
         if command is not None:
             self._command.data = array.array('d', command.force)
             self._pub_commands.publish(self._command)
-
-
-def main(args=None):
-    """Run the node until Ctrl-C or shutdown; return the exit code."""
-    return run(TrackingControllerNode, 'tracking_controller', args)
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())

@@ -147,3 +147,50 @@ def timed_law(s, x, rate):
     v0 = np.sqrt(x[:-1])[k]
     return (t, np.minimum(s[k] + v0 * tau + 0.5 * u[k] * tau * tau,
                           s[k + 1]), v0 + u[k] * tau, u[k])
+
+
+def fine_grid(path, per_metre):
+    """
+    Return ``(index, w, s, stops)``: a grid of every piece of ``path``.
+
+    ``per_metre`` points a metre, 16 a piece at least, a junction twice:
+    the piece, the length along it and along the path (m), where G rests.
+    """
+    index, w, s, stops = [], [], [], []
+    start = 0.0
+    for k, piece in enumerate(path.pieces):
+        n = max(16, int(piece.length * per_metre))
+        ws = np.linspace(0.0, piece.length, n + 1)
+        index.append(np.full(n + 1, k))
+        w.append(ws)
+        s.append(start + ws)
+        flags = np.zeros(n + 1, bool)
+        flags[0], flags[-1] = path.stops[k], path.stops[k + 1]
+        stops.append(flags)
+        start += piece.length
+    return tuple(map(np.concatenate, (index, w, s, stops)))
+
+
+def kinematic_planner(path, rate, per_metre=4000):
+    """
+    Return ``motion(acceleration)``: a CNC-style planner's ``(t, p, v, a)``.
+
+    The time-optimal motion along ``path`` within one Cartesian
+    acceleration limit per axis (m/s^2, :func:`cartesian_rows`) and the
+    programmed feed, on a :func:`fine_grid`, sampled at ``rate`` (Hz).
+    """
+    index, w, s, stops = fine_grid(path, per_metre)
+    _, d1, d2 = path.evaluate(index, w)
+    feed = np.array([path.pieces[k].feed for k in index])
+    lengths = np.array([piece.length for piece in path.pieces])
+
+    def motion(acceleration):
+        rows = cartesian_rows(s, d1, d2, feed, acceleration, stops)
+        t, law, sdot, sddot = timed_law(s, optimal_profile(rows), rate)
+        k = np.clip(np.searchsorted(s, law, side='right') - 1, 0,
+                    len(s) - 2)
+        p, e1, e2 = path.evaluate(index[k], np.clip(
+            w[k] + law - s[k], 0.0, lengths[index[k]]))
+        return (t, p, e1 * sdot[:, None],
+                e1 * sddot[:, None] + e2 * (sdot ** 2)[:, None])
+    return motion

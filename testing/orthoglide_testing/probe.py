@@ -7,8 +7,9 @@ A node in the test's or demo's own process: a probe of the feedforward.
 - :func:`spin_until`, :func:`spin_for`: spin an executor until a predicate
   holds or time runs out; :func:`wait_diagnostics`: until a diagnostics
   message matches;
-- :func:`node_graphs`: a node under test and its probe on one executor,
-  matched, destroyed afterwards (the in-process tests' fixture);
+- :func:`probed`: a probe on its own executor, ended afterwards (the
+  process tests'); :func:`node_graphs`: a node under test and its probe
+  on one executor, matched, destroyed afterwards (the in-process tests');
 - :func:`call` and :func:`parameter_client`: services from a probe.
 """
 
@@ -200,6 +201,19 @@ class Probe(Node):
         spin_until(executor, lambda: False, 0.1)    # drain stragglers
         self.clear()
         return sent
+
+
+@contextmanager
+def probed(context, **kwargs):
+    """Yield ``(probe, executor)``: a :class:`Probe` (``kwargs``) spun alone."""
+    probe = Probe(context, **kwargs)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(probe)
+    try:
+        yield probe, executor
+    finally:
+        executor.shutdown()
+        probe.destroy_node()
 
 
 def matched(publishers=(), subscriptions=()):

@@ -117,14 +117,24 @@ def wait_exit(proc, timeout):
         return None
 
 
-def cpu_seconds(pid):
-    """Return utime + stime (s) of a process; None if it is gone."""
+def _stat(pid):
+    """
+    Return a process's ``/proc/<pid>/stat`` fields from field 3 on, or None.
+
+    stat(5) numbers them from 1: ``fields[0]`` is field 3 (the state).
+    """
     try:
         with open(f'/proc/{pid}/stat') as f:
-            fields = f.read().rsplit(')', 1)[1].split()
+            return f.read().rsplit(')', 1)[1].split()
     except (OSError, IndexError):
         return None
-    return (int(fields[11]) + int(fields[12])) / CLK_TCK
+
+
+def cpu_seconds(pid):
+    """Return utime + stime (s) of a process; None if it is gone."""
+    fields = _stat(pid)
+    return None if fields is None else \
+        (int(fields[11]) + int(fields[12])) / CLK_TCK
 
 
 def rss_mb(pid):
@@ -169,13 +179,8 @@ def memory_kb(pid):
 
 def page_faults(pid):
     """Return (minor, major) page faults of a process so far, or None."""
-    try:
-        with open(f'/proc/{pid}/stat') as f:
-            fields = f.read().rsplit(')', 1)[1].split()
-    except (OSError, IndexError):
-        return None
-    # stat(5): field 10 minflt, 12 majflt; fields[0] is field 3.
-    return int(fields[7]), int(fields[9])
+    fields = _stat(pid)     # stat(5): field 10 minflt, 12 majflt
+    return None if fields is None else (int(fields[7]), int(fields[9]))
 
 
 def process_environment(pid):

@@ -1,7 +1,8 @@
 """
 The ``orthoglide`` command-line tool: the mechanics without ROS.
 
-One module per job, each subcommand's parser beside its ``run_``:
+One module per job, each with its table of subcommands (``SUBCOMMANDS``,
+:class:`.common.Subcommand` rows: name, ``run_``, options, help):
 :mod:`.solving` (paper, solve, batch), :mod:`.planning` (plan),
 :mod:`.identifying` (excitation, record, identify, validate),
 :mod:`.models` (urdf, mjcf), :mod:`.pictures` (draw, render, animate);
@@ -85,6 +86,10 @@ def _parser():
                         version=f'%(prog)s {_version()}')
     sub = parser.add_subparsers(dest='command', metavar='COMMAND')
     for module in (solving, planning, identifying, models, pictures):
-        for add in module.PARSERS:
-            add(sub, common)
+        for command in module.SUBCOMMANDS:
+            one = sub.add_parser(
+                command.name, parents=[common] if command.robot else [],
+                help=command.help, description=command.description)
+            one.set_defaults(run=command.run)
+            command.add(one)
     return parser

@@ -8,6 +8,7 @@ range and the options several subcommands take.
 """
 
 import argparse
+from collections import namedtuple
 import io
 import math
 import os
@@ -18,6 +19,7 @@ import tempfile
 import numpy as np
 
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
+from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import JOINT_NAMES, LEGS, ROW
 
 PROG = 'orthoglide'
@@ -244,28 +246,40 @@ def drawn_png(draw, size, option):
     return png_bytes(figure)
 
 
-def read_trajectory(path, name):
+def read_trajectory(path):
     """
-    Read ``t,x,y,z,vx,...`` by header name; return arrays and line numbers.
+    Read ``t,x,y,z,vx,...`` by header name: ``(name, t, p, v, a, lines)``.
 
-    ``t`` is None if the file has no ``t`` column; a missing velocity or
-    acceleration group is None (zero).
+    ``name`` the file's (``<stdin>`` for ``-``); ``t`` None if the file
+    has no ``t`` column; a missing velocity or acceleration group None
+    (zero); ``lines`` each row's line number.
     """
+    name = '<stdin>' if path == '-' else path
     try:
         values, lines = read_columns(path, INPUT_GROUPS, name)
     except CsvError as error:
         raise CliError(str(error)) from None
     times = values['time']
-    return (None if times is None else times[:, 0], values['position'],
-            values['velocity'], values['acceleration'], lines)
+    return (name, None if times is None else times[:, 0],
+            values['position'], values['velocity'], values['acceleration'],
+            lines)
 
 
-def workspace_reason(error):
-    """Return a WorkspaceError's message less its 0-based sample prefix."""
-    message = str(error)
-    if error.row is not None:
-        message = message.removeprefix(f'sample {error.row}: ')
-    return message
+def solve_trajectory(robot, where, times, lines, p, v, a):
+    """
+    Return the solution of every sample, or refuse the one out of reach.
+
+    The refusal names ``where`` and the sample: its data row and line
+    when ``lines`` are given (a file), else its time.
+    """
+    try:
+        return mechanics.solve_batch(robot, p, v, a)
+    except mechanics.WorkspaceError as error:
+        k = error.row
+        at = (f' at t = {times[k]:.6g} s' if lines is None
+              else f': data row {k + 1} (line {lines[k]})')
+        reason = str(error).removeprefix(f'sample {k}: ')
+        raise CliError(f'{where}{at}: {reason}') from None
 
 
 def table_row(label, *values):
@@ -322,12 +336,18 @@ count = within(int, 0)
 positive_count = within(int, 1)
 
 
-def add_subcommand(sub, parents, name, run, help, description):
-    """Add subcommand ``name``, run by ``run``, with ``parents``' options."""
-    parser = sub.add_parser(name, parents=parents, help=help,
-                            description=description)
-    parser.set_defaults(run=run)
-    return parser
+class Subcommand(namedtuple('Subcommand',
+                            'name run add help description robot',
+                            defaults=(True,))):
+    """
+    One subcommand: a row of its module's ``SUBCOMMANDS`` table.
+
+    ``run(robot, args)`` does the work; ``add(parser)`` adds its own
+    options; ``help`` (the line in the list of commands) and
+    ``description`` (its ``--help``); ``robot``: it takes ``--params``.
+    """
+
+    __slots__ = ()
 
 
 def add_output(parser, what, required=False, metavar='FILE'):

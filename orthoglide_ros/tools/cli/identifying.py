@@ -4,7 +4,6 @@ Identify a robot: ``excitation``, ``record``, ``identify``, ``validate``.
 From the motion to the check of the result; see doc/identification.md.
 """
 
-import argparse
 import contextlib
 import math
 import re
@@ -19,83 +18,65 @@ from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import ROW
 from orthoglide_ros.tools import excitation_design, identification
 from orthoglide_ros.tools.cli.common import (
-    add_joint_names, add_subcommand, CliError, count, drawn_png, finite_float,
-    INPUT_GROUPS, positive_count, positive_float, print_error, robot_range,
+    add_joint_names, CliError, count, drawn_png, finite_float, INPUT_GROUPS,
+    positive_count, positive_float, print_error, robot_range, Subcommand,
     table_csv, table_row, write_output)
 from orthoglide_ros.tools.identification import DEFAULT_CUTOFF, report
 
 TOPIC_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
 
 
-def add_excitation(sub, common):
-    """Add ``excitation``: a periodic motion for identification."""
-    excitation = add_subcommand(
-        sub, [common], 'excitation', run_excitation,
-        help='a periodic trajectory for identification',
-        description='Write one period of an excitation as a trajectory CSV '
-        'file (the batch input columns t, x, y, z (m), vx, vy, vz (m/s), ax, '
-        'ay, az (m/s^2)): a finite Fourier series per axis of frame 0, '
-        f'{trajectory.EXCITATION_HARMONICS} harmonics of 1 / duration with '
-        'random coefficients from --seed, starting and ending at home at '
-        'rest, within --box of home, --max-velocity and --max-acceleration '
-        'per axis, inside the workspace, its actuator forces within '
-        '--max-force. Prints its peaks, its smallest singularity distance '
-        'and the condition number of its base regressor (the smaller the '
-        'better: noise in a log is amplified by it); --optimize searches '
-        'the coefficients for a smaller one. The setpoint_publisher '
-        'streams the same motion (motion: excitation, seed, duration); an '
-        '--optimize motion is streamed from the file (orthoglide batch '
-        '--format joint_trajectory).')
-    excitation.add_argument('--duration', type=positive_float,
-                            required=True, metavar='S',
-                            help='period of the series and length of the '
-                            'file (s)')
-    excitation.add_argument('--output', required=True, metavar='FILE',
-                            help='trajectory CSV file (t, x, y, z, vx, vy, '
-                            'vz, ax, ay, az; SI units), as orthoglide batch '
-                            'reads it; - for standard output (the '
-                            'description then goes to standard error)')
-    excitation.add_argument('--seed', type=count, default=0, metavar='N',
-                            help='seed of the coefficients, an integer >= 0'
-                            ' (default 0)')
-    excitation.add_argument('--seeds', type=positive_count, default=1,
-                            metavar='K',
-                            help='try the K seeds from --seed on and write '
-                            'the one of the smallest condition number '
-                            '(default 1)')
-    excitation.add_argument('--rate', type=positive_float, default=1000.0,
-                            metavar='HZ', help='samples per second of the '
-                            'file (default 1000)')
-    excitation.add_argument('--box', type=positive_float,
-                            default=trajectory.EXCITATION_BOX, metavar='M',
-                            help='largest |x|, |y|, |z| from home (m; '
-                            f'default {trajectory.EXCITATION_BOX:g})')
-    excitation.add_argument('--max-velocity', type=positive_float,
-                            default=trajectory.EXCITATION_MAX_VELOCITY,
-                            metavar='M/S', help='largest speed per axis '
-                            '(m/s; default '
-                            f'{trajectory.EXCITATION_MAX_VELOCITY:g})')
-    excitation.add_argument('--max-acceleration', type=positive_float,
-                            default=trajectory.EXCITATION_MAX_ACCELERATION,
-                            metavar='M/S2', help='largest acceleration per '
-                            'axis (m/s^2; default '
-                            f'{trajectory.EXCITATION_MAX_ACCELERATION:g})')
-    excitation.add_argument('--max-force', type=positive_float,
-                            default=math.inf, metavar='N',
-                            help='largest actuator force of the --params '
-                            'robot along the motion (N; default: none)')
-    excitation.add_argument('--optimize', action='store_true',
-                            help='search the Fourier coefficients, from the '
-                            'seed\'s, for a smaller condition number within '
-                            'the same bounds (L-BFGS-B); prints the seed\'s '
-                            'and the optimized one\'s')
-    excitation.add_argument('--evaluations', type=positive_count,
-                            default=excitation_design.DEFAULT_EVALUATIONS,
-                            metavar='N', help='condition numbers the '
-                            '--optimize search may compute (default '
-                            f'{excitation_design.DEFAULT_EVALUATIONS}: about '
-                            '10 s)')
-    return excitation
+# The excitation's bounds (trajectory.excitation's keywords), as options.
+_EXCITATION_BOUNDS = (
+    ('box', trajectory.EXCITATION_BOX, 'M', 'largest |x|, |y|, |z| from '
+     'home (m'),
+    ('max_velocity', trajectory.EXCITATION_MAX_VELOCITY, 'M/S',
+     'largest speed per axis (m/s'),
+    ('max_acceleration', trajectory.EXCITATION_MAX_ACCELERATION, 'M/S2',
+     'largest acceleration per axis (m/s^2'))
+
+
+def add_excitation(parser):
+    """Add the options of ``excitation``: a periodic motion for identification."""
+    parser.add_argument('--duration', type=positive_float,
+                        required=True, metavar='S',
+                        help='period of the series and length of the '
+                        'file (s)')
+    parser.add_argument('--output', required=True, metavar='FILE',
+                        help='trajectory CSV file (t, x, y, z, vx, vy, '
+                        'vz, ax, ay, az; SI units), as orthoglide batch '
+                        'reads it; - for standard output (the '
+                        'description then goes to standard error)')
+    parser.add_argument('--seed', type=count, default=0, metavar='N',
+                        help='seed of the coefficients, an integer >= 0'
+                        ' (default 0)')
+    parser.add_argument('--seeds', type=positive_count, default=1,
+                        metavar='K',
+                        help='try the K seeds from --seed on and write '
+                        'the one of the smallest condition number '
+                        '(default 1)')
+    parser.add_argument('--rate', type=positive_float, default=1000.0,
+                        metavar='HZ', help='samples per second of the '
+                        'file (default 1000)')
+    for bound, default, metavar, what in _EXCITATION_BOUNDS:
+        parser.add_argument('--' + bound.replace('_', '-'),
+                            type=positive_float, default=default,
+                            metavar=metavar, help=f'{what}; default '
+                            '%(default)g)')
+    parser.add_argument('--max-force', type=positive_float,
+                        default=math.inf, metavar='N',
+                        help='largest actuator force of the --params '
+                        'robot along the motion (N; default: none)')
+    parser.add_argument('--optimize', action='store_true',
+                        help='search the Fourier coefficients, from the '
+                        'seed\'s, for a smaller condition number within '
+                        'the same bounds (L-BFGS-B); prints the seed\'s '
+                        'and the optimized one\'s')
+    parser.add_argument('--evaluations', type=positive_count,
+                        default=excitation_design.DEFAULT_EVALUATIONS,
+                        metavar='N', help='condition numbers the '
+                        '--optimize search may compute (default '
+                        '%(default)s: about 10 s)')
 
 
 def run_excitation(robot, args):
@@ -106,8 +87,7 @@ def run_excitation(robot, args):
         raise CliError(str(error)) from None
     base = identification.base_parameters(
         robot, identification.design_law(robot))
-    bounds = dict(box=args.box, max_velocity=args.max_velocity,
-                  max_acceleration=args.max_acceleration)
+    bounds = {bound: getattr(args, bound) for bound, *_ in _EXCITATION_BOUNDS}
     rows = []
     for seed in range(args.seed, args.seed + args.seeds):
         motion = _excitation(robot, seed, args.duration, bounds)
@@ -182,34 +162,21 @@ def _excitation(robot, seed, duration, bounds):
         raise CliError(f'seed {seed}: {error}') from None
 
 
-def add_record(sub, common):
-    """Add ``record``: topics into a rosbag2 bag (rclpy)."""
-    record = add_subcommand(
-        sub, [], 'record', run_record, help='record joint states into a rosbag2 bag (needs ROS 2)',
-        description='Record topics (serialized messages, stamped at '
-        'reception) into a new rosbag2 bag directory for --duration seconds '
-        '(Ctrl-C ends it earlier, the bag complete); their types are taken '
-        'from their publishers. The bag is what identify reads (topic '
-        f'{identification.DEFAULT_TOPIC}) and what ros2 bag reads. A '
-        f'message {WHY["oversize"]} is dropped; the last line counts what '
-        'was recorded and what was dropped, and why, and the exit code is '
-        f'{LOSSY} when any was dropped (0 when none). Needs '
-        'rclpy; DDS settings from the environment (ROS_DOMAIN_ID, '
-        'ROS_AUTOMATIC_DISCOVERY_RANGE).')
-    record.add_argument('--output', required=True, metavar='BAG',
+def add_record(parser):
+    """Add the options of ``record``: topics into a rosbag2 bag (rclpy)."""
+    parser.add_argument('--output', required=True, metavar='BAG',
                         help='bag directory to create (must not exist)')
-    record.add_argument('--duration', type=positive_float, required=True,
+    parser.add_argument('--duration', type=positive_float, required=True,
                         metavar='S', help='stop after S seconds')
-    record.add_argument('--topic', action='append', metavar='NAME',
+    parser.add_argument('--topic', action='append', metavar='NAME',
                         help='topic to record, repeatable (default '
                         f'{identification.DEFAULT_TOPIC})')
-    record.add_argument('--storage', choices=cdr.BAG_STORAGES,
+    parser.add_argument('--storage', choices=cdr.BAG_STORAGES,
                         default=cdr.BAG_STORAGES[0], help='storage (default mcap, as '
                         'ros2 bag record)')
-    record.add_argument('--wait', type=positive_float, default=10.0,
+    parser.add_argument('--wait', type=positive_float, default=10.0,
                         metavar='S', help='longest wait for each topic\'s '
                         'publisher (s; default 10)')
-    return record
 
 
 def run_record(robot, args):
@@ -245,115 +212,90 @@ def _topic(name):
     return name
 
 
-def _log_options():
-    """Return the parent parser of the options that read a log."""
-    options = argparse.ArgumentParser(add_help=False)
-    options.add_argument('--input', required=True, metavar='LOG',
-                         help='CSV file, or rosbag2 bag (directory, .mcap or '
-                         '.db3 file)')
-    options.add_argument('--topic', default=identification.DEFAULT_TOPIC,
-                         help='joint states topic in a bag (default '
-                         f'{identification.DEFAULT_TOPIC})')
-    add_joint_names(options, 'the joints in the joint states')
-    options.add_argument('--start', type=finite_float, metavar='S',
-                         help='use the log from S seconds after its first '
-                         'sample (default: from the first)')
-    options.add_argument('--end', type=finite_float, metavar='S',
-                         help='use the log up to S seconds after its first '
-                         'sample (default: to the last)')
-    options.add_argument('--cutoff', type=positive_float,
-                         default=DEFAULT_CUTOFF, metavar='HZ',
-                         help='cutoff of the zero-phase low-pass of the '
-                         'forces and the regressor (Hz; default '
-                         f'{DEFAULT_CUTOFF:g}; the motion\'s is '
-                         f'{identification.STATE_CUTOFF_FACTOR:g} times it), '
-                         'below half the log\'s sampling rate')
-    options.add_argument('--payload', type=robot_range('payload'),
-                         default=None, metavar='KG', help='the payload the '
-                         'log was recorded with (kg on the platform, within '
-                         'robot.payload\'s limits [{:g}, {:g}]; default: '
-                         'robot.payload of --params, 0 in the paper\'s '
-                         'robot): its forces are the model\'s'.format(
-                             *ROW['payload'].limits))
-    return options
+def _add_log_options(parser):
+    """Add the options that read a log (identify, validate)."""
+    parser.add_argument('--input', required=True, metavar='LOG',
+                        help='CSV file, or rosbag2 bag (directory, .mcap or '
+                        '.db3 file)')
+    parser.add_argument('--topic', default=identification.DEFAULT_TOPIC,
+                        help='joint states topic in a bag (default '
+                        '%(default)s)')
+    add_joint_names(parser, 'the joints in the joint states')
+    parser.add_argument('--start', type=finite_float, metavar='S',
+                        help='use the log from S seconds after its first '
+                        'sample (default: from the first)')
+    parser.add_argument('--end', type=finite_float, metavar='S',
+                        help='use the log up to S seconds after its first '
+                        'sample (default: to the last)')
+    parser.add_argument('--cutoff', type=positive_float,
+                        default=DEFAULT_CUTOFF, metavar='HZ',
+                        help='cutoff of the zero-phase low-pass of the '
+                        'forces and the regressor (Hz; default '
+                        '%(default)g; the motion\'s is '
+                        f'{identification.STATE_CUTOFF_FACTOR:g} times it), '
+                        'below half the log\'s sampling rate')
+    parser.add_argument('--payload', type=robot_range('payload'),
+                        default=None, metavar='KG', help='the payload the '
+                        'log was recorded with (kg on the platform, within '
+                        'robot.payload\'s limits [{:g}, {:g}]; default: '
+                        'robot.payload of --params, 0 in the paper\'s '
+                        'robot): its forces are the model\'s'.format(
+                            *ROW['payload'].limits))
 
 
-def add_identify(sub, common):
-    """Add ``identify``: the base parameters from a log."""
-    identify = add_subcommand(
-        sub, [common, _log_options()], 'identify', run_identify,
-        help='identify masses, drives and friction from a log',
-        description='Identify the base parameters (the combinations of the '
-        'masses (kg), the drives\' armature (kg) and the viscous (N s/m) '
-        'and Coulomb (N) friction of the sliders that the forces depend '
-        'on) from a log, and write '
+def add_identify(parser):
+    """Add the options of ``identify``: the base parameters from a log."""
+    _add_log_options(parser)
+    parser.add_argument('--output', required=True, metavar='FILE',
+                        help='the identified robot as a ROS 2 parameters '
+                        'file (section feedforward, every robot.* '
+                        'parameter) for --params-file and --params')
+    parser.add_argument('--report', metavar='FILE',
+                        help='draw the measured and predicted forces (N) '
+                        'per actuator and the residuals as a PNG image')
+    parser.add_argument('--force-lag', type=finite_float, default=None,
+                        metavar='S', help='the forces were applied S '
+                        'seconds before their stamps (default: estimated '
+                        'from the log, the lag of the least residual '
+                        f'within +-{identification.LAG_SEARCH * 1e3:g} '
+                        'ms; a simulator or drive that reports the force '
+                        'held over its last step of dt: dt / 2)')
+    parser.add_argument('--friction', default='auto',
+                        choices=('auto',) + tuple(
+                            identification.law_name(law)
+                            for law in identification.LAWS),
+                        help='the law: viscous + Coulomb friction '
+                        '(coulomb), with ' + ', '.join(
+                            f'{term.meaning.format("each slider")} '
+                            f'(+{term.name})'
+                            for term in identification.OPTIONAL)
+                        + '; auto (default): the simplest law within '
+                        f'{100 * identification.SELECTION_MARGIN:g} %% of '
+                        'the least RMS error on held-out parts of the '
+                        'log')
+    parser.add_argument('--stribeck-velocity',
+                        type=robot_range('friction_stribeck_velocity'),
+                        default=None, metavar='M/S',
+                        help='the Stribeck speed v_b of a law with '
+                        '+stribeck (default: the best of speeds '
+                        f'{identification.STRIBECK_STEP:.3g} times apart '
+                        'from the robot\'s friction_velocity to the '
+                        'log\'s largest slider speed, refined)')
+    parser.add_argument('--max-relative-std', type=positive_float,
+                        default=identification.MAX_RELATIVE_STD,
+                        metavar='PCT', help='a base parameter whose '
+                        'relative standard deviation exceeds PCT %% '
+                        '(default %(default)g) '
+                        'is not excited by the log: held at its nominal '
+                        'value unless the held-out error needs it')
 
-        'the identified robot as a ROS 2 parameters file. The log: a CSV '
-        'file with the columns t (s), lambda_a, lambda_b, lambda_c (m), '
-        'force_a, force_b, force_c (N) and, optional, lambdadot_a, '
-        'lambdadot_b, lambdadot_c (m/s), or a rosbag2 bag (a directory, or '
-        'its .mcap or .db3 file) of sensor_msgs/JointState (position: '
-        'lambda, effort: force, header stamp: time). The forces and the '
-        'regressor go through the same zero-phase low-pass; least squares; '
-        'the robot of --params is the nominal one (its geometry, gravity '
-        'and friction_velocity are kept). Prints each base parameter with '
-        'its meaning, estimate and relative standard deviation, the '
-        'condition number, the RMS residual per actuator, the samples used '
-        'and their time span. A base parameter the log does not excite is '
-        'held at its nominal value (unless the held-out error needs it), '
-        'and said; a log that cannot be used at all (unreadable, too short, '
-        'no motion) exits with code 2; nothing is then written.')
-    identify.add_argument('--output', required=True, metavar='FILE',
-                          help='the identified robot as a ROS 2 parameters '
-                          'file (section feedforward, every robot.* '
-                          'parameter) for --params-file and --params')
-    identify.add_argument('--report', metavar='FILE',
-                          help='draw the measured and predicted forces (N) '
-                          'per actuator and the residuals as a PNG image')
-    identify.add_argument('--force-lag', type=finite_float, default=None,
-                          metavar='S', help='the forces were applied S '
-                          'seconds before their stamps (default: estimated '
-                          'from the log, the lag of the least residual '
-                          f'within +-{identification.LAG_SEARCH * 1e3:g} '
-                          'ms; a simulator or drive that reports the force '
-                          'held over its last step of dt: dt / 2)')
-    identify.add_argument('--friction', default='auto',
-                          choices=('auto',) + tuple(
-                              identification.law_name(law)
-                              for law in identification.LAWS),
-                          help='the law: viscous + Coulomb friction '
-                          '(coulomb), with ' + ', '.join(
-                              f'{term.meaning.format("each slider")} '
-                              f'(+{term.name})'
-                              for term in identification.OPTIONAL)
-                          + '; auto (default): the simplest law within '
-                          f'{100 * identification.SELECTION_MARGIN:g} %% of '
-                          'the least RMS error on held-out parts of the '
-                          'log')
-    identify.add_argument('--stribeck-velocity',
-                          type=robot_range('friction_stribeck_velocity'),
-                          default=None, metavar='M/S',
-                          help='the Stribeck speed v_b of a law with '
-                          '+stribeck (default: the best of speeds '
-                          f'{identification.STRIBECK_STEP:.3g} times apart '
-                          'from the robot\'s friction_velocity to the '
-                          'log\'s largest slider speed, refined)')
-    identify.add_argument('--max-relative-std', type=positive_float,
-                          default=identification.MAX_RELATIVE_STD,
-                          metavar='PCT', help='a base parameter whose '
-                          'relative standard deviation exceeds PCT %% '
-                          f'(default {identification.MAX_RELATIVE_STD:g}) '
-                          'is not excited by the log: held at its nominal '
-                          'value unless the held-out error needs it')
-
-    identify.add_argument('--validate', metavar='LOG',
-                          help='another log (another motion): validate the '
-                          'nominal and the identified robot on it, as '
-                          'orthoglide validate does')
-    identify.add_argument('--validate-report', metavar='FILE',
-                          help='draw the validation of the identified robot '
-                          '(as validate --report) as a PNG image')
-    return identify
+    parser.add_argument('--validate', metavar='LOG',
+                        help='another log (another motion): validate the '
+                        'nominal and the identified robot on it, as '
+                        'orthoglide validate does')
+    parser.add_argument('--validate-report', metavar='FILE',
+                        help='draw the validation of the identified robot '
+                        '(as validate --report) as a PNG image')
 
 
 def run_identify(robot, args):
@@ -407,29 +349,17 @@ def run_identify(robot, args):
     return 0
 
 
-def add_validate(sub, common):
-    """Add ``validate``: a robot against a log."""
-    validate = add_subcommand(
-        sub, [common, _log_options()], 'validate', run_validate,
-        help='predict the forces of a log, report the error',
-        description='Predict the actuator forces of a log (another motion '
-        'than the one identified from) with the robot of --params (every '
-        'robot.* parameter, friction included: the full model) and compare '
-        'them with the measured ones, both through the same zero-phase '
-        'low-pass as identify\'s. Prints per actuator the RMS and the '
-        'largest error (N) and the share of the force explained (1 - '
-        'sum(error^2) / sum(force^2)), with the force lag and the part of '
-        'the log used. The log is read as by identify (CSV or rosbag2). A '
-        'log that cannot be used exits with code 2.')
-    validate.add_argument('--report', metavar='FILE',
-                          help='draw measured and predicted forces against '
-                          'time and the error against the slider\'s speed '
-                          'and position, per actuator, as a PNG image')
-    validate.add_argument('--force-lag', type=finite_float, default=None,
-                          metavar='S', help='the forces were applied S '
-                          'seconds before their stamps (default: the lag '
-                          'that best matches the prediction)')
-    return validate
+def add_validate(parser):
+    """Add the options of ``validate``: a robot against a log."""
+    _add_log_options(parser)
+    parser.add_argument('--report', metavar='FILE',
+                        help='draw measured and predicted forces against '
+                        'time and the error against the slider\'s speed '
+                        'and position, per actuator, as a PNG image')
+    parser.add_argument('--force-lag', type=finite_float, default=None,
+                        metavar='S', help='the forces were applied S '
+                        'seconds before their stamps (default: the lag '
+                        'that best matches the prediction)')
 
 
 def run_validate(robot, args):
@@ -474,4 +404,69 @@ def _refusals_in_one_line(source):
                            'option is beyond what it can use') from None
 
 
-PARSERS = (add_excitation, add_record, add_identify, add_validate)
+SUBCOMMANDS = (
+    Subcommand(
+        'excitation', run_excitation, add_excitation,
+        'a periodic trajectory for identification',
+        'Write one period of an excitation as a trajectory CSV '
+        'file (the batch input columns t, x, y, z (m), vx, vy, vz (m/s), ax, '
+        'ay, az (m/s^2)): a finite Fourier series per axis of frame 0, '
+        f'{trajectory.EXCITATION_HARMONICS} harmonics of 1 / duration with '
+        'random coefficients from --seed, starting and ending at home at '
+        'rest, within --box of home, --max-velocity and --max-acceleration '
+        'per axis, inside the workspace, its actuator forces within '
+        '--max-force. Prints its peaks, its smallest singularity distance '
+        'and the condition number of its base regressor (the smaller the '
+        'better: noise in a log is amplified by it); --optimize searches '
+        'the coefficients for a smaller one. The setpoint_publisher '
+        'streams the same motion (motion: excitation, seed, duration); an '
+        '--optimize motion is streamed from the file (orthoglide batch '
+        '--format joint_trajectory).'),
+    Subcommand(
+        'record', run_record, add_record,
+        'record joint states into a rosbag2 bag (needs ROS 2)',
+        'Record topics (serialized messages, stamped at '
+        'reception) into a new rosbag2 bag directory for --duration seconds '
+        '(Ctrl-C ends it earlier, the bag complete); their types are taken '
+        'from their publishers. The bag is what identify reads (topic '
+        f'{identification.DEFAULT_TOPIC}) and what ros2 bag reads. A '
+        f'message {WHY["oversize"]} is dropped; the last line counts what '
+        'was recorded and what was dropped, and why, and the exit code is '
+        f'{LOSSY} when any was dropped (0 when none). Needs '
+        'rclpy; DDS settings from the environment (ROS_DOMAIN_ID, '
+        'ROS_AUTOMATIC_DISCOVERY_RANGE).', robot=False),
+    Subcommand(
+        'identify', run_identify, add_identify,
+        'identify masses, drives and friction from a log',
+        'Identify the base parameters (the combinations of the '
+        'masses (kg), the drives\' armature (kg) and the viscous (N s/m) '
+        'and Coulomb (N) friction of the sliders that the forces depend '
+        'on) from a log, and write '
+        'the identified robot as a ROS 2 parameters file. The log: a CSV '
+        'file with the columns t (s), lambda_a, lambda_b, lambda_c (m), '
+        'force_a, force_b, force_c (N) and, optional, lambdadot_a, '
+        'lambdadot_b, lambdadot_c (m/s), or a rosbag2 bag (a directory, or '
+        'its .mcap or .db3 file) of sensor_msgs/JointState (position: '
+        'lambda, effort: force, header stamp: time). The forces and the '
+        'regressor go through the same zero-phase low-pass; least squares; '
+        'the robot of --params is the nominal one (its geometry, gravity '
+        'and friction_velocity are kept). Prints each base parameter with '
+        'its meaning, estimate and relative standard deviation, the '
+        'condition number, the RMS residual per actuator, the samples used '
+        'and their time span. A base parameter the log does not excite is '
+        'held at its nominal value (unless the held-out error needs it), '
+        'and said; a log that cannot be used at all (unreadable, too short, '
+        'no motion) exits with code 2; nothing is then written.'),
+    Subcommand(
+        'validate', run_validate, add_validate,
+        'predict the forces of a log, report the error',
+        'Predict the actuator forces of a log (another motion '
+        'than the one identified from) with the robot of --params (every '
+        'robot.* parameter, friction included: the full model) and compare '
+        'them with the measured ones, both through the same zero-phase '
+        'low-pass as identify\'s. Prints per actuator the RMS and the '
+        'largest error (N) and the share of the force explained (1 - '
+        'sum(error^2) / sum(force^2)), with the force lag and the part of '
+        'the log used. The log is read as by identify (CSV or rosbag2). A '
+        'log that cannot be used exits with code 2.'),
+)

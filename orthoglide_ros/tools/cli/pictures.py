@@ -4,8 +4,8 @@ import os
 
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools.cli.common import (
-    add_output, add_position, add_size, add_subcommand, CliError,
-    read_trajectory, within, workspace_reason, write_output)
+    add_output, add_position, add_size, CliError, read_trajectory,
+    solve_trajectory, Subcommand, within, write_output)
 
 # Pictures: size limits (pixels) and the animation's defaults.
 MIN_PIXELS, MAX_PIXELS = 100, 4000
@@ -16,18 +16,11 @@ _frames = within(int, 1, MAX_FRAMES)
 _fps = within(float, 0.5, 50.0, unit=' frames/s')
 
 
-def add_draw(sub, common):
-    """Add ``draw``: a picture at one position (matplotlib)."""
-    draw = add_subcommand(
-        sub, [common], 'draw', run_draw, help='draw the robot at a position (PNG)',
-        description='Draw the robot in 3D with its platform centre at a '
-        'position: every body, the actuator axes, the paper\'s workspace '
-        'cube (|x|, |y|, |z| <= 0.3 m) and the actuator forces (N) that '
-        'hold it at rest there. Needs matplotlib.')
-    add_position(draw)
-    add_output(draw, 'PNG file to write', True, 'FILE.png')
-    add_size(draw, (800, 800), _pixels)
-    return draw
+def add_draw(parser):
+    """Add the options of ``draw``: a picture at one position (matplotlib)."""
+    add_position(parser)
+    add_output(parser, 'PNG file to write', True, 'FILE.png')
+    add_size(parser, (800, 800), _pixels)
 
 
 def run_draw(robot, args):
@@ -42,31 +35,22 @@ def run_draw(robot, args):
     return 0
 
 
-def add_render(sub, common):
-    """Add ``render``: MuJoCo's picture (PNG, GIF)."""
-    render = add_subcommand(
-        sub, [common], 'render', run_render, help='render the robot at a position '
-        'with MuJoCo (PNG)',
-        description='Render the robot\'s MuJoCo model (orthoglide mjcf) '
-        'with its platform centre at a position, through MuJoCo\'s '
-        'offscreen renderer (OpenGL: MUJOCO_GL=egl by default, or osmesa). '
-        'Needs mujoco; exits 2 where no OpenGL backend exists. A .gif '
-        'output animates the robot along the paper\'s trajectory.')
-    add_position(render, False, '; for a PNG')
-    add_output(render, 'PNG file, or GIF (animation) to write', True,
+def add_render(parser):
+    """Add the options of ``render``: MuJoCo's picture (PNG, GIF)."""
+    add_position(parser, False, '; for a PNG')
+    add_output(parser, 'PNG file, or GIF (animation) to write', True,
                'FILE.png|.gif')
-    _add_gif(render, 'GIF frames along eq. (6)', 'GIF frames per second')
-    add_size(render, (800, 600), _pixels)
-    return render
+    _add_gif(parser, 'GIF frames along eq. (6)', 'GIF frames per second')
+    add_size(parser, (800, 600), _pixels)
 
 
 def _add_gif(parser, frames_help, fps_help, fps_note=''):
     """Add a GIF's ``--frames`` and ``--fps``, their defaults in the help."""
     parser.add_argument('--frames', type=_frames, default=DEFAULT_FRAMES,
                         metavar='N',
-                        help=f'{frames_help} (default {DEFAULT_FRAMES})')
+                        help=frames_help + ' (default %(default)s)')
     parser.add_argument('--fps', type=_fps, default=DEFAULT_FPS, metavar='F',
-                        help=f'{fps_help} (default {DEFAULT_FPS:g}{fps_note})')
+                        help=f'{fps_help} (default %(default)g{fps_note})')
 
 
 def run_render(robot, args):
@@ -99,25 +83,15 @@ def run_render(robot, args):
     return 0
 
 
-def add_animate(sub, common):
-    """Add ``animate``: a motion with its forces (GIF)."""
-    animate = add_subcommand(
-        sub, [common], 'animate', run_animate, help='animate the robot along a '
-        'trajectory (GIF)',
-        description='Animate the robot along a trajectory with each '
-        'actuator\'s force (N, an arrow along its slider) and the time. '
-        'The trajectory is the paper\'s, eq. (6), or a CSV file read as '
-        'batch reads it (x, y, z in m; vx, vy, vz in m/s and ax, ay, az in '
-        'm/s^2 optional; t in s optional); its rows are sampled evenly '
-        'down to --frames. Needs matplotlib.')
-    animate.add_argument('--input', metavar='FILE', help='trajectory CSV '
-                         'file, - for standard input (default: the paper\'s '
-                         'trajectory, eq. (6))')
-    add_output(animate, 'GIF file to write', True, 'FILE.gif')
-    _add_gif(animate, 'frames at most, evenly spread over the trajectory',
+def add_animate(parser):
+    """Add the options of ``animate``: a motion with its forces (GIF)."""
+    parser.add_argument('--input', metavar='FILE', help='trajectory CSV '
+                        'file, - for standard input (default: the paper\'s '
+                        'trajectory, eq. (6))')
+    add_output(parser, 'GIF file to write', True, 'FILE.gif')
+    _add_gif(parser, 'frames at most, evenly spread over the trajectory',
              'frames per second of the GIF', ': eq. (6) in real time')
-    add_size(animate, (640, 640), _pixels)
-    return animate
+    add_size(parser, (640, 640), _pixels)
 
 
 def run_animate(robot, args):
@@ -130,18 +104,10 @@ def run_animate(robot, args):
         where = 'the paper trajectory'
         lines = None
     else:
-        where = '<stdin>' if args.input == '-' else args.input
-        times, p, v, a, lines = read_trajectory(args.input, where)
+        where, times, p, v, a, lines = read_trajectory(args.input)
         if not len(p):
             raise CliError(f'{where}: no data row')
-    try:
-        sol = mechanics.solve_batch(robot, p, v, a)
-    except mechanics.WorkspaceError as error:
-        if lines is None:
-            raise CliError(f'{where} at t = {times[error.row]:.6g} s: '
-                           f'{workspace_reason(error)}') from None
-        raise CliError(f'{where}: data row {error.row + 1} (line '
-                       f'{lines[error.row]}): {workspace_reason(error)}') from None
+    sol = solve_trajectory(robot, where, times, lines, p, v, a)
     rows = drawing.frame_rows(len(p), args.frames)
     data = drawing.animate(
         robot, None if times is None else times[rows], p[rows],
@@ -169,4 +135,29 @@ def _check_extension(path, extension):
                        f'{extension[1:].upper()})')
 
 
-PARSERS = (add_draw, add_render, add_animate)
+SUBCOMMANDS = (
+    Subcommand(
+        'draw', run_draw, add_draw,
+        'draw the robot at a position (PNG)',
+        'Draw the robot in 3D with its platform centre at a '
+        'position: every body, the actuator axes, the paper\'s workspace '
+        'cube (|x|, |y|, |z| <= 0.3 m) and the actuator forces (N) that '
+        'hold it at rest there. Needs matplotlib.'),
+    Subcommand(
+        'render', run_render, add_render,
+        'render the robot at a position with MuJoCo (PNG)',
+        'Render the robot\'s MuJoCo model (orthoglide mjcf) '
+        'with its platform centre at a position, through MuJoCo\'s '
+        'offscreen renderer (OpenGL: MUJOCO_GL=egl by default, or osmesa). '
+        'Needs mujoco; exits 2 where no OpenGL backend exists. A .gif '
+        'output animates the robot along the paper\'s trajectory.'),
+    Subcommand(
+        'animate', run_animate, add_animate,
+        'animate the robot along a trajectory (GIF)',
+        'Animate the robot along a trajectory with each '
+        'actuator\'s force (N, an arrow along its slider) and the time. '
+        'The trajectory is the paper\'s, eq. (6), or a CSV file read as '
+        'batch reads it (x, y, z in m; vx, vy, vz in m/s and ax, ay, az in '
+        'm/s^2 optional; t in s optional); its rows are sampled evenly '
+        'down to --frames. Needs matplotlib.'),
+)

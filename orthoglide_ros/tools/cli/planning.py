@@ -18,8 +18,8 @@ from orthoglide_ros.planning.limits import (limits_from_params_file,
                                             LimitsError, load_limits,
                                             paper_limits)
 from orthoglide_ros.planning.programs import read_program
-from orthoglide_ros.tools.cli.common import (add_subcommand, CliError,
-                                             finite_float, INPUT_GROUPS,
+from orthoglide_ros.tools.cli.common import (CliError, finite_float,
+                                             INPUT_GROUPS, Subcommand,
                                              table_csv, within, write_output)
 from orthoglide_ros.tools.cli.solving import (_joint_names,
                                               _joint_trajectory_yaml)
@@ -33,56 +33,39 @@ _tolerance = within(float, 0.0, 0.01, unit=' m')
 _speed = within(float, 0.0, 100.0, above=True, unit=' m/s')
 
 
-def add_plan(sub, common):
-    """Add ``plan``: the fastest motion along a program."""
-    plan = add_subcommand(
-        sub, [common], 'plan', run_plan,
-        help='plan the fastest motion along a G-code program or waypoints',
-        description='The fastest motion of the platform centre G that '
-        'starts at rest at --start, follows the program\'s path and ends at '
-        'rest at its last point, within the actuators\' limits under the '
-        'robot\'s own dynamics (masses, payload, armature, friction, '
-        'gravity) and within the programmed feed. The program: G-code (the '
-        'subset of doc/planning.md: G0 G1 G2 G3, G17-G19, G20/G21, '
-        'G90/G91, G94, G61, G61.1, G64 P, F, N, comments, M2/M30; mm by '
-        'default, origin at home) or CSV waypoints (header x,y,z in m, '
-        'optional feed in m/s). Limits: --limits FILE (ros2_control\'s '
-        'joint_limits form), else the --params file\'s planner section, else '
-        'the paper robot\'s. Output columns: ' + ','.join(PLAN_COLUMNS)
-        + ' (SI units), the last sample exactly at the end. Nothing is '
-        'written unless the whole motion is planned.')
-    plan.add_argument('--input', required=True, metavar='PROGRAM',
-                      help='G-code program or CSV waypoints; - for standard '
-                      'input')
-    plan.add_argument('--output', required=True, metavar='FILE',
-                      help='the planned motion; - for standard output')
-    plan.add_argument('--limits', metavar='FILE', help='YAML file with a '
-                      'top-level joint_limits: mapping (ros2_control / '
-                      'MoveIt form, per joint slider_a, slider_b, slider_c: '
-                      'has_effort_limits, max_effort (N), has_velocity_limits, '
-                      'max_velocity (m/s), has_acceleration_limits, '
-                      'max_acceleration (m/s^2), has_jerk_limits, max_jerk '
-                      '(m/s^3))')
-    plan.add_argument('--rate', type=_rate, default=DEFAULT_RATE,
-                      metavar='HZ', help='samples per second (default '
-                      f'{DEFAULT_RATE:g})')
-    plan.add_argument('--start', type=finite_float, nargs=3,
-                      default=[0.0, 0.0, 0.0], metavar=('X', 'Y', 'Z'),
-                      help='where G starts, at rest (m, base frame; default '
-                      'home 0 0 0)')
-    plan.add_argument('--tolerance', type=_tolerance,
-                      default=DEFAULT_TOLERANCE, metavar='M',
-                      help='corners of waypoints and of G64 without P are '
-                      'blended within this distance of the path (m, default '
-                      f'{DEFAULT_TOLERANCE:g}; 0: G stops at every corner)')
-    plan.add_argument('--max-speed', type=_speed, default=math.inf,
-                      metavar='M/S', help='G\'s speed cap beside the '
-                      'programmed feed (m/s; default none)')
-    plan.add_argument('--format', choices=('csv', 'joint_trajectory'),
-                      default='csv', help='csv: the columns above (default); '
-                      'joint_trajectory: a trajectory_msgs/JointTrajectory in '
-                      'YAML with the forces as efforts, as batch writes it')
-    return plan
+def add_plan(parser):
+    """Add the options of ``plan``: the fastest motion along a program."""
+    parser.add_argument('--input', required=True, metavar='PROGRAM',
+                        help='G-code program or CSV waypoints; - for standard '
+                        'input')
+    parser.add_argument('--output', required=True, metavar='FILE',
+                        help='the planned motion; - for standard output')
+    parser.add_argument('--limits', metavar='FILE', help='YAML file with a '
+                        'top-level joint_limits: mapping (ros2_control / '
+                        'MoveIt form, per joint slider_a, slider_b, slider_c: '
+                        'has_effort_limits, max_effort (N), has_velocity_limits, '
+                        'max_velocity (m/s), has_acceleration_limits, '
+                        'max_acceleration (m/s^2), has_jerk_limits, max_jerk '
+                        '(m/s^3))')
+    parser.add_argument('--rate', type=_rate, default=DEFAULT_RATE,
+                        metavar='HZ', help='samples per second (default '
+                        '%(default)g)')
+    parser.add_argument('--start', type=finite_float, nargs=3,
+                        default=[0.0, 0.0, 0.0], metavar=('X', 'Y', 'Z'),
+                        help='where G starts, at rest (m, base frame; default '
+                        'home 0 0 0)')
+    parser.add_argument('--tolerance', type=_tolerance,
+                        default=DEFAULT_TOLERANCE, metavar='M',
+                        help='corners of waypoints and of G64 without P are '
+                        'blended within this distance of the path (m, default '
+                        '%(default)g; 0: G stops at every corner)')
+    parser.add_argument('--max-speed', type=_speed, default=math.inf,
+                        metavar='M/S', help='G\'s speed cap beside the '
+                        'programmed feed (m/s; default none)')
+    parser.add_argument('--format', choices=('csv', 'joint_trajectory'),
+                        default='csv', help='csv: the columns above (default); '
+                        'joint_trajectory: a trajectory_msgs/JointTrajectory in '
+                        'YAML with the forces as efforts, as batch writes it')
 
 
 def run_plan(robot, args):
@@ -127,4 +110,21 @@ def _limits(args, names):
     return paper_limits(), False
 
 
-PARSERS = (add_plan,)
+SUBCOMMANDS = (
+    Subcommand(
+        'plan', run_plan, add_plan,
+        'plan the fastest motion along a G-code program or waypoints',
+        'The fastest motion of the platform centre G that '
+        'starts at rest at --start, follows the program\'s path and ends at '
+        'rest at its last point, within the actuators\' limits under the '
+        'robot\'s own dynamics (masses, payload, armature, friction, '
+        'gravity) and within the programmed feed. The program: G-code (the '
+        'subset of doc/planning.md: G0 G1 G2 G3, G17-G19, G20/G21, '
+        'G90/G91, G94, G61, G61.1, G64 P, F, N, comments, M2/M30; mm by '
+        'default, origin at home) or CSV waypoints (header x,y,z in m, '
+        'optional feed in m/s). Limits: --limits FILE (ros2_control\'s '
+        'joint_limits form), else the --params file\'s planner section, else '
+        'the paper robot\'s. Output columns: ' + ','.join(PLAN_COLUMNS)
+        + ' (SI units), the last sample exactly at the end. Nothing is '
+        'written unless the whole motion is planned.'),
+)

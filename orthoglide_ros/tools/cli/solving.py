@@ -14,9 +14,9 @@ from orthoglide_ros.model.robot import LEGS
 from orthoglide_ros.formats.params_file import load_parameters
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools.cli.common import (
-    add_output, add_position, add_subcommand, CliError, CSV_COLUMNS, csv_text,
-    new_figure, png_bytes, PROG, QUANTITIES, read_trajectory, table_row,
-    within, workspace_reason, write_output)
+    add_output, add_position, CliError, CSV_COLUMNS, csv_text, new_figure,
+    png_bytes, PROG, QUANTITIES, read_trajectory, solve_trajectory,
+    Subcommand, table_row, within, write_output)
 
 DEFAULT_SAMPLES = 201
 UNITS = {'lambda': 'm', 'lambdadot': 'm/s', 'lambdaddot': 'm/s^2',
@@ -25,36 +25,24 @@ _samples = within(int, 2)
 _COLUMNS = ', '.join(CSV_COLUMNS)
 
 
-def add_paper(sub, common):
-    """Add ``paper``: the paper's figures 3-8."""
-    paper = add_subcommand(
-        sub, [common], 'paper', run_paper, help='reproduce the paper\'s figures 3-8',
-        description='Solve the trajectory of eq. (6), r_G(t) = r* (1 - '
-        'cos(pi t / 3)) with r* = (0.05, 0.10, -0.20) m, over [0, 2] s: '
-        'actuator displacements lambda (m; figures 3-5) and powers p (W; '
-        'figures 6-8). Without --csv or --plot, print peak |lambda| (m), '
-        '|force| (N), |power| (W) per actuator and the statics force (N) at '
-        't = 0.')
-    paper.add_argument('--samples', type=_samples, default=DEFAULT_SAMPLES,
-                       metavar='N', help='number of instants evenly spaced '
-                       'over [0, 2] s, both ends included (default '
-                       f'{DEFAULT_SAMPLES})')
-    paper.add_argument('--csv', metavar='FILE', help='write the samples as '
-                       f'CSV ({_COLUMNS}; SI units); - for standard output')
-    paper.add_argument('--plot', metavar='FILE', help='write figures 3-8 as '
-                       'a PNG image (needs matplotlib)')
-    return paper
+def add_paper(parser):
+    """Add the options of ``paper``: the paper's figures 3-8."""
+    parser.add_argument('--samples', type=_samples, default=DEFAULT_SAMPLES,
+                        metavar='N', help='number of instants evenly spaced '
+                        'over [0, 2] s, both ends included (default '
+                        '%(default)s)')
+    parser.add_argument('--csv', metavar='FILE', help='write the samples as '
+                        f'CSV ({_COLUMNS}; SI units); - for standard output')
+    parser.add_argument('--plot', metavar='FILE', help='write figures 3-8 as '
+                        'a PNG image (needs matplotlib)')
 
 
 def run_paper(robot, args):
     """Solve the trajectory of eq. (6); write the CSV, plot or summary."""
     times = trajectory.paper_times(args.samples)
     p, v, a = trajectory.paper_batch(times)
-    try:
-        sol = mechanics.solve_batch(robot, p, v, a)
-    except mechanics.WorkspaceError as error:
-        raise CliError(f'the paper trajectory at t = {times[error.row]:.6g} '
-                       f's: {workspace_reason(error)}') from None
+    sol = solve_trajectory(robot, 'the paper trajectory', times, None, p, v,
+                           a)
     outputs = []
     if args.plot is not None:
         outputs.append((args.plot, _plot_png(times, sol)))
@@ -99,24 +87,18 @@ def _plot_png(times, sol):
     return png_bytes(figure)
 
 
-def add_solve(sub, common):
-    """Add ``solve``: one sample."""
-    solve = add_subcommand(
-        sub, [common], 'solve', run_solve, help='solve one sample',
-        description='Inverse kinematics and dynamics of one sample: lambda '
-        '(m), lambdadot (m/s), lambdaddot (m/s^2), force (N, on each slider '
-        'along +lambda) and power (W) of actuators A, B, C.')
-    add_position(solve)
-    solve.add_argument('--velocity', type=float, nargs=3,
-                       default=mechanics.ZERO, metavar=('VX', 'VY', 'VZ'),
-                       help='its velocity (m/s; default 0 0 0)')
-    solve.add_argument('--acceleration', type=float, nargs=3,
-                       default=mechanics.ZERO, metavar=('AX', 'AY', 'AZ'),
-                       help='its acceleration (m/s^2; default 0 0 0)')
-    solve.add_argument('--json', action='store_true', help='print one JSON '
-                       f'object with the keys {_COLUMNS[3:]} (SI units, full '
-                       'double precision)')
-    return solve
+def add_solve(parser):
+    """Add the options of ``solve``: one sample."""
+    add_position(parser)
+    parser.add_argument('--velocity', type=float, nargs=3,
+                        default=mechanics.ZERO, metavar=('VX', 'VY', 'VZ'),
+                        help='its velocity (m/s; default 0 0 0)')
+    parser.add_argument('--acceleration', type=float, nargs=3,
+                        default=mechanics.ZERO, metavar=('AX', 'AY', 'AZ'),
+                        help='its acceleration (m/s^2; default 0 0 0)')
+    parser.add_argument('--json', action='store_true', help='print one JSON '
+                        f'object with the keys {_COLUMNS[3:]} (SI units, full '
+                        'double precision)')
 
 
 def run_solve(robot, args):
@@ -142,40 +124,24 @@ def run_solve(robot, args):
     return 0
 
 
-def add_batch(sub, common):
-    """Add ``batch``: a trajectory file."""
-    batch = add_subcommand(
-        sub, [common], 'batch', run_batch, help='solve a trajectory CSV file',
-        description='Solve every row of a trajectory CSV file. Columns are '
-        'matched by header name, in any order, case-insensitively; others '
-        'are ignored. x, y, z (m) are required; vx, vy, vz (m/s) and ax, '
-        'ay, az (m/s^2) are optional, each group all or none, a missing '
-        'group meaning zero; t (s) is optional and copied to the output, '
-        'left empty if absent. Blank lines are skipped; rows are counted '
-        'from 1 after the header. Output columns: ' + _COLUMNS + ' (SI '
-        'units). Nothing is written unless every row is solved.')
-    batch.add_argument('--input', required=True, metavar='FILE',
-                       help='trajectory CSV file; - for standard input')
-    batch.add_argument('--format', choices=('csv', 'joint_trajectory'),
-                       default='csv', help='csv: the columns above '
-                       '(default); joint_trajectory: a trajectory_msgs/'
-                       'JointTrajectory in YAML, as ros2 topic pub and '
-                       'launch files read it (needs t; joint names from '
-                       'the --params file\'s joint_names, default '
-                       'slider_a, slider_b, slider_c)')
-    add_output(batch, 'result file')
-    return batch
+def add_batch(parser):
+    """Add the options of ``batch``: a trajectory file."""
+    parser.add_argument('--input', required=True, metavar='FILE',
+                        help='trajectory CSV file; - for standard input')
+    parser.add_argument('--format', choices=('csv', 'joint_trajectory'),
+                        default='csv', help='csv: the columns above '
+                        '(default); joint_trajectory: a trajectory_msgs/'
+                        'JointTrajectory in YAML, as ros2 topic pub and '
+                        'launch files read it (needs t; joint names from '
+                        'the --params file\'s joint_names, default '
+                        'slider_a, slider_b, slider_c)')
+    add_output(parser, 'result file')
 
 
 def run_batch(robot, args):
     """Solve every row of a trajectory file; write CSV or a JointTrajectory."""
-    name = '<stdin>' if args.input == '-' else args.input
-    times, p, v, a, lines = read_trajectory(args.input, name)
-    try:
-        sol = mechanics.solve_batch(robot, p, v, a)
-    except mechanics.WorkspaceError as error:
-        raise CliError(f'{name}: data row {error.row + 1} (line '
-                       f'{lines[error.row]}): {workspace_reason(error)}') from None
+    name, times, p, v, a, lines = read_trajectory(args.input)
+    sol = solve_trajectory(robot, name, times, lines, p, v, a)
     if args.format == 'joint_trajectory':
         data = _joint_trajectory_yaml(_time_from_start(times, lines, name),
                                       sol, _joint_names(args.params))
@@ -254,4 +220,31 @@ def _joint_names(path):
         raise CliError(f'{path}: joint_names: {error}') from None
 
 
-PARSERS = (add_paper, add_solve, add_batch)
+SUBCOMMANDS = (
+    Subcommand(
+        'paper', run_paper, add_paper,
+        'reproduce the paper\'s figures 3-8',
+        'Solve the trajectory of eq. (6), r_G(t) = r* (1 - '
+        'cos(pi t / 3)) with r* = (0.05, 0.10, -0.20) m, over [0, 2] s: '
+        'actuator displacements lambda (m; figures 3-5) and powers p (W; '
+        'figures 6-8). Without --csv or --plot, print peak |lambda| (m), '
+        '|force| (N), |power| (W) per actuator and the statics force (N) at '
+        't = 0.'),
+    Subcommand(
+        'solve', run_solve, add_solve,
+        'solve one sample',
+        'Inverse kinematics and dynamics of one sample: lambda '
+        '(m), lambdadot (m/s), lambdaddot (m/s^2), force (N, on each slider '
+        'along +lambda) and power (W) of actuators A, B, C.'),
+    Subcommand(
+        'batch', run_batch, add_batch,
+        'solve a trajectory CSV file',
+        'Solve every row of a trajectory CSV file. Columns are '
+        'matched by header name, in any order, case-insensitively; others '
+        'are ignored. x, y, z (m) are required; vx, vy, vz (m/s) and ax, '
+        'ay, az (m/s^2) are optional, each group all or none, a missing '
+        'group meaning zero; t (s) is optional and copied to the output, '
+        'left empty if absent. Blank lines are skipped; rows are counted '
+        'from 1 after the header. Output columns: ' + _COLUMNS + ' (SI '
+        'units). Nothing is written unless every row is solved.'),
+)

@@ -407,15 +407,11 @@ def departed_clients(requests=100):
                 joining |= (began >= first) & (began < requesting)
             gaps_of[stream] = max(gaps[~joining], default=math.inf)
             joining_of[stream] = max(gaps[joining], default=0.0)
-        dropped = {}
-        for name in ('simulator', 'feedforward'):
-            status = peer.status(name, timeout=3.0)
-            dropped[name] = int(status[2].get(
-                'replies dropped (client gone)', -1)) if status else -1
         return Departed(
             requests=requests, bursts=BURSTS, gaps=gaps_of,
             joining=joining_of, seconds=end - start,
-            client_exits=[code for code, _ in stopped], dropped=dropped,
+            client_exits=[code for code, _ in stopped],
+            dropped=_replies_dropped(peer),
             alive={n: nodes.alive(n) for n in ('simulator', 'feedforward')})
 
 
@@ -499,15 +495,20 @@ def _beside(peer, nodes, node, hostile, fresh, stalls):
     after['fresh process'] = int(_await_line(
         asker, ANSWERED, 5.0 * stalls + START_TIMEOUT) or -1)
     stop_process(asker)
+    return Isolated(
+        fresh=fresh, answered=answered, carried_out=carried_out,
+        stalls=stalls, after_stalls=after, dropped=_replies_dropped(peer),
+        alive={n: nodes.alive(n) for n in ('simulator', 'feedforward')})
+
+
+def _replies_dropped(peer):
+    """Return each node's ``replies dropped (client gone)``; -1: no status."""
     dropped = {}
     for name in ('simulator', 'feedforward'):
         status = peer.status(name, timeout=3.0)
         dropped[name] = int(status[2].get(
             'replies dropped (client gone)', -1)) if status else -1
-    return Isolated(
-        fresh=fresh, answered=answered, carried_out=carried_out,
-        stalls=stalls, after_stalls=after, dropped=dropped,
-        alive={n: nodes.alive(n) for n in ('simulator', 'feedforward')})
+    return dropped
 
 
 def _state(peer, service):
