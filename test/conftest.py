@@ -178,6 +178,8 @@ SERIAL = (
     'test_flood.py',
     'test_hostile_peers.py::test_departed_clients_pause_no_output_stream',
     'test_hostile_peers.py::test_stalled_process_never_makes_the_loop_saturate_or_race',
+    'test_live_graph.py::test_the_one_host_profile_does_not_stall_when_participants_join',
+    'test_live_graph.py::test_two_hosts_with_the_deployment_recipes',
 )
 # scripts/test.sh's two phases: 'parallel' leaves the ``serial`` tests out,
 # 'serial' runs only them; their count goes to ORTHOGLIDE_SERIAL_COUNT.
