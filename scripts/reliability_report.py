@@ -20,7 +20,8 @@ shorter):
 - producer restarts (SIGKILL then SIGINT, later then earlier stamps) on
   both inputs; SIGINT and SIGTERM mid-stream;
 - ``test/test_fuzz_node.py`` and ``test/test_fuzz_mechanics.py`` (when
-  present) through pytest, with ``--hypothesis-seed`` and
+  present) through pytest, with the ``thorough`` hypothesis profile,
+  ``--hypothesis-seed`` and
   ``ORTHOGLIDE_FUZZ_EXAMPLES`` when the files read it;
 - the hostile peers and stalls (``testing/orthoglide_testing/hostile``
   and ``harness.big_messages``), every node, one line each with its
@@ -109,7 +110,7 @@ def run_fuzz(args, domain):
     if reads:
         env[FUZZ_VARIABLE] = str(args.fuzz_examples)
     command = [sys.executable, '-m', 'pytest', '-q', '-p', 'no:cacheprovider',
-               f'--hypothesis-seed={args.seed}',
+               '--hypothesis-profile=thorough', f'--hypothesis-seed={args.seed}',
                '--hypothesis-show-statistics'] + files
     say('fuzz: ' + ' '.join(command[2:]))
     start = time.monotonic()

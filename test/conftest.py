@@ -6,32 +6,83 @@ README's test command:
 
 - ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``: Fast DDS discovers only on the
   loopback interface (otherwise it multicasts out of the network card);
-- ``ROS_DOMAIN_ID``: one per test session (drawn from the process id, and
-  never the caller's own domain; ``ORTHOGLIDE_TEST_DOMAIN_ID`` overrides),
-  so parallel runs and a live ROS graph on the same machine do not see each
-  other;
-- ``ROS_LOG_DIR``: a temporary directory, so tests leave no logs behind.
+- ``ROS_DOMAIN_ID``: one per test process (each pytest-xdist worker too),
+  held with a lock file so that no other session of this suite on the host
+  takes it, and never the caller's own domain (see :func:`_claim_domain`;
+  ``ORTHOGLIDE_TEST_DOMAIN_ID`` overrides);
+- ``ROS_LOG_DIR``: a temporary directory, so tests leave no logs behind;
+- the hypothesis profile (:mod:`hypothesis_profiles`): ``default``, or
+  ``thorough`` in the soak run;
+- the markers ``slow`` and ``serial`` from measured lists (SLOW, SERIAL),
+  and scripts/test.sh's phases (PHASE).
 
 It names the checkout the proving ground runs from
 (:func:`orthoglide_testing.use_checkout`, pytest's root directory).
 """
 
 from contextlib import contextmanager
+import fcntl
 import os
+from pathlib import Path
+import re
 import sys
 import tempfile
 
+from hypothesis import settings
+import hypothesis_profiles  # noqa: F401 (registers the profiles)
 import pytest
 
+# The domains a session may take: odd ones, so that a test's neighbour
+# domain (test_isolation.py: domain + 1) and the network namespaces' domain
+# (orthoglide_testing.live_graph.namespace_domain: domain + 117, modulo)
+# are even and never another session's.
+SESSION_DOMAINS = range(1, 232, 2)
+DOMAIN_LOCKS = Path(tempfile.gettempdir()) / 'orthoglide-test-domains'
+
+
+def _claim_domain():
+    """
+    Return this process's ROS domain, and the lock that holds it.
+
+    ``ORTHOGLIDE_TEST_DOMAIN_ID`` (the N-th xdist worker: that plus 2 N)
+    wins. Otherwise the first of SESSION_DOMAINS, from one drawn from the
+    process id on, whose lock file no other process holds (an exclusive
+    ``flock``, released when the process ends), other than the domain of
+    the caller (``ROS_DOMAIN_ID`` as the session found it).
+    """
+    worker = os.environ.get('PYTEST_XDIST_WORKER', 'gw0')   # gw0, gw1, ...
+    explicit = os.environ.get('ORTHOGLIDE_TEST_DOMAIN_ID')
+    if explicit:
+        return int(explicit) + 2 * int(worker[2:]), None
+    # The xdist controller runs first: its workers see the caller's domain.
+    caller = os.environ.setdefault('ORTHOGLIDE_CALLER_DOMAIN_ID',
+                                   os.environ.get('ROS_DOMAIN_ID', '0'))
+    start = os.getpid() % len(SESSION_DOMAINS)
+    DOMAIN_LOCKS.mkdir(exist_ok=True)
+    for k in range(len(SESSION_DOMAINS)):
+        domain = SESSION_DOMAINS[(start + k) % len(SESSION_DOMAINS)]
+        if str(domain) == caller:
+            continue
+        lock = open(DOMAIN_LOCKS / f'{domain}.lock', 'a')
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            lock.close()
+            continue
+        return domain, lock
+    raise RuntimeError(f'every test domain is taken ({DOMAIN_LOCKS})')
+
+
 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-_CALLER_DOMAIN = os.environ.get('ROS_DOMAIN_ID', '0')
-_DOMAIN = 1 + os.getpid() % 232
-if str(_DOMAIN) == _CALLER_DOMAIN:
-    _DOMAIN = _DOMAIN % 232 + 1
-# An explicit choice wins (e.g. a range agreed on a shared machine).
-_DOMAIN = int(os.environ.get('ORTHOGLIDE_TEST_DOMAIN_ID', _DOMAIN))
+_DOMAIN, _DOMAIN_LOCK = _claim_domain()
 os.environ['ROS_DOMAIN_ID'] = str(_DOMAIN)
 os.environ.setdefault('ROS_LOG_DIR', tempfile.mkdtemp(prefix='orthoglide-ros-log-'))
+
+
+def _soak(config):
+    """Whether this is the soak run: ``-m soak`` or ``ORTHOGLIDE_SOAK=1``."""
+    return os.environ.get('ORTHOGLIDE_SOAK') == '1' or bool(re.search(
+        r'(?<!not )\bsoak\b', config.getoption('markexpr') or ''))
 
 
 @contextmanager
@@ -79,14 +130,21 @@ def closed_loop():
         yield running
 
 
+@pytest.hookimpl(trylast=True)
 def pytest_configure(config):
     """
     Name the checkout to ``orthoglide_testing`` (its ``config/``, its cwd).
 
     ``scripts/setup_venv.sh`` installs it; where it is not installed
     (``colcon test``), it is taken from the checkout's ``testing/``, for
-    the processes the tests start too.
+    the processes the tests start too. Load the ``thorough`` hypothesis
+    profile for the soak run, unless one is named (after hypothesis' own
+    hook: trylast).
     """
+    if _soak(config) and not config.getoption('hypothesis_profile'):
+        settings.load_profile('thorough')
+    if PHASE in ('parallel', 'serial'):
+        config.pluginmanager.register(_Phase(), 'orthoglide-test-phase')
     try:
         import orthoglide_testing
     except ImportError:
@@ -98,19 +156,71 @@ def pytest_configure(config):
     orthoglide_testing.use_checkout(config.rootpath)
 
 
+# Tests of 1.5 s of CPU or more (measured serially: doc/measurements.md,
+# "Test suite"), marked ``slow``: -m "not ros and not slow" leaves them out
+# while editing. They stay in the pure set. (test_doc_commands.py marks its
+# own.)
+SLOW = (
+    'test_cli_identification.py::test_identify_validates_and_draws_in_one_step',
+    'test_cli_identification.py::test_identify_writes_a_parameters_file_the_tools_read',
+    'test_flake8.py::test_flake8',
+    'test_identification_not_the_model.py::test_plain_identify_then_batch_is_within_the_floor',
+    'test_layers.py::test_the_tool_works_without_rclpy',
+    'test_pep257.py::test_pep257',
+    'test_plan_motion.py::test_random_programs_keep_every_limit_on_the_path',
+)
+# Verdicts on a stream's timing or completeness against a fixed bound that
+# failed beside a parallel neighbour (three runs of the ``ros`` set with
+# -n 2: doc/measurements.md, "Test suite"), marked ``serial``: a file, or
+# file::test. scripts/test.sh runs them after the rest, alone.
+SERIAL = (
+    'test_feedforward_node.py::test_inputs_keep_pace_whatever_spins_the_node',
+    'test_flood.py',
+    'test_hostile_peers.py::test_departed_clients_pause_no_output_stream',
+    'test_hostile_peers.py::test_stalled_process_never_makes_the_loop_saturate_or_race',
+    'test_live_graph.py::test_the_one_host_profile_does_not_stall_when_participants_join',
+    'test_live_graph.py::test_two_hosts_with_the_deployment_recipes',
+)
+# scripts/test.sh's two phases: 'parallel' leaves the ``serial`` tests out,
+# 'serial' runs only them; their count goes to ORTHOGLIDE_SERIAL_COUNT.
+PHASE = os.environ.get('ORTHOGLIDE_TEST_PHASE')
+
+
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """
-    Skip the tests marked ``soak`` unless asked for.
+    Mark SLOW and SERIAL (before -m selects); skip ``soak`` unless asked.
 
-    They are the long versions (10 s floods, 5 restarts): ``pytest -m soak``
-    or ``ORTHOGLIDE_SOAK=1`` runs them; the default run has a short version
-    of each.
+    The soak tests are the long versions (10 s floods, 5 restarts):
+    ``pytest -m soak`` or ``ORTHOGLIDE_SOAK=1`` runs them; the default run
+    has a short version of each.
     """
-    if os.environ.get('ORTHOGLIDE_SOAK') == '1' \
-            or 'soak' in (config.getoption('markexpr') or ''):
+    for item in items:
+        names = (item.path.name, f'{item.path.name}::{item.originalname}')
+        for marker, listed in (('slow', SLOW), ('serial', SERIAL)):
+            if set(names) & set(listed):
+                item.add_marker(marker)
+    if _soak(config):
         return
     skip = pytest.mark.skip(
         reason='soak test: select it with -m soak or ORTHOGLIDE_SOAK=1')
     for item in items:
         if 'soak' in item.keywords:
             item.add_marker(skip)
+
+
+class _Phase:
+    """scripts/test.sh's phase: its tests of the selection, after -m and -k."""
+
+    @pytest.hookimpl(trylast=True)
+    def pytest_collection_modifyitems(self, config, items):
+        """Keep PHASE's tests; write how many of them are ``serial``."""
+        serial = [item for item in items if 'serial' in item.keywords]
+        if os.environ.get('ORTHOGLIDE_SERIAL_COUNT'):
+            Path(os.environ['ORTHOGLIDE_SERIAL_COUNT']).write_text(
+                str(len(serial)))
+        kept = serial if PHASE == 'serial' else [
+            item for item in items if 'serial' not in item.keywords]
+        config.hook.pytest_deselected(items=[
+            item for item in items if item not in kept])
+        items[:] = kept

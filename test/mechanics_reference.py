@@ -14,7 +14,8 @@ package but the values of a :class:`Robot` (read as plain attributes).
 - :func:`mass_matrix`, :func:`kinetic_energy`, :func:`potential_energy`.
 - :func:`lagrange_forces`: the actuator forces from Lagrange's equations,
   ``Q = M qdd + C(q, qd) + dV/dq`` and ``f = J_lambda^-T Q``, with the
-  Christoffel terms from central finite differences of the exact ``M``.
+  Christoffel terms from central finite differences of the exact ``M``;
+  :func:`force_tolerance` their error bound.
 
 Units: m, kg, s, N, J; vectors in frame 0.
 """
@@ -345,6 +346,24 @@ def lagrange_forces(robot, position, velocity, acceleration,
     return LagrangeSolution(force, gen, mm, coriolis, grav, dm, jac)
 
 
+# The error of lagrange_forces (derived in test_lagrange.py's docstring):
+# the Christoffel terms carry DM_RELATIVE of ``|dM/dq| |qd|^2`` (the central
+# difference of M), every other term ROUNDING of its size.
+DM_RELATIVE = 1e-8
+ROUNDING = 1e-12
+
+
+def force_tolerance(ref, velocity, acceleration):
+    """Error bound (N) on ``ref.force``, a :class:`LagrangeSolution`."""
+    inverse_t = np.linalg.norm(np.linalg.inv(ref.jacobian.T), 2)
+    speed2 = np.asarray(velocity) @ np.asarray(velocity)
+    fd_part = DM_RELATIVE * np.abs(ref.dmass).max() * 9.0 * speed2
+    exact_part = ROUNDING * (
+        np.abs(ref.mass_matrix).max() * 3.0 * np.abs(acceleration).max()
+        + np.abs(ref.gravity).max() + np.abs(ref.coriolis).max())
+    return inverse_t * (fd_part + exact_part) + 1e-300
+
+
 # --- Shared helpers of the test suite (no part of the second model) ---
 
 # Half side (m) of the tested workspace cube |x|, |y|, |z| <= CUBE (doc/model.md).
@@ -368,6 +387,20 @@ FAST_TRAJECTORIES = (
     ((-0.12, 0.15, -0.15), 6.0),
     ((0.15, 0.15, 0.15), 8.0),
 )
+
+
+def batch_rows(n, chunk, seed, count=20):
+    """
+    Rows of an n-row batch to check against the reference, sorted.
+
+    Both sides of every boundary of the package's ``chunk``-row pieces, the
+    first and last two, and ``count`` random ones.
+    """
+    rows = {0, 1, n - 2, n - 1}
+    for start in range(chunk, n, chunk):
+        rows |= {start - 1, start, start + 1}
+    rng = np.random.default_rng(seed)
+    return sorted(rows | set(rng.integers(0, n, count).tolist()))
 
 
 def cube_points(half=CUBE):

@@ -9,6 +9,7 @@ field the node uses must come back bit for bit.
 import math
 
 from hypothesis import example, given, settings, strategies as st
+from hypothesis_profiles import examples
 import pytest
 
 from orthoglide_ros.formats import cdr
@@ -47,7 +48,7 @@ def header(msg, stamp, frame):
     return msg
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(stamps, frames, vectors, st.tuples(floats, floats, floats, floats))
 def test_pose_stamped(stamp, frame, position, orientation):
     msg = header(PoseStamped(), stamp, frame)
@@ -59,7 +60,7 @@ def test_pose_stamped(stamp, frame, position, orientation):
     assert same(got[2], position) and same(got[3], orientation)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(stamps, frames, vectors, vectors, st.booleans())
 def test_twist_and_accel_stamped(stamp, frame, linear, angular, is_twist):
     msg = header(TwistStamped() if is_twist else AccelStamped(), stamp, frame)
@@ -77,7 +78,7 @@ def twist(linear):
     return t
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(stamps, frames, st.lists(frames, max_size=3),
        st.lists(st.tuples(
            st.lists(st.tuples(vectors, st.tuples(floats, floats, floats,
@@ -142,7 +143,7 @@ names = st.lists(frames.filter(bool), max_size=6)
 doubles = st.lists(floats, max_size=6)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(stamps, frames, names, doubles, doubles, doubles)
 def test_joint_state(stamp, frame, joint_names, position, velocity, effort):
     msg = header(JointState(), stamp, frame)
@@ -154,7 +155,7 @@ def test_joint_state(stamp, frame, joint_names, position, velocity, effort):
         assert same(read, sent)
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(st.lists(st.tuples(frames, st.integers(0, 2**32 - 1),
                           st.integers(0, 2**32 - 1)), max_size=3),
        st.integers(0, 2**32 - 1), doubles)
@@ -212,7 +213,7 @@ regular_points = st.tuples(
     st.tuples(st.integers(0, 9), st.integers(0, 10**9 - 1)))
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=examples(150), deadline=None)
 @given(stamps, frames, names, st.one_of(
     st.lists(trajectory_points, max_size=6),
     st.lists(regular_points, min_size=2, max_size=9)))
@@ -243,7 +244,7 @@ def test_cartesian_trajectory_reads_every_point(stamp, frame, joint_names,
         assert tuple(got.time[k]) == time
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=examples(100), deadline=None)
 @given(stamps, frames, names.filter(bool), st.integers(0, 7), st.data())
 def test_joint_trajectory_writes_what_rclpy_reads(stamp, frame, joint_names,
                                                   count, data):
@@ -269,7 +270,7 @@ def test_joint_trajectory_writes_what_rclpy_reads(stamp, frame, joint_names,
                 point.time_from_start.nanosec) == tuple(time[k])
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=examples(100), deadline=None)
 @given(stamps, frames, names, st.lists(st.tuples(
     *[st.lists(floats, max_size=4)] * 4,
     st.tuples(st.integers(-2**31, 2**31 - 1), st.integers(0, 2**32 - 1))),

@@ -8,6 +8,7 @@ over the workspace (eq. 3), or the platform would not translate.
 """
 
 from hypothesis import given, settings
+from hypothesis_profiles import examples
 from mechanics_reference import (
     CUBE, cube_points, leg_geometry, LEGS, U1)
 import numpy as np
@@ -18,7 +19,7 @@ from orthoglide_ros.model.robot import Robot
 CLOSURE_TOLERANCE = 1e-12
 
 
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points())
 def test_every_leg_chain_reaches_the_platform_centre(robot, position):
     legs = elements(robot, position)
@@ -27,7 +28,7 @@ def test_every_leg_chain_reaches_the_platform_centre(robot, position):
         assert np.abs(reached - position).max() <= CLOSURE_TOLERANCE, leg
 
 
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points())
 def test_platform_orientation_a50_is_constant(robot, position):
     home = elements(robot, (0.0, 0.0, 0.0))
@@ -47,7 +48,7 @@ def test_platform_orientation_of_leg_c_is_the_corrected_eq4():
         assert np.abs(a50 - c50).max() <= 1e-12
 
 
-@settings(deadline=None, max_examples=30)
+@settings(deadline=None, max_examples=examples(30))
 @given(position=cube_points())
 def test_parallelogram_and_rods_keep_their_lengths(robot, position):
     legs = elements(robot, position)
@@ -74,7 +75,7 @@ def test_parallelogram_and_rods_keep_their_lengths(robot, position):
         assert np.abs(off_axis).max() <= CLOSURE_TOLERANCE
 
 
-@settings(deadline=None, max_examples=30)
+@settings(deadline=None, max_examples=examples(30))
 @given(position=cube_points(CUBE))
 def test_joint_centres_and_rotations_match_an_independent_chain(robot,
                                                                 position):

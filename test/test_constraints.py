@@ -18,6 +18,7 @@ from the rotations ``a_k0`` that ``elements`` returns:
 """
 
 from hypothesis import given, settings
+from hypothesis_profiles import examples
 from mechanics_reference import (
     cube_points, LEGS, skew, U2, U3, vectors)
 import numpy as np
@@ -55,7 +56,7 @@ def connectivity_terms(robot, leg):
     return slider, turn21, turn32, quad21, quad32, cross
 
 
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points())
 def test_spheres_eq14_hold(robot, position):
     lam = solve(robot, position).lambda_
@@ -67,7 +68,7 @@ def test_spheres_eq14_hold(robot, position):
     assert np.abs(residuals).max() <= ROUNDING
 
 
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points(), velocity=vectors(3.0))
 def test_j1_lambdadot_equals_j2_rdot(robot, position, velocity):
     s = solve(robot, position, velocity)
@@ -78,7 +79,7 @@ def test_j1_lambdadot_equals_j2_rdot(robot, position, velocity):
     assert np.abs(lhs - rhs).max() <= ROUNDING * scale
 
 
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points(), velocity=vectors(3.0),
        acceleration=vectors(30.0))
 def test_connectivity_eq13_and_eq18_hold_for_every_leg(

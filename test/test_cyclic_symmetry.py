@@ -16,6 +16,7 @@ the weight of the whole robot for the rates and forces).
 """
 
 from hypothesis import given, settings, strategies as st
+from hypothesis_profiles import examples
 from mechanics_reference import cube_points, OTHER_ROBOT_VALUES, vectors
 import numpy as np
 from orthoglide_ros.model.bodies import elements
@@ -34,7 +35,7 @@ def close(a, b, scale):
     return np.abs(np.asarray(a) - np.asarray(b)).max() <= ROUNDING * scale
 
 
-@settings(deadline=None, max_examples=60)
+@settings(deadline=None, max_examples=examples(60))
 @given(position=cube_points(), velocity=vectors(3.0),
        acceleration=vectors(30.0), gravity=vectors(10.0),
        other=st.booleans())
@@ -60,7 +61,7 @@ def test_turned_input_gives_turned_outputs(position, velocity, acceleration,
         assert close(getattr(t, field), getattr(s, field), 1.0), field
 
 
-@settings(deadline=None, max_examples=30)
+@settings(deadline=None, max_examples=examples(30))
 @given(position=cube_points(), velocity=vectors(3.0),
        acceleration=vectors(30.0))
 def test_turned_input_turns_every_element(position, velocity, acceleration):

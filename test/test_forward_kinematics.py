@@ -10,6 +10,7 @@ independently; inputs with no platform position on the home branch raise
 import itertools
 
 from hypothesis import given, settings
+from hypothesis_profiles import examples
 from mechanics_reference import (
     actuator_displacements, CUBE, cube_points)
 import numpy as np
@@ -22,7 +23,7 @@ TOLERANCE = 1e-12  # m
 CORNERS = np.array(list(itertools.product((-CUBE, CUBE), repeat=3)))
 
 
-@settings(deadline=None, max_examples=60)
+@settings(deadline=None, max_examples=examples(60))
 @given(position=cube_points())
 def test_round_trip_single_point(robot, position):
     lam = solve(robot, position).lambda_

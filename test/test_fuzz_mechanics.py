@@ -18,6 +18,7 @@ import warnings
 from fuzz_strategies import any_float, margins, states
 from hypothesis import example, given, HealthCheck, settings, \
     strategies as st
+from hypothesis_profiles import examples
 from mechanics_reference import OTHER_ROBOT_VALUES
 import numpy as np
 from orthoglide_ros.cores import feedforward
@@ -27,7 +28,7 @@ from orthoglide_ros.model.robot import Robot
 
 RELATIVE = 1e-12
 ROBOTS = (Robot(), Robot(**OTHER_ROBOT_VALUES))
-FUZZ = settings(max_examples=400, deadline=None,
+FUZZ = settings(max_examples=examples(400), deadline=None,
                 suppress_health_check=[HealthCheck.too_slow])
 
 

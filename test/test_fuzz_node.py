@@ -30,6 +30,7 @@ import time
 from types import SimpleNamespace
 
 from hypothesis import given, HealthCheck, settings, strategies as st
+from hypothesis_profiles import examples
 import pytest
 from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
@@ -546,7 +547,7 @@ def test_fuzzed_setpoints(rig):
     names = list(rig.node.core.settings.joint_names)
     totals = {'outputs': 0}
 
-    @settings(FUZZ, max_examples=200)
+    @settings(FUZZ, max_examples=examples(200))
     @given(node_settings, st.lists(
         mostly(st.one_of(groups, trajectories), garbage, 9),
         min_size=1, max_size=6))
@@ -570,7 +571,7 @@ def test_random_bytes_on_every_input(rig):
     """Any byte string on any input: no exception, counted, never wrong."""
     names = list(rig.node.core.settings.joint_names)
 
-    @settings(FUZZ, max_examples=150)
+    @settings(FUZZ, max_examples=examples(150))
     @given(st.lists(garbage, min_size=1, max_size=8))
     def check(items):
         fresh_start(rig)

@@ -2,12 +2,14 @@
 ``leg_joints`` and ``platform_velocity``: the joint variables and rates.
 
 ``leg_joints`` against eq. (9) written independently (the reference model)
-and its derivative by complex step, for one sample and for a batch;
+and its derivative by complex step, for one sample and for every row of a
+batch;
 ``platform_velocity`` inverts ``lambdadot = J_lambda rdot_G`` (the
 reference's complex-step ``J_lambda``); both refuse what ``solve`` refuses.
 """
 
 from hypothesis import given, settings
+from hypothesis_profiles import examples
 from mechanics_reference import (
     COMPLEX_STEP, cube_points, lambda_jacobian, leg_geometry, LEGS,
     vectors)
@@ -30,7 +32,7 @@ def reference(robot, position, velocity):
     return out
 
 
-@settings(deadline=None, max_examples=60)
+@settings(deadline=None, max_examples=examples(60))
 @given(position=cube_points(), velocity=vectors(1.0))
 def test_leg_joints_are_eq9_and_its_derivative(robot, position, velocity):
     legs = leg_joints(robot, position, velocity)
@@ -42,17 +44,20 @@ def test_leg_joints_are_eq9_and_its_derivative(robot, position, velocity):
                            rtol=0, atol=1e-11)
 
 
-def test_batch_equals_single_samples():
+def test_batch_rows_are_eq9_and_its_derivative():
     robot = Robot()
     rng = np.random.default_rng(3)
     positions = rng.uniform(-0.3, 0.3, (50, 3))
     velocities = rng.uniform(-1.0, 1.0, (50, 3))
     batch = leg_joints(robot, positions, velocities)
     for i, (p, v) in enumerate(zip(positions, velocities)):
-        single = leg_joints(robot, p, v)
-        for leg in LEGS:
-            assert np.allclose([x[i] for x in batch[leg]], single[leg],
-                               rtol=1e-12, atol=1e-14)
+        for leg, (values, rates) in reference(robot, p, v).items():
+            got = batch[leg]
+            assert np.allclose([got.lambda_[i], got.phi21[i], got.phi32[i]],
+                               values, rtol=0, atol=1e-12)
+            assert np.allclose(
+                [got.lambdadot[i], got.omega21[i], got.omega32[i]], rates,
+                rtol=0, atol=1e-11)
 
 
 def test_refusals_are_those_of_solve():
@@ -65,7 +70,7 @@ def test_refusals_are_those_of_solve():
     assert error.value.reason == 'singular' and error.value.row == 1
 
 
-@settings(deadline=None, max_examples=60)
+@settings(deadline=None, max_examples=examples(60))
 @given(position=cube_points(), velocity=vectors(1.0))
 def test_platform_velocity_inverts_j_lambda(robot, position, velocity):
     rates = lambda_jacobian(robot, position) @ velocity

@@ -21,34 +21,23 @@ most its norm, which the bound includes.
 """
 
 from hypothesis import given, settings, strategies as st
+from hypothesis_profiles import examples
 from mechanics_reference import (
-    cube_points, DRIVES_ROBOT_VALUES, lagrange_forces, lambda_jacobian,
-    mass_matrix, OTHER_ROBOT_VALUES, potential_gradient, vectors)
+    cube_points, DRIVES_ROBOT_VALUES, force_tolerance, lagrange_forces,
+    lambda_jacobian, mass_matrix, OTHER_ROBOT_VALUES, potential_gradient,
+    ROUNDING, vectors)
 import numpy as np
 from orthoglide_ros.model.bodies import elements
 from orthoglide_ros.model.mechanics import solve, solve_batch
 from orthoglide_ros.model.robot import Robot
 
-DM_RELATIVE = 1e-8
-ROUNDING = 1e-12
 GRAVITIES = {'default': (0.0, 0.0, -9.81), 'zero': (0.0, 0.0, 0.0),
              'oblique': (2.0, -5.0, -7.5)}
 ROBOTS = {'paper': {}, 'other': OTHER_ROBOT_VALUES,
           'drives': {**OTHER_ROBOT_VALUES, **DRIVES_ROBOT_VALUES}}
 
 
-def tolerance(ref, velocity, acceleration):
-    """Error bound (N) on the reference forces (see the module docstring)."""
-    inverse_t = np.linalg.norm(np.linalg.inv(ref.jacobian.T), 2)
-    speed2 = velocity @ velocity
-    fd_part = DM_RELATIVE * np.abs(ref.dmass).max() * 9.0 * speed2
-    exact_part = ROUNDING * (
-        np.abs(ref.mass_matrix).max() * 3.0 * np.abs(acceleration).max()
-        + np.abs(ref.gravity).max() + np.abs(ref.coriolis).max())
-    return inverse_t * (fd_part + exact_part) + 1e-300
-
-
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points(), velocity=vectors(3.0),
        acceleration=vectors(30.0), gravity=st.sampled_from(sorted(GRAVITIES)),
        robot_name=st.sampled_from(sorted(ROBOTS)))
@@ -57,11 +46,11 @@ def test_forces_equal_lagrange_forces(position, velocity, acceleration,
     robot = Robot(**ROBOTS[robot_name], gravity=GRAVITIES[gravity])
     force = np.array(solve(robot, position, velocity, acceleration).force)
     ref = lagrange_forces(robot, position, velocity, acceleration)
-    assert np.abs(force - ref.force).max() <= tolerance(
+    assert np.abs(force - ref.force).max() <= force_tolerance(
         ref, velocity, acceleration)
 
 
-@settings(deadline=None, max_examples=40)
+@settings(deadline=None, max_examples=examples(40))
 @given(position=cube_points(), acceleration=vectors(30.0),
        gravity=vectors(10.0), robot_name=st.sampled_from(sorted(ROBOTS)))
 def test_forces_at_zero_velocity_equal_the_exact_reference(
@@ -91,7 +80,7 @@ def test_inertial_forces_dominate_on_fast_motion_without_gravity():
         force = np.array(solve(robot, position, velocity).force)
         # Pure velocity terms: tens of newtons, checked to the bound.
         assert np.abs(ref.force).max() > 1.0
-        assert np.abs(force - ref.force).max() <= tolerance(
+        assert np.abs(force - ref.force).max() <= force_tolerance(
             ref, velocity, np.zeros(3))
 
 

@@ -9,6 +9,7 @@ then clipping) to floating-point rounding: a few ulps of the terms' sizes.
 import math
 
 from hypothesis import given, settings as hypothesis_settings, strategies as st
+from hypothesis_profiles import examples
 import numpy as np
 import pytest
 
@@ -212,7 +213,7 @@ gain = st.floats(0.0, 1e6, allow_nan=False, allow_infinity=False)
 gains = st.lists(gain, min_size=3, max_size=3)
 
 
-@hypothesis_settings(max_examples=300, deadline=None)
+@hypothesis_settings(max_examples=examples(300), deadline=None)
 @given(kp=gains, kd=gains, feedforward=st.booleans(),
        limit=st.floats(0.001, FORCE_LIMIT_MAX),
        lam_d=triple, dlam_d=triple, f_ff=triple, lam=triple, dlam=triple)
@@ -287,7 +288,7 @@ positions = st.tuples(*[st.floats(-1.0, 1.0)] * 3)
 velocities = st.tuples(*[st.floats(-2.0, 2.0)] * 3)
 
 
-@hypothesis_settings(max_examples=100, deadline=None)
+@hypothesis_settings(max_examples=examples(100), deadline=None)
 @given(order=st.permutations(range(3)), lam_d=positions, dlam_d=velocities,
        f_ff=triple, lam=positions, dlam=velocities)
 def test_name_order_does_not_matter(order, lam_d, dlam_d, f_ff, lam, dlam):
