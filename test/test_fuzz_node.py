@@ -97,7 +97,7 @@ class Model:
     """
     The rules of doc/feedforward.md, written again for the test (no timers).
 
-    ``take`` returns ``('output', stamp, (p, v, a))``, ``('rejected',
+    ``receive`` returns ``('output', stamp, (p, v, a))``, ``('rejected',
     reason)`` or None, and keeps counters like the node's.
     """
 
@@ -116,7 +116,7 @@ class Model:
         return (stamp[0] < 0 or stamp[0] > INT32_MAX or stamp == (0, 0)
                 or not 0 <= stamp[1] < 10**9)
 
-    def take(self, source, fields):
+    def receive(self, source, fields):
         """Apply one read message (or MALFORMED) on input ``source``."""
         self.received[source] += 1
         if fields is MALFORMED:
@@ -415,20 +415,20 @@ class Run:
         if fields is not MALFORMED and source == 'trajectory' and \
                 fields[2] is not None:
             fields, window = self.point_stamp(fields, before, after)
-        outcome = self.model.take(source, fields)
+        predicted = self.model.receive(source, fields)
         published = node.core.published - self.published
         self.published = node.core.published
-        if outcome is not None and outcome[0] == 'output':
-            assert published == 1, (source, fields, outcome)
-            stamp = window if outcome[1] is NOW else outcome[1]
-            self.expected.append((stamp, outcome[2]))
+        if predicted is not None and predicted[0] == 'output':
+            assert published == 1, (source, fields, predicted)
+            stamp = window if predicted[1] is NOW else predicted[1]
+            self.expected.append((stamp, predicted[2]))
         else:
-            assert published == 0, (source, fields, outcome)
+            assert published == 0, (source, fields, predicted)
         assert node.internal_errors == 0
         core = node.core
         assert core.received == self.model.received, (source, fields)
         assert core.rejected == self.model.rejected, (source, fields,
-                                                      outcome)
+                                                      predicted)
 
     @staticmethod
     def point_stamp(fields, before, after):

@@ -83,7 +83,7 @@ def core(**changes):
     return MechanismState(PARAMETERS.parse(changes), now=0.0)
 
 
-def take(c, names, position, velocity, now):
+def solved_joints(c, names, position, velocity, now):
     """Hand ``c`` one JointState's fields; return the joints it solved."""
     stamp, frame, state = c.joint_state(STAMP, 'base_link', names, position,
                                         velocity, (), now)
@@ -94,8 +94,8 @@ def take(c, names, position, velocity, now):
 def test_names_in_any_order_extras_ignored_efforts_unused():
     c = core(joint_names=['x', 'y', 'z'])
     lam = mechanics.solve(Robot(), (0.05, 0.1, -0.2)).lambda_
-    state = take(c, ['other', 'z', 'x', 'y'],
-                 [9.0, lam[2], lam[0], lam[1]], [], 1.0)
+    state = solved_joints(c, ['other', 'z', 'x', 'y'],
+                          [9.0, lam[2], lam[0], lam[1]], [], 1.0)
     assert state.names[:3] == ('x', 'y', 'z')
     assert state.position[:3] == tuple(lam)
     assert state.velocity == ()
@@ -116,7 +116,7 @@ def test_names_in_any_order_extras_ignored_efforts_unused():
 def test_rejections_are_counted_by_reason(names, position, velocity, reason):
     c = core()
     with pytest.raises(Rejected) as error:
-        take(c, names, position, velocity, 1.0)
+        solved_joints(c, names, position, velocity, 1.0)
     assert error.value.reason == reason
     assert c.rejected[reason] == 1 and sum(c.rejected.values()) == 1
     assert c.published == 0 and c.latest is None
@@ -129,31 +129,32 @@ def test_margin_parameter_decides_singular():
                                margin=0.0).singularity_distance
     strict = core(singularity_margin=min(0.99, distance + 0.05))
     with pytest.raises(Rejected):
-        take(strict, list(NAMES), lam, [], 0.0)
+        solved_joints(strict, list(NAMES), lam, [], 0.0)
     loose = core(singularity_margin=max(0.0, distance - 0.05))
-    assert take(loose, list(NAMES), lam, [], 0.0)
+    assert solved_joints(loose, list(NAMES), lam, [], 0.0)
 
 
 def test_configure_takes_new_names():
     c = core()
     c.configure(PARAMETERS.parse({'joint_names': ['p', 'q', 'r']}))
     with pytest.raises(Rejected):
-        take(c, list(NAMES), [0.0] * 3, [], 0.0)
-    assert take(c, ['p', 'q', 'r'], [0.0] * 3, [], 0.0).names[0] == 'p'
+        solved_joints(c, list(NAMES), [0.0] * 3, [], 0.0)
+    names = solved_joints(c, ['p', 'q', 'r'], [0.0] * 3, [], 0.0).names
+    assert names[0] == 'p'
 
 
 def test_status_rules():
     c = core()
     assert c.status(1.0).level == OK
     assert c.status(1.0).message == 'waiting for joint states'
-    take(c, list(NAMES), [0.0] * 3, [], 1.5)
+    solved_joints(c, list(NAMES), [0.0] * 3, [], 1.5)
     status = c.status(2.0)
     assert (status.level, status.message) == (OK, 'ok')
     values = dict(status.values)
     assert values['joint states published'] == 1
     assert values['publish rate (Hz)'] == pytest.approx(1.0)
     with pytest.raises(Rejected):
-        take(c, ['x'], [0.0], [], 2.5)
+        solved_joints(c, ['x'], [0.0], [], 2.5)
     status = c.status(3.0)
     assert status.level == WARN and 'missing_joint' in status.message
     assert dict(status.values)['rejected missing_joint'] == 1
