@@ -1,13 +1,11 @@
 """
 Inverse and forward mechanics of the Orthoglide: the package's math API.
 
-:func:`solve` (one sample) and :func:`solve_batch` (N, vectorised): the
-inverse kinematics and dynamics of eqs. (9), (13), (18) and (25), plus
-the terms beyond the rigid bodies (:mod:`terms`); the forward dynamics
-and kinematics, the workspace and its singularities, eqs. (14)-(17).
-Plain numpy, no ROS; SI units, vectors in frame 0. An input refused
-raises :class:`WorkspaceError` with its ``reason``; no result holds a NaN.
-See doc/mechanics.md.
+:func:`solve` (one sample) and :func:`solve_batch` (N, vectorised): eqs.
+(9), (13), (18) and (25) plus the terms of :mod:`terms`; the forward
+dynamics and kinematics, the workspace and singularities, eqs. (14)-(17).
+SI units, frame 0; a refused input raises :class:`WorkspaceError`, no
+result holds a NaN (doc/mechanics.md).
 
 >>> from orthoglide_ros.model.robot import Robot
 >>> s = solve(Robot(), (0.0, 0.0, 0.0))
