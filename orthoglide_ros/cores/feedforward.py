@@ -1,13 +1,9 @@
 """
 The feedforward's logic without ROS: setpoints in, joint targets out.
 
-:class:`Feedforward` pairs the pose, twist and accel of one setpoint by their
-exact stamp, checks it (:mod:`setpoint_rules`), solves the inverse dynamics
-(:func:`mechanics.solve`: eqs. (9)-(25)) and keeps the counters of its
-status; :func:`convert_trajectory` converts a whole Cartesian trajectory
-with :func:`mechanics.solve_batch`, all or nothing. The rules (pairing,
-stamps, freshness by arrival time, the reasons of a refusal):
-``doc/feedforward.md``.
+:class:`Feedforward` pairs, checks and solves each setpoint (eqs.
+(9)-(25)); :func:`convert_trajectory` converts a whole Cartesian
+trajectory, all or nothing. The rules: doc/feedforward.md.
 """
 
 from collections import namedtuple

@@ -1,12 +1,9 @@
 """
 Rules every node applies to what it receives, without ROS.
 
-:class:`Rejected` (the one exception of a refused input, its ``reason`` the
-key it is counted under), :func:`check_time` and :func:`check_stamp` (the
-one rule of a ``builtin_interfaces`` time), :func:`read_joint_state` and
-:func:`read_joint_trajectory` (actuated joints picked by name) and the byte
-limits of the inputs. Pages: ``doc/robustness.md`` (inputs) and each
-node's rules.
+:class:`Rejected` (a refused input, counted under its ``reason``), the
+time rule, joint states and trajectories read by name, the byte limits
+(doc/robustness.md#inputs).
 """
 
 from collections import namedtuple

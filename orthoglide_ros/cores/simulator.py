@@ -1,12 +1,9 @@
 """
 The simulator's logic without ROS: actuator forces in, measured state out.
 
-:class:`Simulator` runs a plant (:class:`plant.Plant`, the forward dynamics
-by RK4 with the command held over each step, or
-:class:`mujoco_plant.MujocoPlant`) on a fixed grid of ``1 / rate_hz`` s, in
-the states ``held``, ``running``, ``stopped`` and ``diverged``, and keeps
-the counters of its status. The states, the timing, the commands' rules and
-when each parameter applies: ``doc/simulator.md``. Units: m, m/s, N, s.
+:class:`Simulator` steps a plant (:class:`plant.Plant` or
+:class:`mujoco_plant.MujocoPlant`) on a fixed grid of ``1 / rate_hz`` s
+(doc/simulator.md). Units: m, m/s, N, s.
 """
 
 from collections import namedtuple

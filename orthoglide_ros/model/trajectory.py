@@ -1,13 +1,9 @@
 """
 Platform trajectories: the paper's, eq. (6), the way back, an excitation.
 
-- :func:`paper_sample`, :func:`paper_batch`, :func:`paper_times`: eq. (6);
-- :func:`quintic`: the polynomial of degree 5 between two states
-  (position, velocity, acceleration), the smooth way from one to another
-  (the ``setpoint_publisher`` loops eq. (6) with it);
-- :func:`excitation`, :func:`excitation_sample`, :func:`excitation_batch`:
-  a periodic motion for identifying the robot's masses and friction
-  (``doc/identification.md``), a finite Fourier series per axis.
+The paper's (``paper_*``), :func:`quintic` (degree 5 between two states:
+the ``setpoint_publisher``'s way back) and the excitation (a finite
+Fourier series per axis, doc/identification.md#the-excitation).
 """
 
 from __future__ import annotations

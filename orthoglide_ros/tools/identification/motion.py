@@ -1,13 +1,11 @@
 """
 A log on uniform grids, filtered as the least squares need it.
 
-:class:`Motion` cuts a :class:`formats.logs.Log` at its gaps, puts each
-piece on a uniform grid, takes the platform's motion from the measured
-``lambda`` (eq. 14, through a zero-phase Butterworth low-pass), its rates
-by central differences, and filters, trims and decimates alike whatever is
-computed from it: the forces at any lag, the columns of ``W``, a robot's
-forces. :func:`prepare` gives the :class:`Samples` of one law;
-:func:`estimate_lag` the forces' delay. See doc/identification.md#the-filter.
+:class:`Motion` cuts a log at its gaps onto uniform grids and filters,
+trims and decimates alike everything computed from it (eq. 14 from the
+measured ``lambda``); :func:`prepare` gives the :class:`Samples` of one
+law, :func:`estimate_lag` the forces' delay
+(doc/identification.md#the-filter).
 """
 
 from __future__ import annotations
