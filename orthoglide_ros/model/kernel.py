@@ -1,14 +1,11 @@
 """
 The arithmetic kernel of the paper's recursive matrix method.
 
-One implementation of the recursion of sections 2 and 3 of the paper
-(Chablat, Wenger, Staicu), eqs. (9)-(25) for rigid bodies, corrected as
-doc/model.md#errata-and-traps lists: scalar arithmetic on the components
-of the paper's vectors, the zeros of ``a1 ... a6`` exploited, only ``+ -
-* /`` and a ``sqrt`` passed in, so that the same code runs on floats (one
-tick) and on numpy arrays (a trajectory) with the same numbers. It does
-not validate: :mod:`mechanics` checks what goes in and comes out. See
-doc/model.md#the-method.
+The recursion of sections 2 and 3, eqs. (9)-(25), corrected as
+doc/model.md#errata-and-traps lists, in scalar arithmetic with only ``+ -
+* /`` and a ``sqrt`` passed in: the same code runs on floats and on numpy
+arrays. It does not validate (:mod:`mechanics` does;
+doc/model.md#the-method).
 """
 
 from __future__ import annotations

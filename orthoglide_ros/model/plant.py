@@ -1,14 +1,10 @@
 """
 Time integration of the Orthoglide's platform: a plant to simulate.
 
-:func:`rk4_step` integrates ``rddot_G = forward_dynamics(r_G, rdot_G, f)``
-(the inverse dynamics of eq. 25 solved for the acceleration) by classic
-RK4 with the forces held over the step (a drive's zero-order hold);
-:class:`Plant` is a state with force limits stepped by it;
-:class:`Diverged` what a plant raises for a step it could not integrate,
-as opposed to one the workspace refuses (:class:`mechanics.WorkspaceError`).
-Units: m, m/s, m/s^2, N, s; frame 0. See
-doc/mechanics.md#forward-dynamics-and-simulation (why RK4, open loop).
+:func:`rk4_step` (classic RK4, forces held over the step), :class:`Plant`
+(a state with force limits) and :class:`Diverged` (a step not integrated,
+as opposed to one the workspace refuses). Units: m, m/s, m/s^2, N, s;
+frame 0 (doc/mechanics.md#forward-dynamics-and-simulation).
 """
 
 from __future__ import annotations

@@ -1,14 +1,10 @@
 """
 The Orthoglide as a URDF: a cut tree of the closed mechanism, without ROS.
 
-URDF describes trees; the Orthoglide has loops. The tree is cut where
-:mod:`mechanics` cuts it for virtual work (eq. 23): each parallelogram at
-A7, legs B and C at their frame 5, leg A carrying the platform. Frames from
-:func:`bodies.elements` at home, inertials from the bodies table
-(:func:`inertials`), joint limits over the workspace within the
-singularity margin (:func:`joint_limits`); a joint state of every joint
-closes every cut. The names are fixed (tools rely on them): see
-doc/mechanism_state_publisher.md#joints-and-links.
+The tree is cut where :mod:`mechanics` cuts it for virtual work (eq. 23):
+each parallelogram at A7, legs B and C at their frame 5, leg A carrying
+the platform; a joint state of every joint closes every cut. The names
+are contracts (doc/mechanism_state_publisher.md#joints-and-links).
 """
 
 from __future__ import annotations

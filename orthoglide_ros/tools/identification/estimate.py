@@ -1,14 +1,10 @@
 """
 The estimate: the lag, the law, the least squares, the identified robot.
 
-:func:`identify` takes a log and the nominal robot: the forces' lag on the
-states (unless given), the law by its error on held-out parts of the log,
-least squares for the base parameters (bounded where the ordinary ones
-leave what a robot can be) with their standard deviations, the parameters
-the log does not excite held at their nominal values, then a complete
-robot by the split rule (:func:`split`). What the nominal robot knows and
-the law leaves out (the payload, the drives) is known force, taken off the
-measured forces. See doc/identification.md#least-squares-and-statistics.
+:func:`identify` takes a log and the nominal robot; what the nominal robot
+knows and the law leaves out (the payload, the drives) is known force,
+taken off the measured forces
+(doc/identification.md#least-squares-and-statistics).
 """
 
 from __future__ import annotations

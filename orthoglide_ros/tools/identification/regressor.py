@@ -1,14 +1,10 @@
 """
 The regressor ``W`` of the forces, and the base parameters a log can find.
 
-``f = W(r_G, rdot_G, rddot_G) theta``, linear in the standard parameters
-of a :class:`laws.Law`: :func:`regressor` builds ``W`` from the package's
-own inverse dynamics (eq. 25; a mass's column a difference of two
-robots' forces, a term's its force at coefficient 1), not from a second
-model; :func:`base_parameters` finds the combinations a log can identify
-by a QR decomposition with column pivoting at random states;
-:func:`condition_number` says how well a motion excites them. See
-doc/identification.md#base-parameters.
+:func:`regressor` builds ``W`` from the package's own inverse dynamics
+(eq. 25; a mass's column a difference of two robots' forces, a term's its
+force at coefficient 1), not from a second model
+(doc/identification.md#base-parameters).
 """
 
 from __future__ import annotations
