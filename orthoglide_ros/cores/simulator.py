@@ -345,21 +345,14 @@ class Simulator(Core):
         """
         Make the grid's next step if it is due at ``now``.
 
-        Returns ``(tick, instant)``, the :class:`Tick` and the grid time
-        (s) its state holds at, or None when no step is due. The step made
-        at grid time g integrates [g, g + 1/rate_hz] with the command known
-        at g (a drive applies a command from its next cycle), so its state
-        holds at g + 1/rate_hz. Call it until None (or an event) to catch
-        up. The grid starts half a period
-        before the first call, so that a caller's jitter below half a
-        period makes exactly one step per wake-up; a grid more than
-        MAX_CATCH_UP periods behind ``now`` drops the missed time
-        (``overruns``). A grid more than ``command_timeout`` behind (the
-        process itself stalled) also brakes: ``running``, the next step is
-        a timeout, whatever command arrived on waking up (it waited in a
-        queue: held on, it accelerated the plant for the tens of
-        milliseconds the controller took to answer, to 0.74 m/s after a
-        2 s SIGSTOP).
+        Returns ``(tick, instant)``, the :class:`Tick` and the grid time (s) its
+        state holds at, or None when no step is due; call it until None to catch
+        up. The step at grid time g integrates [g, g + 1/rate_hz] with the
+        command known at g. The grid starts half a period before the first call
+        (a caller's jitter below half a period makes one step per wake-up); more
+        than MAX_CATCH_UP periods behind, the missed time is dropped
+        (``overruns``); more than ``command_timeout`` behind, the next step is a
+        timeout (doc/simulator.md#integrator-and-timing).
         """
         if not self.active:
             return None

@@ -556,23 +556,11 @@ def split(robot: Robot, base: Base, values: Array,
     """
     Return ``(robot, notes)``: a complete robot with base parameters ``values``.
 
-    The rule, per base parameter ``beta_i = theta_j + sum_k P_ik theta_k``
-    (``j`` its carrier): the other parameters of the combination keep
-    their nominal values (those of ``robot``) and the carrier takes the
-    rest, ``theta_j = beta_i - sum_k P_ik theta_k``. Where that would put
-    the carrier below its bound (a mass below 1e-6 kg), the whole
-    combination is scaled from its nominal values instead, ``theta =
-    theta_nominal beta_i / beta_i,nominal`` (when the combination's
-    coefficients and both values are positive); where no scaling keeps
-    every member within its bound (a combination found at or near its
-    bound, the sum of its members' bounds), the other members are set to
-    their bounds and the carrier takes the rest. A friction coefficient or
-    an armature found below zero is set to zero. A combination no robot
-    within the bounds has (a mass combination found below zero: a
-    parameter the log hardly excites) keeps its nominal values. Each
-    departure from the plain rule is a note. The law is ``base.law``
-    (with ``stribeck_velocity``, m/s). Raises :class:`IdentificationError`
-    only when the robot so made is refused (a value beyond a bound of
+    Each base parameter ``beta_i = theta_j + sum_k P_ik theta_k`` is split by
+    the rule of doc/identification.md#the-split-rule; each departure from its
+    first case is a note. The law is ``base.law`` (with
+    ``stribeck_velocity``, m/s). Raises :class:`IdentificationError` only when
+    the robot so made is refused (a value beyond a bound of
     :data:`robot.ROWS`).
     """
     names = standard_names(base.law)

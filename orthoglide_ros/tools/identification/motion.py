@@ -277,40 +277,13 @@ def prepare(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     """
     Turn a :class:`Log` into :class:`Samples` for the least squares.
 
-    The log is checked (:func:`check_log`); split into segments at gaps
-    longer than GAP_FACTOR median periods and GAP_SHARE / cutoff; each
-    segment interpolated linearly onto a uniform grid of the median period
-    (exact where the stamps are on it), the forces taken as applied
-    ``force_lag`` s before their stamps (a drive or a simulator that
-    reports with each state the force it held over the last period of
-    ``dt``: ``dt / 2``). Then, with ``H`` the zero-phase Butterworth
-    low-pass of ``cutoff`` Hz (order FILTER_ORDER, run forwards and
-    backwards: ``scipy.signal.sosfiltfilt``) and ``H_s`` the same at
-    STATE_CUTOFF_FACTOR times ``cutoff`` (at most STATE_CUTOFF_SHARE of
-    the sampling rate):
-
-    1. the motion: the platform positions from ``lambda``
-       (:func:`mechanics.forward_kinematics`, ``robot``'s geometry)
-       through ``H_s``, the velocity their central difference ``(r+ -
-       r-) / 2 dt`` (or, with measured ``lambdadots``, theirs through
-       ``H_s``: ``rdot = J2^-1 J1 lambdadot``, eq. 15), the acceleration
-       the velocity's central difference (at a frequency ``f``, relative
-       errors of ``(2 pi f dt)^2 / 6`` and twice that: 7e-6 and 1.3e-5
-       at 1 Hz and 1 kHz). ``H_s`` passes what the forces answer to (the
-       velocity's ripple at a reversal, which the Coulomb switch sees)
-       and stops the encoder's noise;
-    2. the regressor ``W`` of ``law`` (:func:`regressor`) at every sample;
-    3. parallel filtering: the forces and every column of ``W`` through
-       ``H``, so that ``H(f) = H(W) theta`` holds as ``f = W theta`` does:
-       nothing out of phase, no bias from the filter (the sharp Coulomb
-       switch included);
-    4. ``2 / cutoff`` s dropped at each end of a segment (the edges of
-       the two filters in series: positions, then ``W``), segments too
-       short for that dropped, and one sample in
-       ``floor(rate / (2 cutoff))`` kept (parallel decimation, as
-       Gautier's: the filtered signals hold nothing above the cutoff, and
-       the least squares' residuals become nearly uncorrelated, which the
-       standard deviations of :func:`identify` assume).
+    The log is checked (:func:`check_log`), split at gaps longer than
+    GAP_FACTOR median periods and GAP_SHARE / cutoff, each segment put on a
+    uniform grid, the forces taken ``force_lag`` s before their stamps; then
+    the motion through ``H_s`` (STATE_CUTOFF_FACTOR x ``cutoff``, at most
+    STATE_CUTOFF_SHARE of the rate), ``W`` of ``law`` at every sample, the
+    forces and ``W`` through ``H`` (``cutoff``, order FILTER_ORDER), edges
+    dropped and decimated (doc/identification.md#the-filter).
 
     Raises :class:`LogError`.
     """
