@@ -64,13 +64,9 @@ def check_stamp(stamp, zero_allowed=False):
     """
     Refuse a stamp ``(sec, nanosec)`` that is not a ROS time.
 
-    Raises :class:`Rejected` (``stamp``) for nanoseconds outside [0, 1e9)
-    (:func:`check_time`: two spellings of one instant), a negative stamp
-    (before the epoch: ``rclcpp::Time`` throws on it, so a C++ node down
-    the line, ``robot_state_publisher`` among them, would fail on it),
-    seconds beyond int32 and a zero stamp unless ``zero_allowed`` (a
-    trajectory's header, "start now"; the mechanism state at time 0 of a
-    simulated clock; else it cannot tell one setpoint from another).
+    Raises :class:`Rejected` (``stamp``) for nanoseconds outside [0, 1e9), a
+    negative stamp, seconds beyond int32 and a zero stamp unless
+    ``zero_allowed`` (doc/robustness.md#inputs, one stamp rule).
 
     >>> check_stamp((12, 5))
     >>> check_stamp((0, 0), zero_allowed=True)

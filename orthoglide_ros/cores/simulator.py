@@ -145,24 +145,13 @@ class Simulator(Core):
     The simulated Orthoglide behind the ``simulator`` node: a state machine.
 
     :meth:`command` takes a command, :meth:`tick` makes one step (or none)
-    and returns what to publish, :meth:`reset` starts over; every method
-    that needs the time takes ``now``, a monotonic time in seconds, so
-    tests drive time. ``plant`` is the :class:`plant.Plant`; ``state``
-    one of ``held``, ``running``, ``stopped``, ``diverged``; ``timed_out``
-    says that the last ``running`` ended by the command timeout;
-    ``stop_reason`` and ``stop_message`` why the simulation stopped or
-    diverged.
-
-    The core of :mod:`orthoglide_ros.cores.core`; inactive, it holds
-    (brakes on, no step, nothing published) and takes no command.
-
-    Counters: ``received`` messages per input, ``valid`` commands taken,
-    ``rejected`` by reason, ``ignored`` (valid, while stopped or
-    diverged), ``withheld`` (valid, while inactive), ``steps`` (since
-    start), ``divergences`` (since start),
-    ``clipped`` (steps with at least one force clipped), ``timeouts``
-    (``stall_brakes`` of them after this process stood still),
-    ``step_ns_total`` / ``step_ns_max`` (CPU of :meth:`Plant.step`).
+    and returns what to publish, :meth:`reset` starts over; ``now`` is a
+    monotonic time (s). ``plant``: the :class:`plant.Plant`; ``state``:
+    ``held``, ``running``, ``stopped`` or ``diverged``; ``timed_out``: the
+    last ``running`` ended by the command timeout; ``stop_reason`` and
+    ``stop_message``: why it stopped or diverged. The counters are the
+    diagnostics' values (doc/simulator.md#diagnostics); ``step_ns_total`` /
+    ``step_ns_max``: CPU of :meth:`Plant.step`.
 
     >>> sim = Simulator(PARAMETERS.parse({}))
     >>> sim.state, sim.tick(0.0).effort

@@ -101,18 +101,13 @@ def base_parameters(robot: Robot, law: Law = PLAIN,
     """
     Find the base parameters of ``robot``'s regressor (a :class:`Base`).
 
-    ``W`` of ``law`` at ``samples`` random states (see BASE_BOX and its
-    neighbours; ``seed`` for the generator), each column weighted by its
-    parameter's nominal value in ``robot`` (a parameter whose nominal
-    value is zero, such as friction or armature on the paper's robot: its
-    column scaled to unit RMS), goes through a QR decomposition with
-    column pivoting (``scipy.linalg.qr``). The pivots above RANK_TOLERANCE
-    of the first are the independent parameters; each other column is a
-    combination of those, found by least squares, which gives ``P``. The
-    weighting makes the parameter with the largest nominal contribution
-    carry each combination (the platform's ``m5`` rather than the rods'
-    ``m4``), so that the split rule keeps the smaller ones at their
-    nominal values.
+    ``W`` of ``law`` at ``samples`` random states (BASE_BOX and its
+    neighbours; ``seed``), each column weighted by its nominal value in
+    ``robot`` (scaled to unit RMS where that is zero), through a QR
+    decomposition with column pivoting: pivots above RANK_TOLERANCE of the
+    first are independent, the other columns their least-squares
+    combinations (``P``). The weighting makes the largest nominal
+    contribution carry each combination (doc/identification.md#base-parameters).
     """
     import scipy.linalg
     rng = np.random.default_rng(seed)
