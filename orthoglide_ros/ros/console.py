@@ -3,7 +3,7 @@ The nodes' console scripts: signals and memory bounds first, then imports.
 
 Standard library only: before rclpy or numpy, each script bounds the
 memory and makes SIGINT and SIGTERM only record a stop (:data:`STOP`)
-(doc/decisions.md#runtime-and-middleware). Once the node has run, both
+(doc/robustness.md#start-and-stop). Once the node has run, both
 are ignored: a signal during Fast DDS's teardown would end the process
 with -2; that can go when the teardown takes no time to speak of
 (``benchmarks/upstream_checks.py``, ``teardown``).
