@@ -51,10 +51,11 @@ def rk4_step(robot: Robot, position: Vector, velocity: Vector, force: Vector,
 
     ``position`` (m), ``velocity`` (m/s) and ``force`` (N, held over the
     step) are 3-sequences. Returns ``(position, velocity, acceleration)``:
-    the state at ``t + dt`` and the first stage's acceleration. A stage or
-    end out of reach or too near a singularity raises
-    :class:`mechanics.WorkspaceError`, one not finite from finite inputs
-    :class:`Diverged`; ``dt`` must be finite and positive (ValueError).
+    the state at ``t + dt`` and the first stage's acceleration. A
+    non-finite input, or a stage or end out of reach or too near a
+    singularity, raises :class:`mechanics.WorkspaceError`; one not finite
+    from finite inputs :class:`Diverged`; ``dt`` must be finite and
+    positive (ValueError).
 
     >>> from orthoglide_ros.model.robot import Robot
     >>> robot = Robot(gravity=(0.0, 0.0, 0.0))
