@@ -47,7 +47,7 @@ MAX_RELATIVE_STD = 10.0
 # tens to hundreds of N.
 RESOLUTION = {'kg': 0.01, 'N s/m': 1.0, 'N': 1.0}
 # The Stribeck speeds v_b searched (m/s): log-spaced STRIBECK_STEP apart
-# (the density of the former 12 speeds from 2 to 100 mm/s), from the
+# (12 speeds from 2 to 100 mm/s), from the
 # nominal robot's Coulomb smoothing speed friction_velocity (below it a
 # Stribeck excess is one more Coulomb switch) to the log's largest slider
 # speed (above it the excess is a Coulomb level less a term in v^2 that

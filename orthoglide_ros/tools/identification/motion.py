@@ -29,23 +29,14 @@ if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.terms import Term
     from orthoglide_ros.tools.identification.laws import Law
 
-# The log's processing (doc/identification.md): a 4th-order Butterworth
-# low-pass at DEFAULT_CUTOFF (Hz) run forwards and backwards (zero phase,
-# 8th-order roll-off) on the forces and the regressor's columns alike;
-# samples within 2 / cutoff of a segment's ends are dropped (the edges of
-# the two filters in series); a gap longer than GAP_FACTOR times the
-# median sampling period and longer than GAP_SHARE / cutoff splits the log
-# into segments; shorter gaps are interpolated linearly (for a component
-# at frequency f, an error below (pi f gap)^2 / 2 of it: 5 % at the
-# cutoff, 0.2 % at a fifth of it).
+# The filter and the grid (doc/identification.md#the-filter): a
+# Butterworth low-pass of FILTER_ORDER at DEFAULT_CUTOFF (Hz), zero phase,
+# on the forces and W's columns; the motion through the same design at
+# STATE_CUTOFF_FACTOR times the cutoff, at most STATE_CUTOFF_SHARE of the
+# rate; a gap longer than GAP_FACTOR median periods and GAP_SHARE / cutoff
+# splits the log.
 DEFAULT_CUTOFF = 10.0
 FILTER_ORDER = 4
-# The motion (positions, measured velocities) goes through the same design
-# at STATE_CUTOFF_FACTOR times the cutoff, at most STATE_CUTOFF_SHARE of the
-# sampling rate: five times the band of the forces, as Gautier filters
-# positions, so that the velocity keeps the ripple a Coulomb switch sees
-# (at the cutoff itself, the closed-loop logs of the demo gave m1 + m2 5 %
-# too heavy) while the encoder's quantisation stays out.
 STATE_CUTOFF_FACTOR = 5.0
 STATE_CUTOFF_SHARE = 0.4
 GAP_FACTOR = 3.0
