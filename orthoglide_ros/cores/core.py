@@ -1,14 +1,8 @@
 """
 The contract between a node and its core, and what every core shares.
 
-A node (:class:`orthoglide_ros.ros.managed_node.ManagedNode`) makes one core
-at configure, drops it at cleanup, and calls only what :class:`Core` lists:
-``configure``, ``activate``/``deactivate``, one method per input
-(``method(*fields, now)``: the decoded fields and the arrival time, it
-returns what to publish or None, or raises a counted
-:class:`~orthoglide_ros.cores.inputs.Rejected`), ``reject`` and ``status``.
-Every method takes ``now`` so that tests drive time (``doc/decisions.md``,
-nodes).
+A node calls only what :class:`Core` lists; every method takes ``now`` so
+that tests drive time (doc/decisions.md#nodes).
 """
 
 from orthoglide_ros.cores.inputs import Rejected

@@ -1,13 +1,9 @@
 """
 The feedforward's logic without ROS: setpoints in, joint targets out.
 
-:class:`Feedforward` pairs the pose, twist and accel of one setpoint by their
-exact stamp, checks it (:mod:`setpoint_rules`), solves the inverse dynamics
-(:func:`mechanics.solve`: eqs. (9)-(25)) and keeps the counters of its
-status; :func:`convert_trajectory` converts a whole Cartesian trajectory
-with :func:`mechanics.solve_batch`, all or nothing. The rules (pairing,
-stamps, freshness by arrival time, the reasons of a refusal):
-``doc/feedforward.md``.
+:class:`Feedforward` pairs, checks and solves each setpoint (eqs.
+(9)-(25)); :func:`convert_trajectory` converts a whole Cartesian
+trajectory, all or nothing. The rules: doc/feedforward.md.
 """
 
 from collections import namedtuple
@@ -58,22 +54,12 @@ def convert_trajectory(settings, waypoints):
     """
     Convert every point of a Cartesian trajectory, or refuse it whole.
 
-    ``waypoints``: :class:`orthoglide_ros.formats.cdr.Waypoints` (the arrays
-    of a MultiDOFJointTrajectory). The rules, in this order, the first
-    broken one raising :class:`Rejected` with a reason of
-    TRAJECTORY_REASONS and, where a point is at fault, its 0-based index:
-
-    - ``empty``: no point; ``frame``: a frame neither empty nor
-      ``base_frame``; ``stamp``: a header stamp that is not a valid time
-      (:func:`check_stamp`; zero means "start now" and passes unchanged);
-    - ``malformed``: a point without a transform, or without a velocity or
-      acceleration (unless ``pose_only``: zero);
-    - ``time``: a time_from_start not a valid time, negative, or not after
-      the previous point's (:func:`trajectory_times`);
-    - the rules of every setpoint (:func:`setpoint_rules.solve_setpoints`),
-      with the per-actuator ``velocity_limit`` and ``force_limit``.
-
-    Returns a :class:`Conversion`.
+    ``waypoints``: :class:`orthoglide_ros.formats.cdr.Waypoints`. The first
+    rule broken (doc/feedforward.md#whole-trajectories, in its order:
+    ``empty``, ``frame``, ``stamp``, ``malformed``, ``time``, then
+    :func:`setpoint_rules.solve_setpoints`) raises :class:`Rejected` with a
+    reason of TRAJECTORY_REASONS and, where a point is at fault, its 0-based
+    index. Returns a :class:`Conversion`.
     """
     w = waypoints
     if len(w.time) == 0:

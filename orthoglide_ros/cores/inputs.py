@@ -1,12 +1,9 @@
 """
 Rules every node applies to what it receives, without ROS.
 
-:class:`Rejected` (the one exception of a refused input, its ``reason`` the
-key it is counted under), :func:`check_time` and :func:`check_stamp` (the
-one rule of a ``builtin_interfaces`` time), :func:`read_joint_state` and
-:func:`read_joint_trajectory` (actuated joints picked by name) and the byte
-limits of the inputs. Pages: ``doc/robustness.md`` (inputs) and each
-node's rules.
+:class:`Rejected` (a refused input, counted under its ``reason``), the
+time rule, joint states and trajectories read by name, the byte limits
+(doc/robustness.md#inputs).
 """
 
 from collections import namedtuple
@@ -67,13 +64,9 @@ def check_stamp(stamp, zero_allowed=False):
     """
     Refuse a stamp ``(sec, nanosec)`` that is not a ROS time.
 
-    Raises :class:`Rejected` (``stamp``) for nanoseconds outside [0, 1e9)
-    (:func:`check_time`: two spellings of one instant), a negative stamp
-    (before the epoch: ``rclcpp::Time`` throws on it, so a C++ node down
-    the line, ``robot_state_publisher`` among them, would fail on it),
-    seconds beyond int32 and a zero stamp unless ``zero_allowed`` (a
-    trajectory's header, "start now"; the mechanism state at time 0 of a
-    simulated clock; else it cannot tell one setpoint from another).
+    Raises :class:`Rejected` (``stamp``) for nanoseconds outside [0, 1e9), a
+    negative stamp, seconds beyond int32 and a zero stamp unless
+    ``zero_allowed`` (doc/robustness.md#inputs, one stamp rule).
 
     >>> check_stamp((12, 5))
     >>> check_stamp((0, 0), zero_allowed=True)

@@ -1,12 +1,9 @@
 """
 The address space of a node's process, bounded before its imports.
 
-On glibc's and OpenBLAS's defaults a node maps about 950 MB, almost all
-reserved and never used, which ``lock_memory`` would lock whole:
-:func:`bound` caps the malloc arenas, the thread stacks and OpenBLAS's
-threads in the console script, before numpy, rclpy or the node is
-imported, for every node. Only the standard library is imported here.
-See doc/deployment.md#memory-locked.
+:func:`bound` caps the malloc arenas, thread stacks and OpenBLAS's threads
+before numpy or rclpy is imported; standard library only
+(doc/deployment.md#memory-locked).
 """
 
 import ctypes

@@ -1,12 +1,11 @@
 """
 Node parameters: one mechanism for every node of the package, without ROS.
 
-Each node's core module owns one :class:`Table` of :class:`Spec` rows (name,
-type, default, description, range; the ``robot.*`` rows of
-:data:`ROBOT_SPECS` when the node models the robot) and the rules across
-them; the node declares its ROS parameters from it and :meth:`Table.parse`
-validates a whole set into one settings tuple or raises
-:class:`ParameterError` (``doc/decisions.md``, parameters).
+Each core module owns one :class:`Table` of :class:`Spec` rows (plus
+:data:`ROBOT_SPECS` when it models the robot); the node declares its ROS
+parameters from it and :meth:`Table.parse` validates a whole set into one
+settings tuple or raises :class:`ParameterError`
+(doc/decisions.md#parameters-status-and-errors).
 
 >>> table = Table('Demo', (Spec('rate_hz', 'double', 10.0, 'rate (Hz)',
 ...                             (0.0, 100.0)),))

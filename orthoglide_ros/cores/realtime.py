@@ -1,12 +1,9 @@
 """
 Real-time scheduling of a node's process, without ROS: priority, CPUs, memory.
 
-The three read-only parameters of :data:`SPECS`, as ros2_control's
-``controller_manager`` has them: ``thread_priority`` (SCHED_FIFO for every
-thread), ``cpu_affinity``, ``lock_memory`` (``mlockall`` on fault).
-:func:`apply` makes them hold for every thread of the process, once, as
-the node is made; what the OS refuses comes back as one warning each.
-:func:`in_effect` reads back what holds. See doc/deployment.md#real-time.
+:func:`apply` makes the parameters of :data:`SPECS` hold for every thread,
+once, as the node is made, one warning per refusal; :func:`in_effect`
+reads back what holds (doc/deployment.md#real-time).
 """
 
 from collections import namedtuple

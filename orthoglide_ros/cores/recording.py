@@ -1,12 +1,8 @@
 """
 The recorder's logic without ROS: which message goes into the bag.
 
-:class:`Recording` is the core of the node behind ``orthoglide record``: one
-input per topic, each message's bytes returned unchanged to be written and
-counted per topic; a message dropped (``oversize``, ``malformed``,
-``inactive``, ``write_failed``) is counted per topic and reason and said at
-the end (:meth:`Recording.summary`). The counts and the exit code LOSSY:
-``doc/cli.md`` (record).
+:class:`Recording`: each message's bytes returned unchanged, counted per
+topic; a drop counted per topic and reason (doc/cli.md#record).
 """
 
 from orthoglide_ros.cores.core import Core

@@ -1,11 +1,9 @@
 """
 The setpoint publisher's logic without ROS: which setpoint, when.
 
-:class:`Stream` turns the node clock's time into setpoints of a motion,
-pass after pass: the paper's trajectory, eq. (6), with a quintic way back
-between passes when it loops, or the periodic excitation for
-identification. Every setpoint is sampled at its own stamp, so a subscriber
-recomputes it from the stamps alone (``doc/setpoint_publisher.md``).
+:class:`Stream` turns the node clock's time into setpoints of a motion
+(the paper's trajectory, eq. (6), or the periodic excitation), each
+sampled at its own stamp (doc/setpoint_publisher.md).
 
 >>> stream = Stream(PARAMETERS.parse({'duration': 1.0}))
 >>> stream.next(5 * 10**9)[0] == (0.0, 0.0, 0.0)

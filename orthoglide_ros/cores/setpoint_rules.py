@@ -1,13 +1,10 @@
 """
 The rules of a Cartesian setpoint, written once for one sample and for N.
 
-:func:`solve_setpoints` checks a setpoint of the feedforward and every
-point of a whole Cartesian trajectory by the same rules, in the order of
-``doc/feedforward.md`` (rules; whole trajectories): the orientation, the
-speed and acceleration of G, the mechanics' refusals
-(:func:`mechanics.solve`, eqs. (9)-(25)), the actuators' limits. As in
-:mod:`orthoglide_ros.model.kernel`, one text serves floats and ``math``
-(:data:`ONE_SAMPLE`) and (N,) arrays and numpy (:data:`N_POINTS`).
+:func:`solve_setpoints` checks a feedforward setpoint and every point of a
+Cartesian trajectory by the rules of doc/feedforward.md, in its order; as
+in :mod:`orthoglide_ros.model.kernel`, one text serves floats and
+``math`` (:data:`ONE_SAMPLE`) and arrays and numpy (:data:`N_POINTS`).
 """
 
 from collections import namedtuple

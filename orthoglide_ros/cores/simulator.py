@@ -1,12 +1,9 @@
 """
 The simulator's logic without ROS: actuator forces in, measured state out.
 
-:class:`Simulator` runs a plant (:class:`plant.Plant`, the forward dynamics
-by RK4 with the command held over each step, or
-:class:`mujoco_plant.MujocoPlant`) on a fixed grid of ``1 / rate_hz`` s, in
-the states ``held``, ``running``, ``stopped`` and ``diverged``, and keeps
-the counters of its status. The states, the timing, the commands' rules and
-when each parameter applies: ``doc/simulator.md``. Units: m, m/s, N, s.
+:class:`Simulator` steps a plant (:class:`plant.Plant` or
+:class:`mujoco_plant.MujocoPlant`) on a fixed grid of ``1 / rate_hz`` s
+(doc/simulator.md). Units: m, m/s, N, s.
 """
 
 from collections import namedtuple
@@ -148,24 +145,13 @@ class Simulator(Core):
     The simulated Orthoglide behind the ``simulator`` node: a state machine.
 
     :meth:`command` takes a command, :meth:`tick` makes one step (or none)
-    and returns what to publish, :meth:`reset` starts over; every method
-    that needs the time takes ``now``, a monotonic time in seconds, so
-    tests drive time. ``plant`` is the :class:`plant.Plant`; ``state``
-    one of ``held``, ``running``, ``stopped``, ``diverged``; ``timed_out``
-    says that the last ``running`` ended by the command timeout;
-    ``stop_reason`` and ``stop_message`` why the simulation stopped or
-    diverged.
-
-    The core of :mod:`orthoglide_ros.cores.core`; inactive, it holds
-    (brakes on, no step, nothing published) and takes no command.
-
-    Counters: ``received`` messages per input, ``valid`` commands taken,
-    ``rejected`` by reason, ``ignored`` (valid, while stopped or
-    diverged), ``withheld`` (valid, while inactive), ``steps`` (since
-    start), ``divergences`` (since start),
-    ``clipped`` (steps with at least one force clipped), ``timeouts``
-    (``stall_brakes`` of them after this process stood still),
-    ``step_ns_total`` / ``step_ns_max`` (CPU of :meth:`Plant.step`).
+    and returns what to publish, :meth:`reset` starts over; ``now`` is a
+    monotonic time (s). ``plant``: the :class:`plant.Plant`; ``state``:
+    ``held``, ``running``, ``stopped`` or ``diverged``; ``timed_out``: the
+    last ``running`` ended by the command timeout; ``stop_reason`` and
+    ``stop_message``: why it stopped or diverged. The counters are the
+    diagnostics' values (doc/simulator.md#diagnostics); ``step_ns_total`` /
+    ``step_ns_max``: CPU of :meth:`Plant.step`.
 
     >>> sim = Simulator(PARAMETERS.parse({}))
     >>> sim.state, sim.tick(0.0).effort
@@ -348,21 +334,14 @@ class Simulator(Core):
         """
         Make the grid's next step if it is due at ``now``.
 
-        Returns ``(tick, instant)``, the :class:`Tick` and the grid time
-        (s) its state holds at, or None when no step is due. The step made
-        at grid time g integrates [g, g + 1/rate_hz] with the command known
-        at g (a drive applies a command from its next cycle), so its state
-        holds at g + 1/rate_hz. Call it until None (or an event) to catch
-        up. The grid starts half a period
-        before the first call, so that a caller's jitter below half a
-        period makes exactly one step per wake-up; a grid more than
-        MAX_CATCH_UP periods behind ``now`` drops the missed time
-        (``overruns``). A grid more than ``command_timeout`` behind (the
-        process itself stalled) also brakes: ``running``, the next step is
-        a timeout, whatever command arrived on waking up (it waited in a
-        queue: held on, it accelerated the plant for the tens of
-        milliseconds the controller took to answer, to 0.74 m/s after a
-        2 s SIGSTOP).
+        Returns ``(tick, instant)``, the :class:`Tick` and the grid time (s) its
+        state holds at, or None when no step is due; call it until None to catch
+        up. The step at grid time g integrates [g, g + 1/rate_hz] with the
+        command known at g. The grid starts half a period before the first call
+        (a caller's jitter below half a period makes one step per wake-up); more
+        than MAX_CATCH_UP periods behind, the missed time is dropped
+        (``overruns``); more than ``command_timeout`` behind, the next step is a
+        timeout (doc/simulator.md#integrator-and-timing).
         """
         if not self.active:
             return None

@@ -1,10 +1,8 @@
 """
 What the nodes' statuses share, without ROS: levels, periods, rules.
 
-Every core's ``status(now, internal_errors)`` (:mod:`orthoglide_ros.cores.core`)
-returns a :class:`Status`; the node publishes it on ``/diagnostics`` once a
-second (:mod:`orthoglide_ros.ros.diagnostics`; the keys: each node's page,
-diagnostics). The levels are diagnostic_msgs' level bytes.
+Every core's ``status(now, internal_errors)`` returns a :class:`Status`,
+published on ``/diagnostics`` once a second (the keys: each node's page).
 
 >>> period = Period(0.0, published=0)
 >>> seconds, increases = period.advance(2.0, published=100)
@@ -18,7 +16,7 @@ diagnostics). The levels are diagnostic_msgs' level bytes.
 
 from collections import namedtuple
 
-OK, WARN, ERROR = 0, 1, 2
+OK, WARN, ERROR = 0, 1, 2  # diagnostic_msgs' level bytes
 
 Status = namedtuple('Status', 'level message values')
 Status.__doc__ = """One status: ``level`` (OK, WARN or ERROR), ``message``

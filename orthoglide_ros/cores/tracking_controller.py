@@ -1,14 +1,10 @@
 """
 The tracking controller's logic without ROS: joint states in, forces out.
 
-:class:`Tracking` computes, for each desired joint state and the newest
-measured one, the PD plus feedforward of the three actuators,
-
-    f_i = f_ff,i + Kp_i (lambda_d,i - lambda_i)
-          + Kd_i (lambdadot_d,i - lambdadot_i),  clipped to force_limit (N),
-
-holds on a path tolerance or a stall, and follows a whole joint trajectory
-as joint_trajectory_controller does. The rules: ``doc/tracking_controller.md``.
+:class:`Tracking`: ``f_i = f_ff,i + Kp_i (lambda_d,i - lambda_i) + Kd_i
+(lambdadot_d,i - lambdadot_i)``, clipped to ``force_limit`` (N), and a
+joint trajectory followed as joint_trajectory_controller does
+(doc/tracking_controller.md).
 """
 
 from collections import namedtuple

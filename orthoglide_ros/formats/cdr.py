@@ -1,16 +1,11 @@
 """
 Serialized ROS 2 messages (CDR) read and written with struct and numpy.
 
-The nodes subscribe raw and read only the fields they use (setpoints,
-joint states, commands, whole trajectories; the logs' bags too), and
-write whole trajectories the same way (a ``JointTrajectory``, the
-planner's ``MultiDOFJointTrajectory``): building message objects would
-cost more than the mechanics. The layout is XCDR1 little-endian, what
-every ROS 2 host writes. :class:`CdrError`: a buffer this reader does not
-understand (another encapsulation, truncated, bad text);
-:class:`LimitError`: one whose reading would grow with a list the node
-does not use; both are ``malformed``. See
-doc/decisions.md#runtime-and-middleware and doc/robustness.md#inputs.
+Only the fields the package uses are read, whole trajectories written,
+XCDR1 little-endian only. :class:`CdrError` (a buffer not understood) and
+:class:`LimitError` (a list whose reading would grow unused) are both
+``malformed`` (doc/decisions.md#runtime-and-middleware,
+doc/robustness.md#inputs).
 """
 
 from __future__ import annotations

@@ -170,14 +170,10 @@ def read_bag(path: Path, topic: str = DEFAULT_TOPIC,
 
     ``path``: the bag's directory, or its ``.mcap`` or ``.db3`` file (the
     bag of its directory when a ``metadata.yaml`` is beside it, else the
-    file alone), MCAP or sqlite3 storage, read by the ``rosbags`` library
-    without ROS; ``topic`` (a leading ``/`` is added); ``joint_names``:
-    the joints of actuators A, B, C, found by name in each message (other
-    joints ignored). Time is each message's header stamp (the
-    measurement's time), in s from the earliest (``origin``, ns); position
-    is lambda (m), effort the force (N); the velocity is not read (a
-    drive's is often a lagging difference of its own); at most
-    ``csvfile.MAX_ROWS`` messages, as a CSV log's rows. Checked by
+    file alone); ``topic`` (a leading ``/`` is added); ``joint_names``: the
+    joints of actuators A, B, C. Time from the header stamps, in s from the
+    earliest (``origin``, ns); the velocity is not read; at most
+    ``csvfile.MAX_ROWS`` messages (doc/identification.md#logs). Checked by
     :func:`check_log`. Raises :class:`LogError`.
     """
     try:

@@ -1,15 +1,11 @@
 """
 Every body and every joint of the Orthoglide at one state (section 2).
 
-- :func:`elements`: position, velocity and acceleration of every body of
-  every leg, eqs. (1)-(12) and (19), in frame 0;
-- :func:`leg_joints`: every leg's joint variables and rates, eqs. (9) and
-  (13), one sample or N (lighter than :func:`elements`): what the URDF's
-  joints and MuJoCo's are set to.
-
-Both read the kernel's per-element record (:mod:`orthoglide_ros.model.kernel`)
+:func:`elements`: every body of every leg, eqs. (1)-(12) and (19);
+:func:`leg_joints`: every leg's joint variables and rates, eqs. (9) and
+(13), for the URDF's and MuJoCo's joints. Both read the kernel's record
 after :func:`mechanics.solve` or :func:`mechanics.solve_batch` has checked
-the state, so they refuse what those refuse (:class:`mechanics.WorkspaceError`).
+the state, so they refuse what those refuse.
 """
 
 from __future__ import annotations

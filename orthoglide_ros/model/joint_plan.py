@@ -1,29 +1,12 @@
 """
 A joint trajectory sampled in time, as joint_trajectory_controller does.
 
-:class:`JointPlan` holds one received ``trajectory_msgs/JointTrajectory``
-(three joints) from the instant it starts, and :meth:`JointPlan.sample`
-gives the desired position (m), velocity (m/s) and effort (N) of each
-joint at any time of the node's clock. The interpolation is
-joint_trajectory_controller's for positions and velocities without
-accelerations, and its linear effort:
-
-- from the instant the plan was accepted to the first point (its header
-  stamp plus its ``time_from_start``, however far in the future): one
-  cubic from the robot's state at acceptance to the first point, the
-  effort linear from the force that held the robot then (the caller's
-  choice: the tracking controller's last command) to the first point's,
-  as joint_trajectory_controller interpolates from its state at the
-  reception of a trajectory; points already past at the acceptance are
-  skipped (the transition goes to the first point still ahead), and a
-  plan whose every point is past is refused by the caller;
-- between two points: the cubic Hermite polynomial of each joint, from
-  the positions and velocities at both ends; the effort linear;
-- after the last point: the last point's position, velocity zero, its
-  effort, held until something else comes.
-
-No ROS: the tracking controller (``cores/tracking_controller.py``) samples it at its loop
-rate; tests drive it with plain numbers.
+:class:`JointPlan` holds one ``trajectory_msgs/JointTrajectory`` (three
+joints) from its acceptance; :meth:`JointPlan.sample` gives each joint's
+desired position (m), velocity (m/s) and effort (N) at a time of the
+node's clock: one cubic from the state at acceptance to the first point
+ahead, cubic Hermite between points, the effort linear, the last point
+held (doc/tracking_controller.md#following-a-joint-trajectory).
 
 >>> plan = JointPlan(10.0, [1.0, 2.0], [[0.0] * 3, [1.0] * 3],
 ...                  [[0.0] * 3, [0.0] * 3], [[5.0] * 3, [7.0] * 3],

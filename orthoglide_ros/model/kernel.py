@@ -1,14 +1,11 @@
 """
 The arithmetic kernel of the paper's recursive matrix method.
 
-One implementation of the recursion of sections 2 and 3 of the paper
-(Chablat, Wenger, Staicu), eqs. (9)-(25) for rigid bodies, corrected as
-doc/model.md#errata-and-traps lists: scalar arithmetic on the components
-of the paper's vectors, the zeros of ``a1 ... a6`` exploited, only ``+ -
-* /`` and a ``sqrt`` passed in, so that the same code runs on floats (one
-tick) and on numpy arrays (a trajectory) with the same numbers. It does
-not validate: :mod:`mechanics` checks what goes in and comes out. See
-doc/model.md#the-method.
+The recursion of sections 2 and 3, eqs. (9)-(25), corrected as
+doc/model.md#errata-and-traps lists, in scalar arithmetic with only ``+ -
+* /`` and a ``sqrt`` passed in: the same code runs on floats and on numpy
+arrays. It does not validate (:mod:`mechanics` does;
+doc/model.md#the-method).
 """
 
 from __future__ import annotations
@@ -29,22 +26,13 @@ def solve(k: 'KernelConstants', x: Any, y: Any, z: Any, vx: Any, vy: Any,
     """
     Inverse kinematics and dynamics of the whole robot (eqs. 9-25).
 
-    Takes the platform centre G (m), its velocity (m/s) and acceleration
-    (m/s^2) in frame 0, as floats or as equal-shaped arrays. Returns
-    ``(lam, lamd, lamdd, force, power, alphas, jac_inverse_condition)``:
-    three 3-tuples for the actuators' displacement (m), rate (m/s) and
-    acceleration (m/s^2), the actuator forces (N) and powers (W), the
-    ``alpha_i`` of eq. (17) (m) and ``1 / kappa_F(J_lambda)``.
-
-    The forces follow eq. (25) for the three unit virtual motions at once:
-    each leg contributes the virtual work of its sliders' force
-    ``u3^T f_1`` times ``v10^v`` and of its accumulated joint moments times
-    the relative virtual rates, which are linear in the platform's virtual
-    velocity ``delta r``. Summing a leg's joint terms into a generalised
-    force ``Q_leg`` on ``delta r`` and using ``delta r = J_lambda^-1 e_j``
-    gives ``f = F1 + J_lambda^-T sum(Q_leg)``.
-
-    ``record``, if a dict, receives the per-element quantities of every leg
+    Takes G's position (m), velocity (m/s) and acceleration (m/s^2) in frame
+    0, as floats or equal-shaped arrays. Returns ``(lam, lamd, lamdd, force,
+    power, alphas, jac_inverse_condition)``: the actuators' displacement (m),
+    rate (m/s), acceleration (m/s^2), forces (N) and powers (W), the
+    ``alpha_i`` of eq. (17) (m) and ``1 / kappa_F(J_lambda)``. The forces:
+    ``f = F1 + J_lambda^-T sum(Q_leg)`` (eq. 25, doc/model.md#the-method).
+    ``record``, if a dict, receives every leg's per-element quantities
     (``record['A']``, ``['B']``, ``['C']``; see ``_leg``).
     """
     gx, gy, gz = k.gx, k.gy, k.gz

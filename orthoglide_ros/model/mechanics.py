@@ -1,13 +1,11 @@
 """
 Inverse and forward mechanics of the Orthoglide: the package's math API.
 
-:func:`solve` (one sample) and :func:`solve_batch` (N, vectorised): the
-inverse kinematics and dynamics of eqs. (9), (13), (18) and (25), plus
-the terms beyond the rigid bodies (:mod:`terms`); the forward dynamics
-and kinematics, the workspace and its singularities, eqs. (14)-(17).
-Plain numpy, no ROS; SI units, vectors in frame 0. An input refused
-raises :class:`WorkspaceError` with its ``reason``; no result holds a NaN.
-See doc/mechanics.md.
+:func:`solve` (one sample) and :func:`solve_batch` (N, vectorised): eqs.
+(9), (13), (18) and (25) plus the terms of :mod:`terms`; the forward
+dynamics and kinematics, the workspace and singularities, eqs. (14)-(17).
+SI units, frame 0; a refused input raises :class:`WorkspaceError`, no
+result holds a NaN (doc/mechanics.md).
 
 >>> from orthoglide_ros.model.robot import Robot
 >>> s = solve(Robot(), (0.0, 0.0, 0.0))
@@ -260,27 +258,12 @@ def forward_dynamics(robot: Robot, position: Vector, velocity: Vector,
     """
     Platform acceleration (m/s^2, frame 0) from its state and the forces.
 
-    ``position`` (m) and ``velocity`` (m/s) of the platform centre G in
-    frame 0 and ``force`` (N), the three actuator forces on the sliders
-    along +lambda (A, B, C), each a 3-sequence. Returns ``rddot_G`` as a
-    3-tuple of floats.
-
-    Built on the inverse dynamics (:func:`solve`), which is affine in the
-    acceleration at a fixed state: the virtual-work relation
-    ``J_lambda^T f = Q = M(r_G) rddot_G + h(r_G, rdot_G)`` (eqs. 16 and 25)
-    gives ``f(a) = f(0) + F a`` with ``F = J_lambda^-T M``. The bias
-    ``f(0)`` is the inverse dynamics at zero acceleration (Coriolis,
-    centrifugal and weight terms, and the sliders' friction, which
-    depends on the velocity only: the friction resists the motion); column
-    i of ``F`` is the inverse dynamics at zero velocity, without gravity
-    or friction, for the unit acceleration ``e_i`` (exact, no difference
-    taken). Then ``F a = f - f(0)`` is solved by Cramer's rule. Four
-    kernel calls on Python floats, no numpy.
-
-    Refuses what :func:`solve` refuses, with the same reasons: a position
-    out of reach or nearer a singularity than ``margin`` (``unreachable``,
-    ``singular``), a non-finite position, velocity or force
-    (``non_finite``) and a result that is not finite (``overflow``).
+    ``position`` (m) and ``velocity`` (m/s) of G and ``force`` (N, on the
+    sliders A, B, C along +lambda), each a 3-sequence; returns ``rddot_G``.
+    ``J_lambda^T f = M a + h`` (eqs. 16 and 25) solved for ``a`` by four
+    kernel calls and Cramer's rule
+    (doc/mechanics.md#forward-dynamics-and-simulation). Refuses what
+    :func:`solve` refuses, with the same reasons.
 
     >>> from orthoglide_ros.model.robot import Robot
     >>> robot = Robot()

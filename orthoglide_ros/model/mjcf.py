@@ -1,13 +1,10 @@
 """
 The Orthoglide as MJCF: MuJoCo's model, with the loops closed, without ROS.
 
-The bodies, frames, masses and inertias of :mod:`urdf` (the bodies of eqs.
-20-24 at home, full precision), nested as a tree that MuJoCo closes with
-``connect`` equality constraints where :mod:`mechanics` cuts the
-mechanism (A7; A5 of legs B and C, as a hinge); slide joints and motors
-named as the sliders; the :mod:`terms` MuJoCo's joints hold as their
-attributes, the others for :class:`mujoco_plant.MujocoPlant` to apply
-(:func:`friction_beyond`). See doc/mujoco.md (the contract, the settings).
+The bodies of :mod:`urdf` as a tree closed by ``connect`` equality
+constraints where :mod:`mechanics` cuts the mechanism (A7; A5 of legs B
+and C); the :mod:`terms` MuJoCo's joints cannot hold are left to
+:func:`friction_beyond` (doc/mujoco.md).
 """
 
 from __future__ import annotations

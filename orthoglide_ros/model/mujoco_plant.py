@@ -1,13 +1,10 @@
 """
 MuJoCo as the plant: the Orthoglide of :mod:`mjcf`, stepped by MuJoCo.
 
-:class:`MujocoPlant` has the interface of :class:`plant.Plant` (the
-``simulator``'s ``engine`` ``mujoco``): the platform's state in frame 0,
-a step under forces held over it, refused (state unchanged) where the
-builtin plant refuses, :class:`plant.Diverged` on any warning MuJoCo
-raises in the step (its handler taken over: nothing printed, no file).
-The terms MuJoCo's joints cannot hold are applied as forces
-(:func:`mjcf.friction_beyond`). See doc/mujoco.md#warnings-and-divergence.
+:class:`MujocoPlant` has :class:`plant.Plant`'s interface; any warning
+MuJoCo raises in a step is :class:`plant.Diverged` (its handler taken
+over), and the terms its joints cannot hold are applied as forces
+(doc/mujoco.md#warnings-and-divergence).
 """
 
 from __future__ import annotations

@@ -1,14 +1,10 @@
 """
 Time integration of the Orthoglide's platform: a plant to simulate.
 
-:func:`rk4_step` integrates ``rddot_G = forward_dynamics(r_G, rdot_G, f)``
-(the inverse dynamics of eq. 25 solved for the acceleration) by classic
-RK4 with the forces held over the step (a drive's zero-order hold);
-:class:`Plant` is a state with force limits stepped by it;
-:class:`Diverged` what a plant raises for a step it could not integrate,
-as opposed to one the workspace refuses (:class:`mechanics.WorkspaceError`).
-Units: m, m/s, m/s^2, N, s; frame 0. See
-doc/mechanics.md#forward-dynamics-and-simulation (why RK4, open loop).
+:func:`rk4_step` (classic RK4, forces held over the step), :class:`Plant`
+(a state with force limits) and :class:`Diverged` (a step not integrated,
+as opposed to one the workspace refuses). Units: m, m/s, m/s^2, N, s;
+frame 0 (doc/mechanics.md#forward-dynamics-and-simulation).
 """
 
 from __future__ import annotations
@@ -53,19 +49,13 @@ def rk4_step(robot: Robot, position: Vector, velocity: Vector, force: Vector,
     """
     Advance ``(r_G, rdot_G)`` by ``dt`` (s) with the classic RK4 method.
 
-    ``position`` (m), ``velocity`` (m/s) and ``force`` (N, actuators A, B,
-    C) are 3-sequences; the force is held constant over the step (zero-order
-    hold). Returns ``(position, velocity, acceleration)`` as 3-tuples of
-    floats: the state at ``t + dt`` and the acceleration at ``t`` (the
-    first stage's).
-
-    Each of the four stages calls :func:`mechanics.forward_dynamics`, and
-    the end state is checked by :func:`mechanics.solve`: a stage or an end
-    out of reach or nearer a singularity than ``margin`` raises
-    :class:`mechanics.WorkspaceError` (so a step never integrates into or
-    past a singularity), as does a non-finite input (``non_finite``). A
-    stage or an end state that is not finite from finite inputs raises
-    :class:`Diverged`. ``dt`` must be finite and positive (ValueError).
+    ``position`` (m), ``velocity`` (m/s) and ``force`` (N, held over the
+    step) are 3-sequences. Returns ``(position, velocity, acceleration)``:
+    the state at ``t + dt`` and the first stage's acceleration. A
+    non-finite input, or a stage or end out of reach or too near a
+    singularity, raises :class:`mechanics.WorkspaceError`; one not finite
+    from finite inputs :class:`Diverged`; ``dt`` must be finite and
+    positive (ValueError).
 
     >>> from orthoglide_ros.model.robot import Robot
     >>> robot = Robot(gravity=(0.0, 0.0, 0.0))

@@ -1,12 +1,9 @@
 """
 The Orthoglide's constant description: lengths, masses, gravity, terms.
 
-One immutable :class:`Robot` is built and validated once; every algorithm
-of the package takes it as its first argument (in the manner of Pinocchio's
-``Model``) and never validates it again on the hot path. Its fields are
-:data:`ROWS`: the paper's (section 2: the bodies 1-6 of eq. 20-24) and
-those of each force beyond them (:mod:`terms`), the ``robot.*`` ROS
-parameters. See doc/model.md#parameters.
+One immutable :class:`Robot`, validated once, is every algorithm's first
+argument (as Pinocchio's ``Model``) and never validated again on the hot
+path; its fields are :data:`ROWS` (doc/model.md#parameters).
 """
 
 from __future__ import annotations

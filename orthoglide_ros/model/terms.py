@@ -1,13 +1,11 @@
 """
 Forces beyond the paper's rigid bodies: friction, the drives, a payload.
 
-The paper (Chablat, Wenger, Staicu) neglects friction and has neither
-drives nor payload. Each :class:`Term` adds one of them, with its
-``robot.*`` parameters (:class:`Row`), and is the one home of its law: the
-:class:`robot.Robot`'s fields, the forces of :mod:`mechanics` (``f =
-f_rigid(eq. 25) + sum of the terms``), the MJCF and its MuJoCo plant,
-identification's laws and columns, and the docs' tables read it. Adding a
-term is one entry in :data:`TERMS`. See doc/model.md#terms.
+Each :class:`Term` is the one home of its law and its ``robot.*``
+parameters (:class:`Row`), read by the robot, :mod:`mechanics` (``f =
+f_rigid(eq. 25) + sum of the terms``), the MJCF, identification and the
+docs' tables. Adding a term is one entry in :data:`TERMS`
+(doc/model.md#terms).
 """
 
 from __future__ import annotations

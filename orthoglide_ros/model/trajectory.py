@@ -1,13 +1,9 @@
 """
 Platform trajectories: the paper's, eq. (6), the way back, an excitation.
 
-- :func:`paper_sample`, :func:`paper_batch`, :func:`paper_times`: eq. (6);
-- :func:`quintic`: the polynomial of degree 5 between two states
-  (position, velocity, acceleration), the smooth way from one to another
-  (the ``setpoint_publisher`` loops eq. (6) with it);
-- :func:`excitation`, :func:`excitation_sample`, :func:`excitation_batch`:
-  a periodic motion for identifying the robot's masses and friction
-  (``doc/identification.md``), a finite Fourier series per axis.
+The paper's (``paper_*``), :func:`quintic` (degree 5 between two states:
+the ``setpoint_publisher``'s way back) and the excitation (a finite
+Fourier series per axis, doc/identification.md#the-excitation).
 """
 
 from __future__ import annotations
@@ -134,20 +130,13 @@ def excitation(seed: int, period: float, harmonics: int = EXCITATION_HARMONICS,
     """
     Return an :class:`Excitation`: a finite Fourier series per axis.
 
-    ``harmonics`` multiples of the fundamental ``1 / period`` (s) with
-    random coefficients drawn from ``seed`` (an integer >= 0; the same
-    seed gives the same motion), falling off as ``1 / k``. Corrected
-    (least change) so that the motion starts at home at rest with zero
-    acceleration (``sum_k k A_k = 0``, ``sum_k k^2 B_k = 0``, the offset
-    ``-sum_k B_k``): a robot held at home follows it from its first
-    sample, and it repeats without a jump. Then each axis is scaled down
-    until its position stays within ``box`` (m), its speed within
-    ``max_velocity`` (m/s) and its acceleration within
-    ``max_acceleration`` (m/s^2), each to 99 % on a grid of 4000 samples
-    per period, and the path is checked against ``robot``'s workspace
-    (default the paper's) with the singularity ``margin``
-    (:func:`mechanics.workspace_status`): a path outside raises
-    ValueError, as do a period or bound that is not positive.
+    ``harmonics`` multiples of ``1 / period`` (s), random coefficients from
+    ``seed`` (an integer >= 0), corrected to start at home at rest with zero
+    acceleration, each axis scaled down to ``box`` (m), ``max_velocity``
+    (m/s) and ``max_acceleration`` (m/s^2), the path checked against
+    ``robot``'s workspace (default the paper's) with ``margin``
+    (doc/identification.md#the-excitation). Raises ValueError for a path
+    outside or a period or bound that is not positive.
 
     >>> motion = excitation(7, 5.0)
     >>> position, velocity, acceleration = excitation_sample(motion, 0.0)

@@ -1,14 +1,10 @@
 """
 The Orthoglide as a URDF: a cut tree of the closed mechanism, without ROS.
 
-URDF describes trees; the Orthoglide has loops. The tree is cut where
-:mod:`mechanics` cuts it for virtual work (eq. 23): each parallelogram at
-A7, legs B and C at their frame 5, leg A carrying the platform. Frames from
-:func:`bodies.elements` at home, inertials from the bodies table
-(:func:`inertials`), joint limits over the workspace within the
-singularity margin (:func:`joint_limits`); a joint state of every joint
-closes every cut. The names are fixed (tools rely on them): see
-doc/mechanism_state_publisher.md#joints-and-links.
+The tree is cut where :mod:`mechanics` cuts it for virtual work (eq. 23):
+each parallelogram at A7, legs B and C at their frame 5, leg A carrying
+the platform; a joint state of every joint closes every cut. The names
+are contracts (doc/mechanism_state_publisher.md#joints-and-links).
 """
 
 from __future__ import annotations
@@ -98,19 +94,14 @@ def joint_limits(robot: Robot,
     """
     Range of each joint variable over the workspace within ``margin``.
 
-    The workspace is every platform position with a singularity distance
-    of at least ``margin`` (:func:`mechanics.workspace_status`) on the
-    home branch of the forward kinematics (the positions that
-    :func:`mechanics.forward_kinematics` gives back, so those a joint
-    state of the sliders can describe). Returns
-    ``{'lambda_': (low, high), 'phi21': ..., 'phi32': ...}`` (m, rad) of
-    leg A, rounded outward to LIMIT_STEP; legs B and C are leg A turned
-    about the diagonal and the workspace is symmetric under that turn, so
-    their ranges are the same. Found by a grid over the cube ``|x|, |y|,
-    |z| < l3`` (which holds every reachable point), then random samples
-    around the best points so far, in a spread that shrinks to about 1e-9
-    m (seeded: the same limits every time; about 1 s, remembered for the
-    last robots asked).
+    On the home branch of the forward kinematics
+    (doc/mechanism_state_publisher.md#joints-and-links). Returns
+    ``{'lambda_': (low, high), 'phi21': ..., 'phi32': ...}`` (m, rad) of leg
+    A, rounded outward to LIMIT_STEP: legs B and C are leg A turned about the
+    diagonal, the workspace symmetric under that turn. Found by a grid over
+    the cube ``|x|, |y|, |z| < l3``, then seeded random samples around the
+    best points down to about 1e-9 m (about 1 s, remembered for the last
+    robots asked).
     """
     return dict(_joint_limits(robot, float(margin)))
 

@@ -1,14 +1,12 @@
 """
 The nodes' console scripts: signals and memory bounds first, then imports.
 
-Before any import of rclpy or numpy, each script bounds the process's
-memory (:func:`orthoglide_ros.cores.memory.bound`) and makes SIGINT and
-SIGTERM only record a stop (:data:`STOP`, read by ``node_runtime.run``):
-exit code 0 and nothing on standard error at any moment
-(``doc/robustness.md``, start and stop). Once the node has run, both are
-ignored: a signal during Fast DDS's teardown (138-187 ms) would end the
-process with -2. That can go when the teardown takes no time to speak of
-(``benchmarks/upstream_checks.py``, ``teardown``). Standard library only.
+Standard library only: before rclpy or numpy, each script bounds the
+memory and makes SIGINT and SIGTERM only record a stop (:data:`STOP`)
+(doc/robustness.md#start-and-stop). Once the node has run, both
+are ignored: a signal during Fast DDS's teardown would end the process
+with -2; that can go when the teardown takes no time to speak of
+(``benchmarks/upstream_checks.py``, ``teardown``).
 """
 
 import importlib

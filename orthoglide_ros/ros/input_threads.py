@@ -4,26 +4,17 @@ A node's inputs and periodic work, on threads of their own.
 :class:`InputThreads`, owned by every node, reads the inputs subscribed
 with :meth:`InputThreads.subscribe` from rcl wait sets and runs the work
 added with :meth:`InputThreads.periodic`; the executor serves only the
-services. The path of one message (:meth:`InputThreads.deliver`) and
-the rules it follows are in ``doc/decisions.md`` (runtime and
-middleware) and ``doc/robustness.md`` (inputs).
+services. Why and the rules: doc/decisions.md#runtime-and-middleware,
+doc/robustness.md#inputs. Each upstream behaviour worked around can go
+when its check in ``benchmarks/upstream_checks.py`` says so:
 
-Upstream behaviour worked around; each is checked by
-``benchmarks/upstream_checks.py``, which prints "still needed" or "can go":
-
-- rclpy's EventsExecutor queues one event per message, whatever the
-  history depth: memory and latency grow without bound under a flood,
-  and the bounded SingleThreadedExecutor costs 2-6x the wait-set thread's
-  CPU per message. It can go when an executor is bounded and within 1.3x
-  of that (``executor_queue``).
-- rmw_fastrtps: a reader's QoS events and its data share one status
-  condition, so an executor waiting on the events masks the data from
-  the input thread (:meth:`InputThreads.hides`). It can go when a wait-set
-  executor spinning the node no longer delays the inputs (``events_mask``;
-  test_feedforward_node.py's ``..._whatever_spins_the_node``).
-- Periodic work on the EventsExecutor waits behind a flood of service
-  requests (gaps of 47-316 ms at 100 Hz measured): it can go when a
-  timer keeps within 3 periods under one (``timer_behind_services``).
+- EventsExecutor's unbounded queue: when an executor is bounded and within
+  1.3x of the wait-set thread's CPU per message (``executor_queue``);
+- rmw_fastrtps's QoS events masking the data (:meth:`InputThreads.hides`):
+  when a wait-set executor spinning the node no longer delays the inputs
+  (``events_mask``);
+- timers behind a flood of requests: when a timer on the EventsExecutor
+  keeps within 3 periods under one (``timer_behind_services``).
 """
 
 from contextlib import ExitStack

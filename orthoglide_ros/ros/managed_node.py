@@ -1,13 +1,11 @@
 """
 The one shape of the package's nodes: a managed node around one core.
 
-:class:`ManagedNode` is rclpy's ``LifecycleNode`` around one core of
-:mod:`orthoglide_ros.cores` (the contract: :mod:`orthoglide_ros.cores.core`).
-It owns its :class:`InputThreads` (inputs and periodic work),
-:class:`ReplyGuard` (services) and :class:`Diagnostics`; a subclass's
-:meth:`ManagedNode.build` makes the core, its outputs and its inputs at
-configure. What each state and transition does: ``doc/feedforward.md``
-(lifecycle), ``doc/decisions.md`` (nodes).
+:class:`ManagedNode`, rclpy's ``LifecycleNode`` around one core
+(:mod:`orthoglide_ros.cores.core`), owns its :class:`InputThreads`,
+:class:`ReplyGuard` and :class:`Diagnostics`; a subclass's
+:meth:`ManagedNode.build` makes the core, outputs and inputs at configure
+(doc/feedforward.md#lifecycle, doc/decisions.md#nodes).
 """
 
 import sys

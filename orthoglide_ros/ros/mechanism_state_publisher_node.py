@@ -1,12 +1,8 @@
 """
 The ``mechanism_state_publisher`` ROS 2 node: three sliders in, every joint out.
 
-Glue over :class:`orthoglide_ros.cores.mechanism_state_publisher.MechanismState`:
-``joint_states`` in, every non-fixed joint of the URDF out on
-``mechanism/joint_states`` with the input's stamp, for
-``robot_state_publisher``. ``ros2 run orthoglide_ros
-mechanism_state_publisher``; ``doc/mechanism_state_publisher.md`` has the
-topics, parameters and rules.
+Glue over :class:`orthoglide_ros.cores.mechanism_state_publisher.MechanismState`
+(doc/mechanism_state_publisher.md).
 """
 
 import array

@@ -1,12 +1,9 @@
 """
 A node's ROS parameters, declared from its core's table and read back.
 
-:func:`declare_specs` declares one ROS parameter per
-:class:`orthoglide_ros.cores.parameters.Spec`; :func:`spec_values` reads
-them back as plain values for :meth:`Table.parse`. An empty array default
-is declared by its type alone: rclpy 7.1.6 types ``[]`` as a byte array
-whatever the descriptor says; that can go when it does not
-(``benchmarks/upstream_checks.py``, ``empty_array_default``).
+An empty array default is declared by its type alone: rclpy 7.1.6 types
+``[]`` as a byte array whatever the descriptor says; that can go when it
+does not (``benchmarks/upstream_checks.py``, ``empty_array_default``).
 """
 
 import array

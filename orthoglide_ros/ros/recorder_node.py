@@ -1,12 +1,10 @@
 """
 The recorder behind ``orthoglide record``: topics into a rosbag2 bag.
 
-A managed node around :class:`orthoglide_ros.cores.recording.Recording`:
-each topic an input whose bytes go into the bag unchanged, stamped with the
-node clock at reception, through a queue to the thread that owns the bag
-(:class:`BagThread`: sqlite3 refuses a connection used from another thread,
-and the input thread never waits for the disk). ``doc/cli.md`` (record)
-has the options, what is dropped and the exit codes.
+Each message's bytes go unchanged, through a queue, to the thread that
+owns the bag (:class:`BagThread`: sqlite3 refuses a connection used from
+another thread, and the input thread never waits for the disk)
+(doc/cli.md#record).
 """
 
 import functools

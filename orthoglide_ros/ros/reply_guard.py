@@ -1,40 +1,21 @@
 """
 Service callbacks and replies that can neither end nor stall a node.
 
-:class:`ReplyGuard`, owned by a node
-(:class:`~orthoglide_ros.ros.managed_node.ManagedNode`), wraps every
-service of the node: the parameter and lifecycle services as it is made,
-each later one as the node creates it (:meth:`ReplyGuard.guard`).
+:class:`ReplyGuard`, owned by every node, wraps each of its services
+(:meth:`ReplyGuard.guard`) against two upstream behaviours
+(doc/robustness.md#services): rclpy raising on a set-parameters request
+whose value type does not exist, and rmw_fastrtps holding a reply for an
+unmatched reader with the GIL held. It reads the DDS service topics
+(``rq<service>Request``, ``rr<service>Reply``: rmw_fastrtps's naming) and
+the requester from the request's header memory (:func:`requester`:
+rclpy 7.1 does not expose ``request_id.writer_guid``).
 
-Upstream behaviour it works around:
-
-- rclpy raises, outside its own error handling, on a set-parameters
-  request whose ``ParameterValue.type`` is not a ParameterType: the
-  exception left the executor and ended the node. Such a request is
-  refused whole with the reason.
-- rmw_fastrtps holds a reply, up to 100 ms with the GIL held, while the
-  requesting client's reply reader is not matched: a client that sent
-  requests and left, or one whose reader can never match (a
-  TRANSIENT_LOCAL client), stalled every thread of the process for each
-  reply (100 requests, 6.3 s). A reply therefore waits, without the GIL,
-  polling the graph, until :class:`~orthoglide_ros.ros.service_replies.
-  ReplyRoutes` says it may go to rmw, and is dropped if its own client
-  cannot take it. This reads the DDS service topics
-  (``rq<service>Request``, ``rr<service>Reply``: rmw_fastrtps's naming) and
-  the requesting client's reply reader from the request's header
-  (``request_id.writer_guid``, which rclpy 7.1 does not expose:
-  :func:`requester` reads it from the header's memory, checked against the
-  fields rclpy does expose).
-
-How to tell when it can go (``benchmarks/upstream_checks.py``, on plain
-rclpy): the request check, when rclpy answers a parameter value of type 99
-without raising (``parameter_type``); the reply rule, when rmw_fastrtps
-sends a reply to an unmatched reader at once (``reply_stall``;
-``benchmarks/bench_replies.py`` measures the stalls of a node). The read
-of the header's memory, when rclpy exposes ``request_id.writer_guid``
-(``writer_guid``); if :func:`requester` stops finding the reader (a new
-rclpy or pybind11), ``test_service_replies.py`` fails and every reply is
-sent as plain rclpy would.
+Removal (``benchmarks/upstream_checks.py``, on plain rclpy): the request
+check when rclpy answers a value of type 99 (``parameter_type``); the
+reply rule when rmw_fastrtps sends to an unmatched reader at once
+(``reply_stall``); the header read when rclpy exposes the requester
+(``writer_guid``). If :func:`requester` stops finding the reader,
+``test_service_replies.py`` fails and replies go as plain rclpy sends them.
 """
 
 import ctypes
@@ -73,17 +54,12 @@ class ReplyGuard:
         """
         Keep a service from ending or stalling the node.
 
-        The callback: a set-parameters request naming a value type that
-        does not exist (rclpy raises on it, outside its own error handling)
-        is refused whole with the reason; any other exception is a defect,
-        answered with the default response.
-
-        The reply waits, without the GIL, polling the graph, until
-        :class:`~orthoglide_ros.ros.service_replies.ReplyRoutes` (the rule,
-        for the requesting client alone) says it may go to rmw, which would
-        otherwise wait for a departed or unmatched client's reader up to
-        100 ms with the GIL held; a reply the rule drops is counted in
-        :attr:`replies_dropped`. Returns ``service``.
+        A set-parameters request naming a value type that does not exist is
+        refused whole with the reason; any other exception is a defect,
+        answered with the default response. The reply waits, without the
+        GIL, until :class:`~orthoglide_ros.ros.service_replies.ReplyRoutes`
+        says it may go; one it drops is counted in :attr:`replies_dropped`.
+        Returns ``service``.
         """
         node = self._node
         callback, send = service.callback, service.send_response

@@ -1,44 +1,14 @@
 """
 When a service reply may be handed to rmw: the rule, per client, without ROS.
 
-rmw_fastrtps (Jazzy, ``rmw_response.cpp``) sends a reply only once its
-reply writer has matched the requesting client's reply reader, and waits
-for that match up to the writer's ``max_blocking_time`` (100 ms) with the
-Python GIL held: every thread of the node stops meanwhile. A reader that
-will never match (a client made with a QoS the reply writer cannot serve:
-TRANSIENT_LOCAL against the VOLATILE writer), or one that has left while
-its requests are still being answered, would stop the node 100 ms per
-reply. So the node (``reply_guard.ReplyGuard``) hands a reply to rmw only
-once :meth:`ReplyRoutes.decide` says ``SEND``, polling the ROS graph while
-it says ``WAIT``, and drops the reply when it says ``DROP``.
-
-Whose reply it is: rmw_fastrtps names the requesting client's reply reader
-in the request's header (``request_id.writer_guid``: the GUID the client
-sent as the related sample identity, which is the reader's gid on the
-graph). Each reply is therefore decided for its own client's reader, and
-nothing a client does costs another client its reply.
-
-The rules, for the reply reader ``R`` of the request:
-
-- ``R`` listed with a QoS the reply writer can match, for :data:`REPLY_MATCH`
-  s (matched by then) or once the reply has waited :data:`REPLY_WAIT` s:
-  ``SEND``;
-- ``R`` listed with a QoS the writer can never match: ``DROP`` at once (its
-  client gets no reply, whatever the node does);
-- ``R``'s last :data:`STALE_AFTER` replies each timed out in rmw all the
-  same (a reader listed but never matched): ``DROP``, but for one reply
-  every :data:`STALE_RETRY` s, which clears it if it goes through. One slow
-  send (the node stalled while sending) marks nothing;
-- ``R`` not listed: ``WAIT`` while its client's request writer is listed (a
-  new client on a loaded machine: discovery brings the reader later), up to
-  :data:`REPLY_DISCOVERY` s, else up to :data:`REPLY_WAIT` s; then ``DROP``,
-  and ``R`` is counted as gone;
-- ``R`` seen on the graph and gone since: ``DROP`` at once;
-- the requester unknown (a header rclpy did not let us read): ``SEND``, as
-  rclpy itself would.
-
-It goes with :mod:`reply_guard`'s workaround, once rmw_fastrtps sends a
-reply to an unmatched reader at once (``benchmarks/upstream_checks.py``,
+:meth:`ReplyRoutes.decide` says ``SEND``, ``WAIT`` or ``DROP`` for a
+reply, from the graph as last polled, for the requesting client's own
+reply reader (``request_id.writer_guid``, the reader's gid); the rules
+and why (rmw_fastrtps waits for an unmatched reader with the GIL held):
+doc/robustness.md#services. A requester unknown (a header rclpy did not
+let us read) gets ``SEND``, as rclpy itself would. It goes with
+:mod:`reply_guard`'s workaround, once rmw_fastrtps sends a reply to an
+unmatched reader at once (``benchmarks/upstream_checks.py``,
 ``reply_stall``).
 
 >>> routes = ReplyRoutes()

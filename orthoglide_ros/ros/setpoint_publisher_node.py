@@ -1,12 +1,8 @@
 """
 The ``setpoint_publisher`` ROS 2 node: streams eq. (6) or the excitation.
 
-Glue over :class:`orthoglide_ros.cores.setpoint_publisher.Stream`: once its
-subscribers have matched, one setpoint per period from a thread of its
-own, on ``setpoint/trajectory`` or ``setpoint/pose|twist|accel``
-(``input``); after one pass it exits 0, or with ``loop`` goes on. ``ros2 run
-orthoglide_ros setpoint_publisher``; ``doc/setpoint_publisher.md`` has the
-parameters.
+Glue over :class:`orthoglide_ros.cores.setpoint_publisher.Stream`
+(doc/setpoint_publisher.md).
 """
 
 import time

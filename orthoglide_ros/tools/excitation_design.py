@@ -1,12 +1,9 @@
 """
 An excitation optimized for identification, without ROS.
 
-:func:`optimize` searches the Fourier coefficients of
-:func:`trajectory.excitation`'s series, from a seed's, for a smaller
-condition number of the base regressor (scipy's L-BFGS-B on its
-logarithm), every candidate shaped and bounded as any excitation and
-never worse than the seed's; :func:`check_size` bounds a file before
-anything is computed. See doc/identification.md#the-excitation.
+:func:`optimize` lowers the base regressor's condition number from a
+seed's, never worse than the seed; :func:`check_size` bounds a file before
+anything is computed (doc/identification.md#the-excitation).
 """
 
 from collections import namedtuple

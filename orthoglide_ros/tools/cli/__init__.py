@@ -1,13 +1,9 @@
 """
 The ``orthoglide`` command-line tool: the mechanics without ROS.
 
-One module per job, each with its table of subcommands (``SUBCOMMANDS``,
-:class:`.common.Subcommand` rows: name, ``run_``, options, help):
-:mod:`.solving` (paper, solve, batch), :mod:`.planning` (plan),
-:mod:`.identifying` (excitation, record, identify, validate),
-:mod:`.models` (urdf, mjcf), :mod:`.pictures` (draw, render, animate);
-:mod:`.common` what they share. Units SI; bad input exits 2 with one
-line. See doc/cli.md.
+One module per job, each with its ``SUBCOMMANDS`` table
+(:class:`.common.Subcommand` rows); :mod:`.common` what they share. Bad
+input exits 2 with one line (doc/cli.md).
 """
 
 import argparse

@@ -1,12 +1,8 @@
 """
 Identify the Orthoglide's masses, drives and friction from a log, no ROS.
 
-The forces are linear in a law's standard parameters:
-``f = W(r_G, rdot_G, rddot_G) theta`` (kg, N s/m, N). :mod:`.laws` (the
-laws and their parameters), :mod:`.regressor` (``W`` from the inverse
-dynamics, the base parameters), :mod:`.motion` (a log filtered and
-differentiated), :mod:`.estimate` (:func:`identify`), :mod:`.validate`,
-:mod:`.report`. scipy is imported where used. See doc/identification.md.
+``f = W(r_G, rdot_G, rddot_G) theta``; scipy is imported where used
+(doc/identification.md).
 """
 
 from orthoglide_ros.formats.logs import (  # noqa: F401

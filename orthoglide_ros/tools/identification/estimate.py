@@ -1,14 +1,10 @@
 """
 The estimate: the lag, the law, the least squares, the identified robot.
 
-:func:`identify` takes a log and the nominal robot: the forces' lag on the
-states (unless given), the law by its error on held-out parts of the log,
-least squares for the base parameters (bounded where the ordinary ones
-leave what a robot can be) with their standard deviations, the parameters
-the log does not excite held at their nominal values, then a complete
-robot by the split rule (:func:`split`). What the nominal robot knows and
-the law leaves out (the payload, the drives) is known force, taken off the
-measured forces. See doc/identification.md#least-squares-and-statistics.
+:func:`identify` takes a log and the nominal robot; what the nominal robot
+knows and the law leaves out (the payload, the drives) is known force,
+taken off the measured forces
+(doc/identification.md#least-squares-and-statistics).
 """
 
 from __future__ import annotations
@@ -51,7 +47,7 @@ MAX_RELATIVE_STD = 10.0
 # tens to hundreds of N.
 RESOLUTION = {'kg': 0.01, 'N s/m': 1.0, 'N': 1.0}
 # The Stribeck speeds v_b searched (m/s): log-spaced STRIBECK_STEP apart
-# (the density of the former 12 speeds from 2 to 100 mm/s), from the
+# (12 speeds from 2 to 100 mm/s), from the
 # nominal robot's Coulomb smoothing speed friction_velocity (below it a
 # Stribeck excess is one more Coulomb switch) to the log's largest slider
 # speed (above it the excess is a Coulomb level less a term in v^2 that
@@ -560,23 +556,11 @@ def split(robot: Robot, base: Base, values: Array,
     """
     Return ``(robot, notes)``: a complete robot with base parameters ``values``.
 
-    The rule, per base parameter ``beta_i = theta_j + sum_k P_ik theta_k``
-    (``j`` its carrier): the other parameters of the combination keep
-    their nominal values (those of ``robot``) and the carrier takes the
-    rest, ``theta_j = beta_i - sum_k P_ik theta_k``. Where that would put
-    the carrier below its bound (a mass below 1e-6 kg), the whole
-    combination is scaled from its nominal values instead, ``theta =
-    theta_nominal beta_i / beta_i,nominal`` (when the combination's
-    coefficients and both values are positive); where no scaling keeps
-    every member within its bound (a combination found at or near its
-    bound, the sum of its members' bounds), the other members are set to
-    their bounds and the carrier takes the rest. A friction coefficient or
-    an armature found below zero is set to zero. A combination no robot
-    within the bounds has (a mass combination found below zero: a
-    parameter the log hardly excites) keeps its nominal values. Each
-    departure from the plain rule is a note. The law is ``base.law``
-    (with ``stribeck_velocity``, m/s). Raises :class:`IdentificationError`
-    only when the robot so made is refused (a value beyond a bound of
+    Each base parameter ``beta_i = theta_j + sum_k P_ik theta_k`` is split by
+    the rule of doc/identification.md#the-split-rule; each departure from its
+    first case is a note. The law is ``base.law`` (with
+    ``stribeck_velocity``, m/s). Raises :class:`IdentificationError` only when
+    the robot so made is refused (a value beyond a bound of
     :data:`robot.ROWS`).
     """
     names = standard_names(base.law)

@@ -1,13 +1,10 @@
 """
 The parameters identification finds: masses, drives and friction, by law.
 
-A :class:`Law` is a choice of the terms of :mod:`model.terms` (viscous and
-Coulomb friction always, and any of the others a log may identify). The
-forces are linear in its standard parameters ``theta`` (the masses ``m1``
-... ``m6`` of eq. 20-24, then each term's coefficient per slider:
-``armature_a``, ``viscous_a``, ``coulomb_a`` ...): ``f = W theta``, a
-term's column its force at coefficient 1. See
-doc/identification.md#friction-laws-chosen-by-the-data.
+A :class:`Law` is a choice of the terms of :mod:`model.terms`; the forces
+are linear in its standard parameters (the masses of eq. 20-24, then each
+term's coefficient per slider): ``f = W theta``
+(doc/identification.md#friction-laws-chosen-by-the-data).
 """
 
 from __future__ import annotations

@@ -1,13 +1,11 @@
 """
 A log on uniform grids, filtered as the least squares need it.
 
-:class:`Motion` cuts a :class:`formats.logs.Log` at its gaps, puts each
-piece on a uniform grid, takes the platform's motion from the measured
-``lambda`` (eq. 14, through a zero-phase Butterworth low-pass), its rates
-by central differences, and filters, trims and decimates alike whatever is
-computed from it: the forces at any lag, the columns of ``W``, a robot's
-forces. :func:`prepare` gives the :class:`Samples` of one law;
-:func:`estimate_lag` the forces' delay. See doc/identification.md#the-filter.
+:class:`Motion` cuts a log at its gaps onto uniform grids and filters,
+trims and decimates alike everything computed from it (eq. 14 from the
+measured ``lambda``); :func:`prepare` gives the :class:`Samples` of one
+law, :func:`estimate_lag` the forces' delay
+(doc/identification.md#the-filter).
 """
 
 from __future__ import annotations
@@ -31,23 +29,14 @@ if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.terms import Term
     from orthoglide_ros.tools.identification.laws import Law
 
-# The log's processing (doc/identification.md): a 4th-order Butterworth
-# low-pass at DEFAULT_CUTOFF (Hz) run forwards and backwards (zero phase,
-# 8th-order roll-off) on the forces and the regressor's columns alike;
-# samples within 2 / cutoff of a segment's ends are dropped (the edges of
-# the two filters in series); a gap longer than GAP_FACTOR times the
-# median sampling period and longer than GAP_SHARE / cutoff splits the log
-# into segments; shorter gaps are interpolated linearly (for a component
-# at frequency f, an error below (pi f gap)^2 / 2 of it: 5 % at the
-# cutoff, 0.2 % at a fifth of it).
+# The filter and the grid (doc/identification.md#the-filter): a
+# Butterworth low-pass of FILTER_ORDER at DEFAULT_CUTOFF (Hz), zero phase,
+# on the forces and W's columns; the motion through the same design at
+# STATE_CUTOFF_FACTOR times the cutoff, at most STATE_CUTOFF_SHARE of the
+# rate; a gap longer than GAP_FACTOR median periods and GAP_SHARE / cutoff
+# splits the log.
 DEFAULT_CUTOFF = 10.0
 FILTER_ORDER = 4
-# The motion (positions, measured velocities) goes through the same design
-# at STATE_CUTOFF_FACTOR times the cutoff, at most STATE_CUTOFF_SHARE of the
-# sampling rate: five times the band of the forces, as Gautier filters
-# positions, so that the velocity keeps the ripple a Coulomb switch sees
-# (at the cutoff itself, the closed-loop logs of the demo gave m1 + m2 5 %
-# too heavy) while the encoder's quantisation stays out.
 STATE_CUTOFF_FACTOR = 5.0
 STATE_CUTOFF_SHARE = 0.4
 GAP_FACTOR = 3.0
@@ -279,40 +268,13 @@ def prepare(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     """
     Turn a :class:`Log` into :class:`Samples` for the least squares.
 
-    The log is checked (:func:`check_log`); split into segments at gaps
-    longer than GAP_FACTOR median periods and GAP_SHARE / cutoff; each
-    segment interpolated linearly onto a uniform grid of the median period
-    (exact where the stamps are on it), the forces taken as applied
-    ``force_lag`` s before their stamps (a drive or a simulator that
-    reports with each state the force it held over the last period of
-    ``dt``: ``dt / 2``). Then, with ``H`` the zero-phase Butterworth
-    low-pass of ``cutoff`` Hz (order FILTER_ORDER, run forwards and
-    backwards: ``scipy.signal.sosfiltfilt``) and ``H_s`` the same at
-    STATE_CUTOFF_FACTOR times ``cutoff`` (at most STATE_CUTOFF_SHARE of
-    the sampling rate):
-
-    1. the motion: the platform positions from ``lambda``
-       (:func:`mechanics.forward_kinematics`, ``robot``'s geometry)
-       through ``H_s``, the velocity their central difference ``(r+ -
-       r-) / 2 dt`` (or, with measured ``lambdadots``, theirs through
-       ``H_s``: ``rdot = J2^-1 J1 lambdadot``, eq. 15), the acceleration
-       the velocity's central difference (at a frequency ``f``, relative
-       errors of ``(2 pi f dt)^2 / 6`` and twice that: 7e-6 and 1.3e-5
-       at 1 Hz and 1 kHz). ``H_s`` passes what the forces answer to (the
-       velocity's ripple at a reversal, which the Coulomb switch sees)
-       and stops the encoder's noise;
-    2. the regressor ``W`` of ``law`` (:func:`regressor`) at every sample;
-    3. parallel filtering: the forces and every column of ``W`` through
-       ``H``, so that ``H(f) = H(W) theta`` holds as ``f = W theta`` does:
-       nothing out of phase, no bias from the filter (the sharp Coulomb
-       switch included);
-    4. ``2 / cutoff`` s dropped at each end of a segment (the edges of
-       the two filters in series: positions, then ``W``), segments too
-       short for that dropped, and one sample in
-       ``floor(rate / (2 cutoff))`` kept (parallel decimation, as
-       Gautier's: the filtered signals hold nothing above the cutoff, and
-       the least squares' residuals become nearly uncorrelated, which the
-       standard deviations of :func:`identify` assume).
+    The log is checked (:func:`check_log`), split at gaps longer than
+    GAP_FACTOR median periods and GAP_SHARE / cutoff, each segment put on a
+    uniform grid, the forces taken ``force_lag`` s before their stamps; then
+    the motion through ``H_s`` (STATE_CUTOFF_FACTOR x ``cutoff``, at most
+    STATE_CUTOFF_SHARE of the rate), ``W`` of ``law`` at every sample, the
+    forces and ``W`` through ``H`` (``cutoff``, order FILTER_ORDER), edges
+    dropped and decimated (doc/identification.md#the-filter).
 
     Raises :class:`LogError`.
     """

@@ -1,14 +1,10 @@
 """
 The regressor ``W`` of the forces, and the base parameters a log can find.
 
-``f = W(r_G, rdot_G, rddot_G) theta``, linear in the standard parameters
-of a :class:`laws.Law`: :func:`regressor` builds ``W`` from the package's
-own inverse dynamics (eq. 25; a mass's column a difference of two
-robots' forces, a term's its force at coefficient 1), not from a second
-model; :func:`base_parameters` finds the combinations a log can identify
-by a QR decomposition with column pivoting at random states;
-:func:`condition_number` says how well a motion excites them. See
-doc/identification.md#base-parameters.
+:func:`regressor` builds ``W`` from the package's own inverse dynamics
+(eq. 25; a mass's column a difference of two robots' forces, a term's its
+force at coefficient 1), not from a second model
+(doc/identification.md#base-parameters).
 """
 
 from __future__ import annotations
@@ -105,18 +101,13 @@ def base_parameters(robot: Robot, law: Law = PLAIN,
     """
     Find the base parameters of ``robot``'s regressor (a :class:`Base`).
 
-    ``W`` of ``law`` at ``samples`` random states (see BASE_BOX and its
-    neighbours; ``seed`` for the generator), each column weighted by its
-    parameter's nominal value in ``robot`` (a parameter whose nominal
-    value is zero, such as friction or armature on the paper's robot: its
-    column scaled to unit RMS), goes through a QR decomposition with
-    column pivoting (``scipy.linalg.qr``). The pivots above RANK_TOLERANCE
-    of the first are the independent parameters; each other column is a
-    combination of those, found by least squares, which gives ``P``. The
-    weighting makes the parameter with the largest nominal contribution
-    carry each combination (the platform's ``m5`` rather than the rods'
-    ``m4``), so that the split rule keeps the smaller ones at their
-    nominal values.
+    ``W`` of ``law`` at ``samples`` random states (BASE_BOX and its
+    neighbours; ``seed``), each column weighted by its nominal value in
+    ``robot`` (scaled to unit RMS where that is zero), through a QR
+    decomposition with column pivoting: pivots above RANK_TOLERANCE of the
+    first are independent, the other columns their least-squares
+    combinations (``P``). The weighting makes the largest nominal
+    contribution carry each combination (doc/identification.md#base-parameters).
     """
     import scipy.linalg
     rng = np.random.default_rng(seed)

@@ -1,13 +1,9 @@
 """
 What ``orthoglide identify`` and ``orthoglide validate`` print and draw.
 
-Text lines from an :class:`identification.Identification` or a
-:class:`identification.Validation`, and their figures drawn into a
-matplotlib Figure the caller makes (the command-line tool, on the Agg
-canvas): measured against predicted forces, and the residual against time,
-the slider's speed and its position, per actuator, so that what the model
-does not explain (a ripple periodic in position, a friction law it lacks)
-shows. No ROS, no matplotlib import of its own.
+Text lines and figures (measured against predicted forces, the residual
+against time, speed and position per actuator) drawn into a matplotlib
+Figure the caller makes; no matplotlib import of its own (doc/cli.md).
 """
 
 from __future__ import annotations
