@@ -546,10 +546,29 @@ def _await_line(proc, prefix, timeout):
 # What the lingering client prints once its requests are sent, and what
 # the asking one prints at its end.
 LINGERING, ANSWERED = 'lingering', 'answered'
+# How long the lingering client waits for its request's effect before it
+# sends the request again (s).
+RESEND = 2.0
+
+
+def _seen(node, client, request, done):
+    """Ask ``client``; whether its reply satisfies ``done``."""
+    future = client.call_async(request)
+    rclpy.spin_until_future_complete(node, future, timeout_sec=2.0)
+    return future.done() and future.result() is not None \
+        and done(future.result())
 
 
 def linger(args):
-    """Child: one request each from TRANSIENT_LOCAL clients, then stay."""
+    """
+    Child: one request each from TRANSIENT_LOCAL clients, then stay.
+
+    A request sent before the service's request reader has matched this
+    writer is lost (DDS, on a loaded machine), and the reply that would
+    say so never comes: ordinary clients of the same node read the effect
+    (feedforward inactive, ``force_limit`` 999 N), and a request whose
+    effect does not show within RESEND s is sent again.
+    """
     rclpy.init()
     node = Node(f'lingering_client_{os.getpid()}')
     qos = QoSProfile(depth=10, durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -558,22 +577,34 @@ def linger(args):
     parameters = node.create_client(SetParameters,
                                     '/simulator/set_parameters',
                                     qos_profile=qos)
+    state = node.create_client(GetState, '/feedforward/get_state')
+    force = node.create_client(GetParameters, '/simulator/get_parameters')
+    requests = (
+        (change, ChangeState.Request(transition=Transition(
+            id=Transition.TRANSITION_DEACTIVATE)),
+         state, GetState.Request(),
+         lambda reply: reply.current_state.label == 'inactive'),
+        (parameters, SetParameters.Request(parameters=[ParameterMsg(
+            name='force_limit', value=ParameterValue(
+                type=3, double_value=999.0))]),
+         force, GetParameters.Request(names=['force_limit']),
+         lambda reply: reply.values[0].double_value == 999.0))
     try:
-        # Not wait_for_service: it waits for the reply reader to match too,
-        # which this one never does. The services on the graph, then time
-        # for the request writers to match.
+        # Not wait_for_service on the hostile clients: it waits for the
+        # reply reader to match too, which this one never does.
         deadline = time.monotonic() + START_TIMEOUT
-        while not {'/feedforward/change_state', '/simulator/set_parameters'} \
-                <= {name for name, _ in node.get_service_names_and_types()}:
-            if time.monotonic() > deadline:
-                return 1
-            time.sleep(0.1)
-        time.sleep(1.0)
-        change.call_async(ChangeState.Request(transition=Transition(
-            id=Transition.TRANSITION_DEACTIVATE)))
-        parameters.call_async(SetParameters.Request(parameters=[
-            ParameterMsg(name='force_limit', value=ParameterValue(
-                type=3, double_value=999.0))]))
+        if not all(check.wait_for_service(timeout_sec=START_TIMEOUT)
+                   for _, _, check, _, _ in requests):
+            return 1
+        for client, request, check, question, done in requests:
+            seen = False
+            while not seen:
+                if time.monotonic() > deadline:
+                    return 1
+                client.call_async(request)
+                end = time.monotonic() + RESEND
+                while not seen and time.monotonic() < end:
+                    seen = _seen(node, check, question, done)
         print(LINGERING, flush=True)
         while True:
             time.sleep(0.1)
