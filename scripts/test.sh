@@ -36,6 +36,8 @@ trap 'rm -f "$COUNT"' EXIT
 code=0
 ORTHOGLIDE_TEST_PHASE=parallel ORTHOGLIDE_SERIAL_COUNT="$COUNT" \
     "${PYTEST[@]}" -n "$WORKERS" --dist worksteal "$@" || code=$?
+# 2: interrupted, or a collection error: the serial phase would not help.
+[ "$code" = 2 ] && exit 2
 # 5: no test selected in that phase.
 if [ "$(cat "$COUNT")" != 0 ] && [ "$(cat "$COUNT")" != "" ]; then
     echo "test.sh: the $(cat "$COUNT") serial test(s), alone"

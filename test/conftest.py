@@ -215,12 +215,12 @@ class _Phase:
     @pytest.hookimpl(trylast=True)
     def pytest_collection_modifyitems(self, config, items):
         """Keep PHASE's tests; write how many of them are ``serial``."""
-        serial = [item for item in items if 'serial' in item.keywords]
+        serial = [item for item in items if item.get_closest_marker('serial')]
         if os.environ.get('ORTHOGLIDE_SERIAL_COUNT'):
             Path(os.environ['ORTHOGLIDE_SERIAL_COUNT']).write_text(
                 str(len(serial)))
         kept = serial if PHASE == 'serial' else [
-            item for item in items if 'serial' not in item.keywords]
+            item for item in items if not item.get_closest_marker('serial')]
         config.hook.pytest_deselected(items=[
             item for item in items if item not in kept])
         items[:] = kept

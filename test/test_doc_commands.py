@@ -153,7 +153,7 @@ class Scratch:
         self.base = base
         self.folders = {}
 
-    def run(self, step, capsys):
+    def run(self, step, capfd):
         """Run ``step`` after the steps it needs; return its folder."""
         if step in self.folders:
             return self.folders[step]
@@ -165,7 +165,7 @@ class Scratch:
         (folder / 'doc' / 'programs').symlink_to(ROOT / 'doc' / 'programs')
         for file, writer in step.sources:
             if writer.line.startswith(TOOL):
-                source = self.run(writer, capsys) / file
+                source = self.run(writer, capfd) / file
                 (folder / file).parent.mkdir(parents=True, exist_ok=True)
                 copy = shutil.copytree if source.is_dir() else shutil.copy
                 copy(source, folder / file)
@@ -178,7 +178,7 @@ class Scratch:
             self._skip_a_recorded_log(step, folder, words)
             with contextlib.chdir(folder):
                 code = cli.main(words[1:])
-            _, err = capsys.readouterr()
+            _, err = capfd.readouterr()
             where = f'{step.document.name}:{step.number}: {step.line}'
             assert code == 0, (where, err)
             assert 'error' not in err, (where, err)
@@ -205,9 +205,9 @@ def scratch(tmp_path_factory):
 
 
 @pytest.mark.parametrize('step', list(tool_commands()))
-def test_tool_commands_run_as_written(scratch, capsys, step):
+def test_tool_commands_run_as_written(scratch, capfd, step):
     """After the earlier commands that write what it reads: exit 0."""
-    scratch.run(step, capsys)
+    scratch.run(step, capfd)
 
 
 @pytest.mark.parametrize('path, line, node, arguments, written',

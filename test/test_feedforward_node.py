@@ -140,9 +140,10 @@ def test_inputs_keep_pace_whatever_spins_the_node(graph, executor):
     With rmw_fastrtps a reader's QoS events and its data share one status
     condition: an executor waiting on the inputs' events would hide data
     from the input thread for 100 ms and more, and partial setpoints would
-    expire (about 1 in 1000 here).
+    expire (about 1 in 1000 here). A pairing timeout of 90 ms still sees
+    that, where the default 50 ms also saw this process descheduled.
     """
-    g = graph(executor=executor)
+    g = graph({'pairing_timeout': 0.09}, executor=executor)
     for k in range(1000):
         t = 0.002 * k
         g.probe.send(stamp_of(t), *paper_sample(t))

@@ -22,9 +22,9 @@ operations from the inputs to a force, each rounding once). With
 ``|F^-1|_2`` in the solve, the round-trip bound holds with a wide margin:
 the worst measured error is about 1e-15 of max |a|, some 1e-3 of the bound.
 Lagrange: the reference's Christoffel terms come from a central difference
-of ``M`` (``DM_RELATIVE = 1e-8`` of ``|dM/dq| |qd|^2``, derived in
+of ``M`` (``mechanics_reference.DM_RELATIVE`` of ``|dM/dq| |qd|^2``, derived in
 ``test_lagrange.py``), and everything else is exact to rounding
-(``REFERENCE_ROUNDING = 1e-12`` of each term, as there); ``M^-1``
+(its ``ROUNDING`` of each term); ``M^-1``
 amplifies both by ``|M^-1|_2``. At zero velocity there is no difference
 quotient and the comparison is to rounding.
 """
@@ -34,8 +34,9 @@ import math
 from hypothesis import given, settings, strategies as st
 from hypothesis_profiles import examples
 from mechanics_reference import (
-    batch_rows, cube_points, lagrange_forces, lambda_jacobian, mass_matrix,
-    OTHER_ROBOT_VALUES, potential_gradient, vectors)
+    batch_rows, cube_points, DM_RELATIVE, lagrange_forces, lambda_jacobian,
+    mass_matrix, OTHER_ROBOT_VALUES, potential_gradient,
+    ROUNDING as REFERENCE_ROUNDING, vectors)
 import numpy as np
 from orthoglide_ros.model.mechanics import (
     BATCH_CHUNK, forward_dynamics, forward_dynamics_batch, solve,
@@ -44,8 +45,6 @@ from orthoglide_ros.model.robot import Robot
 import pytest
 
 ROUNDING = 1e-14
-DM_RELATIVE = 1e-8
-REFERENCE_ROUNDING = 1e-12
 GRAVITIES = {'default': (0.0, 0.0, -9.81), 'zero': (0.0, 0.0, 0.0),
              'oblique': (2.0, -5.0, -7.5)}
 ROBOTS = {'paper': {}, 'other': OTHER_ROBOT_VALUES}

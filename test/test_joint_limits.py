@@ -72,6 +72,11 @@ def test_a_file_of_joint_limits(tmp_path):
     path.write_text('joint_limits:\n  slider_c:\n    has_effort_limits: true'
                     '\n    max_effort: 520.0\n')
     assert load_limits(path).effort[2] == 520.0
+    # Numbers as rcl reads a parameters file: an exponent without a dot.
+    for written, value in (('5e-1', 0.5), ('520', 520.0), ('.5', 0.5)):
+        path.write_text('joint_limits:\n  slider_c:\n    max_effort: '
+                        f'{written}\n')
+        assert load_limits(path).effort[2] == value, written
     for text, words in (('a: [', 'not valid YAML'),
                         ('robot: {}', 'no top-level joint_limits'),
                         ('joint_limits: &a {}\nx: *a', 'aliases')):

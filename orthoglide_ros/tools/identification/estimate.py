@@ -46,13 +46,12 @@ MAX_RELATIVE_STD = 10.0
 # excitation's 0.4 m/s) or a mass below 10 g hardly matters to forces of
 # tens to hundreds of N.
 RESOLUTION = {'kg': 0.01, 'N s/m': 1.0, 'N': 1.0}
-# The Stribeck speeds v_b searched (m/s): log-spaced STRIBECK_STEP apart
-# (12 speeds from 2 to 100 mm/s), from the
-# nominal robot's Coulomb smoothing speed friction_velocity (below it a
-# Stribeck excess is one more Coulomb switch) to the log's largest slider
-# speed (above it the excess is a Coulomb level less a term in v^2 that
-# the log cannot tell from a larger v_b); the best is refined between its
-# neighbours (stribeck_velocities).
+# The Stribeck speeds v_b searched (m/s): log-spaced STRIBECK_STEP apart (the
+# spacing of 12 speeds from 2 to 100 mm/s), from the nominal robot's Coulomb
+# smoothing speed friction_velocity (below it a Stribeck excess is one more
+# Coulomb switch) to the log's largest slider speed (above it the excess is a
+# Coulomb level less a term in v^2 that the log cannot tell from a larger
+# v_b); the best is refined between its neighbours (stribeck_velocities).
 STRIBECK_STEP = 50.0 ** (1.0 / 11.0)
 # The law is chosen by the RMS error on held-out parts of the log (FOLDS
 # contiguous blocks, each predicted from the others): a law with more
