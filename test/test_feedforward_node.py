@@ -132,6 +132,9 @@ def test_paper_trajectory(graph, form, executor):
     assert not any(core.rejected.values())
 
 
+# serial: its 90 ms pairing window lost setpoints beside a parallel
+# neighbour (the ros set with -n 2, three runs, 2026-12-05); alone, none.
+@pytest.mark.serial
 @pytest.mark.parametrize('executor', ['single', 'events'])
 def test_inputs_keep_pace_whatever_spins_the_node(graph, executor):
     """

@@ -75,6 +75,9 @@ def test_big_messages_do_not_starve_a_stream_on_the_same_input():
     assert int(result['rejected'].get('rejected malformed', 0)) >= 2, result
 
 
+# serial: the loop's stall verdicts failed beside a parallel neighbour (the
+# ros set with -n 2, three runs, 2026-12-05); alone, none.
+@pytest.mark.serial
 def test_stalled_process_never_makes_the_loop_saturate_or_race():
     result = harness.stall_resume()
     print(result)
@@ -113,6 +116,9 @@ def test_text_from_messages_never_makes_long_or_many_log_lines():
     assert int(counters['rejected measured malformed']) >= 400, counters
 
 
+# serial: its 0.2 s bound on an output gap failed beside a parallel
+# neighbour (the ros set with -n 2, three runs, 2026-12-05); alone, none.
+@pytest.mark.serial
 def test_departed_clients_pause_no_output_stream():
     result = harness.departed_clients()
     print(result)
