@@ -559,6 +559,25 @@ def rms_mm(run, start=0.0, end=math.inf):
     return float(np.sqrt(np.mean(norm[inside] ** 2)))
 
 
+def off_path_mm(run, direction, start=0.0, end=math.inf):
+    """
+    Return the RMS distance (mm) of ``run``'s platform from a straight path.
+
+    The path: the line along ``direction`` (3,) that the motion follows
+    (eq. (6)'s, along its target); from ``start`` to ``end`` s. The
+    error's component across the path, which timing does not make: a
+    sample late or early, a stall, a latency move the platform along its
+    path, and only a force the model misses (a weight, an inertia) pushes
+    it off.
+    """
+    along = np.asarray(direction, dtype=float)
+    along = along / np.linalg.norm(along)
+    inside = (run.times >= start) & (run.times < end)
+    error = run.position_error[inside]
+    across = error - np.outer(error @ along, along)
+    return float(np.sqrt(np.mean(np.sum(across ** 2, axis=1)))) * 1e3
+
+
 def robot_parameters(robot):
     """Return every ``robot.*`` parameter of ``robot`` (rclpy Parameters)."""
     return [Parameter(f'robot.{name}', value=value)
