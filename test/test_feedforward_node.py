@@ -298,7 +298,7 @@ def test_bad_inputs_rejected_counted_and_node_goes_on(graph):
     good('trajectory')
     expected = {'non_finite': 2, 'speed_limit': 1, 'acceleration_limit': 1,
                 'unreachable': 1, 'singular': 1, 'overflow': 0,
-                'force_limit': 0, 'frame': 1, 'orientation': 2, 'stamp': 3,
+                'velocity_limit': 0, 'force_limit': 0, 'frame': 1, 'orientation': 2, 'stamp': 3,
                 'malformed': 4, 'oversize': 0, 'unpaired': 1}
     assert set(expected) == set(REASONS)
     n = len(good_stamps)

@@ -84,7 +84,7 @@ def test_stalled_process_never_makes_the_loop_saturate_or_race():
     assert all(result.alive.values()), result
     for name, stall in result.stalls.items():
         assert stall.commands > 0, (name, stall)
-        assert stall.max_force < result.force_limit, (name, stall)
+        assert stall.max_force < result.max_effort, (name, stall)
         assert stall.max_speed <= 2.0 * result.peak_speed, (name, stall)
 
 
@@ -196,7 +196,7 @@ def test_a_trajectory_flood_never_saturates_and_a_normal_one_follows():
     A new joint trajectory every millisecond to the controller.
 
     Alternating targets 0 and 10 mm, 50 ms ahead, with the simulator as
-    plant: no command at force_limit, no slider faster than 0.5 m/s, and
+    plant: no command at the effort limit, no slider faster than 0.5 m/s, and
     the normal trajectory sent afterwards brings the robot home.
     """
     result = harness.trajectory_flood()

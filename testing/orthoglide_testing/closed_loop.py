@@ -64,7 +64,7 @@ from orthoglide_testing.processes import (node_executable,
 from orthoglide_testing.verdicts import ATTEMPTS, pass_spoiled_by
 
 from orthoglide_ros.model import mechanics, trajectory
-from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.robot import JOINT_NAMES, Robot
 from orthoglide_ros.cores.tracking_controller import PARAMETERS
 
 LOOP_RATE = 250.0       # Hz: setpoints, feedforward and commands
@@ -206,8 +206,9 @@ class ClosedLoop:
     after a timeout) and :attr:`exit_codes` and :attr:`stderr` keep what
     they returned. ``loop_rate`` and ``plant_rate`` in Hz; ``engine``: the
     simulator's (``builtin`` or ``mujoco``), ``mjcf_file`` its model file
-    (mujoco; '' builds it from the plant's robot); ``force_limit``: the
-    simulator's (N, each actuator; None: its default). ``realtime`` (default:
+    (mujoco; '' builds it from the plant's robot); ``max_effort``: the
+    simulator's drives' limit (N, each actuator's
+    ``joint_limits.<joint>.max_effort``; None: its default). ``realtime`` (default:
     where the OS grants it): the loop's nodes (the setpoint publisher's
     included) run every thread SCHED_FIFO NODE_PRIORITY (their
     ``thread_priority``) and this process, the recorder, SCHED_FIFO
@@ -216,7 +217,7 @@ class ClosedLoop:
 
     def __init__(self, context, loop_rate=LOOP_RATE, plant_rate=PLANT_RATE,
                  engine='builtin', mjcf_file='', realtime=REALTIME,
-                 force_limit=None):
+                 max_effort=None):
         self.context = context
         self.realtime = realtime
         self.node_args = realtime_args(realtime)
@@ -224,7 +225,7 @@ class ClosedLoop:
         self.plant_rate = plant_rate
         self.engine = engine
         self.mjcf_file = mjcf_file
-        self.force_limit = force_limit
+        self.max_effort = max_effort
         self.processes = {}
         self.exit_codes = {}
         self.stderr = {}
@@ -240,8 +241,10 @@ class ClosedLoop:
                           '-p', f'engine:={self.engine}'] + (
                               ['-p', f'mjcf_file:={self.mjcf_file}']
                               if self.mjcf_file else []) + (
-                              ['-p', f'force_limit:={float(self.force_limit)}']
-                              if self.force_limit else []),
+                              [arg for joint in JOINT_NAMES for arg in (
+                                  '-p', f'joint_limits.{joint}.max_effort:='
+                                  f'{float(self.max_effort)}')]
+                              if self.max_effort else []),
             'feedforward': [],
             'tracking_controller': [
                 '-r', 'joint_trajectory:=feedforward/joint_trajectory'],
