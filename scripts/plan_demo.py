@@ -10,7 +10,8 @@ core of
 duration (one Cartesian acceleration limit per axis, chosen so that the
 motion lasts as long). Both are sent as one Cartesian trajectory through
 the feedforward to the tracking controller, on the simulated robot in
-MuJoCo whose drives clip at 400 N (the simulator's ``force_limit``).
+MuJoCo whose drives clip at 400 N (the simulator's
+``joint_limits.<joint>.max_effort``).
 Prints, for each, the peak force the model asks of each drive against its
 limit, the share of the pass the drives clipped, and the contour error
 measured; writes a PNG: the path coloured by speed, and the forces against
@@ -129,7 +130,7 @@ def main(argv=None):
              tuple(timed)}
     results = {}
     try:
-        with harness.demo_loop(engine=args.engine, force_limit=LIMIT) as loop:
+        with harness.demo_loop(engine=args.engine, max_effort=LIMIT) as loop:
             for name, (t, p, v, a) in cases.items():
                 run = loop.run(as_motion(t, p, v, a), model=robot,
                                plant=robot, mode='trajectory')

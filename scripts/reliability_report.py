@@ -254,9 +254,9 @@ def _big_messages(r):
 def _stall_resume(r):
     worst_f = max(s.max_force for s in r.stalls.values())
     worst_v = max(s.max_speed for s in r.stalls.values())
-    return (worst_f < r.force_limit and worst_v <= 2 * r.peak_speed,
+    return (worst_f < r.max_effort and worst_v <= 2 * r.peak_speed,
             f'2 s SIGSTOP of each process of the closed loop: largest '
-            f'|command| {worst_f:.0f} N (limit {r.force_limit:.0f}), largest '
+            f'|command| {worst_f:.0f} N (limit {r.max_effort:.0f}), largest '
             f'|lambdadot| {worst_v:.3f} m/s (trajectory peak '
             f'{r.peak_speed:.3f}); per process '
             + ', '.join(f'{n} {s.max_force:.0f} N {s.max_speed:.3f} m/s'

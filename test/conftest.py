@@ -13,8 +13,10 @@ README's test command:
 - ``ROS_LOG_DIR``: a temporary directory, so tests leave no logs behind;
 - the hypothesis profile (:mod:`hypothesis_profiles`): ``default``, or
   ``thorough`` in the soak run;
-- the markers ``slow`` and ``serial`` from measured lists (SLOW, SERIAL),
-  and scripts/test.sh's phases (PHASE).
+- scripts/test.sh's phases (PHASE): the tests marked ``serial`` apart.
+
+The marks ``slow`` and ``serial`` are on the tests themselves, each with
+its measured reason beside it (setup.cfg lists the markers).
 
 It names the checkout the proving ground runs from
 (:func:`orthoglide_testing.use_checkout`, pytest's root directory).
@@ -156,31 +158,6 @@ def pytest_configure(config):
     orthoglide_testing.use_checkout(config.rootpath)
 
 
-# Tests of 1.5 s of CPU or more (measured serially: doc/measurements.md,
-# "Test suite"), marked ``slow``: -m "not ros and not slow" leaves them out
-# while editing. They stay in the pure set. (test_doc_commands.py marks its
-# own.)
-SLOW = (
-    'test_cli_identification.py::test_identify_validates_and_draws_in_one_step',
-    'test_cli_identification.py::test_identify_writes_a_parameters_file_the_tools_read',
-    'test_flake8.py::test_flake8',
-    'test_identification_not_the_model.py::test_plain_identify_then_batch_is_within_the_floor',
-    'test_layers.py::test_the_tool_works_without_rclpy',
-    'test_pep257.py::test_pep257',
-    'test_plan_motion.py::test_random_programs_keep_every_limit_on_the_path',
-)
-# Verdicts on a stream's timing or completeness against a fixed bound that
-# failed beside a parallel neighbour (three runs of the ``ros`` set with
-# -n 2: doc/measurements.md, "Test suite"), marked ``serial``: a file, or
-# file::test. scripts/test.sh runs them after the rest, alone.
-SERIAL = (
-    'test_feedforward_node.py::test_inputs_keep_pace_whatever_spins_the_node',
-    'test_flood.py',
-    'test_hostile_peers.py::test_departed_clients_pause_no_output_stream',
-    'test_hostile_peers.py::test_stalled_process_never_makes_the_loop_saturate_or_race',
-    'test_live_graph.py::test_the_one_host_profile_does_not_stall_when_participants_join',
-    'test_live_graph.py::test_two_hosts_with_the_deployment_recipes',
-)
 # scripts/test.sh's two phases: 'parallel' leaves the ``serial`` tests out,
 # 'serial' runs only them; their count goes to ORTHOGLIDE_SERIAL_COUNT.
 PHASE = os.environ.get('ORTHOGLIDE_TEST_PHASE')
@@ -189,17 +166,12 @@ PHASE = os.environ.get('ORTHOGLIDE_TEST_PHASE')
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     """
-    Mark SLOW and SERIAL (before -m selects); skip ``soak`` unless asked.
+    Skip ``soak`` unless asked.
 
     The soak tests are the long versions (10 s floods, 5 restarts):
     ``pytest -m soak`` or ``ORTHOGLIDE_SOAK=1`` runs them; the default run
     has a short version of each.
     """
-    for item in items:
-        names = (item.path.name, f'{item.path.name}::{item.originalname}')
-        for marker, listed in (('slow', SLOW), ('serial', SERIAL)):
-            if set(names) & set(listed):
-                item.add_marker(marker)
     if _soak(config):
         return
     skip = pytest.mark.skip(

@@ -10,6 +10,7 @@ import sys
 
 import pytest
 
+from orthoglide_ros.formats.params_file import ParametersFile
 from orthoglide_ros.model import mechanics, trajectory
 from cli_runs import assert_bad_input, HEADER, PNG_MAGIC, read_csv, run, write_trajectory
 from orthoglide_ros.model.robot import Robot
@@ -440,6 +441,37 @@ def test_batch_writes_a_joint_trajectory_ros_reads(tmp_path, capsys):
         ns = point.time_from_start.sec * 10**9 + \
             point.time_from_start.nanosec
         assert ns == round(times[k] * 1e9)
+
+
+@pytest.mark.parametrize('command', [
+    ['solve', '--position', '0', '0', '0', '--json'],
+    ['batch', '--format', 'joint_trajectory', '--input', 'IN', '--output',
+     'OUT'],
+    ['urdf', '--output', 'OUT'],
+])
+def test_params_is_read_once_per_command(tmp_path, capsys, monkeypatch,
+                                         command):
+    """The robot, the joint names: one reading of the --params file."""
+    reads = []
+    read = ParametersFile.read.__func__
+
+    def counted(cls, path):
+        reads.append(path)
+        return read(cls, path)
+    monkeypatch.setattr(ParametersFile, 'read', classmethod(counted))
+    params = tmp_path / 'params.yaml'
+    params.write_text('feedforward:\n  ros__parameters:\n'
+                      '    joint_names: [ja, jb, jc]\n'
+                      '    robot: {m5: 16.0}\n')
+    files = {'IN': write_trajectory(tmp_path / 'in.csv', ('t', 'x', 'y', 'z'),
+                                    [(0.0, 0.0, 0.0, 0.0)]),
+             'OUT': tmp_path / 'out'}
+    code, _, err = run(capsys, *[files.get(word, word) for word in command],
+                       '--params', params)
+    assert code == 0, err
+    assert reads == [str(params)]
+    if command[0] == 'batch':
+        assert 'joint_names: ["ja", "jb", "jc"]' in files['OUT'].read_text()
 
 
 @pytest.mark.parametrize('rows, words', [

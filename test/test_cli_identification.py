@@ -94,6 +94,7 @@ def test_excitation_writes_the_best_of_several_seeds(capsys, tmp_path):
     assert float(rows[123]['x']) == pytest.approx(p[0], rel=1e-12)
 
 
+@pytest.mark.slow     # 1.6-3.6 s of CPU, one process, 2026-12-06
 def test_identify_writes_a_parameters_file_the_tools_read(capsys, tmp_path):
     from orthoglide_ros.formats import params_file
     from orthoglide_ros.tools import identification
@@ -382,6 +383,7 @@ def test_identify_chooses_the_friction_law_or_takes_it(capsys, tmp_path):
     assert forced.friction_coulomb_negative != forced.friction_coulomb
 
 
+@pytest.mark.slow     # 2.2-5.9 s of CPU, one process, 2026-12-06
 def test_identify_validates_and_draws_in_one_step(capsys, tmp_path):
     log, _ = rough_log(tmp_path, 'rough.csv', 0, 20.0)
     other, _ = rough_log(tmp_path, 'other.csv', 3, 8.0)

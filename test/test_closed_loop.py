@@ -16,8 +16,13 @@ platform centre's, measured minus the trajectory at the measurement's stamp
   heavier than the model.
 - A 5 kg payload picked up halfway through the pass: with the feedforward
   told at that instant (its ``robot.payload`` set at run time, as the
-  simulator's is) the error after it stays at least 5x below the error
-  with the feedforward not told (measured 0.09 against 2.7 mm RMS).
+  simulator's is) the platform keeps to its path after it at least 5x
+  better than with the feedforward not told. The measure is the distance
+  from the path (eq. (6) is a straight line), not the tracking error: what
+  is left of the error with the model told is timing, along the path
+  (a latency, a descheduled process), and grows with the machine's load,
+  while the unmodelled weight sags the platform across it too (figures:
+  doc/measurements.md, "Closed loop").
 - A process stalled longer than the command timeout spoils a real-time
   pass now and then (the plant braked or skipped simulated time, or the
   controller held): such a pass is run again, three passes at most
@@ -29,6 +34,7 @@ import sys
 import pytest
 
 from node_checks import needs_scripts
+from orthoglide_ros.model.trajectory import PAPER_TARGET
 
 pytest.importorskip('rclpy')
 harness = pytest.importorskip('orthoglide_testing.closed_loop')
@@ -90,12 +96,14 @@ def test_joint_trajectory_ten_times_better_like_the_stream(closed_loop):
 def test_a_payload_picked_up_the_feedforward_is_told_tracks_5x_better(
         closed_loop):
     at = 0.5 * harness.TRAJECTORIES['paper'].duration
-    after = {}
+    off_path, after = {}, {}
     for told in (False, True):
         run = closed_loop.run_unspoiled('paper', feedforward=True,
                                         pickup=(at, 5.0, told))
         report(run)
+        off_path[told] = harness.off_path_mm(run, PAPER_TARGET, at)
         after[told] = harness.rms_mm(run, at)
-    print(f'after the pick-up: told {after[True]:.4f} mm, not told '
-          f'{after[False]:.4f} mm', file=sys.stderr)
-    assert after[False] >= 5.0 * after[True]
+    print(f'after the pick-up, off the path: told {off_path[True]:.4f} mm, '
+          f'not told {off_path[False]:.4f} mm (tracking error {after[True]:.4f}'
+          f' and {after[False]:.4f} mm)', file=sys.stderr)
+    assert off_path[False] >= 5.0 * off_path[True]

@@ -1,9 +1,10 @@
 """
 A step the engine cannot integrate is reported, never shown as physics.
 
-Masses of 1e-6 kg and ``force_limit`` 1e6 N under +-1e6 N commands make
-MuJoCo flag ``Nan, Inf or huge value in QACC``, reset its own state to
-qpos0 and write ``MUJOCO_LOG.TXT`` into the working directory, every step.
+Masses of 1e-6 kg and drives of 1e6 N (``max_effort``) under +-1e6 N
+commands make MuJoCo flag ``Nan, Inf or huge value in QACC``, reset its
+own state to qpos0 and write ``MUJOCO_LOG.TXT`` into the working
+directory, every step.
 The rule (one for both engines, doc/simulator.md): a plant raises
 :class:`plant.Diverged` (MuJoCo: any warning of the step in
 ``mjData.warning``; the builtin: a stage or end state that is not finite),
@@ -19,6 +20,7 @@ import os
 import pytest
 
 from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.parameters import joint_limit_values
 from orthoglide_ros.cores.simulator import (DIVERGED, HELD, PARAMETERS,
                                             RUNNING, Simulator)
 from orthoglide_ros.cores.status import ERROR
@@ -164,7 +166,8 @@ def diverging(engine):
         needs_mujoco()
         changes = {f'robot.{k}': v for k, v in LIGHT.items()}
         sim = Simulator(PARAMETERS.parse(
-            {'engine': 'mujoco', 'force_limit': 1e6, **changes}))
+            {'engine': 'mujoco', **joint_limit_values('max_effort', 1e6),
+             **changes}))
         return sim, PUSH
     sim = Simulator(PARAMETERS.parse({}))
     sim.plant.velocity = WILD

@@ -124,8 +124,8 @@ def tool_commands():
         for step in tool_steps(path):
             if step.line.startswith(TOOL):
                 words = step.line.split()
-                # 1.5 s of CPU or more (as conftest.SLOW): a GIF, an
-                # optimisation.
+                # 1.5 s of CPU or more, one process, 2026-12-06: a GIF
+                # (animate 5.0 s), an optimisation (excitation 5.4 s).
                 slow = words[1] == 'animate' or '--optimize' in words
                 yield pytest.param(
                     step, id=f'{path.name}:{step.number} {words[1]}',

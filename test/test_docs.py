@@ -45,6 +45,14 @@ references,
 and git keeps how they came. An upstream issue is named with its project
 (`` Fast-DDS issue 6535 ``, `` issue #1615 ``).
 
+**Layout.** README.md's Layout table is the tree's: each row names its
+folders in its first cell; every ``<name>.py`` (or ``<pattern>.py``, a
+``<placeholder>`` standing for any name) and ``<name>/`` in backticks in
+its second cell exists there (a row of ``orthoglide_ros/``: in that folder
+or below it; another: anywhere in the repository), and every module of the
+package (but ``__init__.py`` and ``__main__.py``) is named in its folder's
+row.
+
 **Text.** README.md has at most 250 lines, and no page speaks of the
 machines the project was developed on ("these machines") or links to the
 development-only ``shared/`` directory.
@@ -306,6 +314,85 @@ def test_slug_follows_github():
         'the-orthoglide-command-line-tool'
     assert slug('`--params`') == '--params'
     assert slug('Inputs, pairing and time') == 'inputs-pairing-and-time'
+
+
+# Layout ----------------------------------------------------------------------
+PACKAGE = 'orthoglide_ros'
+# A file or folder the Layout table names: `plant.py`, `<node>_node.py`, `cli/`.
+LAYOUT_NAME = re.compile(r'`([\w<>.-]+(?:\.\w+|/))`')
+
+
+def layout_rows():
+    """Return ``[(folders, text)]``: the README's Layout table, row by row."""
+    layout = read(README).split('\n## Layout\n', 1)[1].split('\n## ', 1)[0]
+    (header, rows), = tables(layout)
+    assert header[:2] == ['path', 'what'], header
+    return [(re.findall(r'`([^`]+/)`', cells[0]), cells[1])
+            for cells in rows]
+
+
+def name_pattern(name):
+    """Return the regular expression of a named file (``<x>``: any name)."""
+    return re.compile(''.join('[^/]+' if part.startswith('<') else
+                              re.escape(part) for part in
+                              re.split(r'(<[^>]*>)', name.rstrip('/'))))
+
+
+def layout_misses(rows, files):
+    """
+    Yield what the Layout ``rows`` name and ``files`` (paths) do not hold.
+
+    A name of a row of the package holds in the row's folders or below
+    them; of another row, anywhere; then every module of the package
+    missing from its folder's row.
+    """
+    folders = {os.path.dirname(f) + '/' for f in files}
+    folders |= {'/'.join(f.split('/')[:k]) + '/' for f in folders
+                for k in range(1, f.count('/'))}
+    for first, text in rows:
+        for folder in first:
+            if folder not in folders:
+                yield f'{folder} (no such folder)'
+        package = all(f.startswith(PACKAGE + '/') for f in first)
+        for name in LAYOUT_NAME.findall(text):
+            pattern = name_pattern(name)
+            where = [p for p in (folders if name.endswith('/') else files)
+                     if not package or p.startswith(tuple(first))]
+            if not any(pattern.fullmatch(p.rstrip('/').rsplit('/', 1)[-1])
+                       for p in where):
+                yield f'{name} (not in {", ".join(first)})'
+    for module in files:
+        if not (module.startswith(PACKAGE + '/') and module.endswith('.py')) \
+                or module.endswith(('/__init__.py', '/__main__.py')):
+            continue
+        row = [text for first, text in rows
+               if any(module.startswith(f) for f in first)]
+        stem = module.rsplit('/', 1)[1]
+        if not any(name_pattern(n).fullmatch(stem)
+                   for text in row for n in LAYOUT_NAME.findall(text)):
+            yield f'{module} (not named in its row)'
+
+
+def test_the_readme_layout_is_the_tree():
+    files = [f for f in repository_files()
+             if '__pycache__' not in f and '.egg-info' not in f]
+    missing = list(layout_misses(layout_rows(), files))
+    assert not missing, 'README.md, Layout: ' + '; '.join(missing)
+
+
+def test_layout_misses_are_found():
+    files = ['orthoglide_ros/model/plant.py', 'orthoglide_ros/model/urdf.py',
+             'orthoglide_ros/ros/feedforward_node.py',
+             'orthoglide_ros/tools/cli/common.py', 'scripts/test.sh']
+    rows = [(['orthoglide_ros/model/'], '`plant.py` (RK4), `gone.py`'),
+            (['orthoglide_ros/ros/'], '`<node>_node.py` for each core'),
+            (['orthoglide_ros/tools/'], '`cli/` (`common.py`), `scripts/`'),
+            (['scripts/', 'nowhere/'], '`test.sh`, `plant.py`')]
+    assert sorted(layout_misses(rows, files)) == [
+        'gone.py (not in orthoglide_ros/model/)',
+        'nowhere/ (no such folder)',
+        'orthoglide_ros/model/urdf.py (not named in its row)',
+        'scripts/ (not in orthoglide_ros/tools/)']
 
 
 # Text ------------------------------------------------------------------------

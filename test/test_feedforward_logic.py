@@ -16,7 +16,8 @@ from orthoglide_ros.cores.feedforward import (Feedforward, INPUTS, MAX_PENDING,
                                               PARAMETERS, REASONS)
 from orthoglide_ros.cores.setpoint_rules import ORIENTATION_TOLERANCE
 from orthoglide_ros.cores.inputs import Rejected
-from orthoglide_ros.cores.parameters import ROBOT_SPECS
+from orthoglide_ros.cores.parameters import (field, joint_limit_values,
+                                             ROBOT_SPECS)
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.trajectory import paper_sample
 
@@ -342,15 +343,39 @@ def test_motion_bounds_are_the_parameters(which, bound):
              lambda: complete(ff, (2, 0), sample, 0.0))
 
 
-def test_no_force_beyond_max_force_is_computed():
-    """A setpoint whose force exceeds max_force is refused, not published."""
+def test_no_force_beyond_max_effort_is_computed():
+    """A setpoint whose force exceeds max_effort is refused, not published."""
     position = SAMPLES[0][0]
     largest = max(abs(f) for f in mechanics.solve(Robot(), position).force)
-    ff = core(max_force=largest * 1.001)
+    ff = core(**joint_limit_values('max_effort', largest * 1.001))
     assert complete(ff, (1, 0), (position, ZERO, ZERO), 0.0) is not None
     error = rejected(ff, 'force_limit', lambda: complete(
         ff, (2, 0), (position, ZERO, (0.0, 0.0, 5.0)), 0.0))
-    assert 'max_force' in str(error) and ff.computed == 1
+    assert 'max_effort' in str(error) and ff.computed == 1
+
+
+def test_no_slider_faster_than_max_velocity_is_computed():
+    """A setpoint whose |lambdadot| exceeds max_velocity is refused."""
+    position = SAMPLES[0][0]
+    velocity = (0.1, 0.0, 0.0)
+    speeds = mechanics.solve(Robot(), position, velocity).lambdadot
+    ff = core(**joint_limit_values('max_velocity', [
+        abs(speeds[0]) * 1.001, None, None]))
+    assert complete(ff, (1, 0), (position, velocity, ZERO), 0.0) is not None
+    error = rejected(ff, 'velocity_limit', lambda: complete(
+        ff, (2, 0), (position, (0.11, 0.0, 0.0), ZERO), 0.0))
+    assert 'joint_limits.slider_a.max_velocity' in str(error)
+    assert ff.rejected['velocity_limit'] == 1 and ff.computed == 1
+
+
+def test_the_retired_limits_name_their_new_key():
+    for old, new in (('velocity_limit', 'max_velocity'),
+                     ('force_limit', 'max_effort'),
+                     ('max_force', 'max_effort')):
+        with pytest.raises(ValueError, match=(
+                f'^{old}: no longer a parameter; use joint_limits.<joint>.'
+                f'{new} ')):
+            settings(**{old: [1.0] * 3 if old != 'max_force' else 1.0})
 
 
 def test_rejection_order_frame_then_orientation_then_mechanics():
@@ -500,10 +525,19 @@ def test_a_payload_set_at_run_time_is_a_heavier_platform_next_setpoint():
 # Settings --------------------------------------------------------------------
 def test_default_settings():
     s = PARAMETERS.parse(PARAMETERS.defaults())
+    limits = {}
+    for joint in ('slider_a', 'slider_b', 'slider_c'):
+        limits.update({f'joint_limits__{joint}__has_velocity_limits': False,
+                       f'joint_limits__{joint}__max_velocity': 0.0,
+                       f'joint_limits__{joint}__has_effort_limits': True,
+                       f'joint_limits__{joint}__max_effort': 10000.0})
     assert s == PARAMETERS.Settings(
-        Robot(), ('slider_a', 'slider_b', 'slider_c'), 'base_link', 0.0, 0.1,
-        0.05, mechanics.DEFAULT_SINGULARITY_MARGIN, False, (0.0, 0.0, 0.0),
-        (0.0, 0.0, 0.0), 5.0, 100.0, 10000.0, 0, (), False)
+        robot=Robot(), joint_names=('slider_a', 'slider_b', 'slider_c'),
+        base_frame='base_link', rate_hz=0.0, setpoint_timeout=0.1,
+        pairing_timeout=0.05,
+        singularity_margin=mechanics.DEFAULT_SINGULARITY_MARGIN,
+        pose_only=False, max_speed=5.0, max_acceleration=100.0, **limits,
+        thread_priority=0, cpu_affinity=(), lock_memory=False)
     assert PARAMETERS.parse({}) == s
     assert s.robot.m4 == s.robot.m2 and s.robot.m6 == s.robot.m3
 
@@ -513,7 +547,8 @@ def test_spec_table():
     assert len(names) == len(set(names))
     assert [s.name for s in ROBOT_SPECS] == [
         'robot.' + n for n in Robot.parameter_names()]
-    assert {s.name for s in PARAMETERS.own_specs} == set(PARAMETERS.Settings._fields) - {'robot'}
+    assert {field(s.name) for s in PARAMETERS.own_specs} == \
+        set(PARAMETERS.Settings._fields) - {'robot'}
     for spec in PARAMETERS.specs:
         assert spec.type in ('double', 'double_array', 'integer',
                              'integer_array', 'string', 'string_array',

@@ -132,6 +132,9 @@ def test_paper_trajectory(graph, form, executor):
     assert not any(core.rejected.values())
 
 
+# serial: its 90 ms pairing window lost setpoints beside a parallel
+# neighbour (the ros set with -n 2, three runs, 2026-12-05); alone, none.
+@pytest.mark.serial
 @pytest.mark.parametrize('executor', ['single', 'events'])
 def test_inputs_keep_pace_whatever_spins_the_node(graph, executor):
     """
@@ -295,7 +298,7 @@ def test_bad_inputs_rejected_counted_and_node_goes_on(graph):
     good('trajectory')
     expected = {'non_finite': 2, 'speed_limit': 1, 'acceleration_limit': 1,
                 'unreachable': 1, 'singular': 1, 'overflow': 0,
-                'force_limit': 0, 'frame': 1, 'orientation': 2, 'stamp': 3,
+                'velocity_limit': 0, 'force_limit': 0, 'frame': 1, 'orientation': 2, 'stamp': 3,
                 'malformed': 4, 'oversize': 0, 'unpaired': 1}
     assert set(expected) == set(REASONS)
     n = len(good_stamps)

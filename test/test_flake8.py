@@ -9,6 +9,7 @@ ament_flake8 = pytest.importorskip('ament_flake8.main')
 
 @pytest.mark.flake8
 @pytest.mark.linter
+@pytest.mark.slow     # 9.4-12.4 s of CPU, one process, 2026-12-06
 def test_flake8(tmp_path):
     """
     The code follows ROS 2's flake8 rules.

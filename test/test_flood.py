@@ -24,7 +24,10 @@ from orthoglide_testing import reliability as harness  # noqa: E402
 SHORT = 2.5         # s of flood / stream in the default run
 FULL = 10.0         # s in the soak run (the target's)
 RATE = 1000         # Hz: half of what the node sustains (bench_node.py)
-pytestmark = [pytest.mark.ros, needs_scripts()]
+# serial: a flood takes a core, and the bounds (100 ms of input history,
+# diagnostics each second, answers within 2 s) failed beside a parallel
+# neighbour (the ros set with -n 2, three runs, 2026-12-05); alone, none.
+pytestmark = [pytest.mark.ros, pytest.mark.serial, needs_scripts()]
 
 
 def check(result, **which):

@@ -44,6 +44,7 @@ from trajectory_msgs.msg import (MultiDOFJointTrajectory,
 from orthoglide_ros.formats import cdr
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.cores.feedforward import INPUTS
+from orthoglide_ros.cores.parameters import joint_limit
 from orthoglide_ros.cores.setpoint_rules import ORIENTATION_TOLERANCE
 from orthoglide_ros.ros.feedforward_node import FeedforwardNode
 
@@ -180,8 +181,12 @@ class Model:
                                        settings.singularity_margin)
         except mechanics.WorkspaceError as error:
             return self.reject(error.reason)
-        if max(abs(f) for f in solution.force) > settings.max_force:
-            return self.reject('force_limit')
+        for reason, values, key in (
+                ('velocity_limit', solution.lambdadot, 'max_velocity'),
+                ('force_limit', solution.force, 'max_effort')):
+            if any(abs(v) > limit for v, limit in zip(
+                    values, joint_limit(settings, key))):
+                return self.reject(reason)
         return ('output', stamp, solution)
 
     def flush(self):

@@ -75,13 +75,16 @@ def test_big_messages_do_not_starve_a_stream_on_the_same_input():
     assert int(result['rejected'].get('rejected malformed', 0)) >= 2, result
 
 
+# serial: the loop's stall verdicts failed beside a parallel neighbour (the
+# ros set with -n 2, three runs, 2026-12-05); alone, none.
+@pytest.mark.serial
 def test_stalled_process_never_makes_the_loop_saturate_or_race():
     result = harness.stall_resume()
     print(result)
     assert all(result.alive.values()), result
     for name, stall in result.stalls.items():
         assert stall.commands > 0, (name, stall)
-        assert stall.max_force < result.force_limit, (name, stall)
+        assert stall.max_force < result.max_effort, (name, stall)
         assert stall.max_speed <= 2.0 * result.peak_speed, (name, stall)
 
 
@@ -113,6 +116,9 @@ def test_text_from_messages_never_makes_long_or_many_log_lines():
     assert int(counters['rejected measured malformed']) >= 400, counters
 
 
+# serial: its 0.2 s bound on an output gap failed beside a parallel
+# neighbour (the ros set with -n 2, three runs, 2026-12-05); alone, none.
+@pytest.mark.serial
 def test_departed_clients_pause_no_output_stream():
     result = harness.departed_clients()
     print(result)
@@ -190,7 +196,7 @@ def test_a_trajectory_flood_never_saturates_and_a_normal_one_follows():
     A new joint trajectory every millisecond to the controller.
 
     Alternating targets 0 and 10 mm, 50 ms ahead, with the simulator as
-    plant: no command at force_limit, no slider faster than 0.5 m/s, and
+    plant: no command at the effort limit, no slider faster than 0.5 m/s, and
     the normal trajectory sent afterwards brings the robot home.
     """
     result = harness.trajectory_flood()

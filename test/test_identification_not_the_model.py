@@ -380,6 +380,7 @@ def rms(error):
     return np.sqrt(np.mean(np.square(error), axis=0))
 
 
+@pytest.mark.slow     # 2.4-3.2 s of CPU per seed, one process, 2026-12-06
 @pytest.mark.parametrize('seed', SEEDS)
 def test_plain_identify_then_batch_is_within_the_floor(
         capsys, tmp_path, seed):

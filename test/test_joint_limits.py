@@ -98,4 +98,8 @@ def test_parameters_and_the_config_file_give_the_paper_robots_limits():
     for field in ('effort', 'velocity', 'acceleration', 'jerk'):
         assert np.array_equal(getattr(from_config, field),
                               getattr(paper, field)), field
-    assert limits_from_params_file(CONFIG, 'simulator') is None
+    assert limits_from_params_file(CONFIG, 'mechanism_state_publisher') is None
+    # The simulator's drives: the same form, their own values.
+    drives = limits_from_params_file(CONFIG, 'simulator')
+    assert list(drives.effort) == [1000.0] * 3
+    assert not np.isfinite(drives.velocity).any()

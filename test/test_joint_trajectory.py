@@ -53,13 +53,14 @@ def graph():
     """
     Run the installed feedforward: named joints, two limits.
 
-    B's force limit is 40 N (the paper's points need up to 35.9 N), C's
+    B's effort limit is 40 N (the paper's points need up to 35.9 N), C's
     velocity limit 0.25 m/s (they need up to 0.195 m/s).
     """
     with Nodes() as nodes, Peer() as peer:
         nodes.start('feedforward', '-p', f'joint_names:={NAMES}',
-                    '-p', 'force_limit:=[0.0, 40.0, 0.0]',
-                    '-p', 'velocity_limit:=[0.0, 0.0, 0.25]')
+                    '-p', 'joint_limits.slider_b.max_effort:=40.0',
+                    '-p', 'joint_limits.slider_c.has_velocity_limits:=true',
+                    '-p', 'joint_limits.slider_c.max_velocity:=0.25')
         pub = peer.publisher(MultiDOFJointTrajectory, 'cartesian_trajectory')
         out = peer.record('feedforward/joint_trajectory', JointTrajectory,
                           depth=100)

@@ -136,6 +136,7 @@ def test_the_hook_refuses_rclpy():
     assert result.returncode != 0 and 'refused' in result.stderr
 
 
+@pytest.mark.slow     # 8.1 s of CPU (its interpreters), one process, 2026-12-06
 def test_the_tool_works_without_rclpy(tmp_path):
     from cli_runs import identification_log
     source, _ = identification_log(tmp_path, duration=20.0)

@@ -45,6 +45,9 @@ def show(result):
 PLAIN_ROUNDS = 3    # rounds of 8 joins on plain settings to see a stall
 
 
+# serial: beside a parallel neighbour the profile's run showed 1 stall where
+# 0 is the bar (a whole-suite run with -n 2, 2026-12-05); alone, 0.
+@pytest.mark.serial
 def test_the_one_host_profile_does_not_stall_when_participants_join():
     profile = show(live.in_namespace('joins'))
     # The stall it replaces shows on plain settings (the test can fail).
@@ -85,6 +88,10 @@ SEVERAL_HOSTS = {
 }
 
 
+# serial: beside a parallel neighbour 1,203 of 1,245 messages crossed the
+# veth link where all are the bar (a whole-suite run with -n 2,
+# 2026-12-05); alone, all.
+@pytest.mark.serial
 @pytest.mark.parametrize('recipe', sorted(SEVERAL_HOSTS))
 def test_two_hosts_with_the_deployment_recipes(recipe):
     with netns.pair() as (a, b):

@@ -230,6 +230,7 @@ def limit_sets(draw):
     return limits_from_mapping(entries)
 
 
+@pytest.mark.slow     # 3.1-3.6 s of CPU, one process, 2026-12-06
 @settings(max_examples=8, deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(programs(), limit_sets())

@@ -15,7 +15,8 @@ from orthoglide_ros.cores import simulator
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.cores.inputs import Rejected
-from orthoglide_ros.cores.parameters import ROBOT_SPECS
+from orthoglide_ros.cores.parameters import (joint_limit, joint_limit_values,
+                                             ROBOT_SPECS)
 from orthoglide_ros.model.plant import rk4_step
 from orthoglide_ros.cores.simulator import (
     COMMAND_REASONS, HELD, PARAMETERS, RUNNING, Simulator, STOPPED)
@@ -29,6 +30,12 @@ INF = float('inf')
 DT = 1e-3           # s: one step at the default rate_hz
 HOLD = mechanics.solve(Robot(), ZERO).force     # holds the weight at home
 START = (0.05, -0.03, 0.02)     # m: an initial position off home
+EFFORT = 'joint_limits.slider_a.max_effort'
+
+
+def limits(value):
+    """Return the parameters of the drives' limit: ``value`` N each."""
+    return joint_limit_values('max_effort', value)
 
 
 def settings(**changes):
@@ -69,8 +76,11 @@ def test_spec_table_is_the_robot_table_plus_the_simulator_contract():
     assert SIMULATOR_SPECS[:len(ROBOT_SPECS)] == ROBOT_SPECS
     own = [s.name for s in SIMULATOR_SPECS[len(ROBOT_SPECS):]]
     assert own == ['rate_hz', 'publish_rate_hz', 'initial_position',
-                   'command_timeout',
-                   'force_limit', 'singularity_margin', 'joint_names',
+                   'command_timeout'] + [
+        f'joint_limits.{joint}.{key}'
+        for joint in ('slider_a', 'slider_b', 'slider_c')
+        for key in ('has_effort_limits', 'max_effort')] + [
+                   'singularity_margin', 'joint_names',
                    'base_frame', 'engine', 'mjcf_file', 'thread_priority',
                    'cpu_affinity', 'lock_memory']
     for spec in SIMULATOR_SPECS:
@@ -87,7 +97,7 @@ def test_default_settings():
     assert s.publish_rate_hz == 0.0     # every step
     assert s.initial_position == ZERO
     assert s.command_timeout == 0.1
-    assert s.force_limit == 1000.0
+    assert joint_limit(s, 'max_effort') == (1000.0,) * 3
     assert s.singularity_margin == mechanics.DEFAULT_SINGULARITY_MARGIN
     assert s.joint_names == ('slider_a', 'slider_b', 'slider_c')
     assert s.base_frame == 'base_link'
@@ -104,7 +114,8 @@ def test_default_settings():
     ('initial_position', [0.0, 0.0]), ('initial_position', [0, 0, 0]),
     ('initial_position', [NAN, 0.0, 0.0]), ('initial_position', 0.0),
     ('command_timeout', 0.0), ('command_timeout', -1.0),
-    ('force_limit', 0.0), ('force_limit', -5.0), ('force_limit', INF),
+    (EFFORT, 0.0), (EFFORT, -5.0), (EFFORT, INF), (EFFORT, 1000),
+    ('force_limit', 1000.0),
     ('singularity_margin', 0.0), ('singularity_margin', 1.0),
     ('joint_names', ['a', 'a', 'b']), ('joint_names', ['a', 'b']),
     ('joint_names', ['a', 'b', '']), ('base_frame', 5),
@@ -213,13 +224,13 @@ def test_timeout_brakes_to_held_with_zero_velocity():
     assert (tick.state, tick.position) == (RUNNING, position)
 
 
-@pytest.mark.parametrize('force_limit, force', [
+@pytest.mark.parametrize('limit, force', [
     (1000.0, (1000.0, 0.0, 0.0)),       # drives leg B towards its limit
     (1.0e6, (1.0e6, -1.0e6, 1.0e6)),    # far out in one step
 ])
-def test_stopped_on_a_step_into_the_singular_region(force_limit, force):
+def test_stopped_on_a_step_into_the_singular_region(limit, force):
     """A refused step freezes the last good state, velocity 0, says why."""
-    sim = core(force_limit=force_limit)
+    sim = core(**limits(limit))
     sim.command(force, 0.0)
     previous = sim.plant.position
     for k in range(1, 2000):
@@ -264,9 +275,9 @@ def test_reset_starts_over_and_applies_the_pending_plant():
     assert sim.stop_reason is None and sim.stop_message is None
     sim.command(HOLD, 100.0)
     assert sim.state == RUNNING
-    # Plant parameters wait for the reset; force_limit applies at once.
+    # Plant parameters wait for the reset; the drives' limits at once.
     heavy = Robot(m5=20.0)
-    new = settings(initial_position=list(START), force_limit=100.0,
+    new = settings(initial_position=list(START), **limits(100.0),
                    **{'robot.m5': 20.0})
     sim.configure(new)
     assert sim.pending_reset
@@ -277,7 +288,7 @@ def test_reset_starts_over_and_applies_the_pending_plant():
     assert 'applied' in message and not sim.pending_reset
     assert sim.plant.robot == heavy and sim.plant.position == START
     assert sim.state == HELD
-    sim.configure(settings(initial_position=list(START), force_limit=50.0,
+    sim.configure(settings(initial_position=list(START), **limits(50.0),
                            **{'robot.m5': 20.0}))
     assert not sim.pending_reset
 
@@ -303,8 +314,8 @@ def test_a_payload_is_picked_up_at_the_next_step_not_at_reset():
 
 
 def test_clipping_applied_and_counted():
-    """A force beyond force_limit is clipped per actuator; steps counted."""
-    sim = core(force_limit=200.0, initial_position=list(START))
+    """A force beyond max_effort is clipped per actuator; steps counted."""
+    sim = core(**limits(200.0), initial_position=list(START))
     command = (-500.0, 150.0, 256.0)
     ticks = run_steps(sim, command, 3)
     clipped = (-200.0, 150.0, 200.0)
@@ -313,6 +324,14 @@ def test_clipping_applied_and_counted():
     assert sim.clipped == 3
     run_steps(sim, (1.0, 2.0, 199.0), 2, start=1.0)
     assert sim.clipped == 3
+
+
+def test_each_drive_its_own_limit_or_none():
+    """Per actuator: 100 N on A, 300 N on B, no limit on C (its flag off)."""
+    sim = core(**limits([100.0, 300.0, INF]), initial_position=list(START))
+    command = (-500.0, 500.0, 5000.0)
+    ticks = run_steps(sim, command, 1)
+    assert ticks[0].effort == (-100.0, 300.0, 5000.0) and sim.clipped == 1
 
 
 @pytest.mark.parametrize('command, reason', [

@@ -412,7 +412,7 @@ def test_joint_commands_by_name_like_topic_based_ros2_control(graph):
 
 
 def test_parameter_changes_live_and_at_reset(graph):
-    """force_limit applies at once, robot.* at ~/reset, bad ones refused."""
+    """joint_limits apply at once, robot.* at ~/reset, bad ones refused."""
     g = graph()
     node = g.node
     results = node.set_parameters([Parameter('rate_hz', value=-1.0)])
@@ -421,7 +421,8 @@ def test_parameter_changes_live_and_at_reset(graph):
                                              value=[0.9, 0.0, 0.0])])
     assert not results[0].successful
     assert 'initial_position' in results[0].reason
-    results = node.set_parameters([Parameter('force_limit', value=100.0),
+    results = node.set_parameters([Parameter(
+        'joint_limits.slider_c.max_effort', value=100.0),
                                    Parameter('robot.m5', value=20.0),
                                    Parameter('rate_hz', value=500.0)])
     assert all(r.successful for r in results)
@@ -470,7 +471,7 @@ def test_process_mujoco_divergence_is_an_error_and_publishes_nothing(
     """
     Under absurd masses and forces MuJoCo diverges; the node says so.
 
-    ``engine:=mujoco``, every mass 1e-6 kg, ``force_limit`` 1e6 N, +-1e6 N
+    ``engine:=mujoco``, every mass 1e-6 kg, each ``max_effort`` 1e6 N, +-1e6 N
     commands every 10 ms, the process in an empty working directory:
     diagnostics ERROR ``diverged: ...`` with MuJoCo's reason, no step
     counted, no state published from the push on (none ever with its
@@ -479,9 +480,11 @@ def test_process_mujoco_divergence_is_an_error_and_publishes_nothing(
     """
     from orthoglide_testing.hostile.peer import Peer
     light = [arg for i in range(1, 7) for arg in ('-p', f'robot.m{i}:=1e-6')]
+    limits = [arg for joint in ('slider_a', 'slider_b', 'slider_c')
+              for arg in ('-p', f'joint_limits.{joint}.max_effort:=1e6')]
     proc = start_node_process(
-        ['--ros-args', '-p', 'engine:=mujoco', '-p', 'force_limit:=1e6',
-         *light], command=simulator_command(), cwd=str(tmp_path))
+        ['--ros-args', '-p', 'engine:=mujoco', *limits, *light],
+        command=simulator_command(), cwd=str(tmp_path))
     try:
         with Peer() as peer:
             states = peer.record('joint_states', JointState)

@@ -20,6 +20,7 @@ from orthoglide_ros.cores import (
     tracking_controller,
 )
 from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.parameters import joint_limit_values
 from orthoglide_ros.cores.status import ERROR, OK, WARN
 from orthoglide_ros.model.trajectory import paper_sample
 
@@ -132,7 +133,7 @@ def test_simulator_held_running_timed_out():
 
 
 def test_simulator_stopped_is_error_until_reset():
-    sim = sim_core(force_limit=1.0e6)
+    sim = sim_core(**joint_limit_values('max_effort', 1.0e6))
     sim.command([0.0, 0.0, 1.0e6], 0.0)
     for k in range(1, 2000):
         if sim.tick(k * 1e-4).event == 'stopped':

@@ -5,8 +5,7 @@ Each test process holds a ROS domain of its own: one of the session
 domains (odd, so that the neighbour and namespace domains the tests use
 are never another session's), its lock file held while the process lives;
 processes started side by side, as pytest-xdist starts its workers, take
-different domains. The measured lists of ``slow`` and ``serial`` tests
-name tests that exist (a renamed test would silently lose its mark).
+different domains.
 """
 
 import fcntl
@@ -15,7 +14,7 @@ from pathlib import Path
 import subprocess
 import sys
 
-from conftest import DOMAIN_LOCKS, SERIAL, SESSION_DOMAINS, SLOW
+from conftest import DOMAIN_LOCKS, SESSION_DOMAINS
 import pytest
 
 HERE = Path(__file__).resolve().parent
@@ -58,10 +57,3 @@ def test_processes_side_by_side_take_different_domains():
     mine = int(os.environ['ROS_DOMAIN_ID'])
     assert len(set(domains + [mine])) == 4, (domains, mine)
     assert all(d in SESSION_DOMAINS for d in domains)
-
-
-@pytest.mark.parametrize('name', SLOW + SERIAL)
-def test_the_marked_tests_exist(name):
-    file, _, function = name.partition('::')
-    text = (HERE / file).read_text()
-    assert f'def {function}(' in text if function else 'def test_' in text

@@ -16,9 +16,11 @@ import pytest
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.parameters import joint_limit, joint_limit_values
 from orthoglide_ros.cores.tracking_controller import (
-    Command, control_law, FORCE_LIMIT_MAX, INPUTS, JointValues, PARAMETERS,
+    Command, control_law, INPUTS, JointValues, PARAMETERS,
     read_joint_state, REASONS, SKIPS, Tracking)
+from orthoglide_ros.planning.limits import LIMIT_BOUND
 
 CONTROLLER_SPECS = PARAMETERS.specs
 controller_settings_from_parameters = PARAMETERS.parse
@@ -30,6 +32,12 @@ ZERO3 = (0.0, 0.0, 0.0)
 NAN = float('nan')
 INF = float('inf')
 EPS = 2.0 ** -52
+EFFORT = 'joint_limits.slider_a.max_effort'
+
+
+def limits(value):
+    """Return the parameters of an effort limit: ``value`` N on A, B, C."""
+    return joint_limit_values('max_effort', value)
 
 
 def settings(**changes):
@@ -50,13 +58,13 @@ def settings(**changes):
 def expected_force(s, desired, measured):
     """Return (forces, bounds): the law computed apart, with its rounding."""
     forces, bounds = [], []
-    for i in range(3):
+    for i, limit in enumerate(joint_limit(s, 'max_effort')):
         terms = [s.kp[i] * (desired.position[i] - measured.position[i]),
                  s.kd[i] * (desired.velocity[i] - measured.velocity[i])]
         if s.feedforward:
             terms.append(desired.effort[i])
         f = math.fsum(terms)
-        forces.append(min(max(f, -s.force_limit), s.force_limit))
+        forces.append(min(max(f, -limit), limit))
         # Rounding of the products and of two additions, with margin.
         bounds.append(8 * EPS * sum(abs(t) for t in terms) + 1e-300)
     return forces, bounds
@@ -65,9 +73,10 @@ def expected_force(s, desired, measured):
 def assert_law(s, desired, measured, command):
     """Check the command against the independent law, to rounding."""
     forces, bounds = expected_force(s, desired, measured)
-    for got, want, bound in zip(command.force, forces, bounds):
+    for got, want, bound, limit in zip(command.force, forces, bounds,
+                                       joint_limit(s, 'max_effort')):
         assert abs(got - want) <= bound, (got, want, bound)
-        assert abs(got) <= s.force_limit
+        assert abs(got) <= limit
     assert command.error == tuple(
         d - m for d, m in zip(desired.position, measured.position))
 
@@ -76,7 +85,9 @@ def assert_law(s, desired, measured, command):
 def test_specs_defaults_and_names():
     """The table's names, types and defaults are the documented ones."""
     specs = {s.name: s for s in PARAMETERS.own_specs}
-    assert list(specs) == ['kp', 'kd', 'feedforward', 'force_limit',
+    assert list(specs) == ['kp', 'kd', 'feedforward'] + [
+        f'joint_limits.{joint}.{key}' for joint in NAMES
+        for key in ('has_effort_limits', 'max_effort')] + [
                            'joint_names', 'measurement_timeout',
                            'rate_hz', 'path_tolerance', 'stall_timeout',
                            'max_position', 'max_velocity', 'thread_priority',
@@ -85,7 +96,9 @@ def test_specs_defaults_and_names():
     assert specs['kp'].default == [20000.0] * 3
     assert specs['kd'].default == [1200.0] * 3
     assert specs['feedforward'].default is True
-    assert specs['force_limit'].default == 1000.0
+    for joint in NAMES:
+        assert specs[f'joint_limits.{joint}.has_effort_limits'].default
+        assert specs[f'joint_limits.{joint}.max_effort'].default == 1000.0
     assert specs['joint_names'].default == list(NAMES)
     assert specs['measurement_timeout'].default == 0.05
     assert specs['path_tolerance'].default == [0.05] * 3
@@ -96,8 +109,8 @@ def test_specs_defaults_and_names():
     s = settings()
     assert s.kp == (20000.0,) * 3 and s.kd == (1200.0,) * 3
     assert s.joint_names == NAMES
-    assert (s.feedforward, s.force_limit, s.measurement_timeout) == (
-        True, 1000.0, 0.05)
+    assert (s.feedforward, joint_limit(s, 'max_effort'),
+            s.measurement_timeout) == (True, (1000.0,) * 3, 0.05)
 
 
 def test_default_gains_about_critically_damped():
@@ -143,11 +156,12 @@ def test_actuator_mass_at_home_and_damping_ratio():
     ('kd', [-0.5, 2.0, 3.0]),
     ('feedforward', 'yes'),
     ('feedforward', 1),
-    ('force_limit', 0.0),
-    ('force_limit', -1.0),
-    ('force_limit', 1000),
-    ('force_limit', INF),
-    ('force_limit', FORCE_LIMIT_MAX * 2),
+    (EFFORT, 0.0),
+    (EFFORT, -1.0),
+    (EFFORT, 1000),
+    (EFFORT, INF),
+    (EFFORT, LIMIT_BOUND * 2),
+    ('force_limit', 1000.0),
     ('joint_names', ['a', 'b']),
     ('joint_names', ['a', 'a', 'c']),
     ('joint_names', ['a', '', 'c']),
@@ -164,10 +178,13 @@ def test_invalid_parameters_named(name, value):
 def test_valid_parameter_edges():
     """Zero gains, the range ends and any names are accepted."""
     s = settings(kp=[0.0, 0.0, 0.0], kd=[0.0, 1e9, 0.0],
-                 force_limit=FORCE_LIMIT_MAX, joint_names=['x', 'y', 'z'],
+                 **limits(LIMIT_BOUND), joint_names=['x', 'y', 'z'],
                  measurement_timeout=0.0001, feedforward=False)
     assert s.kd == (0.0, 1e9, 0.0) and s.joint_names == ('x', 'y', 'z')
-    assert settings(force_limit=0.001).force_limit == 0.001
+    assert joint_limit(settings(**limits(0.001)), 'max_effort') == \
+        (0.001,) * 3
+    # Off: no limit, 0.0 then not a limit.
+    assert joint_limit(settings(**limits(INF)), 'max_effort') == (INF,) * 3
 
 
 # The law ---------------------------------------------------------------------
@@ -186,8 +203,8 @@ def test_law_worked_example():
 
 
 def test_law_clips_to_limit_and_counts():
-    """Beyond +-force_limit: clipped; exactly at it: not counted."""
-    s = settings(kp=[1000.0] * 3, kd=[0.0] * 3, force_limit=100.0)
+    """Beyond +-max_effort of its actuator: clipped; at it: not counted."""
+    s = settings(kp=[1000.0] * 3, kd=[0.0] * 3, **limits(100.0))
     zero = (0.0, 0.0, 0.0)
     desired = JointValues((1.0, -1.0, 0.1), zero, zero)
     measured = JointValues(zero, zero, None)
@@ -195,6 +212,18 @@ def test_law_clips_to_limit_and_counts():
     assert command.force == (100.0, -100.0, 100.0)
     assert command.clipped == 2
     assert command.error == (1.0, -1.0, 0.1)
+    # Each actuator its own limit; none where its flag is off.
+    s = settings(kp=[1000.0] * 3, kd=[0.0] * 3,
+                 **limits([100.0, 50.0, INF]))
+    command = control_law(s, JointValues((1.0, -1.0, 5.0), zero, zero),
+                          measured)
+    assert command.force == (100.0, -50.0, 5000.0) and command.clipped == 2
+
+
+def test_an_effort_limit_flagged_without_its_value_is_refused():
+    with pytest.raises(ValueError, match=EFFORT + ': must be above 0 where '
+                       'has_effort_limits is true'):
+        settings(**{EFFORT: 0.0})
 
 
 def test_law_overflow_refused():
@@ -215,12 +244,12 @@ gains = st.lists(gain, min_size=3, max_size=3)
 
 @hypothesis_settings(max_examples=examples(300), deadline=None)
 @given(kp=gains, kd=gains, feedforward=st.booleans(),
-       limit=st.floats(0.001, FORCE_LIMIT_MAX),
+       limit=st.floats(0.001, 1e6),
        lam_d=triple, dlam_d=triple, f_ff=triple, lam=triple, dlam=triple)
 def test_law_property(kp, kd, feedforward, limit, lam_d, dlam_d, f_ff, lam,
                       dlam):
     """The output is f_ff + Kp e + Kd edot clipped to the limit."""
-    s = settings(kp=kp, kd=kd, feedforward=feedforward, force_limit=limit)
+    s = settings(kp=kp, kd=kd, feedforward=feedforward, **limits(limit))
     desired = JointValues(lam_d, dlam_d, f_ff if feedforward else None)
     measured = JointValues(lam, dlam, None)
     command = control_law(s, desired, measured)
@@ -282,8 +311,8 @@ def test_read_effort_not_needed():
         assert values.effort is None
 
 
-# Within the default plausibility bounds (max_position, max_velocity,
-# force_limit).
+# Within the default plausibility bounds (max_position, max_velocity, the
+# max_effort of each actuator).
 positions = st.tuples(*[st.floats(-1.0, 1.0)] * 3)
 velocities = st.tuples(*[st.floats(-2.0, 2.0)] * 3)
 
@@ -389,12 +418,12 @@ def test_feedforward_on_needs_effort_off_does_not():
 
 def test_clipped_counted_and_configure_applies():
     """Clipped forces add up; new settings apply from the next message."""
-    core = Tracking(settings(force_limit=10.0))
+    core = Tracking(settings(**limits(10.0)))
     send_measured(core, (0.0, 0.0, 0.0), 0.0)
     command = send_desired(core, (1.0, -1.0, 0.0), 0.01)
     assert command.force == (10.0, -10.0, 0.0)
     assert core.clipped == 2
-    core.configure(settings(force_limit=50000.0, joint_names=['a', 'b', 'c']))
+    core.configure(settings(**limits(50000.0), joint_names=['a', 'b', 'c']))
     # New names: the measurement read by the old ones is forgotten.
     assert core.desired(STAMP, '', ['a', 'b', 'c'], [0.0] * 3, [0.0] * 3, [0.0] * 3,
                         0.02) is None
@@ -555,7 +584,7 @@ def test_implausible_joint_states_are_refused_and_change_nothing(
     assert core.measurement.position == ZERO3 and core.commands == 0
     # The bound is the parameter: raised, the same value passes.
     looser = Tracking(settings(max_position=10.0, max_velocity=1e3,
-                               force_limit=1e6))
+                               **limits(1e6)))
     send_measured(looser, ZERO3, 0.0)
     if max(map(abs, velocity + effort)) < 1e3:
         call = looser.measured if source == 'measured' else looser.desired
@@ -565,7 +594,7 @@ def test_implausible_joint_states_are_refused_and_change_nothing(
 def test_a_saturated_command_is_never_the_hold_bias():
     """The bias is the last command that clipped nothing."""
     core = Tracking(settings(path_tolerance=[0.05] * 3, kp=[1e4] * 3,
-                             kd=[0.0] * 3, force_limit=1000.0))
+                             kd=[0.0] * 3, **limits(1000.0)))
     send_measured(core, ZERO3, 0.0)
     calm = send_desired(core, (0.001, 0.0, 0.0), 0.001,
                         effort=(10.0, 20.0, 30.0))

@@ -22,6 +22,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
+from orthoglide_ros.cores.parameters import joint_limit_values
 from orthoglide_ros.cores.tracking_controller import INPUTS, PARAMETERS, REASONS
 from orthoglide_ros.ros.tracking_controller_node import TrackingControllerNode
 
@@ -48,6 +49,7 @@ DIAGNOSTIC_NAME = 'tracking_controller: Orthoglide tracking controller'
 # test_hostile_peers.py).
 PATIENT = {'measurement_timeout': 30.0, 'path_tolerance': [0.0, 0.0, 0.0],
            'stall_timeout': 0.0}
+EFFORT = 'joint_limits.slider_a.max_effort'
 
 
 class TrackingProbe(Node):
@@ -278,8 +280,8 @@ def test_feedforward_off_is_pd_alone(graph):
 
 
 def test_clipping_counted(graph):
-    """Forces beyond force_limit are clipped to it and counted."""
-    g = graph({**PATIENT, 'force_limit': 50.0})
+    """Forces beyond max_effort are clipped to it and counted."""
+    g = graph({**PATIENT, **joint_limit_values('max_effort', 50.0)})
     measure(g, ZERO)
     msg = command(g, (0.01, -0.01, 0.0001), ZERO, (0.0, 0.0, 1.0))
     assert list(msg.data) == [50.0, -50.0, pytest.approx(3.0)]
@@ -382,7 +384,7 @@ def test_diagnostics_values(graph):
         pytest.approx(-0.001)
     assert float(values['tracking error slider_c (m)']) == 0.0
     assert values['feedforward'] == 'true'
-    assert values['force_limit (N)'] == '1000'
+    assert values['max_effort A, B, C (N)'] == '1000, 1000, 1000'
     assert msg.status[0].level == DiagnosticStatus.OK
 
 
@@ -396,7 +398,9 @@ def test_invalid_parameter_changes_refused(graph):
         (Parameter('kd', value=[1.0, -2.0, 3.0]), 'kd'),
         (Parameter('kd', value=[1.0, NAN, 3.0]), 'kd'),
         (Parameter('joint_names', value=['a', 'a', 'b']), 'joint_names'),
-        (Parameter('force_limit', value=0.0), None),        # rclpy: range
+        (Parameter(EFFORT, value=-1.0), None),              # rclpy: range
+        (Parameter(EFFORT, value=0.0), EFFORT),             # flag true
+        (Parameter('force_limit', value=5.0), None),        # retired
         (Parameter('feedforward', value=1.0), None),        # rclpy: type
         (Parameter('measurement_timeout', value=-1.0), None),
     ]
@@ -414,7 +418,7 @@ def test_invalid_parameter_changes_refused(graph):
     ])).result
     assert not result.successful and 'kd' in result.reason
     values = call(g, client.get_parameters(
-        ['kp', 'kd', 'force_limit', 'feedforward', 'joint_names'])).values
+        ['kp', 'kd', EFFORT, 'feedforward', 'joint_names'])).values
     assert list(values[0].double_array_value) == [20000.0] * 3
     assert list(values[1].double_array_value) == [1200.0] * 3
     assert values[2].double_value == 1000.0
@@ -436,7 +440,8 @@ def test_valid_change_applied_to_next_command(graph):
         Parameter('kp', value=[10.0, 20.0, 30.0]),
         Parameter('kd', value=[1.0, 2.0, 3.0]),
         Parameter('feedforward', value=False),
-        Parameter('force_limit', value=5.0)])).result
+        *(Parameter(name, value=value) for name, value in
+          joint_limit_values('max_effort', 5.0).items())])).result
     assert result.successful, result.reason
     measure(g, ZERO, (0.5, 0.5, 0.5))
     msg = command(g, (0.1, 0.2, 0.3), ZERO, (100.0, 100.0, 100.0))

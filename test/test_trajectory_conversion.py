@@ -18,6 +18,9 @@ from orthoglide_ros.formats.cdr import Waypoints
 from orthoglide_ros.cores.feedforward import (convert_trajectory, Feedforward,
                                               PARAMETERS, TRAJECTORY_REASONS)
 from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.parameters import joint_limit_values
+
+INF = math.inf
 
 
 def settings(**changes):
@@ -146,29 +149,38 @@ def test_pose_only_takes_missing_rates_as_zero():
     refused('malformed', bare, 0)
 
 
+def limits(key, values):
+    """Return the parameters of joint limit ``key``: ``values`` on A, B, C."""
+    return joint_limit_values(key, [float(v) for v in values])
+
+
 def test_limits_refuse_with_point_actuator_and_value():
     w = paper()
     out = convert_trajectory(settings(), w)
     speed = np.abs(out.solution.lambdadot).max(0)
     force = np.abs(out.solution.force).max(0)
-    assert convert_trajectory(settings(velocity_limit=(speed * 1.01).tolist()),
-                              w)
-    error = refused('velocity_limit', w,
-                    velocity_limit=[0.0, 0.0, float(speed[2] * 0.99)])
+    assert convert_trajectory(
+        settings(**limits('max_velocity', speed * 1.01)), w)
+    error = refused('velocity_limit', w, **limits(
+        'max_velocity', [INF, INF, speed[2] * 0.99]))
     row = int(np.argmax(np.abs(out.solution.lambdadot[:, 2])
                         > speed[2] * 0.99))
     assert f'point {row}: actuator C' in str(error)
-    error = refused('force_limit', w, force_limit=[0.0, 0.0, 200.0])
+    assert 'joint_limits.slider_c.max_velocity' in str(error)
+    error = refused('force_limit', w,
+                    **limits('max_effort', [INF, INF, 200.0]))
     assert 'actuator C' in str(error)
-    assert convert_trajectory(settings(force_limit=(force + 1.0).tolist()), w)
+    assert 'joint_limits.slider_c.max_effort 200 N' in str(error)
+    assert convert_trajectory(settings(**limits('max_effort', force + 1.0)),
+                              w)
 
 
-def test_absurd_points_refused_and_no_force_beyond_max_force():
+def test_absurd_points_refused_and_no_force_beyond_max_effort():
     """
     A point accelerating at 1e200 m/s^2 (2.45e201 N) is refused.
 
-    Refused by the plausibility bounds, naming the point; max_force
-    bounds every published effort even with no per-actuator limit.
+    Refused by the plausibility bounds, naming the point; the default
+    max_effort (10 kN) bounds every published effort.
     """
     w = paper()
     for field, reason in (('linear_acceleration', 'acceleration_limit'),
@@ -178,8 +190,9 @@ def test_absurd_points_refused_and_no_force_beyond_max_force():
         error = refused(reason, changed(w, **{field: values}), 17)
         assert 'max_' in str(error)
     force = np.abs(convert_trajectory(settings(), w).solution.force).max()
-    refused('force_limit', w, max_force=float(force) * 0.99)
-    assert convert_trajectory(settings(max_force=float(force) * 1.01), w)
+    refused('force_limit', w, **limits('max_effort', [force * 0.99] * 3))
+    assert convert_trajectory(
+        settings(**limits('max_effort', [force * 1.01] * 3)), w)
 
 
 def test_core_counts_trajectories_apart_from_setpoints():

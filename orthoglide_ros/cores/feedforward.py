@@ -19,8 +19,9 @@ from orthoglide_ros.cores.inputs import (check_stamp, check_time,
                                          NANOSECONDS, Rejected,
                                          trajectory_times)
 from orthoglide_ros.cores.parameters import (
-    arrival_timeout_spec, at_most, base_frame_spec, joint_names_spec,
-    nonnegative_triple, singularity_margin_spec, Spec, Table)
+    arrival_timeout_spec, at_most, base_frame_spec, every_joint,
+    joint_limit_name, joint_limit_specs, joint_limits_rule,
+    joint_names_spec, singularity_margin_spec, Spec, Table)
 from orthoglide_ros.cores.status import OK, WARN
 
 # Most partial setpoints held at once; beyond, the oldest is dropped.
@@ -34,8 +35,8 @@ TRAJECTORY_REASONS = ('empty', 'frame', 'stamp', 'time', 'malformed',
                       'overflow', 'velocity_limit', 'force_limit', 'oversize')
 
 REASONS = ('non_finite', 'speed_limit', 'acceleration_limit', 'unreachable',
-           'singular', 'overflow', 'force_limit', 'frame', 'orientation',
-           'stamp', 'malformed', 'oversize', 'unpaired')
+           'singular', 'overflow', 'velocity_limit', 'force_limit', 'frame',
+           'orientation', 'stamp', 'malformed', 'oversize', 'unpaired')
 INPUTS = ('pose', 'twist', 'accel', 'trajectory', 'cartesian_trajectory')
 
 Conversion = namedtuple('Conversion', 'stamp frame time solution')
@@ -80,8 +81,14 @@ def convert_trajectory(settings, waypoints):
     with np.errstate(all='ignore'):     # a NaN or an inf: refused inside
         solution = setpoint_rules.solve_setpoints(
             settings, w.position, velocity, acceleration, w.orientation,
-            setpoint_rules.N_POINTS, per_actuator=True)
+            setpoint_rules.N_POINTS)
     return Conversion(w.stamp, w.frame, w.time, solution)
+
+
+# The actuators' limits by default: every force within 10 kN (about 40
+# times the paper's largest), a plausibility bound until the drives'
+# ratings are set; no velocity limit.
+LIMITS = every_joint(max_effort=10000.0)
 
 
 def _first_bad(reason, bad, what):
@@ -115,14 +122,6 @@ PARAMETERS = Table('Settings', (
          'serve each pose alone as a setpoint with zero velocity and '
          'acceleration (twist and accel topics ignored); trajectory points '
          'may then omit velocities and accelerations'),
-    Spec('velocity_limit', 'double_array', [0.0, 0.0, 0.0],
-         'largest |lambdadot| per actuator A, B, C (m/s) of a converted '
-         'cartesian_trajectory: one beyond it is refused whole; 0.0: no '
-         'limit', check=nonnegative_triple),
-    Spec('force_limit', 'double_array', [0.0, 0.0, 0.0],
-         'largest |f| per actuator A, B, C (N) of a converted '
-         'cartesian_trajectory: one beyond it is refused whole; 0.0: no '
-         'limit', check=nonnegative_triple),
     Spec('max_speed', 'double', 5.0,
          'largest speed |v| of G (m/s) of a setpoint or a trajectory point: '
          'one beyond it is refused (speed_limit)', (0.001, 1000.0)),
@@ -130,12 +129,18 @@ PARAMETERS = Table('Settings', (
          'largest acceleration |a| of G (m/s^2) of a setpoint or a '
          'trajectory point: one beyond it is refused (acceleration_limit)',
          (0.001, 1.0e5)),
-    Spec('max_force', 'double', 10000.0,
-         'largest |f| (N) of any actuator force the node publishes: a '
-         'setpoint or trajectory that needs more is refused (force_limit)',
-         (0.001, 1.0e7)),
+    *joint_limit_specs(LIMITS, {
+        'max_velocity': 'a setpoint or trajectory point that needs more is '
+                        'refused (velocity_limit)',
+        'max_effort': 'a setpoint or trajectory point that needs more is '
+                      'refused (force_limit): no force beyond it is '
+                      'published'}),
     *realtime.SPECS,
-), rules=(at_most('pairing_timeout', 'setpoint_timeout', 's'),), robot=True)
+), rules=(at_most('pairing_timeout', 'setpoint_timeout', 's'),
+          joint_limits_rule), robot=True, retired={
+    'velocity_limit': joint_limit_name('max_velocity'),
+    'force_limit': joint_limit_name('max_effort'),
+    'max_force': joint_limit_name('max_effort')})
 
 
 class Feedforward(Core):

@@ -5,7 +5,9 @@ Each core module owns one :class:`Table` of :class:`Spec` rows (plus
 :data:`ROBOT_SPECS` when it models the robot); the node declares its ROS
 parameters from it and :meth:`Table.parse` validates a whole set into one
 settings tuple or raises :class:`ParameterError`
-(doc/decisions.md#parameters-status-and-errors).
+(doc/decisions.md#parameters-status-and-errors). The rows several nodes
+declare are here: ``robot.*``, the actuators' ``joint_limits.<joint>.*``
+(:func:`joint_limit_specs`), ``joint_names``, ``base_frame``...
 
 >>> table = Table('Demo', (Spec('rate_hz', 'double', 10.0, 'rate (Hz)',
 ...                             (0.0, 100.0)),))
@@ -27,6 +29,7 @@ from orthoglide_ros.formats.text import clip
 from orthoglide_ros.model.mechanics import DEFAULT_SINGULARITY_MARGIN
 from orthoglide_ros.model.robot import (is_vector, JOINT_NAMES,
                                         ParameterError, ROWS)
+from orthoglide_ros.planning.limits import KINDS, LIMIT_BOUND
 
 TYPES = ('double', 'double_array', 'integer', 'integer_array', 'string',
          'string_array', 'bool')
@@ -82,16 +85,19 @@ class Table:
     settings' first field ``robot`` holds the validated :class:`Robot`.
     ``rules``: functions ``rule(settings)`` that raise
     :class:`ParameterError` when several values together break a rule.
+    ``retired``: ``{old name: what replaced it}``, names refused with
+    that hint wherever they are given (:meth:`refuse_retired`).
     """
 
-    def __init__(self, name, specs, rules=(), robot=False):
+    def __init__(self, name, specs, rules=(), robot=False, retired=None):
         """Build the settings type from the rows (see the class docstring)."""
         self.own_specs = tuple(specs)
         self.robot = robot
         self.specs = (ROBOT_SPECS if robot else ()) + self.own_specs
         self.rules = tuple(rules)
+        self.retired = dict(retired or {})
         names = [s.name for s in self.specs]
-        if len(names) != len(set(names)):
+        if len(names) != len(set(names)) or set(names) & set(self.retired):
             raise ValueError(f'{name}: a parameter name repeats')
         self.Settings = namedtuple(name, (('robot',) if robot else ())
                                    + tuple(field(s.name)
@@ -109,10 +115,11 @@ class Table:
         An absent name takes its default (a ``robot.*`` name that is None
         too: ``m4``, ``m6`` and ``friction_coulomb_negative`` then follow
         ``m2``, ``m3`` and ``friction_coulomb``); names of
-        other tables are ignored. Raises :class:`ParameterError` (or, for ``robot.*``,
-        :class:`ParameterError`, ``robot.<name>``) naming the first bad
-        parameter.
+        other tables are ignored, a retired one refused. Raises
+        :class:`ParameterError` naming the first bad parameter
+        (``robot.l3``, ``rate_hz``).
         """
+        self.refuse_retired(values)
         fields = {}
         if self.robot:
             fields['robot'] = robot_from_parameters(
@@ -125,6 +132,13 @@ class Table:
         for rule in self.rules:
             rule(settings)
         return settings
+
+    def refuse_retired(self, names):
+        """Raise :class:`ParameterError` for the first retired name given."""
+        for name in names:
+            if name in self.retired:
+                raise ParameterError(name, 'no longer a parameter; use '
+                                     + self.retired[name])
 
 
 def field(name):
@@ -202,6 +216,101 @@ def arrival_timeout_spec(name, default, low, description):
     """Return a timeout row: seconds by arrival time, ``low`` to an hour."""
     return Spec(name, 'double', default,
                 'seconds (by arrival time) ' + description, (low, 3600.0))
+
+
+# The actuators' limits in ros2_control's form, joint_limits.<joint>.*
+# (planning/limits.py reads the form): the planner declares every kind,
+# another node the kinds it applies, each row the same but for its
+# default and what the node does beyond it.
+_FLAGS = {key: has for key, has, _, _ in KINDS}
+_FIELDS = {key: tuple((field(f'joint_limits.{joint}.{key}'),
+                       field(f'joint_limits.{joint}.{has}'))
+                      for joint in JOINT_NAMES)
+           for key, has in _FLAGS.items()}
+
+
+def joint_limit_specs(defaults, effects=None):
+    """
+    Return the ``joint_limits.<joint>.has_*`` and ``max_*`` rows.
+
+    For each joint of actuators A, B, C (JOINT_NAMES) and each kind of
+    :data:`planning.limits.KINDS` (``max_velocity``, ...,
+    ``max_effort``), a bool flag and a double in ``[0, LIMIT_BOUND]``.
+    ``defaults``: ``{joint: {key: value}}`` (as
+    :data:`planning.limits.PAPER_LIMITS`), a key absent off (false,
+    0.0). ``effects``: ``{max key: what the node does beyond it}``, the
+    kinds the node applies (None: every kind, the planner's). A flag true
+    with its value 0.0 is :func:`joint_limits_rule`'s to refuse.
+    """
+    specs = []
+    for joint in JOINT_NAMES:
+        given = defaults.get(joint, {})
+        for key, has, unit, what in KINDS:
+            if effects is not None and key not in effects:
+                continue
+            effect = '' if effects is None else '; ' + effects[key]
+            specs.append(Spec(
+                f'joint_limits.{joint}.{has}', 'bool', given.get(has, False),
+                f'whether {key} of {joint} bounds {what}'))
+            specs.append(Spec(
+                f'joint_limits.{joint}.{key}', 'double', given.get(key, 0.0),
+                f'largest {what} of {joint} ({unit}) where {has} is true'
+                + effect, (0.0, LIMIT_BOUND)))
+    return specs
+
+
+def joint_limit_name(key):
+    """Return the name of limit ``key`` of every joint, for a message."""
+    return (f'joint_limits.<joint>.{key} (with {_FLAGS[key]}: true) for '
+            'each <joint> of ' + ', '.join(JOINT_NAMES))
+
+
+def every_joint(**limits):
+    """Return ``{joint: {...}}`` giving each joint ``limits``, each flag on."""
+    entry = {}
+    for key, value in limits.items():
+        entry.update({_FLAGS[key]: True, key: value})
+    return {joint: dict(entry) for joint in JOINT_NAMES}
+
+
+def joint_limit_values(key, limits):
+    """
+    Return the parameters that set limit ``key`` of actuators A, B, C.
+
+    ``limits``: one value for every joint or three; ``math.inf`` (or
+    None) turns a joint's limit off. ``{'joint_limits.slider_a.max_effort':
+    400.0, 'joint_limits.slider_a.has_effort_limits': True, ...}``.
+    """
+    if not isinstance(limits, (list, tuple)):
+        limits = (limits,) * 3
+    values = {}
+    for joint, limit in zip(JOINT_NAMES, limits):
+        on = limit is not None and limit != math.inf
+        values[f'joint_limits.{joint}.{_FLAGS[key]}'] = on
+        values[f'joint_limits.{joint}.{key}'] = float(limit) if on else 0.0
+    return values
+
+
+def joint_limit(settings, key):
+    """
+    Return limit ``key`` (``max_effort``...) of actuators A, B, C.
+
+    A 3-tuple from the settings of :func:`joint_limit_specs` rows:
+    ``math.inf`` where the joint's flag is false.
+    """
+    return tuple(getattr(settings, value) if getattr(settings, flag)
+                 else math.inf for value, flag in _FIELDS[key])
+
+
+def joint_limits_rule(settings):
+    """Refuse a ``has_*`` flag true with its ``max_*`` at 0.0 (a Table rule)."""
+    for key, has in _FLAGS.items():
+        for joint, (value, flag) in zip(JOINT_NAMES, _FIELDS[key]):
+            if getattr(settings, flag, False) and \
+                    getattr(settings, value) <= 0.0:
+                raise ParameterError(
+                    f'joint_limits.{joint}.{key}', 'must be above 0 where '
+                    f'{has} is true, got {getattr(settings, value)!r}')
 
 
 def _short(value):

@@ -30,14 +30,13 @@ import numpy as np
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.inputs import Rejected
-from orthoglide_ros.cores.parameters import (base_frame_spec, field, Spec,
-                                             Table)
+from orthoglide_ros.cores.parameters import (base_frame_spec, field,
+                                             joint_limit_specs, Spec, Table)
 from orthoglide_ros.cores.status import OK
 from orthoglide_ros.model.robot import JOINT_NAMES, ParameterError
 from orthoglide_ros.planning.gcode import ProgramError
 from orthoglide_ros.planning.limits import (KINDS, limits_from_parameters,
-                                            LIMIT_BOUND, LimitsError,
-                                            PAPER_LIMITS)
+                                            LimitsError, PAPER_LIMITS)
 from orthoglide_ros.planning.parametrization import plan
 from orthoglide_ros.planning.path import from_waypoints
 
@@ -46,22 +45,6 @@ REASONS = ('frame', 'non_finite', 'too_few_poses', 'infeasible',
 # The nav_msgs/Path read whole: 100,000 poses (about 8 MB).
 PATH_BYTES = 8 * 1024 * 1024
 MAX_POSES = 100_000
-
-
-def _limit_specs():
-    """Return the ``joint_limits.<joint>.*`` rows, the paper robot's by default."""
-    specs = []
-    for joint in JOINT_NAMES:
-        paper = PAPER_LIMITS[joint]
-        for key, has, unit, what in KINDS:
-            specs.append(Spec(
-                f'joint_limits.{joint}.{has}', 'bool', paper.get(has, False),
-                f'whether {key} of {joint} bounds {what}'))
-            specs.append(Spec(
-                f'joint_limits.{joint}.{key}', 'double', paper.get(key, 0.0),
-                f'largest {what} of {joint} ({unit}) where '
-                f'{has} is true', (0.0, LIMIT_BOUND)))
-    return specs
 
 
 def _limits_rule(settings):
@@ -85,7 +68,7 @@ PARAMETERS = Table('PlannerSettings', (
     Spec('rate_hz', 'double', 1000.0,
          'points per second of the published motion (Hz)',
          (100.0, 100000.0)),
-    *_limit_specs(),
+    *joint_limit_specs(PAPER_LIMITS),
     *realtime.SPECS,
 ), rules=(_limits_rule,), robot=True)
 

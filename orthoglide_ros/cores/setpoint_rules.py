@@ -14,7 +14,9 @@ import operator
 import numpy as np
 
 from orthoglide_ros.cores.inputs import Rejected
+from orthoglide_ros.cores.parameters import joint_limit
 from orthoglide_ros.model import mechanics
+from orthoglide_ros.model.robot import JOINT_NAMES
 
 # Largest rotation of the platform accepted as "the identity" (rad).
 ORIENTATION_TOLERANCE = 1e-3
@@ -50,16 +52,15 @@ def check_frame(frame, settings, what='setpoint'):
 
 
 def solve_setpoints(settings, position, velocity, acceleration,
-                    orientation, ops, per_actuator=False):
+                    orientation, ops):
     """
     Check one setpoint or N points by every rule; return their Solution.
 
     ``position``, ``velocity``, ``acceleration`` (m, m/s, m/s^2) and
     ``orientation`` (quaternion x y z w): 3- and 4-sequences with
     :data:`ONE_SAMPLE`, (N, 3) and (N, 4) arrays with :data:`N_POINTS`.
-    ``per_actuator``: also the per-actuator ``velocity_limit`` and
-    ``force_limit`` of a whole trajectory (0.0: none), besides
-    ``max_force``. Raises :class:`Rejected` with the reason of the first
+    Last, each actuator's ``joint_limits.<joint>.max_velocity`` and
+    ``max_effort``. Raises :class:`Rejected` with the reason of the first
     rule broken, for N points naming the first point at fault (``point
     <i>: ``).
     """
@@ -89,7 +90,7 @@ def solve_setpoints(settings, position, velocity, acceleration,
     except mechanics.WorkspaceError as error:
         raise Rejected(error.reason,
                        ops.point_prefix(error.row) + error.detail) from None
-    _check_actuators(settings, solution, ops, per_actuator)
+    _check_actuators(settings, solution, ops)
     return solution
 
 
@@ -123,27 +124,22 @@ def _quaternion(ops, q, i):
     return tuple(float(ops.value_at(c, i)) for c in q)
 
 
-def _check_actuators(settings, solution, ops, per_actuator):
-    """Refuse a |lambdadot| or |f| beyond an actuator's limit (first point)."""
-    for reason, values, limits, unit in (
-            ('velocity_limit', solution.lambdadot,
-             settings.velocity_limit if per_actuator else (0.0,) * 3, 'm/s'),
-            ('force_limit', solution.force,
-             settings.force_limit if per_actuator else (0.0,) * 3, 'N')):
+def _check_actuators(settings, solution, ops):
+    """Refuse a |lambdadot| or |f| beyond an actuator's joint limit."""
+    for reason, values, key, unit in (
+            ('velocity_limit', solution.lambdadot, 'max_velocity', 'm/s'),
+            ('force_limit', solution.force, 'max_effort', 'N')):
         beyond = []
-        for leg, (component, limit) in enumerate(zip(ops.columns(values),
-                                                     limits)):
-            name = f'the limit of actuator {"ABC"[leg]}'
-            if reason == 'force_limit' and not 0.0 < limit < \
-                    settings.max_force:
-                limit, name = settings.max_force, 'max_force'
-            i = ops.first_bad_index(ops.abs(component) > limit) \
-                if limit else None
+        for leg, (component, limit, joint) in enumerate(zip(
+                ops.columns(values), joint_limit(settings, key),
+                JOINT_NAMES)):
+            i = ops.first_bad_index(ops.abs(component) > limit)
             if i is not None:
                 beyond.append((i, leg, ops.value_at(component, i), limit,
-                               name))
+                               joint))
         if beyond:
-            i, leg, value, limit, name = min(beyond)
+            i, leg, value, limit, joint = min(beyond)
             raise Rejected(reason, (
                 f'{ops.point_prefix(i)}actuator {"ABC"[leg]} needs '
-                f'{value:.6g} {unit}, beyond {name} {limit:g} {unit}'))
+                f'{value:.6g} {unit}, beyond joint_limits.{joint}.{key} '
+                f'{limit:g} {unit}'))

@@ -15,8 +15,9 @@ from orthoglide_ros.cores.inputs import joint_columns, Rejected
 from orthoglide_ros.model.mechanics import format_vector, ZERO
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import (
-    arrival_timeout_spec, at_most, base_frame_spec, joint_names_spec, one_of,
-    ParameterError, singularity_margin_spec, Spec, Table, triple)
+    arrival_timeout_spec, at_most, base_frame_spec, every_joint, joint_limit,
+    joint_limit_name, joint_limit_specs, joint_limits_rule, joint_names_spec,
+    one_of, ParameterError, singularity_margin_spec, Spec, Table, triple)
 from orthoglide_ros.model.plant import Diverged, Plant
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.status import ERROR, OK, WARN
@@ -56,6 +57,9 @@ def _engine(value):
     return value
 
 
+# The plant's drives: each saturates at 1000 N (model.urdf.SLIDER_EFFORT,
+# the URDF's effort limit of the sliders).
+DRIVES = every_joint(max_effort=1000.0)
 # Longest MJCF file read (bytes), as a parameters file.
 MJCF_FILE_BYTES = 1 << 20
 
@@ -103,9 +107,9 @@ PARAMETERS = Table('SimulatorSettings', (
                          'without a valid command after which a running '
                          'simulation brakes: back to held, velocity zero; '
                          'at least one step (1/rate_hz)'),
-    Spec('force_limit', 'double', 1000.0,
-         'largest actuator force magnitude (N, each actuator); commands '
-         'beyond it are clipped and the clipping counted', (0.001, 1.0e6)),
+    *joint_limit_specs(DRIVES, {
+        'max_effort': 'a command beyond it is clipped to it, as a drive '
+                      'saturates, and the step counted'}),
     singularity_margin_spec(
         'workspace limit: smallest singularity distance a step may reach, '
         'min(alpha_i / l3, 1 / kappa_F(J_lambda)); a step beyond it stops '
@@ -125,8 +129,8 @@ PARAMETERS = Table('SimulatorSettings', (
     *realtime.SPECS,
 ), rules=(_mjcf_file_needs_mujoco, _initial_position_in_workspace,
           at_most('publish_rate_hz', 'rate_hz', 'Hz'),
-          _timeout_of_a_step_at_least),
-    robot=True)
+          _timeout_of_a_step_at_least, joint_limits_rule),
+    robot=True, retired={'force_limit': joint_limit_name('max_effort')})
 
 Tick = namedtuple('Tick', (
     'state', 'position', 'lambda_', 'lambdadot', 'effort', 'event'))
@@ -193,13 +197,13 @@ class Simulator(Core):
         """
         Use new settings: the live ones at once, the plant's at reset.
 
-        ``force_limit`` and ``robot.payload`` (a part picked up or put
+        ``joint_limits.*`` and ``robot.payload`` (a part picked up or put
         down: the plant carries it) apply from the next step; the rest of
         ``robot``, ``initial_position`` and ``singularity_margin`` wait for
         :meth:`reset` (see :attr:`pending_reset`).
         """
         old, self.settings = self.settings, settings
-        self.plant.force_limit = (settings.force_limit,) * 3
+        self.plant.force_limit = joint_limit(settings, 'max_effort')
         if settings.robot.payload != self.plant.robot.payload:
             self.plant.carry(settings.robot.payload)
         if settings.rate_hz != old.rate_hz:
@@ -417,7 +421,7 @@ class Simulator(Core):
         extra = {'model_text': settings.mjcf_file} \
             if settings.mjcf_file else {}
         self.plant = engine(settings.robot, settings.initial_position, ZERO,
-                            0.0, settings.force_limit,
+                            0.0, joint_limit(settings, 'max_effort'),
                             settings.singularity_margin, **extra)
         self._model = _plant_model(settings)
         self._command = None

@@ -2,7 +2,8 @@
 The tracking controller's logic without ROS: joint states in, forces out.
 
 :class:`Tracking`: ``f_i = f_ff,i + Kp_i (lambda_d,i - lambda_i) + Kd_i
-(lambdadot_d,i - lambdadot_i)``, clipped to ``force_limit`` (N), and a
+(lambdadot_d,i - lambdadot_i)``, clipped to its actuator's
+``joint_limits.<joint>.max_effort`` (N), and a
 joint trajectory followed as joint_trajectory_controller does
 (doc/tracking_controller.md).
 """
@@ -17,13 +18,20 @@ from orthoglide_ros.cores.inputs import (JointValues, read_joint_state,
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.mechanics import ZERO
 from orthoglide_ros.model.joint_plan import JointPlan
+from orthoglide_ros.model.robot import JOINT_NAMES
 from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.parameters import (
-    arrival_timeout_spec, joint_names_spec, nonnegative_triple, Spec, Table)
+    arrival_timeout_spec, every_joint, joint_limit, joint_limit_name,
+    joint_limit_specs, joint_limits_rule, joint_names_spec,
+    nonnegative_triple, Spec, Table)
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.status import ERROR, OK, WARN
 
-FORCE_LIMIT_MAX = 1.0e6     # N: the largest force_limit accepted
+# The drives it commands: each saturates at 1000 N (the simulator's).
+DRIVES = every_joint(max_effort=1000.0)
+# The effort limits' names, as a refusal says them.
+EFFORT_NAMES = tuple(f'joint_limits.{joint}.max_effort'
+                     for joint in JOINT_NAMES)
 INPUTS = ('desired', 'measured', 'trajectory')
 REASONS = ('missing_joint', 'malformed', 'missing_position',
            'missing_velocity', 'missing_effort', 'non_finite',
@@ -45,10 +53,10 @@ PARAMETERS = Table('ControllerSettings', (
     Spec('feedforward', 'bool', True,
          'add the desired effort (feedforward force, N) to the PD output; '
          'false: PD alone, desired efforts not needed'),
-    Spec('force_limit', 'double', 1000.0,
-         'largest force magnitude commanded per actuator (N); larger ones '
-         'are clipped to it and counted; a desired effort beyond it is '
-         'refused (effort_limit)', (0.001, FORCE_LIMIT_MAX)),
+    *joint_limit_specs(DRIVES, {
+        'max_effort': 'a command beyond it is clipped to it and counted; '
+                      'a desired effort beyond it is refused (effort_limit)'
+    }),
     joint_names_spec(
         'names of the prismatic joints of actuators A, B, C: the order of '
         'the command\'s values; joint states are matched by these names'),
@@ -82,7 +90,8 @@ PARAMETERS = Table('ControllerSettings', (
          'velocity, a joint trajectory\'s planned motion included: beyond '
          'it the input is refused (velocity_limit)', (0.001, 1000.0)),
     *realtime.SPECS,
-), robot=True)
+), rules=(joint_limits_rule,), robot=True,
+    retired={'force_limit': joint_limit_name('max_effort')})
 
 Command = namedtuple('Command', 'force error clipped')
 Command.__doc__ = """One command: ``force`` the 3 forces (N) after
@@ -96,14 +105,14 @@ def control_law(settings, desired, measured):
 
     ``f = f_ff + Kp (lambda_d - lambda) + Kd (lambdadot_d - lambdadot)``
     per actuator (f_ff omitted when ``settings.feedforward`` is off), then
-    clipped to +-``force_limit``. Raises :class:`Rejected` (``overflow``)
-    if a force before clipping is not finite.
+    clipped to +-``joint_limits.<joint>.max_effort``. Raises
+    :class:`Rejected` (``overflow``) if a force before clipping is not
+    finite.
     """
-    limit = settings.force_limit
     forces = []
     errors = []
     clipped = 0
-    for i in range(3):
+    for i, limit in enumerate(joint_limit(settings, 'max_effort')):
         error = desired.position[i] - measured.position[i]
         force = settings.kp[i] * error + settings.kd[i] * (
             desired.velocity[i] - measured.velocity[i])
@@ -508,7 +517,9 @@ class Tracking(Core):
             ('stall holds', self.stalls),
             ('feedforward', settings.feedforward),
             ('payload (kg)', settings.robot.payload),
-            ('force_limit (N)', settings.force_limit),
+            ('max_effort A, B, C (N)', ', '.join(
+                f'{limit:.6g}' for limit in joint_limit(settings,
+                                                        'max_effort'))),
         ]
         return values
 
@@ -536,31 +547,32 @@ def _bounded(settings, positions, velocities, efforts):
     ``positions``, ``velocities``, ``efforts`` (None: not checked): a
     joint state's 3-tuples (m, m/s, N; plain floats, the per-message
     path) or a trajectory's (N, 3) arrays, bounded in magnitude by
-    ``max_position``, ``max_velocity`` and ``force_limit``. Raises
-    :class:`Rejected` (``position_limit``, ``velocity_limit``,
-    ``effort_limit``), not counted here.
+    ``max_position``, ``max_velocity`` and each actuator's
+    ``joint_limits.<joint>.max_effort`` (an effort it could not command
+    is not plausible). Raises :class:`Rejected` (``position_limit``,
+    ``velocity_limit``, ``effort_limit``), not counted here.
     """
-    for reason, values, bound, name, unit in (
-            ('position_limit', positions, settings.max_position,
-             'max_position', 'm'),
-            ('velocity_limit', velocities, settings.max_velocity,
-             'max_velocity', 'm/s'),
-            ('effort_limit', efforts, settings.force_limit, 'force_limit',
-             'N')):
+    for reason, values, bounds, names, unit in (
+            ('position_limit', positions, (settings.max_position,) * 3,
+             ('max_position',) * 3, 'm'),
+            ('velocity_limit', velocities, (settings.max_velocity,) * 3,
+             ('max_velocity',) * 3, 'm/s'),
+            ('effort_limit', efforts, joint_limit(settings, 'max_effort'),
+             EFFORT_NAMES, 'N')):
         if values is None:
             continue
         if isinstance(values, np.ndarray):
-            beyond = np.argwhere(np.abs(values) > bound)
+            beyond = np.argwhere(np.abs(values) > np.asarray(bounds))
             if not len(beyond):
                 continue
             point, joint = beyond[0]
             where, value = f'point {point}: ', values[point, joint]
         else:
-            joint = next((j for j, v in enumerate(values) if abs(v) > bound),
-                         None)
+            joint = next((j for j, v in enumerate(values)
+                          if abs(v) > bounds[j]), None)
             if joint is None:
                 continue
             where, value = '', values[joint]
         raise Rejected(reason, (
             f'{where}{settings.joint_names[joint]!r} at {value:.4g} {unit}, '
-            f'beyond {name} {bound:g} {unit}'))
+            f'beyond {names[joint]} {bounds[joint]:g} {unit}'))

@@ -33,10 +33,10 @@ LOG_GROUPS = (('time', ('t',), True),
 # (squares, sums over millions of samples) would leave the finite
 # numbers. Time: 1e10 s (a Unix time in s holds until the year 2286);
 # lambda: 1e3 m (ten times the longest length a robot may have,
-# robot.LENGTH_LIMITS); force: 1e7 N (the largest max_force the
-# feedforward accepts); lambdadot: 1e3 m/s (the largest max_speed it
-# accepts).
-LIMITS = {'t': (1e10, 's'), 'lambda': (1e3, 'm'), 'force': (1e7, 'N'),
+# robot.LENGTH_LIMITS); force: 1e9 N (the largest joint_limits
+# max_effort a node accepts, planning.limits.LIMIT_BOUND); lambdadot: 1e3
+# m/s (the largest max_speed the feedforward accepts).
+LIMITS = {'t': (1e10, 's'), 'lambda': (1e3, 'm'), 'force': (1e9, 'N'),
           'lambdadot': (1e3, 'm/s')}
 JOINT_STATE_TYPE = 'sensor_msgs/msg/JointState'
 DEFAULT_TOPIC = '/joint_states'

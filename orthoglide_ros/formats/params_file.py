@@ -3,9 +3,9 @@ Read and write ROS 2 parameters files the way rcl does, without ROS.
 
 The nodes and the ``orthoglide`` tool share one file
 (``config/orthoglide.yaml``), so the tool applies rcl's sections and
-typing (:func:`load_parameters`, :func:`load_robot`) and writes a robot
-with the same typing (:func:`robot_file_text`). The rules:
-doc/cli.md#--params.
+typing (:class:`ParametersFile`, read once, its sections on demand;
+:func:`load_parameters`, :func:`load_robot`) and writes a robot with the
+same typing (:func:`robot_file_text`). The rules: doc/cli.md#--params.
 """
 
 from __future__ import annotations
@@ -89,31 +89,74 @@ def read_yaml(path: Path, error: type = ParametersFileError) -> Any:
         raise error(f'{path}: a value cannot be read: {failure}') from None
 
 
+class ParametersFile:
+    """
+    A parameters file read once; each node's section on demand.
+
+    :meth:`read` reads and parses it (:func:`read_yaml`), so that a command
+    reads its ``--params`` once whatever it takes from it.
+    """
+
+    def __init__(self, path: Path, document: dict) -> None:
+        """Keep the parsed ``document`` of ``path`` (use :meth:`read`)."""
+        self.path = path
+        self.document = document
+
+    @classmethod
+    def read(cls, path: Path) -> 'ParametersFile':
+        """
+        Read ``path``; raise :class:`ParametersFileError` if it is not one.
+
+        Not readable, not YAML (:func:`read_yaml`), or not a mapping.
+        """
+        document = read_yaml(path)
+        if not isinstance(document, dict):
+            raise ParametersFileError(f'{path}: not a ROS 2 parameters file')
+        return cls(path, document)
+
+    def section(self, node: str = NODE_NAME) -> dict[str, Any]:
+        """
+        Return node ``node``'s parameters as a flat ``{name: value}``.
+
+        ``/**`` first, then the node's own (``node``, ``/node``), the later
+        overriding, as rcl applies them. Raises
+        :class:`ParametersFileError` without a section for the node.
+        """
+        keys = _section_keys(node)
+        sections = [self.document[key] for key in keys
+                    if key in self.document]
+        if not sections:
+            raise ParametersFileError(
+                f'{self.path}: no section for the node: expected one of '
+                + ', '.join(repr(k) for k in keys))
+        params: dict[str, Any] = {}
+        for section in sections:
+            values = section.get('ros__parameters') if isinstance(
+                section, dict) else None
+            if not isinstance(values, dict):
+                raise ParametersFileError(f'{self.path}: the node section '
+                                          'has no ros__parameters mapping')
+            _flatten(values, '', params)
+        return params
+
+    def robot(self) -> Robot:
+        """Return the robot of the ``feedforward`` section's ``robot.*``."""
+        return robot_from_parameters(self.section())
+
+
+def _section_keys(node):
+    return ('/**', node, '/' + node)
+
+
 def load_parameters(path: Path, node: str = NODE_NAME) -> dict[str, Any]:
     """
     Return node ``node``'s parameters in ``path`` as a flat ``{name: value}``.
 
     Raises :class:`ParametersFileError` if the file cannot be read, is not
-    YAML (:func:`read_yaml`), or has no section for the node.
+    YAML (:func:`read_yaml`), or has no section for the node
+    (:meth:`ParametersFile.section`).
     """
-    document = read_yaml(path)
-    if not isinstance(document, dict):
-        raise ParametersFileError(f'{path}: not a ROS 2 parameters file')
-    keys = ('/**', node, '/' + node)
-    sections = [document[key] for key in keys if key in document]
-    if not sections:
-        raise ParametersFileError(
-            f'{path}: no section for the node: expected one of '
-            + ', '.join(repr(k) for k in keys))
-    params = {}
-    for section in sections:
-        values = section.get('ros__parameters') if isinstance(
-            section, dict) else None
-        if not isinstance(values, dict):
-            raise ParametersFileError(
-                f'{path}: the node section has no ros__parameters mapping')
-        _flatten(values, '', params)
-    return params
+    return ParametersFile.read(path).section(node)
 
 
 def rcl_typed(kind: str, value: Any) -> Any:
@@ -177,7 +220,7 @@ def load_robot(path: Path) -> Robot:
     Read with :func:`load_parameters` and validated by
     :func:`robot_from_parameters`.
     """
-    return robot_from_parameters(load_parameters(path))
+    return ParametersFile.read(path).robot()
 
 
 def _flatten(mapping, prefix, out):

@@ -47,7 +47,7 @@ RATES = {'lambda_': 'lambdadot', 'phi21': 'omega21', 'phi32': 'omega32'}
 LIMIT_STEP = 1e-4
 SEARCH_GRID, SEARCH_ROUNDS, SEARCH_SAMPLES, SEARCH_KEEP = 41, 60, 2000, 20
 SEARCH_SHRINK, SEARCH_SEED = 0.75, 12
-# Effort limit of the sliders (N): the force_limit default of the simulator
+# Effort limit of the sliders (N): the max_effort default of the simulator
 # and the tracking controller (the model rates no actuator); velocity
 # limits (m/s, rad/s): the model rates none, so a bound for tools only.
 SLIDER_EFFORT = 1000.0

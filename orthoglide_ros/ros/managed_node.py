@@ -25,7 +25,8 @@ from orthoglide_ros.formats.text import clip, printable
 from orthoglide_ros.ros.diagnostics import Diagnostics
 from orthoglide_ros.ros.input_threads import default_qos, InputThreads
 from orthoglide_ros.ros.node_runtime import NotStarting
-from orthoglide_ros.ros.parameters import declare_specs, spec_values
+from orthoglide_ros.ros.parameters import (declare_specs, overridden,
+                                           spec_values)
 from orthoglide_ros.ros.reply_guard import ReplyGuard
 
 __all__ = ('AUTOSTART', 'default_qos', 'ManagedNode')
@@ -73,6 +74,8 @@ class ManagedNode(LifecycleNode):
         self._refused = None        # why the last transition failed
         self.inputs = InputThreads(self)
         self.replies = ReplyGuard(self)
+        self.PARAMETERS.refuse_retired(
+            overridden(self, self.PARAMETERS.retired))
         declare_specs(self, (AUTOSTART, *self.PARAMETERS.specs))
         self.diagnostics = Diagnostics(self, self.TITLE,
                                        self._apply_realtime())

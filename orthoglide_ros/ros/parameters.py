@@ -54,6 +54,24 @@ def declare_specs(node, specs):
             raise ParameterError(spec.name, clip(error.args[0])) from None
 
 
+def overridden(node, names):
+    """
+    Return which of ``names`` (undeclared) the node was given at start.
+
+    By ``-p`` or a parameters file: rclpy keeps such overrides for a
+    later declaration, so each name is declared without a type, read and
+    undeclared again.
+    """
+    given = []
+    for name in names:
+        value = node.declare_parameter(
+            name, None, ParameterDescriptor(dynamic_typing=True))
+        if value.type_ != Parameter.Type.NOT_SET:
+            given.append(name)
+        node.undeclare_parameter(name)
+    return given
+
+
 def spec_values(node, specs, changes=()):
     """
     Return ``{name: value}`` of the specs' parameters with ``changes`` applied.

@@ -64,7 +64,7 @@ from orthoglide_testing.processes import (node_executable,
 from orthoglide_testing.verdicts import ATTEMPTS, pass_spoiled_by
 
 from orthoglide_ros.model import mechanics, trajectory
-from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.robot import JOINT_NAMES, Robot
 from orthoglide_ros.cores.tracking_controller import PARAMETERS
 
 LOOP_RATE = 250.0       # Hz: setpoints, feedforward and commands
@@ -206,8 +206,9 @@ class ClosedLoop:
     after a timeout) and :attr:`exit_codes` and :attr:`stderr` keep what
     they returned. ``loop_rate`` and ``plant_rate`` in Hz; ``engine``: the
     simulator's (``builtin`` or ``mujoco``), ``mjcf_file`` its model file
-    (mujoco; '' builds it from the plant's robot); ``force_limit``: the
-    simulator's (N, each actuator; None: its default). ``realtime`` (default:
+    (mujoco; '' builds it from the plant's robot); ``max_effort``: the
+    simulator's drives' limit (N, each actuator's
+    ``joint_limits.<joint>.max_effort``; None: its default). ``realtime`` (default:
     where the OS grants it): the loop's nodes (the setpoint publisher's
     included) run every thread SCHED_FIFO NODE_PRIORITY (their
     ``thread_priority``) and this process, the recorder, SCHED_FIFO
@@ -216,7 +217,7 @@ class ClosedLoop:
 
     def __init__(self, context, loop_rate=LOOP_RATE, plant_rate=PLANT_RATE,
                  engine='builtin', mjcf_file='', realtime=REALTIME,
-                 force_limit=None):
+                 max_effort=None):
         self.context = context
         self.realtime = realtime
         self.node_args = realtime_args(realtime)
@@ -224,7 +225,7 @@ class ClosedLoop:
         self.plant_rate = plant_rate
         self.engine = engine
         self.mjcf_file = mjcf_file
-        self.force_limit = force_limit
+        self.max_effort = max_effort
         self.processes = {}
         self.exit_codes = {}
         self.stderr = {}
@@ -240,8 +241,10 @@ class ClosedLoop:
                           '-p', f'engine:={self.engine}'] + (
                               ['-p', f'mjcf_file:={self.mjcf_file}']
                               if self.mjcf_file else []) + (
-                              ['-p', f'force_limit:={float(self.force_limit)}']
-                              if self.force_limit else []),
+                              [arg for joint in JOINT_NAMES for arg in (
+                                  '-p', f'joint_limits.{joint}.max_effort:='
+                                  f'{float(self.max_effort)}')]
+                              if self.max_effort else []),
             'feedforward': [],
             'tracking_controller': [
                 '-r', 'joint_trajectory:=feedforward/joint_trajectory'],
@@ -557,6 +560,25 @@ def rms_mm(run, start=0.0, end=math.inf):
     norm = np.linalg.norm(run.position_error, axis=1) * 1e3
     inside = (run.times >= start) & (run.times < end)
     return float(np.sqrt(np.mean(norm[inside] ** 2)))
+
+
+def off_path_mm(run, direction, start=0.0, end=math.inf):
+    """
+    Return the RMS distance (mm) of ``run``'s platform from a straight path.
+
+    The path: the line along ``direction`` (3,) that the motion follows
+    (eq. (6)'s, along its target); from ``start`` to ``end`` s. The
+    error's component across the path, which timing does not make: a
+    sample late or early, a stall, a latency move the platform along its
+    path, and only a force the model misses (a weight, an inertia) pushes
+    it off.
+    """
+    along = np.asarray(direction, dtype=float)
+    along = along / np.linalg.norm(along)
+    inside = (run.times >= start) & (run.times < end)
+    error = run.position_error[inside]
+    across = error - np.outer(error @ along, along)
+    return float(np.sqrt(np.mean(np.sum(across ** 2, axis=1)))) * 1e3
 
 
 def robot_parameters(robot):

@@ -9,14 +9,14 @@ input exits 2 with one line (doc/cli.md).
 import argparse
 import sys
 
-from orthoglide_ros.formats.params_file import load_robot, ParametersFileError
-from orthoglide_ros.model.robot import ParameterError, Robot
+from orthoglide_ros.formats.params_file import ParametersFileError
+from orthoglide_ros.model.robot import ParameterError
 from orthoglide_ros.tools.cli import (identifying, models, pictures,
                                       planning, solving)
 from orthoglide_ros.tools.cli.common import (check_distinct, check_output,
                                              CliError, CSV_COLUMNS,
                                              OUTPUT_OPTIONS, print_error,
-                                             PROG)
+                                             PROG, read_params, robot_of)
 
 __all__ = ('CliError', 'CSV_COLUMNS', 'main')
 
@@ -36,8 +36,12 @@ def main(argv=None):
         if args.command != 'record':    # a bag: the recorder's own checks
             for option in OUTPUT_OPTIONS:
                 check_output(getattr(args, option, None), option)
-        # Every subcommand but record reads the robot (--params).
-        robot = _robot(args.params) if 'params' in args else None
+        # Every subcommand but record reads the robot (--params), the file
+        # once: args.parameters holds it for what else a command takes.
+        robot = None
+        if 'params' in args:
+            args.parameters = read_params(args.params)
+            robot = robot_of(args.parameters)
         return args.run(robot, args)
     except CliError as error:
         print_error(str(error))
@@ -45,16 +49,6 @@ def main(argv=None):
     except (ParametersFileError, ParameterError) as error:
         print_error(str(error))
         return 2
-
-
-def _robot(path):
-    """Return the robot of the --params file (its path names a bad value)."""
-    if path is None:
-        return Robot()
-    try:
-        return load_robot(path)
-    except ParameterError as error:
-        raise CliError(f'{path}: {error}') from None
 
 
 def _version():

@@ -1,15 +1,18 @@
 """
-What the ``orthoglide`` subcommands share: errors, columns, outputs, types.
+What the ``orthoglide`` subcommands share: errors, columns, files, types.
 
 :class:`CliError` (one line, exit code 2), the columns the tool writes and
 reads, the output files checked before anything is computed and written
-atomically (doc/cli.md#exit-codes), argparse types of finite numbers in
+atomically (doc/cli.md#exit-codes), the ``--params`` file read once
+(``args.parameters``: its robot, its joint names), the joint trajectory
+YAML ``batch`` and ``plan`` write, argparse types of finite numbers in
 range and the options several subcommands take.
 """
 
 import argparse
 from collections import namedtuple
 import io
+import json
 import math
 import os
 import stat
@@ -18,9 +21,12 @@ import tempfile
 
 import numpy as np
 
+from orthoglide_ros.cores.parameters import joint_names
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
+from orthoglide_ros.formats.params_file import ParametersFile
 from orthoglide_ros.model import mechanics
-from orthoglide_ros.model.robot import JOINT_NAMES, LEGS, ROW
+from orthoglide_ros.model.robot import (JOINT_NAMES, LEGS, ParameterError,
+                                        Robot, ROW)
 
 PROG = 'orthoglide'
 QUANTITIES = ('lambda', 'lambdadot', 'lambdaddot', 'force', 'power')
@@ -53,6 +59,49 @@ class CliError(Exception):
 def option_flag(option):
     """Return the command-line spelling of the option ``dest``."""
     return '--' + option.replace('_', '-')
+
+
+def read_params(path):
+    """Return the ``--params`` file read once, or None without one."""
+    return None if path is None else ParametersFile.read(path)
+
+
+def robot_of(parameters):
+    """
+    Return the robot of the ``--params`` file (the paper's without one).
+
+    A bad ``robot.*`` value is refused naming the file and the parameter.
+    """
+    if parameters is None:
+        return Robot()
+    try:
+        return parameters.robot()
+    except ParameterError as error:
+        raise CliError(f'{parameters.path}: {error}') from None
+
+
+def params_joint_names(parameters):
+    """
+    Return the ``feedforward`` section's ``joint_names`` of ``--params``.
+
+    Checked as the nodes check them; the defaults (JOINT_NAMES) without a
+    file or without the key.
+    """
+    if parameters is None:
+        return JOINT_NAMES
+    names = parameters.section().get('joint_names', list(JOINT_NAMES))
+    try:
+        return joint_names(names)
+    except ValueError as error:
+        raise CliError(f'{parameters.path}: joint_names: {error}') from None
+
+
+def option_joint_names(args):
+    """Return ``--joint-names`` checked as the nodes check them."""
+    try:
+        return joint_names(args.joint_names)
+    except ValueError as error:
+        raise CliError(f'--joint-names: {error}') from None
 
 
 def check_output(path, option):
@@ -280,6 +329,34 @@ def solve_trajectory(robot, where, times, lines, p, v, a):
               else f': data row {k + 1} (line {lines[k]})')
         reason = str(error).removeprefix(f'sample {k}: ')
         raise CliError(f'{where}{at}: {reason}') from None
+
+
+def joint_trajectory_yaml(nanoseconds, sol, names):
+    """
+    Format a trajectory_msgs/JointTrajectory as YAML (bytes).
+
+    The message as ``ros2 topic pub`` and launch files read it: a zero
+    header stamp (joint_trajectory_controller starts it on arrival),
+    ``names``, one point per row with positions = lambda (m), velocities =
+    lambdadot (m/s), accelerations = lambdaddot (m/s^2), effort = f (N)
+    and time_from_start = ``nanoseconds`` (int64). Doubles in full
+    precision.
+    """
+    def row(values):
+        return '[' + ', '.join(repr(float(x)) for x in values) + ']'
+    out = ['header:', '  stamp:', '    sec: 0', '    nanosec: 0',
+           "  frame_id: ''",
+           'joint_names: [' + ', '.join(map(json.dumps, names)) + ']',
+           'points:']
+    for k in range(len(nanoseconds)):
+        sec, nanosec = divmod(int(nanoseconds[k]), 10**9)
+        out += [f'- positions: {row(sol.lambda_[k])}',
+                f'  velocities: {row(sol.lambdadot[k])}',
+                f'  accelerations: {row(sol.lambdaddot[k])}',
+                f'  effort: {row(sol.force[k])}',
+                '  time_from_start:', f'    sec: {sec}',
+                f'    nanosec: {nanosec}']
+    return ('\n'.join(out) + '\n').encode('utf-8')
 
 
 def table_row(label, *values):

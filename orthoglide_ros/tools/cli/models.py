@@ -1,9 +1,8 @@
 """``urdf``, ``mjcf``: the robot as a URDF and as a MuJoCo model."""
 
-from orthoglide_ros.cores.parameters import joint_names
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.tools.cli.common import (
-    add_joint_names, add_output, CliError, non_negative_float,
+    add_joint_names, add_output, non_negative_float, option_joint_names,
     positive_float, Subcommand, within, write_output)
 
 _singularity_margin = within(float, 0.0, 0.99)
@@ -23,7 +22,7 @@ def add_urdf(parser):
 def run_urdf(robot, args):
     """Write the robot's URDF (standard output or ``--output``)."""
     from orthoglide_ros.model import urdf
-    names = _joint_names(args)
+    names = option_joint_names(args)
     text = urdf.urdf(robot, names, args.singularity_margin)
     write_output(args.output, text.encode('utf-8'))
     return 0
@@ -47,7 +46,7 @@ def add_mjcf(parser):
 def run_mjcf(robot, args):
     """Write the robot's MJCF (standard output or ``--output``)."""
     from orthoglide_ros.model import mjcf
-    names = _joint_names(args)
+    names = option_joint_names(args)
     if args.armature is not None:
         robot = robot.replace(armature=tuple(args.armature))
     text = mjcf.mjcf(robot, names, args.force_limit)
@@ -72,11 +71,3 @@ SUBCOMMANDS = (
         'constraints, three force actuators named as the sliders (N); '
         'see doc/mujoco.md.'),
 )
-
-
-def _joint_names(args):
-    """Return ``--joint-names`` checked as the nodes check them."""
-    try:
-        return joint_names(args.joint_names)
-    except ValueError as error:
-        raise CliError(f'--joint-names: {error}') from None

@@ -9,14 +9,13 @@ import sys
 
 import numpy as np
 
-from orthoglide_ros.cores.parameters import JOINT_NAMES, joint_names
 from orthoglide_ros.model.robot import LEGS
-from orthoglide_ros.formats.params_file import load_parameters
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools.cli.common import (
-    add_output, add_position, CliError, CSV_COLUMNS, csv_text, new_figure,
-    png_bytes, PROG, QUANTITIES, read_trajectory, solve_trajectory,
-    Subcommand, table_row, within, write_output)
+    add_output, add_position, CliError, CSV_COLUMNS, csv_text,
+    joint_trajectory_yaml, new_figure, params_joint_names, png_bytes, PROG,
+    QUANTITIES, read_params, read_trajectory, solve_trajectory, Subcommand,
+    table_row, within, write_output)
 
 DEFAULT_SAMPLES = 201
 UNITS = {'lambda': 'm', 'lambdadot': 'm/s', 'lambdaddot': 'm/s^2',
@@ -143,8 +142,8 @@ def run_batch(robot, args):
     name, times, p, v, a, lines = read_trajectory(args.input)
     sol = solve_trajectory(robot, name, times, lines, p, v, a)
     if args.format == 'joint_trajectory':
-        data = _joint_trajectory_yaml(_time_from_start(times, lines, name),
-                                      sol, _joint_names(args.params))
+        data = joint_trajectory_yaml(_time_from_start(times, lines, name),
+                                     sol, params_joint_names(args.parameters))
     else:
         data = csv_text(times, p, sol)
     write_output(args.output, data)
@@ -181,43 +180,14 @@ def _time_from_start(times, lines, name):
     return nanoseconds
 
 
-def _joint_trajectory_yaml(nanoseconds, sol, names):
-    """
-    Format a trajectory_msgs/JointTrajectory as YAML (bytes).
-
-    The message as ``ros2 topic pub`` and launch files read it: a zero
-    header stamp (joint_trajectory_controller starts it on arrival),
-    ``names``, one point per row with positions = lambda (m), velocities =
-    lambdadot (m/s), accelerations = lambdaddot (m/s^2), effort = f (N)
-    and time_from_start = ``nanoseconds`` (int64). Doubles in full
-    precision.
-    """
-    def row(values):
-        return '[' + ', '.join(repr(float(x)) for x in values) + ']'
-    out = ['header:', '  stamp:', '    sec: 0', '    nanosec: 0',
-           "  frame_id: ''",
-           'joint_names: [' + ', '.join(map(json.dumps, names)) + ']',
-           'points:']
-    for k in range(len(nanoseconds)):
-        sec, nanosec = divmod(int(nanoseconds[k]), 10**9)
-        out += [f'- positions: {row(sol.lambda_[k])}',
-                f'  velocities: {row(sol.lambdadot[k])}',
-                f'  accelerations: {row(sol.lambdaddot[k])}',
-                f'  effort: {row(sol.force[k])}',
-                '  time_from_start:', f'    sec: {sec}',
-                f'    nanosec: {nanosec}']
-    return ('\n'.join(out) + '\n').encode('utf-8')
+# cli/planning.py imports these two names from here and reads --params
+# itself: they go once it takes args.parameters and common's helpers.
+_joint_trajectory_yaml = joint_trajectory_yaml
 
 
 def _joint_names(path):
-    """Return the feedforward section's joint_names of ``path``, or the defaults."""
-    if path is None:
-        return JOINT_NAMES
-    names = load_parameters(path).get('joint_names', list(JOINT_NAMES))
-    try:
-        return joint_names(names)
-    except ValueError as error:
-        raise CliError(f'{path}: joint_names: {error}') from None
+    """Return the ``joint_names`` of the ``--params`` file ``path``."""
+    return params_joint_names(read_params(path))
 
 
 SUBCOMMANDS = (

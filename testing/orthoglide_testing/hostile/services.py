@@ -149,6 +149,10 @@ def malformed_parameters(type_code=200):
     return result
 
 
+# A simulator parameter the cases set, harmless: A's effort limit (N).
+EFFORT = 'joint_limits.slider_a.max_effort'
+
+
 # Absurd parameter values -----------------------------------------------------
 ABSURD = {
     'feedforward': {'robot.l3': 1e200, 'robot.m5': 1e300,
@@ -437,9 +441,9 @@ def isolated_clients(fresh=3, stalls=5):
     ``~/change_state`` and the simulator's ``~/set_parameters`` with a
     TRANSIENT_LOCAL reply reader (the VOLATILE reply writer never matches
     it: a user's QoS mistake is enough), sends one request to each
-    (deactivate; ``force_limit`` 999 N; again while an ordinary client does
-    not see it done: a request can be lost before discovery ends), and
-    stays. Then ``fresh`` new clients of this process call each service in
+    (deactivate; A's ``max_effort`` 999 N, EFFORT; again while an ordinary
+    client does not see it done: a request can be lost before discovery
+    ends), and stays. Then ``fresh`` new clients of this process call each service in
     turn (5 s each). Then the feedforward is stopped (SIGSTOP) for 150 ms as
     each of ``stalls`` get_state requests of one client is being answered,
     and that client and a fresh process ask ``stalls`` more times.
@@ -467,7 +471,7 @@ def _beside(peer, nodes, node, hostile, fresh, stalls):
         'feedforward change_state': peer.wait(lambda: _state(
             peer, state) == 'inactive', 5.0),
         'simulator set_parameters': peer.wait(lambda: _parameter(
-            peer, 'simulator', 'force_limit') == 999.0, 5.0)}
+            peer, 'simulator', EFFORT) == 999.0, 5.0)}
     answered = {'feedforward change_state': 0, 'simulator set_parameters': 0}
     for k in range(fresh):
         transition = (Transition.TRANSITION_ACTIVATE if k % 2 == 0
@@ -478,7 +482,7 @@ def _beside(peer, nodes, node, hostile, fresh, stalls):
         answered['feedforward change_state'] += bool(
             reply is not None and reply.success)
         results = peer.set_parameters(
-            'simulator', {'force_limit': 1000.0 + k}, timeout=5.0)
+            'simulator', {EFFORT: 1000.0 + k}, timeout=5.0)
         answered['simulator set_parameters'] += bool(
             results and results[0].successful)
     client = peer.node.create_client(GetState, state)
@@ -571,7 +575,7 @@ def linger(args):
     A request sent before the service's request reader has matched this
     writer is lost (DDS, on a loaded machine), and the reply that would
     say so never comes: ordinary clients of the same node read the effect
-    (feedforward inactive, ``force_limit`` 999 N), and a request whose
+    (feedforward inactive, A's ``max_effort`` 999 N), and a request whose
     effect does not show within RESEND s is sent again.
     """
     rclpy.init()
@@ -590,9 +594,9 @@ def linger(args):
          state, GetState.Request(),
          lambda reply: reply.current_state.label == 'inactive'),
         (parameters, SetParameters.Request(parameters=[ParameterMsg(
-            name='force_limit', value=ParameterValue(
+            name=EFFORT, value=ParameterValue(
                 type=3, double_value=999.0))]),
-         force, GetParameters.Request(names=['force_limit']),
+         force, GetParameters.Request(names=[EFFORT]),
          lambda reply: reply.values[0].double_value == 999.0))
     try:
         # Not wait_for_service on the hostile clients: it waits for the
@@ -663,7 +667,7 @@ def burst(args):
     else:
         client = node.create_client(SetParameters,
                                     f'/{args.target}/set_parameters')
-        name, value = {'simulator': ('force_limit', 1000.0),
+        name, value = {'simulator': (EFFORT, 1000.0),
                        'feedforward': ('singularity_margin', 0.2)}[
                            args.target]
 

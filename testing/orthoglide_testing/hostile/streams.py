@@ -26,8 +26,12 @@ from orthoglide_testing.load import REALTIME
 from orthoglide_testing.hostile.peer import (
     diagnostic_counter, handshake, HarnessError, HOLD, home_setpoint, NODES,
     Nodes, Peer, START_TIMEOUT, wait_running)
+from orthoglide_ros.cores.tracking_controller import DRIVES
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
+
+# The tracking controller's effort limit, the same on each actuator (N).
+MAX_EFFORT = DRIVES['slider_a']['max_effort']
 
 
 @dataclass
@@ -97,7 +101,7 @@ class Stalls:
     """:func:`stall_resume`: each stalled process and the bounds."""
 
     peak_speed: float       # the trajectory's own, m/s
-    force_limit: float
+    max_effort: float       # N, the controller's clip
     stalls: dict            # process -> Stall
     alive: dict             # process -> every node alive after
 
@@ -109,7 +113,7 @@ class Flood:
 
     sent: int                   # one-point trajectories published
     commands: int               # commands during the flood and after it
-    saturated: int              # of them, a force at force_limit
+    saturated: int              # of them, a force at the effort limit
     max_force: float
     max_speed: float            # largest |lambdadot| measured
     final_error: float          # |lambda| after the normal trajectory, m
@@ -369,7 +373,8 @@ def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
     holds, and the trajectory's own peak |lambdadot|.
     """
     peak = trajectory_peak_speed()
-    result = Stalls(peak_speed=peak, force_limit=1000.0, stalls={}, alive={})
+    result = Stalls(peak_speed=peak, max_effort=MAX_EFFORT, stalls={},
+                    alive={})
     with Peer(realtime=REALTIME) as peer:
         commands = peer.record('commands', Float64MultiArray)
         states = peer.record('joint_states', JointState)
@@ -423,7 +428,6 @@ def trajectory_flood(flood=1.5, period=0.001, after=1.5):
     stamp zero: "now"), for ``flood`` s; then one normal trajectory, home
     in 1 s with the force that holds it there, followed for ``after`` s.
     """
-    force_limit = 1000.0
     with Nodes() as nodes, Peer() as peer:
         commands = peer.record('commands', Float64MultiArray)
         states = peer.record('joint_states', JointState)
@@ -462,7 +466,7 @@ def trajectory_flood(flood=1.5, period=0.001, after=1.5):
         values = status[2] if status else {}
         return Flood(
             sent=sent, commands=len(forces),
-            saturated=sum(f >= force_limit for f in forces),
+            saturated=sum(f >= MAX_EFFORT for f in forces),
             max_force=max(forces, default=0.0),
             max_speed=max(speeds, default=0.0),
             final_error=max(abs(x) for x in states[-1][1].position),
