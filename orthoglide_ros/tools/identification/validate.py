@@ -16,7 +16,9 @@ from collections import namedtuple
 import numpy as np
 
 from orthoglide_ros.formats.logs import LogError
-from orthoglide_ros.tools.identification.laws import standard_parameters
+from orthoglide_ros.model.terms import RIPPLE
+from orthoglide_ros.tools.identification.laws import (Law,
+                                                      standard_parameters)
 from orthoglide_ros.tools.identification.motion import (
     check_lag, DEFAULT_CUTOFF, estimate_lag, Motion)
 from orthoglide_ros.model.types import Array
@@ -35,7 +37,8 @@ TRANSIENT_SHARE = 0.01
 
 Validation = namedtuple('Validation', (
     'source', 'samples', 'measured', 'predicted', 'rms', 'max', 'explained',
-    'force_lag', 'lag_estimated', 'warnings'), defaults=((),))
+    'force_lag', 'lag_estimated', 'warnings', 'screw_lead', 'ripple_left'),
+    defaults=((), (0.0, 0.0, 0.0), None))
 Validation.__doc__ = """A robot's forces against a log's (:func:`validate`).
 
 ``samples``: the log's :class:`Samples` (their regressor unused: None);
@@ -45,7 +48,10 @@ low-pass; per actuator ``rms`` and ``max`` of the error (N) and
 sum(f^2)``; ``force_lag`` (s) and ``lag_estimated`` as in
 :class:`estimate.Identification`; ``warnings``: sentences on what makes
 the figures say little (a robot standing still, an error that is a
-transient's).
+transient's); ``screw_lead``: the robot's (m, per actuator; 0.0: none);
+``ripple_left``: per actuator, the amplitude (N) of the error's part
+periodic in the screw's lead (:func:`ripple_left`; NaN without a lead),
+None when no actuator has one.
 """
 
 
@@ -93,6 +99,7 @@ def validate(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
                                 out=np.full(3, np.nan), where=squares > 0.0)
     samples = motion.samples(None, measured)
     rms = np.sqrt(np.mean(error ** 2, axis=0))
+    left = ripple_left(motion, error) if any(robot.screw_lead) else None
     if not np.isfinite(rms).all():
         j = int(np.argmin(np.isfinite(rms)))
         raise LogError(f'{log.source}: the error on actuator {"ABC"[j]} '
@@ -101,7 +108,30 @@ def validate(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     return Validation(
         log.source, samples, measured, predicted, rms,
         np.abs(error).max(axis=0), explained, float(force_lag),
-        lag_estimated, _warnings(samples, error))
+        lag_estimated, _warnings(samples, error), robot.screw_lead, left)
+
+
+def ripple_left(motion: Motion, error: Array) -> Array:
+    """
+    Return the amplitude (N, per actuator) of the screw ripple in ``error``.
+
+    ``error`` (M, 3): measured less predicted forces along ``motion``,
+    filtered. Per actuator with a lead, the least-squares fit of its
+    error on the sine and cosine of the screw's angle ``2 pi lambda /
+    p`` through the same low-pass (the ripple term's columns,
+    :meth:`Motion.own_columns`): ``sqrt(s^2 + c^2)`` of the fit, what of
+    a ripple the model leaves (a ripple the model holds leaves about
+    the noise's share). NaN on an actuator without a lead.
+    """
+    law = Law((RIPPLE,))
+    sine, cosine = (motion.own_columns(term, law) for term in law)
+    out = np.full(3, np.nan)
+    for j, lead in enumerate(motion.robot.screw_lead):
+        if lead:
+            a = np.column_stack((sine[:, j], cosine[:, j]))
+            fit = np.linalg.lstsq(a, error[:, j], rcond=None)[0]
+            out[j] = float(np.hypot(*fit))
+    return out
 
 
 def _warnings(samples, error):
