@@ -99,9 +99,9 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
     its derivatives in frame 0 (m, m/s, m/s^2), each a 3-sequence. Returns
     a :class:`Solution` of 3-tuples. The force is the rigid bodies' (the
     kernel's) plus the terms of :mod:`terms` at the sliders' state
-    (friction, drives, screw ripple), and the power ``lambdadot * force`` is the total force's. ``record``, if a
-    dict, receives the kernel's per-element quantities (see
-    :func:`elements`).
+    (friction, drives, screw ripple), and the power ``lambdadot * force``
+    is the total force's. ``record``, if a dict, receives the kernel's
+    per-element quantities (see :func:`elements`).
     """
     x, y, z = position
     vx, vy, vz = velocity

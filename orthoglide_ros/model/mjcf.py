@@ -11,7 +11,7 @@ written in the file's ``custom`` data) to :func:`recorded_forces`
 
 from __future__ import annotations
 
-from typing import Any, Optional, Sequence, TYPE_CHECKING
+from typing import Any, Mapping, Optional, Sequence, TYPE_CHECKING
 import functools
 import xml.etree.ElementTree as ET
 
@@ -59,7 +59,7 @@ def friction_beyond(robot: Robot, lambdadot: Any) -> Any:
         mechanics.friction_force(held_by_mujoco(robot), lambdadot)))
 
 
-def recorded(robot: Robot, numeric: dict[str, Sequence[float]]) -> Robot:
+def recorded(robot: Robot, numeric: Mapping[str, Any]) -> Robot:
     """
     Return ``robot`` with the RECORDED rows of an MJCF's ``custom`` data.
 
@@ -83,8 +83,10 @@ def recorded_forces(robot: Robot, lambda_: Vector,
     active = tuple(term for term in robot.active_terms if term in RECORDED)
     if not active:
         return ZERO
-    return terms.forces(robot, active, tuple(map(float, lambda_)),
-                        tuple(map(float, lambdadot)), ZERO, terms.FLOATS)
+    fa, fb, fc = terms.forces(robot, active, tuple(map(float, lambda_)),
+                              tuple(map(float, lambdadot)), ZERO,
+                              terms.FLOATS)
+    return fa, fb, fc
 
 
 @functools.lru_cache(maxsize=16)

@@ -10,7 +10,7 @@ friction beyond them, and the screw ripple the model records
 
 from __future__ import annotations
 
-from typing import Optional, Union
+from typing import Any, Optional, Union
 import math
 
 import numpy as np
@@ -52,7 +52,7 @@ def check_model(text: str) -> None:
     mjcf.recorded(Robot(), numeric_data(model))
 
 
-def numeric_data(model) -> dict[str, np.ndarray]:
+def numeric_data(model: Any) -> dict[str, np.ndarray]:
     """Return a MuJoCo model's ``custom`` numeric data by name."""
     return {model.numeric(i).name: model.numeric(i).data.copy()
             for i in range(model.nnumeric)}

@@ -12,13 +12,15 @@ from __future__ import annotations
 
 from typing import Optional, TYPE_CHECKING
 from collections import namedtuple
+import math
 
 import numpy as np
 
 from orthoglide_ros.formats.logs import LogError
-from orthoglide_ros.model.terms import RIPPLE
-from orthoglide_ros.tools.identification.laws import (Law,
-                                                      standard_parameters)
+from orthoglide_ros.model.robot import LEGS
+from orthoglide_ros.model.terms import RIPPLE, RIPPLE_COSINE
+from orthoglide_ros.tools.identification.laws import (
+    Law, parameter, PLAIN, standard_names, standard_parameters)
 from orthoglide_ros.tools.identification.motion import (
     check_lag, DEFAULT_CUTOFF, estimate_lag, Motion)
 from orthoglide_ros.model.types import Array
@@ -116,22 +118,25 @@ def ripple_left(motion: Motion, error: Array) -> Array:
     Return the amplitude (N, per actuator) of the screw ripple in ``error``.
 
     ``error`` (M, 3): measured less predicted forces along ``motion``,
-    filtered. Per actuator with a lead, the least-squares fit of its
-    error on the sine and cosine of the screw's angle ``2 pi lambda /
-    p`` through the same low-pass (the ripple term's columns,
-    :meth:`Motion.own_columns`): ``sqrt(s^2 + c^2)`` of the fit, what of
-    a ripple the model leaves (a ripple the model holds leaves about
-    the noise's share). NaN on an actuator without a lead.
+    filtered. The least-squares fit of the error on the regressor of
+    ``coulomb+ripple`` along the motion (the masses', the friction's and
+    the ripple's filtered columns: an error of the masses or friction is
+    not taken for a ripple), and per actuator with a lead ``sqrt(s^2 +
+    c^2)`` of its ripple coefficients: what of a ripple the model leaves
+    (about the noise's share where it holds the ripple). NaN on an
+    actuator without a lead.
     """
-    law = Law((RIPPLE,))
-    sine, cosine = (motion.own_columns(term, law) for term in law)
-    out = np.full(3, np.nan)
-    for j, lead in enumerate(motion.robot.screw_lead):
-        if lead:
-            a = np.column_stack((sine[:, j], cosine[:, j]))
-            fit = np.linalg.lstsq(a, error[:, j], rcond=None)[0]
-            out[j] = float(np.hypot(*fit))
-    return out
+    law = Law(PLAIN + (RIPPLE,))
+    w = motion.columns(law).reshape(-1, len(standard_names(law)))
+    norms = np.linalg.norm(w, axis=0)
+    fit = np.linalg.lstsq(w / np.where(norms > 0.0, norms, 1.0),
+                          error.reshape(-1), rcond=None)[0]
+    values = dict(zip(standard_names(law), fit / np.where(norms > 0.0,
+                                                          norms, 1.0)))
+    return np.array([
+        math.hypot(values[parameter(RIPPLE, leg)],
+                   values[parameter(RIPPLE_COSINE, leg)]) if lead
+        else math.nan for leg, lead in zip(LEGS, motion.robot.screw_lead)])
 
 
 def _warnings(samples, error):
