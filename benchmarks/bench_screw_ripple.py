@@ -47,8 +47,8 @@ def seeds(text):
     return [int(v) for v in text.split(',')]
 
 
-def errors(nominal, robot, defects, log, motion, times):
-    """Identify from ``log``; return the robot, its errors (N), seconds."""
+def identified(nominal, robot, defects, log, motion, times):
+    """Identify from ``log``; give the robot, its RMS errors (N), seconds."""
     start = time.perf_counter()
     found = identification.identify(nominal, log)
     spent = time.perf_counter() - start
@@ -79,9 +79,9 @@ def main(argv=None):
         robot, defects = rough.screw_robot(seed)
         log = rough.log(robot, defects, 2 * seed, 10 + seed)
         motion, times = rough.validation_motion(defects, 2 * seed + 1)
-        plain, before, spent_before = errors(Robot(), robot, defects, log,
-                                             motion, times)
-        found, after, spent_after = errors(
+        plain, before, spent_before = identified(
+            Robot(), robot, defects, log, motion, times)
+        found, after, spent_after = identified(
             Robot(screw_lead=(lead,) * 3), robot, defects, log, motion,
             times)
         amplitude = np.hypot(found.robot.ripple_sine,

@@ -197,7 +197,6 @@ TERMS = (VISCOUS, COULOMB, DIRECTION, STRIBECK, ARMATURE, RIPPLE,
 # The terms with a force of their own, and the friction among them.
 FORCES = tuple(term for term in TERMS if term.force)
 FRICTION = tuple(term for term in FORCES if term.friction)
-_new = tuple.__new__
 # Every term's rows, by name.
 _ROWS = {row.name: row for term in TERMS for row in term.rows}
 # Each term whose coefficient follows another's, by name: that term.
@@ -273,8 +272,9 @@ def forces(robot: Any, terms: tuple[Term, ...], lambda_: Any, lambdadot: Any,
     va, vb, vc = lambdadot
     aa, ab, ac = lambdaddot
     # (Slider(...) through tuple.__new__: half the cost, the hot path.)
-    sa, sb, sc = (_new(Slider, (0, pa, va, aa)), _new(Slider, (1, pb, vb, ab)),
-                  _new(Slider, (2, pc, vc, ac)))
+    new = tuple.__new__
+    sa, sb, sc = (new(Slider, (0, pa, va, aa)), new(Slider, (1, pb, vb, ab)),
+                  new(Slider, (2, pc, vc, ac)))
     fa = fb = fc = 0.0
     for term in terms:
         ca, cb, cc = getattr(robot, term.rows[0].name)

@@ -148,7 +148,7 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     motion = Motion(robot, log, cutoff)
     payload = robot.payload if payload is None else float(payload)
     laws = (base.law,) if base is not None else (
-        tuple(law for law in LAWS if possible(robot, law))
+        tuple(law for law in LAWS if _possible(robot, law))
         if friction is None else (friction,))
     _check_possible(robot, laws[0])
     # The laws the log has samples enough for (the simplest needs them).
@@ -247,7 +247,7 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
         bounded, held, payload)
 
 
-def possible(robot: Robot, law: Law) -> bool:
+def _possible(robot, law):
     """Whether every term of ``law`` can act on some actuator of ``robot``."""
     return all(any(terms.acts(robot, term)) for term in law)
 
