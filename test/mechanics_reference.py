@@ -11,7 +11,9 @@ package but the values of a :class:`Robot` (read as plain attributes).
 - :func:`body_jacobians`: the linear (centre of mass) and angular Jacobians
   of every body with respect to the generalised coordinates ``q = r_G``,
   by complex step (exact to machine precision).
-- :func:`mass_matrix`, :func:`kinetic_energy`, :func:`potential_energy`.
+- :func:`mass_matrix`, :func:`kinetic_energy`, :func:`potential_energy`
+  (gravity, and the drives' screw ripple as a potential of the sliders:
+  :func:`ripple_potential`).
 - :func:`lagrange_forces`: the actuator forces from Lagrange's equations,
   ``Q = M qdd + C(q, qd) + dV/dq`` and ``f = J_lambda^-T Q``, with the
   Christoffel terms from central finite differences of the exact ``M``;
@@ -279,23 +281,63 @@ def kinetic_energy(robot, position, velocity):
 
 
 def potential_energy(robot, position):
-    """V (J) = -sum m g . r_C over every body (platform once)."""
+    """
+    V (J) = -sum m g . r_C over every body (platform once), plus the ripple.
+
+    The drives' screw ripple is :func:`ripple_potential`.
+    """
     g = np.asarray(robot.gravity, dtype=float)
     total = -masses(robot)[5] * g @ np.asarray(position, dtype=float)
     for leg in LEGS:
         geo = leg_geometry(robot, leg, position)
         for k in LEG_BODIES:
             total -= masses(robot)[k] * g @ geo.centre[k]
+    return total + ripple_potential(robot, position)
+
+
+def ripple_potential(robot, position):
+    """
+    V_r (J): the screw ripple of the drives as a potential of the sliders.
+
+    A drive of lead ``p_j`` whose force periodic in its screw's angle
+    ``phi = 2 pi lambda_j / p_j`` is ``s_j sin(phi) + c_j cos(phi)``
+    (doc/model.md#drives-and-payload) stores ``V_j = (p_j / 2 pi) (c_j
+    sin(phi) - s_j cos(phi))``, whose derivative along the slider is that
+    force; 0 without a lead. ``position`` real or complex (eq. 9 for
+    lambda).
+    """
+    total = 0.0
+    lam = None
+    for j, lead in enumerate(robot.screw_lead):
+        if lead == 0.0:
+            continue
+        if lam is None:
+            lam = [leg_geometry(robot, leg, position).lam for leg in LEGS]
+        phi = 2.0 * np.pi * lam[j] / lead
+        total = total + lead / (2.0 * np.pi) * (
+            robot.ripple_cosine[j] * np.sin(phi)
+            - robot.ripple_sine[j] * np.cos(phi))
     return total
 
 
 def potential_gradient(robot, position):
-    """dV/dq (N) = -sum m Jv^T g, exact (complex-step Jacobians)."""
+    """
+    dV/dq (N) = -sum m Jv^T g plus the ripple's, exact (complex step).
+
+    The ripple's part is the complex-step derivative of
+    :func:`ripple_potential` along each coordinate of q.
+    """
     jac = body_jacobians(robot, position)
     g = np.asarray(robot.gravity, dtype=float)
     grad = np.zeros(3)
     for key in jac.centre:
         grad -= masses(robot)[key[1]] * jac.linear[key].T @ g
+    if any(robot.screw_lead):
+        q = np.asarray(position, dtype=float)
+        for i in range(3):
+            dq = q.astype(complex)
+            dq[i] += 1j * COMPLEX_STEP
+            grad[i] += np.imag(ripple_potential(robot, dq)) / COMPLEX_STEP
     return grad
 
 

@@ -15,6 +15,7 @@ import re
 import sys
 
 from orthoglide_ros.model import terms
+from orthoglide_ros.model.mjcf import RECORDED
 from orthoglide_ros.model.robot import is_vector, ROWS
 from orthoglide_ros.tools.identification import PLAIN
 
@@ -51,9 +52,16 @@ def parameters_table():
             default = f'`{float(row.default)!r}`'
         low, high = (number(v) for v in row.limits)
         bounds = f'({low}, {high})' if row.open else f'[{low}, {high}]'
+        if row.none is not None:
+            bounds = f'{number(row.none)} (none) or in {bounds}'
+        else:
+            bounds = f'in {bounds}' if vector else bounds
+        bounds = f'each {bounds}' if vector else bounds
+        if row.needs:
+            bounds += f'; 0 where `robot.{row.needs}` is none'
         lines.append(
             f'| `robot.{row.name}` | {"double[3]" if vector else "double"} '
-            f'| {default} | {"each in " if vector else ""}{bounds} '
+            f'| {default} | {bounds} '
             f'| {cell(row.description)} ({row.unit}) |')
     return '\n'.join(lines)
 
@@ -67,12 +75,14 @@ def terms_table():
             mujoco = 'the platform body\'s `mass`'
         elif term.mujoco:
             mujoco = f'slide joint `{term.mujoco}`'
+        elif term in RECORDED:
+            mujoco = 'custom numeric data; a force the plant applies'
         else:
             mujoco = 'a force the plant applies'
         if term in PLAIN:
             identified = 'always'
         elif term.identified:
-            identified = f'`+{term.name}`'
+            identified = f'`+{term.part_of or term.name}`'
         else:
             identified = 'known'
         lines.append(

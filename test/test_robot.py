@@ -23,6 +23,7 @@ POSITIVE = ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm4', 'm5',
             'm6', 'friction_velocity', 'friction_stribeck_velocity')
 FRICTION = ('friction_viscous', 'friction_coulomb',
             'friction_coulomb_negative', 'friction_stribeck')
+RIPPLE = ('ripple_sine', 'screw_lead', 'ripple_cosine')
 BAD_NUMBERS = (0.0, -0.1, -math.inf, math.inf, math.nan, '0.2', None,
                True, [0.2])
 
@@ -187,9 +188,10 @@ def test_parameter_names_and_values_round_trip():
                   friction_coulomb_negative=(7.0, 8.0, 9.0),
                   friction_stribeck=(1.5, 2.5, 3.5),
                   friction_stribeck_velocity=0.005, armature=(3.2, 1.0, 0.0),
-                  payload=2.5)
+                  screw_lead=(0.005, 0.01, 0.0), ripple_sine=(0.5, -0.2, 0.0),
+                  ripple_cosine=(-0.3, 0.0, 0.0), payload=2.5)
     assert set(Robot.parameter_names()) == set(POSITIVE) | {'gravity'} \
-        | set(FRICTION) | {'armature', 'payload'}
+        | set(FRICTION) | {'armature', 'payload'} | set(RIPPLE)
     assert Robot(**robot.as_parameters()) == robot
     assert robot.replace() == robot
     assert robot.replace(m5=16.0).friction_coulomb == (4.0, 5.0, 6.0)

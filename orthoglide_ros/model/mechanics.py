@@ -98,10 +98,10 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
     ``position``, ``velocity``, ``acceleration``: the platform centre G and
     its derivatives in frame 0 (m, m/s, m/s^2), each a 3-sequence. Returns
     a :class:`Solution` of 3-tuples. The force is the rigid bodies' (the
-    kernel's) plus the sliders' friction (:func:`friction_force`), and the
-    power ``lambdadot * force`` is the total force's. ``record``, if a
-    dict, receives the kernel's per-element quantities (see
-    :func:`elements`).
+    kernel's) plus the terms of :mod:`terms` at the sliders' state
+    (friction, drives, screw ripple), and the power ``lambdadot * force``
+    is the total force's. ``record``, if a dict, receives the kernel's
+    per-element quantities (see :func:`elements`).
     """
     x, y, z = position
     vx, vy, vz = velocity
@@ -123,8 +123,8 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
             f'position {format_vector(position)} m is on a singularity')) from None
     lam, lamd, lamdd, force, power, alphas, conditioning = out
     if robot.active_terms:
-        fa, fb, fc = terms.forces(robot, robot.active_terms, lamd, lamdd,
-                                  FLOATS)
+        fa, fb, fc = terms.forces(robot, robot.active_terms, lam, lamd,
+                                  lamdd, FLOATS)
         force = (force[0] + fa, force[1] + fb, force[2] + fc)
         power = (lamd[0] * force[0], lamd[1] * force[1], lamd[2] * force[2])
     if conditioning < margin:
@@ -153,7 +153,7 @@ def solve_batch(robot: Robot, positions: Rows,
 
     ``positions``, ``velocities``, ``accelerations``: (N, 3) arrays in frame
     0 (m, m/s, m/s^2); a missing velocity or acceleration means zero.
-    Returns a :class:`Solution` of (N, 3) and (N,) arrays, friction
+    Returns a :class:`Solution` of (N, 3) and (N,) arrays, the terms
     included as in :func:`solve`. The first bad sample raises
     :class:`WorkspaceError` with its index in ``row``.
     """
@@ -193,7 +193,8 @@ def solve_batch(robot: Robot, positions: Rows,
     if robot.active_terms:
         with np.errstate(all='ignore'):     # checked below, row by row
             for leg, force in enumerate(terms.forces(
-                    robot, robot.active_terms, out[1], out[2], ARRAYS)):
+                    robot, robot.active_terms, out[0], out[1], out[2],
+                    ARRAYS)):
                 out[3, leg] += force
             np.multiply(out[1], out[3], out=out[4])
     out = out.transpose(0, 2, 1)
@@ -243,13 +244,13 @@ def friction_force(robot: Robot, lambdadot: Any) -> Any:
     if isinstance(lambdadot, np.ndarray):
         out = np.zeros(lambdadot.shape)
         for leg, force in enumerate(terms.forces(
-                robot, friction, lambdadot.T, ZERO, ARRAYS)):
+                robot, friction, ZERO, lambdadot.T, ZERO, ARRAYS)):
             out[:, leg] += force
         return out
     values = tuple(float(v) for v in lambdadot)
     if not friction:
         return ZERO
-    return terms.forces(robot, friction, values, ZERO, FLOATS)
+    return terms.forces(robot, friction, ZERO, values, ZERO, FLOATS)
 
 
 def forward_dynamics(robot: Robot, position: Vector, velocity: Vector,
@@ -260,8 +261,9 @@ def forward_dynamics(robot: Robot, position: Vector, velocity: Vector,
 
     ``position`` (m) and ``velocity`` (m/s) of G and ``force`` (N, on the
     sliders A, B, C along +lambda), each a 3-sequence; returns ``rddot_G``.
-    ``J_lambda^T f = M a + h`` (eqs. 16 and 25) solved for ``a`` by four
-    kernel calls and Cramer's rule
+    ``J_lambda^T f = M a + h`` (eqs. 16 and 25; ``h``, the forces at zero
+    acceleration, holds every term but the drives': friction, the screw
+    ripple) solved for ``a`` by four kernel calls and Cramer's rule
     (doc/mechanics.md#forward-dynamics-and-simulation). Refuses what
     :func:`solve` refuses, with the same reasons.
 
@@ -290,8 +292,8 @@ def forward_dynamics(robot: Robot, position: Vector, velocity: Vector,
     for unit in _UNITS:
         force, lamdd = _unit_column(k, x, y, z, unit)
         if inertia.active_terms:    # the drives' terms: their part of M
-            extra = terms.forces(inertia, inertia.active_terms, ZERO, lamdd,
-                                 FLOATS)
+            extra = terms.forces(inertia, inertia.active_terms, ZERO, ZERO,
+                                 lamdd, FLOATS)
             force = (force[0] + extra[0], force[1] + extra[1],
                      force[2] + extra[2])
         columns.append(force)
@@ -553,23 +555,23 @@ def _overflow_error(position, velocity, third, row=None,
         'finite'), row)
 
 
-# Copies of the robots seen without gravity or friction, keyed by what
-# their mass matrix depends on (the kernel's constants and the terms that
-# are no friction, the drives): the inverse dynamics at zero velocity of
-# such a copy is ``M`` applied.
+# Copies of the robots as their mass matrix sees them (terms.inertial),
+# keyed by what it depends on (the kernel's constants and the inertial
+# terms, the drives): the inverse dynamics at zero velocity of such a copy
+# is ``M`` applied.
 _INERTIA = {}
 
 
 def _inertia(robot):
-    """Return ``robot`` less gravity and friction (built once per robot)."""
+    """Return :func:`terms.inertial` of ``robot`` (built once per robot)."""
     drives = [getattr(robot, terms.coefficient_name(term))
-              for term in robot.active_terms if not term.friction]
+              for term in robot.active_terms if term.inertial]
     key = (robot.constants, *drives) if drives else robot.constants
     inertia = _INERTIA.get(key)
     if inertia is None:
         if len(_INERTIA) >= 16:
             _INERTIA.clear()
-        inertia = robot.frictionless().replace(gravity=ZERO)
+        inertia = terms.inertial(robot)
         _INERTIA[key] = inertia
     return inertia
 

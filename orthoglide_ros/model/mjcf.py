@@ -3,13 +3,15 @@ The Orthoglide as MJCF: MuJoCo's model, with the loops closed, without ROS.
 
 The bodies of :mod:`urdf` as a tree closed by ``connect`` equality
 constraints where :mod:`mechanics` cuts the mechanism (A7; A5 of legs B
-and C); the :mod:`terms` MuJoCo's joints cannot hold are left to
-:func:`friction_beyond` (doc/mujoco.md).
+and C); the :mod:`terms` MuJoCo's joints cannot hold are left to the
+plant: friction to :func:`friction_beyond`, the screw ripple (RECORDED,
+written in the file's ``custom`` data) to :func:`recorded_forces`
+(doc/mujoco.md).
 """
 
 from __future__ import annotations
 
-from typing import Any, Optional, Sequence, TYPE_CHECKING
+from typing import Any, Mapping, Optional, Sequence, TYPE_CHECKING
 import functools
 import xml.etree.ElementTree as ET
 
@@ -36,6 +38,12 @@ SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 
 # The terms MuJoCo's slide joints hold (their MJCF attribute).
 HELD = tuple(term for term in terms.FORCES if term.mujoco)
+# The terms no MJCF element holds that are no friction (the screw ripple):
+# their rows are written as custom numeric data named ``robot.<row>``, and
+# the MuJoCo plant applies them as forces from the model it steps.
+RECORDED = tuple(term for term in terms.FORCES
+                 if not term.mujoco and not term.friction)
+RECORDED_ROWS = tuple(row for term in RECORDED for row in term.rows)
 
 
 def friction_beyond(robot: Robot, lambdadot: Any) -> Any:
@@ -49,6 +57,36 @@ def friction_beyond(robot: Robot, lambdadot: Any) -> Any:
     return tuple(a - b for a, b in zip(
         mechanics.friction_force(robot, lambdadot),
         mechanics.friction_force(held_by_mujoco(robot), lambdadot)))
+
+
+def recorded(robot: Robot, numeric: Mapping[str, Any]) -> Robot:
+    """
+    Return ``robot`` with the RECORDED rows of an MJCF's ``custom`` data.
+
+    ``numeric``: the model's numeric data by name (``robot.screw_lead``:
+    three values); a row the model does not record takes its default (no
+    ripple). Validated: a value no robot has raises
+    :class:`robot.ParameterError`.
+    """
+    return robot.replace(**{row.name: tuple(float(v) for v in numeric.get(
+        f'robot.{row.name}', row.default)) for row in RECORDED_ROWS})
+
+
+def recorded_forces(robot: Robot, lambda_: Vector,
+                    lambdadot: Vector) -> tuple[float, float, float]:
+    """
+    Return the RECORDED terms' forces (N, A, B, C) at the sliders' state.
+
+    ``lambda_`` (m) and ``lambdadot`` (m/s): 3-sequences. The forces the
+    actuators overcome (the MuJoCo plant applies their opposite).
+    """
+    active = tuple(term for term in robot.active_terms if term in RECORDED)
+    if not active:
+        return ZERO
+    fa, fb, fc = terms.forces(robot, active, tuple(map(float, lambda_)),
+                              tuple(map(float, lambdadot)), ZERO,
+                              terms.FLOATS)
+    return fa, fb, fc
 
 
 @functools.lru_cache(maxsize=16)
@@ -65,8 +103,10 @@ def mjcf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
     ``force_limit`` (N, optional): the actuators' control range +-it.
     ``robot.armature`` (kg, per slider A, B, C) is each slide joint's
     ``armature``, MuJoCo's name for a drive's rotor inertia reflected onto
-    it; ``robot.payload`` rides in the platform's mass. Plain text, the
-    same for the same arguments.
+    it; ``robot.payload`` rides in the platform's mass; the screw ripple
+    (RECORDED) is ``custom`` numeric data ``robot.screw_lead``, ...,
+    written when the robot has it. Plain text, the same for the same
+    arguments.
     """
     home = elements(robot, ZERO)
     masses = inertials(robot)
@@ -76,6 +116,11 @@ def mjcf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
         robot, 'mjcf', _number, '. Loops closed by connect constraints; see '
         'doc/mujoco.md. '))
     ET.SubElement(root, 'compiler', angle='radian', autolimits='true')
+    if any(getattr(robot, row.name) != row.default for row in RECORDED_ROWS):
+        custom = ET.SubElement(root, 'custom')
+        for row in RECORDED_ROWS:
+            ET.SubElement(custom, 'numeric', name=f'robot.{row.name}',
+                          size='3', data=_vector(getattr(robot, row.name)))
     ET.SubElement(root, 'option', timestep=_number(TIMESTEP),
                   integrator=INTEGRATOR, gravity=_vector(robot.gravity))
     default = ET.SubElement(root, 'default')

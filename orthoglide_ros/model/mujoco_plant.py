@@ -3,13 +3,14 @@ MuJoCo as the plant: the Orthoglide of :mod:`mjcf`, stepped by MuJoCo.
 
 :class:`MujocoPlant` has :class:`plant.Plant`'s interface; any warning
 MuJoCo raises in a step is :class:`plant.Diverged` (its handler taken
-over), and the terms its joints cannot hold are applied as forces
+over), and the terms its joints cannot hold are applied as forces: the
+friction beyond them, and the screw ripple the model records
 (doc/mujoco.md#warnings-and-divergence).
 """
 
 from __future__ import annotations
 
-from typing import Optional, Union
+from typing import Any, Optional, Union
 import math
 
 import numpy as np
@@ -29,7 +30,8 @@ def check_model(text: str) -> None:
 
     It must load in MuJoCo and have the contract's names: the slide joints
     and actuators JOINT_NAMES (in that order), every hinge of
-    :func:`mjcf.joint_values` and the body ``platform``.
+    :func:`mjcf.joint_values` and the body ``platform``; the terms it
+    records (:data:`mjcf.RECORDED`) must be a robot's.
     """
     import mujoco
     try:
@@ -47,6 +49,13 @@ def check_model(text: str) -> None:
             'not a model of orthoglide mjcf (default joint names): joints '
             f'{sorted(wanted - joints)} missing, actuators {actuators}, '
             f'platform body {"present" if "platform" in bodies else "absent"}')
+    mjcf.recorded(Robot(), numeric_data(model))
+
+
+def numeric_data(model: Any) -> dict[str, np.ndarray]:
+    """Return a MuJoCo model's ``custom`` numeric data by name."""
+    return {model.numeric(i).name: model.numeric(i).data.copy()
+            for i in range(model.nnumeric)}
 
 
 def unavailable() -> Optional[str]:
@@ -110,8 +119,8 @@ class MujocoPlant:
 
         ``model_text``: an MJCF to simulate instead (:func:`check_model`:
         ``orthoglide mjcf``'s names and ``robot``'s lengths; its masses,
-        friction and armature its own). Either way the platform carries
-        ``robot.payload`` (:meth:`carry`).
+        friction, armature and screw ripple its own). Either way the
+        platform carries ``robot.payload`` (:meth:`carry`).
         """
         import mujoco
         quiet_warnings()
@@ -135,6 +144,10 @@ class MujocoPlant:
         # model given as text has its own friction).
         self._extra_friction = model_text is None \
             and mjcf.held_by_mujoco(robot) != robot
+        # The screw ripple the model records (none if it records none).
+        self._recorded = mjcf.recorded(robot, numeric_data(self.model))
+        self._ripple = any(term in mjcf.RECORDED
+                           for term in self._recorded.active_terms)
         self._set(position, velocity)
         self.data.time = float(time)
 
@@ -189,15 +202,17 @@ class MujocoPlant:
         model.opt.timestep = dt / substeps
         data.ctrl[:] = applied      # the actuators, in JOINT_NAMES order
         slots = [self._dofs[name][1] for name in JOINT_NAMES]
+        positions = [self._dofs[name][0] for name in JOINT_NAMES]
+        half = 0.5 * model.opt.timestep
         # MuJoCo counts each warning in data.warning (and clears the
         # counts when it resets a diverged state): zero them, then any
         # count after the step is this step's.
         self._warnings[:] = 0
         heard = _Heard.count
         for _ in range(substeps):
-            if self._extra_friction:
-                data.qfrc_applied[slots] = np.negative(mjcf.friction_beyond(
-                    self.robot, tuple(data.qvel[slots])))
+            if self._extra_friction or self._ripple:
+                data.qfrc_applied[slots] = np.negative(self._beyond(
+                    data.qpos[positions], data.qvel[slots], half))
             mujoco.mj_step(model, data)
         mujoco.mj_forward(model, data)  # positions and velocities at the end
         position, velocity = self.position, self.velocity
@@ -219,6 +234,23 @@ class MujocoPlant:
         return PlantStep(
             tuple((v - w) / dt for v, w in zip(velocity, before)), applied,
             tuple(a != c for a, c in zip(applied, command)))
+
+    def _beyond(self, lam, lamd, half):
+        """
+        Return the terms' forces (N) the model's joints leave out.
+
+        The friction beyond the joints' at the sliders' speeds ``lamd``
+        (m/s), and the ripple the model records at each slider's position
+        in the middle of the step, ``lambda + half lambdadot`` (m; the
+        force is held over the step, whose ``half`` is in s).
+        """
+        force = np.zeros(3)
+        if self._extra_friction:
+            force += mjcf.friction_beyond(self.robot, tuple(lamd))
+        if self._ripple:
+            force += mjcf.recorded_forces(self._recorded, lam + half * lamd,
+                                          lamd)
+        return force
 
     def _warned(self, heard):
         """Return MuJoCo's warnings of a step, joints named ('' if none)."""

@@ -52,6 +52,8 @@ ROWS = (
         'gravity vector in the base frame 0'),
 ) + tuple(row for term in terms.TERMS for row in term.rows)
 ROW = {row.name: row for row in ROWS}
+# The rows that need another's value on an actuator (Row.needs).
+NEEDING = tuple(row for row in ROWS if row.needs)
 
 
 def is_vector(row: 'Row') -> bool:
@@ -114,6 +116,9 @@ class Robot:
         for row in ROWS:
             object.__setattr__(self, row.name, _checked(
                 row, getattr(self, row.name)))
+        for row in NEEDING:
+            _check_needs(row, getattr(self, row.name),
+                         getattr(self, row.needs))
         # Derived once (not fields: no part of eq or repr): the kernel's
         # constants, the terms whose force the robot has, and whether
         # friction is among them.
@@ -187,11 +192,13 @@ def _checked(row, value):
     wrong kind, not finite, or beyond the row's limits.
     """
     low, high = row.limits
-    within = (lambda v: low < v < high) if row.open \
-        else (lambda v: low <= v <= high)
+    within = (lambda v: low < v < high or v == row.none) if row.open \
+        else (lambda v: low <= v <= high or v == row.none)
     ends = ', '.join('pi/2' if v == math.pi / 2 else f'{v:g}'
                      for v in (low, high))
     bounds = f'({ends})' if row.open else f'[{ends}]'
+    place = f'lie in {bounds} {row.unit}' if row.none is None else \
+        f'be {row.none:g} (none) or lie in {bounds} {row.unit}'
     if is_vector(row):
         try:
             values = tuple(value)
@@ -202,16 +209,31 @@ def _checked(row, value):
         if not all(math.isfinite(v) for v in values):
             raise _bad(row, f'must be finite, got {value!r}')
         if not all(within(v) for v in values):
-            raise _bad(row, f'each component must lie in {bounds} '
-                       f'{row.unit}, got {value!r}')
+            raise _bad(row, f'each component must {place}, got {value!r}')
         return tuple(float(v) for v in values)
     if not _number(value):
         raise _bad(row, f'must be a number, got {value!r}')
     if not math.isfinite(value):
         raise _bad(row, f'must be finite, got {value!r}')
     if not within(value):
-        raise _bad(row, f'must lie in {bounds} {row.unit}, got {value!r}')
+        raise _bad(row, f'must {place}, got {value!r}')
     return float(value)
+
+
+def _check_needs(row, values, needed):
+    """
+    Refuse a value on an actuator where ``row.needs`` is none (ParameterError).
+
+    An amplitude of the screw ripple without the screw's lead: the force
+    would have no period.
+    """
+    none = ROW[row.needs].none
+    for leg, value, other in zip('ABC', values, needed):
+        if value != 0.0 and other == none:
+            raise _bad(row, (
+                f'actuator {leg} has {value:g} {row.unit} but no '
+                f'robot.{row.needs} ({none:g}: none): give its '
+                f'{row.needs.replace("_", " ")} or set it to 0.0'))
 
 
 def _number(value):

@@ -45,7 +45,7 @@ import math
 
 import numpy as np
 
-from orthoglide_ros.model import mechanics
+from orthoglide_ros.model import mechanics, terms
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.types import Array
 from orthoglide_ros.planning.gcode import ProgramError
@@ -216,7 +216,7 @@ class _Models:
     def __init__(self, robot, margin):
         self.robot = robot
         self.statics = robot.frictionless()
-        self.inertia = self.statics.replace(gravity=mechanics.ZERO)
+        self.inertia = terms.inertial(robot)
         self.margin = margin
 
     def dynamics(self, path, index, w):

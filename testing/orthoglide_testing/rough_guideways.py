@@ -17,6 +17,13 @@ The limits: no model holds the ripple, so its RMS, ``ripple / sqrt(2)``,
 is the floor no identification goes below. Each actuator's RMS error
 within EACH and their mean within MEAN times it: 0.55 and 0.46 N for a
 ripple of 0.5 N, the targets set for a robot of this kind.
+
+:func:`screw_robot` puts such a robot on ball screws of SCREW_LEAD: a ripple
+of 0.5-0.7 N per actuator at the lead, which the model's ripple term holds
+once ``robot.screw_lead`` is given, and a second harmonic of up to
+SECOND_SHARE of it (the balls' recirculation, a motor's cogging), which it
+does not. With the term, each actuator's RMS error on another motion within
+SCREW_EACH and their mean within SCREW_MEAN (N).
 """
 
 import math
@@ -33,6 +40,11 @@ JITTER = 5e-5           # s, standard deviation of the stamps
 QUANTUM = 1e-6          # m, of the measured lambda
 LOG_S = 30.0            # s logged for identification
 VALIDATION_S = 12.0     # s of another motion to validate on
+SCREW_LEAD = 0.005      # m, the ball screws' lead
+SCREW_RIPPLE = (0.5, 0.7)   # N, the range of the ripple at the lead
+SECOND_SHARE = 0.15     # the second harmonic's share of it, at most
+SCREW_EACH = 0.35       # N, RMS error per actuator with the ripple term
+SCREW_MEAN = 0.30       # N, and the mean of the three
 
 
 def drawn_robot(seed):
@@ -70,13 +82,35 @@ def drawn_robot(seed):
     return robot, defects
 
 
+def screw_robot(seed):
+    """
+    Return a robot of this kind on ball screws, and its log's defects.
+
+    :func:`drawn_robot`'s, its ripple now at SCREW_LEAD: SCREW_RIPPLE N per
+    actuator, and a second harmonic of up to SECOND_SHARE of it, phases at
+    random.
+    """
+    robot, defects = drawn_robot(seed)
+    rng = np.random.default_rng(8000 + seed)
+    ripple = rng.uniform(*SCREW_RIPPLE, 3)
+    return robot, defects | dict(
+        ripple=ripple, pitch=SCREW_LEAD,
+        phases=tuple(rng.uniform(0.0, 2.0 * math.pi, 3)),
+        second=ripple * rng.uniform(0.0, SECOND_SHARE, 3),
+        second_phases=tuple(rng.uniform(0.0, 2.0 * math.pi, 3)))
+
+
 def forces(robot, defects, times, motion):
     """Return ``lambda`` and the forces along ``motion``, the ripple too."""
     solution = mechanics.solve_batch(
         robot, *trajectory.excitation_batch(motion, times))
-    return solution.lambda_, solution.force + defects['ripple'] * np.sin(
-        2.0 * math.pi * solution.lambda_ / defects['pitch']
-        + np.array(defects['phases']))
+    angle = 2.0 * math.pi * solution.lambda_ / defects['pitch']
+    ripple = np.asarray(defects['ripple']) * np.sin(
+        angle + np.array(defects['phases']))
+    if 'second' in defects:
+        ripple = ripple + np.asarray(defects['second']) * np.sin(
+            2.0 * angle + np.array(defects['second_phases']))
+    return solution.lambda_, solution.force + ripple
 
 
 def log(robot, defects, seed, noise_seed, duration=LOG_S):
@@ -110,5 +144,6 @@ def errors(predicted, robot, defects, motion, times):
 
 
 def floor(defects):
-    """Return the ripple's RMS (N): what no model explains."""
-    return defects['ripple'] / math.sqrt(2.0)
+    """Return the ripple's RMS (N): what no model explains (per actuator)."""
+    return np.sqrt((np.square(defects['ripple'])
+                    + np.square(defects.get('second', 0.0))) / 2.0)

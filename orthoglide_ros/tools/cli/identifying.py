@@ -14,7 +14,7 @@ import numpy as np
 
 from orthoglide_ros.cores.recording import LOSSY, WHY
 from orthoglide_ros.formats import cdr, params_file
-from orthoglide_ros.model import mechanics, trajectory
+from orthoglide_ros.model import mechanics, terms, trajectory
 from orthoglide_ros.model.robot import ROW
 from orthoglide_ros.tools import excitation_design, identification
 from orthoglide_ros.tools.cli.common import (
@@ -266,13 +266,11 @@ def add_identify(parser):
                             for law in identification.LAWS),
                         help='the law: viscous + Coulomb friction '
                         '(coulomb), with ' + ', '.join(
-                            f'{term.meaning.format("each slider")} '
-                            f'(+{term.name})'
-                            for term in identification.OPTIONAL)
+                            _choice(term) for term in identification.OPTIONAL)
                         + '; auto (default): the simplest law within '
                         f'{100 * identification.SELECTION_MARGIN:g} %% of '
                         'the least RMS error on held-out parts of the '
-                        'log')
+                        'log, among those the --params robot can have')
     parser.add_argument('--stribeck-velocity',
                         type=robot_range('friction_stribeck_velocity'),
                         default=None, metavar='M/S',
@@ -296,6 +294,15 @@ def add_identify(parser):
     parser.add_argument('--validate-report', metavar='FILE',
                         help='draw the validation of the identified robot '
                         '(as validate --report) as a PNG image')
+
+
+def _choice(term):
+    """Describe a term ``--friction`` may add: ``Stribeck ... (+stribeck)``."""
+    parts = ''.join(f', with the {t.meaning.format("each slider")}'
+                    for t in terms.TERMS if t.part_of == term.name)
+    needs = term.rows[0].needs
+    return (f'{term.meaning.format("each slider")} (+{term.name}{parts}'
+            + (f'; needs robot.{needs} of --params' if needs else '') + ')')
 
 
 def run_identify(robot, args):

@@ -148,7 +148,9 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     motion = Motion(robot, log, cutoff)
     payload = robot.payload if payload is None else float(payload)
     laws = (base.law,) if base is not None else (
-        LAWS if friction is None else (friction,))
+        tuple(law for law in LAWS if _possible(robot, law))
+        if friction is None else (friction,))
+    _check_possible(robot, laws[0])
     # The laws the log has samples enough for (the simplest needs them).
 
     def parameters(law):
@@ -232,6 +234,7 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
         values, bounded, held = _held(a, y, lower, base, values, bounded,
                                       nominal, unexcited, std, relative,
                                       max_relative_std, names)
+    held = Held(held + _left_out(robot, laws, law), held.indices)
     residual = y - a @ values
     robot_out, notes = split(robot, base, values, speed)
     return Identification(
@@ -242,6 +245,43 @@ def identify(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
         (a @ values).reshape(-1, 3) + known(law), robot_out, notes, law,
         speed, float(force_lag), lag_estimated, tuple(candidates), why,
         bounded, held, payload)
+
+
+def _possible(robot, law):
+    """Whether every term of ``law`` can act on some actuator of ``robot``."""
+    return all(any(terms.acts(robot, term)) for term in law)
+
+
+def _check_possible(robot, law):
+    """Refuse a law with a term ``robot`` cannot have (IdentificationError)."""
+    for term in law:
+        if not any(terms.acts(robot, term)):
+            needs = term.rows[0].needs
+            raise IdentificationError(
+                f'the law {law_name(law)} identifies the '
+                f'{term.meaning.format("the sliders")}, which needs '
+                f'robot.{needs}: the nominal robot (--params) has none on '
+                'any actuator')
+
+
+def _left_out(robot, laws, law):
+    """
+    Say which terms the nominal robot enabled the chosen law leaves out.
+
+    A term whose coefficient ``needs`` a row of the nominal robot (the
+    screw ripple its lead) was asked for: tried and not chosen, it keeps
+    the nominal robot's values (the known forces), in one sentence each.
+    """
+    tried = {term for candidate in laws for term in candidate}
+    return tuple(
+        f'not in the law chosen, kept at the nominal robot\'s values: '
+        f'{term.meaning.format("the sliders")} (robot.'
+        f'{terms.coefficient_name(term)} '
+        + ', '.join(f'{v:.4g}' for v in getattr(
+            robot, terms.coefficient_name(term)))
+        + f' {term.rows[0].unit})'
+        for term in terms.FORCES if term in tried and term not in law
+        and term.rows[0].needs)
 
 
 def _held(a, y, lower, base, values, bounded, nominal, unexcited, std,

@@ -31,18 +31,23 @@ class Law(tuple):
     The terms a law identifies, in :data:`terms.TERMS`' order.
 
     Named by :attr:`name` (``coulomb+direction+stribeck+armature``: the
-    plain law, then the other terms'), read by :func:`parse_law`.
+    plain law, then the other terms'), read by :func:`parse_law`. A term
+    comes with those that are ``part_of`` it (the ripple's cosine part
+    with its sine part), which its name stands for.
     """
 
     def __new__(cls, members):
-        """Hold ``members`` (terms) in :data:`terms.TERMS`' order."""
-        return super().__new__(cls, (t for t in terms.TERMS if t in members))
+        """Hold ``members`` (terms) and their parts, in TERMS' order."""
+        names = {t.name for t in members}
+        return super().__new__(cls, (t for t in terms.TERMS
+                                     if t.name in names or t.part_of in names))
 
     @property
     def name(self) -> str:
         """Return ``coulomb``, ``coulomb+direction``, ..."""
         return '+'.join(['coulomb'] + [
-            term.name for term in self if term not in PLAIN])
+            term.name for term in self
+            if term not in PLAIN and term.part_of is None])
 
     def __repr__(self) -> str:
         """Show the law by its name."""
@@ -53,9 +58,11 @@ class Law(tuple):
         return tuple(sorted(self, key=lambda term: term.friction))
 
 
-# Viscous and Coulomb friction, every law's; the terms a law may add.
+# Viscous and Coulomb friction, every law's; the terms a law may add
+# (each with its parts).
 PLAIN = Law((VISCOUS, COULOMB))
-OPTIONAL = tuple(t for t in terms.FORCES if t.identified and t not in PLAIN)
+OPTIONAL = tuple(t for t in terms.FORCES if t.identified and t not in PLAIN
+                 and t.part_of is None)
 # Every law identify chooses from: the fewest terms first, and among as
 # many, the later terms of OPTIONAL last.
 LAWS = tuple(sorted(
@@ -93,13 +100,14 @@ def standard_names(law: Law = PLAIN) -> tuple[str, ...]:
 STANDARD = standard_names(PLAIN)
 # Each standard parameter's unit, meaning in words and lowest value: its
 # robot.* row's (the masses' meaning from the row's description).
+_IDENTIFIED = tuple(t for t in terms.FORCES if t.identified)
 _ROWS = {m: ROW[m] for m in MASSES} | {
     parameter(term, leg): term.rows[0]
-    for term in OPTIONAL + PLAIN for leg in LEGS}
+    for term in _IDENTIFIED for leg in LEGS}
 UNITS = {name: row.unit for name, row in _ROWS.items()}
 MEANINGS = {m: ROW[m].description.split(';')[0] for m in MASSES} | {
     parameter(term, leg): term.meaning.format(f'slider {leg.upper()}')
-    for term in OPTIONAL + PLAIN for leg in LEGS}
+    for term in _IDENTIFIED for leg in LEGS}
 LOWER = {name: row.limits[0] for name, row in _ROWS.items()}
 
 
@@ -146,38 +154,39 @@ def acting(term: Term, law: tuple[Term, ...]) -> tuple[Term, ...]:
     return tuple(t for t in law if t is term or terms.leader(t) is term)
 
 
-def columns(robot: Robot, term: Term, law: tuple[Term, ...],
+def columns(robot: Robot, term: Term, law: tuple[Term, ...], lambda_: Array,
             lambdadot: Array, lambdaddot: Array) -> Array:
     """
     Return ``term``'s own columns of ``W`` in ``law`` (N, 3): per actuator.
 
-    The forces of ``law``'s terms (:func:`terms.forces`) with ``term``'s
-    coefficient 1 and the others' 0, at the slider rates ``lambdadot``
-    (m/s) and accelerations ``lambdaddot`` (m/s^2), (N, 3) arrays; the
-    column of slider j's coefficient is zero on the other actuators.
+    The forces of ``law``'s terms with ``term``'s coefficient 1 and the
+    others' 0 (a follower's excess over it then -1: :func:`acting`), at
+    the sliders' positions ``lambda_`` (m), rates ``lambdadot`` (m/s) and
+    accelerations ``lambdaddot`` (m/s^2), (N, 3) arrays; the column of
+    slider j's coefficient is zero on the other actuators (and where the
+    term cannot act: the ripple without a lead).
     """
-    unit = robot.replace(**{terms.coefficient_name(t): (
-        1.0 if t is term else 0.0,) * 3 for t in law})
     out = np.zeros(lambdadot.shape)
-    for j, force in enumerate(terms.forces(unit, acting(term, law),
-                                           lambdadot.T, lambdaddot.T,
-                                           ARRAYS)):
-        out[:, j] += force
+    for t in acting(term, law):
+        for j in range(3):
+            out[:, j] += (1.0 if t is term else -1.0) * t.force(
+                1.0, terms.Slider(j, lambda_[:, j], lambdadot[:, j],
+                                  lambdaddot[:, j]), robot, ARRAYS)
     return out
 
 
-def term_columns(robot: Robot, lambdadot: Array, lambdaddot: Array,
-                 law: Law = PLAIN) -> Array:
+def term_columns(robot: Robot, lambda_: Array, lambdadot: Array,
+                 lambdaddot: Array, law: Law = PLAIN) -> Array:
     """
     Return the terms' part of ``W`` (N, 3, k) at the slider motion.
 
     One column per coefficient of ``law`` (:func:`standard_names` less the
     masses), the force of its term with that coefficient 1 and the others
-    0 (:func:`columns`; ``friction_velocity`` and
-    ``friction_stribeck_velocity`` are ``robot``'s).
+    0 (:func:`columns`; ``friction_velocity``,
+    ``friction_stribeck_velocity`` and ``screw_lead`` are ``robot``'s).
     """
-    return np.concatenate([diagonal(columns(robot, term, law, lambdadot,
-                                            lambdaddot))
+    return np.concatenate([diagonal(columns(robot, term, law, lambda_,
+                                            lambdadot, lambdaddot))
                            for term in law.columns_order()], axis=2)
 
 

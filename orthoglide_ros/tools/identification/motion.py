@@ -222,9 +222,11 @@ class Motion:
         """
         Return ``term``'s filtered columns (M, 3) in ``law`` (kept).
 
-        Each actuator's own (:func:`laws.columns`): that one series is
-        filtered. ``robot`` (default the motion's) gives the parameters of
-        the term's other rows (the Stribeck speed searched).
+        Each actuator's own (:func:`laws.columns`) along the piece's
+        ``lambda`` (the screw ripple's phase), ``lambdadot`` and
+        ``lambdaddot``: that one series is filtered. ``robot`` (default
+        the motion's) gives the parameters of the term's other rows (the
+        Stribeck speed searched, the screw's lead).
         """
         robot = robot or self.robot
         members = acting(term, law)
@@ -232,8 +234,8 @@ class Motion:
             getattr(robot, row.name) for t in members for row in t.rows[1:]))
         if key not in self._own:
             self._own[key] = self.filtered([
-                own_columns(robot, term, law, p.lambdadot, p.lambdaddot)
-                for p in self.pieces])
+                own_columns(robot, term, law, p.lambdas, p.lambdadot,
+                            p.lambdaddot) for p in self.pieces])
         return self._own[key]
 
     def model_forces(self, robot: Robot) -> Array:

@@ -63,14 +63,15 @@ def regressor(robot: Robot, positions: Rows, velocities: Rows,
     :func:`mechanics.solve_batch` on ``robot``'s geometry and gravity (its
     masses, drives and friction do not matter): the masses' columns of
     :func:`rigid_columns`, then the terms' of ``law``
-    (:func:`laws.term_columns`) at the samples' ``lambdadot`` and
-    ``lambdaddot``. Raises :class:`mechanics.WorkspaceError` as
+    (:func:`laws.term_columns`) at the samples' ``lambda``, ``lambdadot``
+    and ``lambdaddot``. Raises :class:`mechanics.WorkspaceError` as
     ``solve_batch`` does.
     """
     rigid, reference = rigid_columns(robot, positions, velocities,
                                      accelerations, margin)
     return np.concatenate((rigid, term_columns(
-        robot, reference.lambdadot, reference.lambdaddot, law)), axis=2)
+        robot, reference.lambda_, reference.lambdadot, reference.lambdaddot,
+        law)), axis=2)
 
 
 def rigid_columns(robot: Robot, positions: Rows, velocities: Rows,
@@ -103,7 +104,8 @@ def base_parameters(robot: Robot, law: Law = PLAIN,
 
     ``W`` of ``law`` at ``samples`` random states (BASE_BOX and its
     neighbours; ``seed``), each column weighted by its nominal value in
-    ``robot`` (scaled to unit RMS where that is zero), through a QR
+    ``robot`` (scaled to unit RMS where that is zero; a column that is zero
+    everywhere, a ripple without a lead, is no parameter), through a QR
     decomposition with column pivoting: pivots above RANK_TOLERANCE of the
     first are independent, the other columns their least-squares
     combinations (``P``). The weighting makes the largest nominal
@@ -121,7 +123,8 @@ def base_parameters(robot: Robot, law: Law = PLAIN,
                   law).reshape(-1, len(names))
     nominal = standard_parameters(robot, law)
     rms = np.sqrt(np.mean(w * w, axis=0))
-    weights = np.where(nominal > 0.0, nominal, 1.0 / rms)
+    weights = np.where(nominal > 0.0, nominal, 1.0 / np.where(
+        rms > 0.0, rms, np.inf))
     _, r, pivots = scipy.linalg.qr(w * weights, mode='economic',
                                    pivoting=True)
     diagonal = np.abs(np.diag(r))
@@ -182,11 +185,11 @@ def design_law(robot: Robot) -> Law:
     """
     Return the law an excitation for ``robot`` is designed for.
 
-    The plain law, with the terms that are no friction (the drives) that
-    ``robot`` has: a motion that tells each drive's inertia from the
-    masses (which gravity alone does for ``m1 + m2``).
+    The plain law, with the inertial terms (the drives) that ``robot``
+    has: a motion that tells each drive's inertia from the masses (which
+    gravity alone does for ``m1 + m2``).
     """
-    return Law(PLAIN + tuple(term for term in OPTIONAL if not term.friction
+    return Law(PLAIN + tuple(term for term in OPTIONAL if term.inertial
                              and term in robot.active_terms))
 
 

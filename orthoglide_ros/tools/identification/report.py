@@ -12,6 +12,7 @@ from typing import Any, Optional, TYPE_CHECKING
 
 import numpy as np
 
+from orthoglide_ros.model.terms import RIPPLE
 from orthoglide_ros.tools import identification
 from orthoglide_ros.model.types import Array
 
@@ -82,6 +83,17 @@ def identification_lines(source: str, log: Log, window: tuple[float, float],
         label = f'{name} ({identification.UNITS[names[carrier]]})'
         lines.append(f'{label:<28}{value:12.6g}{nominal:12.6g}'
                      f'{relative:14.3g}  {meaning}')
+    if RIPPLE in result.law:
+        robot = result.robot
+        lines.append('screw ripple found, amplitude sqrt(s^2 + c^2) (N): '
+                     + ', '.join(
+                         f'{leg} {np.hypot(s, c):.4g}' if lead else
+                         f'{leg} - (no lead)' for leg, s, c, lead in zip(
+                             ACTUATORS, robot.ripple_sine,
+                             robot.ripple_cosine, robot.screw_lead))
+                     + ' (screw lead ' + ', '.join(
+                         f'{1e3 * lead:g}' for lead in robot.screw_lead)
+                     + ' mm)')
     lines.append(f'condition number of the base regressor: '
                  f'{result.condition:.4g} (unit-norm columns)')
     lines.append('RMS residual per actuator (N): ' + ', '.join(
@@ -108,15 +120,19 @@ def validation_lines(validation: Validation,
              lag_text(validation.force_lag, validation.lag_estimated),
              f'{"":<34}{"A":>10}{"B":>10}{"C":>10}']
     for label, v in rows:
-        for what, values, form in (
-                ('force error RMS (N)', v.rms, '.4g'),
-                ('force error max (N)', v.max, '.4g'),
-                ('share of the force explained (%)', 100 * v.explained,
-                 '.4g')):
+        figures = [('force error RMS (N)', v.rms, '.4g'),
+                   ('force error max (N)', v.max, '.4g'),
+                   ('share of the force explained (%)', 100 * v.explained,
+                    '.4g')]
+        if v.ripple_left is not None:
+            figures.append(('screw ripple left (N, amplitude)',
+                            v.ripple_left, '.3g'))
+        for what, values, form in figures:
             text = f'{label}: {what}' if reference is not None else what
             # (A cell of 10 characters or more keeps a space before it.)
             lines.append(f'{text:<34}' + ''.join(
-                (' ' + format(value, form)).rjust(10) for value in values))
+                (' ' + (format(value, form) if np.isfinite(value) else '-')
+                 ).rjust(10) for value in values))
     lines += [f'warning: {w}' for w in validation.warnings]
     return lines
 
@@ -164,7 +180,8 @@ def draw_validation(figure: Any, validation: Validation) -> None:
 
     Measured and predicted forces against time; the residual against the
     slider's speed (what a friction law leaves) and against its position
-    (a ripple periodic in position: a ball screw's pitch, cogging).
+    (a ripple periodic in position: a ball screw's pitch, cogging), within
+    one lead of the screw where the robot has one.
     """
     samples = validation.samples
     axes = figure.subplots(3, 3)
@@ -185,9 +202,14 @@ def draw_validation(figure: Any, validation: Validation) -> None:
                     markersize=2, color='tab:red')
         middle.set_xlabel(f'$\\dot\\lambda_{leg}$ (m/s)')
         middle.set_ylabel('measured - predicted (N)')
-        bottom.plot(samples.lambdas[:, j] * 1e3, residual[:, j], '.',
+        lead = validation.screw_lead[j]
+        position = samples.lambdas[:, j] % lead if lead else \
+            samples.lambdas[:, j]
+        bottom.plot(position * 1e3, residual[:, j], '.',
                     markersize=2, color='tab:purple')
-        bottom.set_xlabel(f'$\\lambda_{leg}$ (mm)')
+        bottom.set_xlabel(
+            f'$\\lambda_{leg}$ modulo the screw lead {1e3 * lead:g} mm '
+            '(mm)' if lead else f'$\\lambda_{leg}$ (mm)')
         bottom.set_ylabel('measured - predicted (N)')
         for ax in (top, middle, bottom):
             ax.grid(True, alpha=0.4)

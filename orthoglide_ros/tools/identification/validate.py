@@ -12,11 +12,15 @@ from __future__ import annotations
 
 from typing import Optional, TYPE_CHECKING
 from collections import namedtuple
+import math
 
 import numpy as np
 
 from orthoglide_ros.formats.logs import LogError
-from orthoglide_ros.tools.identification.laws import standard_parameters
+from orthoglide_ros.model.robot import LEGS
+from orthoglide_ros.model.terms import RIPPLE, RIPPLE_COSINE
+from orthoglide_ros.tools.identification.laws import (
+    Law, parameter, PLAIN, standard_names, standard_parameters)
 from orthoglide_ros.tools.identification.motion import (
     check_lag, DEFAULT_CUTOFF, estimate_lag, Motion)
 from orthoglide_ros.model.types import Array
@@ -35,7 +39,8 @@ TRANSIENT_SHARE = 0.01
 
 Validation = namedtuple('Validation', (
     'source', 'samples', 'measured', 'predicted', 'rms', 'max', 'explained',
-    'force_lag', 'lag_estimated', 'warnings'), defaults=((),))
+    'force_lag', 'lag_estimated', 'warnings', 'screw_lead', 'ripple_left'),
+    defaults=((), (0.0, 0.0, 0.0), None))
 Validation.__doc__ = """A robot's forces against a log's (:func:`validate`).
 
 ``samples``: the log's :class:`Samples` (their regressor unused: None);
@@ -45,7 +50,10 @@ low-pass; per actuator ``rms`` and ``max`` of the error (N) and
 sum(f^2)``; ``force_lag`` (s) and ``lag_estimated`` as in
 :class:`estimate.Identification`; ``warnings``: sentences on what makes
 the figures say little (a robot standing still, an error that is a
-transient's).
+transient's); ``screw_lead``: the robot's (m, per actuator; 0.0: none);
+``ripple_left``: per actuator, the amplitude (N) of the error's part
+periodic in the screw's lead (:func:`ripple_left`; NaN without a lead),
+None when no actuator has one.
 """
 
 
@@ -93,6 +101,7 @@ def validate(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
                                 out=np.full(3, np.nan), where=squares > 0.0)
     samples = motion.samples(None, measured)
     rms = np.sqrt(np.mean(error ** 2, axis=0))
+    left = ripple_left(motion, error) if any(robot.screw_lead) else None
     if not np.isfinite(rms).all():
         j = int(np.argmin(np.isfinite(rms)))
         raise LogError(f'{log.source}: the error on actuator {"ABC"[j]} '
@@ -101,7 +110,33 @@ def validate(robot: Robot, log: Log, cutoff: float = DEFAULT_CUTOFF,
     return Validation(
         log.source, samples, measured, predicted, rms,
         np.abs(error).max(axis=0), explained, float(force_lag),
-        lag_estimated, _warnings(samples, error))
+        lag_estimated, _warnings(samples, error), robot.screw_lead, left)
+
+
+def ripple_left(motion: Motion, error: Array) -> Array:
+    """
+    Return the amplitude (N, per actuator) of the screw ripple in ``error``.
+
+    ``error`` (M, 3): measured less predicted forces along ``motion``,
+    filtered. The least-squares fit of the error on the regressor of
+    ``coulomb+ripple`` along the motion (the masses', the friction's and
+    the ripple's filtered columns: an error of the masses or friction is
+    not taken for a ripple), and per actuator with a lead ``sqrt(s^2 +
+    c^2)`` of its ripple coefficients: what of a ripple the model leaves
+    (about the noise's share where it holds the ripple). NaN on an
+    actuator without a lead.
+    """
+    law = Law(PLAIN + (RIPPLE,))
+    w = motion.columns(law).reshape(-1, len(standard_names(law)))
+    norms = np.linalg.norm(w, axis=0)
+    fit = np.linalg.lstsq(w / np.where(norms > 0.0, norms, 1.0),
+                          error.reshape(-1), rcond=None)[0]
+    values = dict(zip(standard_names(law), fit / np.where(norms > 0.0,
+                                                          norms, 1.0)))
+    return np.array([
+        math.hypot(values[parameter(RIPPLE, leg)],
+                   values[parameter(RIPPLE_COSINE, leg)]) if lead
+        else math.nan for leg, lead in zip(LEGS, motion.robot.screw_lead)])
 
 
 def _warnings(samples, error):
