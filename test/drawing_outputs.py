@@ -9,7 +9,7 @@ the forward dynamics, ``forward_kinematics_rows``, ``workspace_status``,
 of three robots, through the API that existed before the per-leg rows
 (no new name), so that the code of that time can run it.
 ``drawing_outputs.json`` holds what that code gave, every float as
-``float.hex``; ``test_leg_geometry_unchanged.py`` checks that today's
+``float.hex``; ``test_drawing_unchanged.py`` checks that today's
 code gives the same to the last bit, with the rows absent and given at
 the drawing's values.
 
@@ -145,10 +145,15 @@ def robot_outputs(robot):
     return out
 
 
-def outputs():
-    """Every robot's outputs, as JSON-ready nests of hex strings."""
-    return {name: flat(robot_outputs(Robot(**values)))
-            for name, values in ROBOTS.items()}
+def outputs(rows=None):
+    """
+    Every robot's outputs, as JSON-ready nests of hex strings.
+
+    ``rows``: a function of a robot's values returning more ``Robot``
+    keyword arguments (none by default).
+    """
+    return {name: flat(robot_outputs(Robot(**values, **(
+        rows(values) if rows else {})))) for name, values in ROBOTS.items()}
 
 
 def main(argv):

@@ -65,6 +65,105 @@ def solve(k: 'KernelConstants', x: Any, y: Any, z: Any, vx: Any, vy: Any,
             inverse_condition)
 
 
+# One leg as built, for :func:`solve_legs` (``robot.leg_constants``): ``k``
+# its KernelConstants (its bar length L_i as ``l3``, gravity in its frame),
+# ``frame`` its R_i row by row (9 floats), ``shift`` ``r_i - a_i`` (m,
+# frame 0) and ``offset`` its joint offset ``e_i`` (m).
+LegConstants = namedtuple('LegConstants', ('k', 'frame', 'shift', 'offset'))
+
+
+def leg_point(leg: 'LegConstants', x: Any, y: Any, z: Any) -> tuple:
+    """
+    Return the platform point as leg ``leg`` sees it, less its offset.
+
+    ``(x', y', z') = R_i^T (G + r_i - a_i) - (e_i, 0, 0)`` for ``G = (x,
+    y, z)`` (m, frame 0; floats or arrays): eq. (9) on it with ``l3 =
+    L_i`` gives the joint reading, ``lambda_i = x' + L_i - alpha_i``
+    (doc/model.md#the-machine-as-built).
+    """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = leg.frame
+    sx, sy, sz = leg.shift
+    px, py, pz = x + sx, y + sy, z + sz
+    return (r00 * px + r10 * py + r20 * pz - leg.offset,
+            r01 * px + r11 * py + r21 * pz,
+            r02 * px + r12 * py + r22 * pz)
+
+
+def solve_legs(legs: tuple, x: Any, y: Any, z: Any, vx: Any, vy: Any,
+               vz: Any, ax: Any, ay: Any, az: Any, sqrt: Callable[[Any], Any],
+               record: Optional[dict[str, Any]] = None) -> tuple:
+    """
+    :func:`solve` for legs as built: each in its own frame R_i.
+
+    ``legs``: three :data:`LegConstants` (A, B, C). Each leg runs the
+    one-leg recursion on :func:`leg_point` and on ``R_i^T`` of the
+    velocity, acceleration and gravity; its generalised force ``(0, Qy,
+    Qz)`` goes back to frame 0 as ``R_i (0, Qy, Qz)``, and ``J_lambda``'s
+    row i is ``R_i (1, y'/alpha_i, z'/alpha_i)``: ``f = F1 + J_lambda^-T
+    sum_i R_i Q_i`` (eq. 25). Takes and returns what :func:`solve` does.
+    """
+    records: tuple = (None, None, None)
+    if record is not None:
+        records = record['A'], record['B'], record['C'] = {}, {}, {}
+    lam, lamd, lamdd, alphas, f1, rows = [], [], [], [], [], []
+    qx = qy = qz = 0.0
+    for index, leg in enumerate(legs):
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = leg.frame
+        k = leg.k
+        px, py, pz = leg_point(leg, x, y, z)
+        out = _leg(k, px, py, pz,
+                   r00 * vx + r10 * vy + r20 * vz,
+                   r01 * vx + r11 * vy + r21 * vz,
+                   r02 * vx + r12 * vy + r22 * vz,
+                   r00 * ax + r10 * ay + r20 * az,
+                   r01 * ax + r11 * ay + r21 * az,
+                   r02 * ax + r12 * ay + r22 * az,
+                   k.gx, k.gy, k.gz, index == 0, sqrt, records[index])
+        lam.append(out[0])
+        lamd.append(out[1])
+        lamdd.append(out[2])
+        alphas.append(out[3])
+        f1.append(out[4])
+        qy_leg, qz_leg = out[5], out[6]
+        qx = qx + r01 * qy_leg + r02 * qz_leg
+        qy = qy + r11 * qy_leg + r12 * qz_leg
+        qz = qz + r21 * qy_leg + r22 * qz_leg
+        ra = 1.0 / out[3]
+        ty, tz = py * ra, pz * ra
+        rows.extend((r00 + r01 * ty + r02 * tz, r10 + r11 * ty + r12 * tz,
+                     r20 + r21 * ty + r22 * tz))
+    cof, det, inverse_condition = cofactors(rows, sqrt)
+    rd = 1.0 / det
+    force = tuple(f1[i] + (cof[3 * i] * qx + cof[3 * i + 1] * qy
+                           + cof[3 * i + 2] * qz) * rd for i in range(3))
+    return (tuple(lam), tuple(lamd), tuple(lamdd), force,
+            tuple(lamd[i] * force[i] for i in range(3)), tuple(alphas),
+            inverse_condition)
+
+
+def cofactors(j: Any, sqrt: Callable[[Any], Any]) -> tuple:
+    """
+    Cofactors, determinant and ``1 / kappa_F`` of any 3x3 ``J_lambda``.
+
+    ``j``: its 9 entries row by row. Returns ``(cof, det,
+    inverse_condition)`` as :func:`jacobian_cofactors` does (``cof[3 i +
+    m]`` the cofactor of entry (i, m): ``J^-T = cof / det``).
+    """
+    j00, j01, j02, j10, j11, j12, j20, j21, j22 = j
+    cof = (j11 * j22 - j12 * j21, j12 * j20 - j10 * j22,
+           j10 * j21 - j11 * j20,
+           j02 * j21 - j01 * j22, j00 * j22 - j02 * j20,
+           j01 * j20 - j00 * j21,
+           j01 * j12 - j02 * j11, j02 * j10 - j00 * j12,
+           j00 * j11 - j01 * j10)
+    det = j00 * cof[0] + j01 * cof[1] + j02 * cof[2]
+    jj = cc = 0.0
+    for a, c in zip(j, cof):
+        jj = jj + a * a
+        cc = cc + c * c
+    return cof, det, 3.0 * abs(det) / sqrt(jj * cc)
+
+
 def jacobian_cofactors(x: Any, y: Any, z: Any, al_a: Any, al_b: Any, al_c: Any,
                        sqrt: Callable[[Any], Any]) -> tuple:
     """

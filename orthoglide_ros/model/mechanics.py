@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from orthoglide_ros.model import kernel, terms
+from orthoglide_ros.model import kernel, legs, terms
 from orthoglide_ros.model.terms import ARRAYS, FLOATS
 from orthoglide_ros.model.types import Array, Rows, Triple, Vector
 
@@ -36,6 +36,9 @@ DEFAULT_SINGULARITY_MARGIN = 0.2
 REASONS = ('non_finite', 'unreachable', 'singular', 'overflow')
 
 ZERO = (0.0, 0.0, 0.0)
+
+# The legs' names in messages.
+LEG_NAMES = ('A', 'B', 'C')
 
 # The unit accelerations of the forward dynamics' columns.
 _UNITS = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
@@ -88,6 +91,24 @@ class WorkspaceError(ValueError):
         self.row = row
 
 
+def kernel_solve(robot: Robot, x: Any, y: Any, z: Any, vx: Any, vy: Any,
+                 vz: Any, ax: Any, ay: Any, az: Any, sqrt: Any,
+                 record: Optional[dict[str, Any]] = None) -> Any:
+    """
+    Run the kernel on ``robot``'s legs, unchecked: floats or arrays.
+
+    :func:`kernel.solve` for a robot as drawn (``robot.as_drawn``),
+    :func:`kernel.solve_legs` for legs as built; the arguments and the
+    result are theirs. Callers check the state (:func:`solve`,
+    :func:`solve_batch`) first or after.
+    """
+    if robot.as_drawn:
+        return kernel.solve(robot.constants, x, y, z, vx, vy, vz, ax, ay, az,
+                            sqrt, record)
+    return kernel.solve_legs(robot.leg_constants, x, y, z, vx, vy, vz, ax,
+                             ay, az, sqrt, record)
+
+
 def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
           acceleration: Vector = ZERO,
           margin: float = DEFAULT_SINGULARITY_MARGIN,
@@ -108,19 +129,35 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
     ax, ay, az = acceleration
     if not math.isfinite(x + y + z + vx + vy + vz + ax + ay + az):
         _check_finite_inputs(position, velocity, acceleration)
-    l3sq = robot.l3 * robot.l3
-    rho = max(y * y + z * z, z * z + x * x, x * x + y * y)
-    if rho >= l3sq * (1.0 - margin * margin):
-        raise _leg_error(robot, position, margin)
-    try:
-        out = kernel.solve(robot.constants, float(x), float(y), float(z),
-                           float(vx), float(vy), float(vz), float(ax),
-                           float(ay), float(az), math.sqrt, record)
-    except (ZeroDivisionError, ValueError):
-        # Only exactly on a singularity: det J_lambda = 0 (J2 singular, as
-        # at x = y = z = l3/sqrt(3)), or a cosine's square rounded below 0.
-        raise WorkspaceError('singular', (
-            f'position {format_vector(position)} m is on a singularity')) from None
+    la, lb, lc = robot.bar_length
+    if robot.as_drawn:
+        l3sq = robot.l3 * robot.l3
+        rho = max(y * y + z * z, z * z + x * x, x * x + y * y)
+        if rho >= l3sq * (1.0 - margin * margin):
+            raise _leg_error(robot, position, margin)
+        try:
+            out = kernel.solve(robot.constants, float(x), float(y), float(z),
+                               float(vx), float(vy), float(vz), float(ax),
+                               float(ay), float(az), math.sqrt, record)
+        except (ZeroDivisionError, ValueError):
+            # Only exactly on a singularity: det J_lambda = 0 (J2 singular,
+            # as at x = y = z = l3/sqrt(3)), or a cosine's square rounded
+            # below 0.
+            raise _on_singularity(position) from None
+    else:
+        try:
+            out = kernel.solve_legs(
+                robot.leg_constants, float(x), float(y), float(z), float(vx),
+                float(vy), float(vz), float(ax), float(ay), float(az),
+                math.sqrt, record)
+        except (ZeroDivisionError, ValueError):
+            # A leg out of reach (a negative square), or exactly on a
+            # singularity.
+            raise _leg_fault(robot, position, margin) or _on_singularity(
+                position) from None
+        alphas = out[5]
+        if min(alphas[0] / la, alphas[1] / lb, alphas[2] / lc) < margin:
+            raise _leg_error(robot, position, margin)
     lam, lamd, lamdd, force, power, alphas, conditioning = out
     if robot.active_terms:
         fa, fb, fc = terms.forces(robot, robot.active_terms, lamd, lamdd,
@@ -132,8 +169,7 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
             f'position {format_vector(position)} m is too near a singularity of '
             f'J2: 1/kappa_F(J_lambda) = {conditioning:.3g} < margin '
             f'{margin:g}'))
-    l3 = robot.l3
-    ratio = (alphas[0] / l3, alphas[1] / l3, alphas[2] / l3)
+    ratio = (alphas[0] / la, alphas[1] / lb, alphas[2] / lc)
     if min(ratio) < margin:     # the leg test above, rounded apart
         raise _leg_error(robot, position, margin)
     if not math.isfinite(sum(lamdd) + sum(force) + sum(power)) and not all(
@@ -171,13 +207,15 @@ def solve_batch(robot: Robot, positions: Rows,
         row = int(np.argmin(finite))
         _check_finite_inputs(p[row], v[row], a[row], row)
     x, y, z = p.T.copy()
-    with np.errstate(over='ignore'):    # a far point: inf, refused below
-        rho = np.maximum(np.maximum(y * y + z * z, z * z + x * x),
-                         x * x + y * y)
-    reach = rho < robot.l3 * robot.l3 * (1.0 - margin * margin)
-    if not reach.all():
-        row = int(np.argmin(reach))
-        raise _leg_error(robot, p[row], margin, row)
+    lengths = np.array(robot.bar_length)
+    if robot.as_drawn:
+        with np.errstate(over='ignore'):    # a far point: inf, refused below
+            rho = np.maximum(np.maximum(y * y + z * z, z * z + x * x),
+                             x * x + y * y)
+        reach = rho < robot.l3 * robot.l3 * (1.0 - margin * margin)
+        if not reach.all():
+            row = int(np.argmin(reach))
+            raise _leg_error(robot, p[row], margin, row)
     # Filled per actuator row (contiguous writes), returned as (N, 3) views.
     out = np.empty((6, 3, n))
     conditioning = np.empty(n)
@@ -185,11 +223,19 @@ def solve_batch(robot: Robot, positions: Rows,
     for start in range(0, n, BATCH_CHUNK):
         chunk = slice(start, start + BATCH_CHUNK)
         with np.errstate(all='ignore'):     # checked below, row by row
-            *values, conditioning[chunk] = kernel.solve(
-                robot.constants, *(c[chunk] for c in columns), np.sqrt)
+            *values, conditioning[chunk] = kernel_solve(
+                robot, *(c[chunk] for c in columns), np.sqrt)
         for j, triple in enumerate(values):
             for leg in range(3):
                 out[j, leg, chunk] = triple[leg]
+    if not robot.as_drawn:
+        # Each leg's reach and J1 first, as the drawing's test above (NaN:
+        # out of reach).
+        with np.errstate(invalid='ignore'):
+            reach = (out[5] / lengths[:, None]).min(0) >= margin
+        if not reach.all():
+            row = int(np.argmin(reach))
+            raise _leg_error(robot, p[row], margin, row)
     if robot.active_terms:
         with np.errstate(all='ignore'):     # checked below, row by row
             for leg, force in enumerate(terms.forces(
@@ -204,13 +250,12 @@ def solve_batch(robot: Robot, positions: Rows,
     if not accepted.all():
         row = int(np.argmin(accepted))
         if conditioning[row] == 0.0:
-            raise WorkspaceError('singular', (
-                f'position {format_vector(p[row])} m is on a singularity'), row)
+            raise _on_singularity(p[row], row)
         raise WorkspaceError('singular', (
             f'position {format_vector(p[row])} m is too near a singularity of J2: '
             f'1/kappa_F(J_lambda) = {conditioning[row]:.3g} < margin '
             f'{margin:g}'), row)
-    ratio = out[5] / robot.l3
+    ratio = out[5] / lengths
     near = ratio.min(1) < margin    # the leg test above, rounded apart
     if near.any():
         row = int(np.argmax(near))
@@ -284,11 +329,10 @@ def forward_dynamics(robot: Robot, position: Vector, velocity: Vector,
         raise _overflow_error(position, velocity, force, None,
                               'force') from None
     inertia = _inertia(robot)
-    k = inertia.constants
     x, y, z = float(position[0]), float(position[1]), float(position[2])
     columns = []
     for unit in _UNITS:
-        force, lamdd = _unit_column(k, x, y, z, unit)
+        force, lamdd = _unit_column(inertia, x, y, z, unit)
         if inertia.active_terms:    # the drives' terms: their part of M
             extra = terms.forces(inertia, inertia.active_terms, ZERO, lamdd,
                                  FLOATS)
@@ -365,6 +409,12 @@ def workspace_status(robot: Robot, position: Vector,
     1 at home. Returns a :class:`WorkspaceStatus` (arrays for N points).
     """
     p = np.asarray(position, dtype=float)
+    if not robot.as_drawn:
+        reachable, ratio, conditioning, _ = legs.status(
+            robot.legs, robot.leg_constants, p)
+        distance = np.minimum(ratio.min(-1), conditioning)
+        return WorkspaceStatus(reachable, ratio, conditioning, distance,
+                               reachable & (distance >= margin))
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     l3sq = robot.l3 * robot.l3
     q = 1.0 - np.stack([y * y + z * z, z * z + x * x, x * x + y * y],
@@ -419,6 +469,8 @@ def forward_kinematics_rows(robot: Robot, lam: Rows) -> tuple[Array, Array]:
     one is not given back: a robot started at home cannot reach it without
     crossing a singularity of J2.
     """
+    if not robot.as_drawn:
+        return legs.intersect(robot.legs, lam)
     lam = np.asarray(lam, dtype=float)
     l3 = robot.l3
     d = l3 - lam
@@ -514,13 +566,19 @@ def jacobians(robot: Robot, position: Vector) -> tuple[Array, Array]:
     (N, 3, 3) arrays. Raises :class:`WorkspaceError` where unreachable.
     """
     p = np.asarray(position, dtype=float)
-    status = workspace_status(robot, p, 0.0)
-    if not np.all(status.reachable):
-        row = int(np.argmin(np.atleast_1d(status.reachable)))
+    if robot.as_drawn:
+        reachable, ratio = workspace_status(robot, p, 0.0)[:2]
+    else:
+        reachable, ratio, _, j_lambda = legs.status(
+            robot.legs, robot.leg_constants, p)
+    if not np.all(reachable):
+        row = int(np.argmin(np.atleast_1d(reachable)))
         raise _leg_error(robot, np.atleast_2d(p)[row], 0.0,
                          row if p.ndim == 2 else None)
-    alpha = robot.l3 * status.alpha_ratio
+    alpha = np.asarray(robot.bar_length) * ratio
     j1 = alpha[..., :, None] * np.eye(3)
+    if not robot.as_drawn:
+        return j1, alpha[..., :, None] * j_lambda
     j2 = np.broadcast_to(p[..., None, :], j1.shape).copy()
     j2[..., [0, 1, 2], [0, 1, 2]] = alpha
     return j1, j2
@@ -564,7 +622,8 @@ def _inertia(robot):
     """Return ``robot`` less gravity and friction (built once per robot)."""
     drives = [getattr(robot, terms.coefficient_name(term))
               for term in robot.active_terms if not term.friction]
-    key = (robot.constants, *drives) if drives else robot.constants
+    key = robot.constants if robot.as_drawn else robot.leg_constants
+    key = (key, *drives) if drives else key
     inertia = _INERTIA.get(key)
     if inertia is None:
         if len(_INERTIA) >= 16:
@@ -574,10 +633,10 @@ def _inertia(robot):
     return inertia
 
 
-def _unit_column(k, x, y, z, unit):
+def _unit_column(robot, x, y, z, unit):
     """Return the kernel's forces and ``lambdaddot`` at rest under ``unit``."""
-    out = kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, unit[0], unit[1], unit[2],
-                       math.sqrt)
+    out = kernel_solve(robot, x, y, z, 0.0, 0.0, 0.0, unit[0], unit[1],
+                       unit[2], math.sqrt)
     return out[3], out[2]
 
 
@@ -600,30 +659,57 @@ def _solve3(columns, rhs):
             (b0 * r20 + b1 * r21 + b2 * r22) * inv)
 
 
-def _leg_error(robot, position, margin, row=None):
-    """Explain which leg refuses ``position`` (a WorkspaceError)."""
+def _on_singularity(position, row=None):
+    """Refuse a position exactly on a singularity (a WorkspaceError)."""
+    return WorkspaceError('singular', (
+        f'position {format_vector(position)} m is on a singularity'), row)
+
+
+def _leg_fault(robot, position, margin, row=None):
+    """
+    Return the first leg's refusal of ``position`` (or None).
+
+    Leg i reaches the position where its point's distance from its axis,
+    ``sqrt(y'^2 + z'^2)`` (:func:`kernel.leg_point`), is below its bar
+    length ``L_i`` (``l3`` as drawn); ``alpha_i / L_i`` is then J1's
+    margin.
+    """
     x, y, z = (float(v) for v in position)
-    l3 = robot.l3
-    legs = (('A', y * y + z * z), ('B', z * z + x * x), ('C', x * x + y * y))
-    for leg, rho in legs:
-        if rho >= l3 * l3:
+    for leg, constants in zip(robot.legs, robot.leg_constants):
+        name = leg.name.upper()
+        length = leg.length
+        what = 'l3' if robot.as_drawn else f'L_{name}'
+        _, yq, zq = kernel.leg_point(constants, x, y, z)
+        rho = yq * yq + zq * zq
+        if rho >= length * length:
             return WorkspaceError('unreachable', (
-                f'position {format_vector(position)} m is out of reach of leg {leg}: '
+                f'position {format_vector(position)} m is out of reach of leg {name}: '
                 f'its distance {math.sqrt(rho):.4g} m from the leg\'s axis '
-                f'is not below l3 = {l3:g} m'), row)
-        ratio = math.sqrt(1.0 - rho / (l3 * l3))
+                f'is not below {what} = {length:g} m'), row)
+        ratio = math.sqrt(1.0 - rho / (length * length))
         if ratio < margin:
             return WorkspaceError('singular', (
                 f'position {format_vector(position)} m is too near a singularity of '
-                f'J1: leg {leg} has alpha/l3 = {ratio:.3g} < margin '
+                f'J1: leg {name} has alpha/{what} = {ratio:.3g} < margin '
                 f'{margin:g}'), row)
+    return None
+
+
+def _leg_error(robot, position, margin, row=None):
+    """Explain which leg refuses ``position`` (a WorkspaceError)."""
+    fault = _leg_fault(robot, position, margin, row)
+    if fault is not None:
+        return fault
     # On the margin's very edge the callers' test and the ones above can
     # round apart: the leg nearest its singularity refuses it.
-    leg, rho = max(legs, key=lambda item: item[1])
+    status = workspace_status(robot, np.asarray(position, dtype=float),
+                              margin)
+    leg = int(np.argmin(status.alpha_ratio))
+    what = 'l3' if robot.as_drawn else f'L_{LEG_NAMES[leg]}'
     return WorkspaceError('singular', (
         f'position {format_vector(position)} m is on the edge of the singularity '
-        f'margin {margin:g} of J1: leg {leg} has alpha/l3 = '
-        f'{math.sqrt(1.0 - rho / (l3 * l3)):.3g}'), row)
+        f'margin {margin:g} of J1: leg {LEG_NAMES[leg]} has alpha/{what} = '
+        f'{status.alpha_ratio[leg]:.3g}'), row)
 
 
 def format_vector(vec: Optional[Vector]) -> str:

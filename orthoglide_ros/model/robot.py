@@ -12,8 +12,10 @@ from dataclasses import dataclass, fields
 import math
 from typing import Any, Tuple
 
-from orthoglide_ros.model import terms
-from orthoglide_ros.model.kernel import KernelConstants
+import numpy as np
+
+from orthoglide_ros.model import legs, mechanics, terms
+from orthoglide_ros.model.kernel import KernelConstants, LegConstants
 from orthoglide_ros.model.terms import (  # noqa: F401 (the rows' names)
     FORCE_LIMITS, LENGTH_LIMITS, MASS_LIMITS, NO_FRICTION, Row,
     SPEED_LIMITS)
@@ -24,10 +26,40 @@ LEGS = ('a', 'b', 'c')
 # every node, of the URDF and of the logs.
 JOINT_NAMES = tuple(f'slider_{leg}' for leg in LEGS)
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+# A leg's points and offsets lie within 0.1 m of the drawing's (m, each
+# coordinate), its axis within MAX_TILT_DEG of the drawing's, a unit vector
+# to UNIT_TOLERANCE: far beyond any built Orthoglide's errors.
+OFFSET_LIMITS = (-0.1, 0.1)
+DIRECTION_LIMITS = (-1.001, 1.001)
+UNIT_TOLERANCE = 1e-3
+MAX_TILT_DEG = 10.0
 
 Vector = Tuple[float, float, float]
 
-# The paper's parameters (section 2), then every term's.
+# The machine as built: each leg's geometry (:mod:`legs`), by default the
+# drawing's (doc/model.md#the-machine-as-built).
+GEOMETRY_ROWS = tuple(
+    Row(f'axis_point_{leg}', (0.0, 0.0, 0.0), 'm', OFFSET_LIMITS,
+        f'point a of actuator {leg.upper()}\'s axis where leg {leg.upper()} '
+        'holds its platform point when the slider\'s true position is 0 and '
+        'the bars lie along the axis (frame 0; the drawing: the origin)')
+    for leg in LEGS) + tuple(
+    Row(f'axis_direction_{leg}', axis, '1', DIRECTION_LIMITS,
+        f'direction u of +lambda on actuator {leg.upper()}\'s axis (frame '
+        f'0): a unit vector within {MAX_TILT_DEG:g} deg of the drawing\'s')
+    for leg, axis in zip(LEGS, legs.DRAWING_AXES)) + (
+    Row('joint_offset', (0.0, 0.0, 0.0), 'm', OFFSET_LIMITS,
+        'offsets e of the joint readings of A, B, C: a slider\'s true '
+        'position is its reading plus its offset'),
+    Row('bar_length', None, 'm', LENGTH_LIMITS,
+        'length L of the parallelogram bars of legs A, B, C; defaults to l3 '
+        'on each leg', 'l3'),
+) + tuple(
+    Row(f'attachment_{leg}', (0.0, 0.0, 0.0), 'm', OFFSET_LIMITS,
+        f'leg {leg.upper()}\'s point r on the platform relative to its '
+        'centre G (frame 0; the drawing: G itself)')
+    for leg in LEGS)
+# The paper's parameters (section 2), each leg's geometry, every term's.
 ROWS = (
     Row('l', 0.20, 'm', LENGTH_LIMITS, 'side of the cubic platform (body 5)'),
     Row('l1', 0.15, 'm', LENGTH_LIMITS,
@@ -50,12 +82,22 @@ ROWS = (
         'mass of each bar A6A7 (body 6); defaults to m3', 'm3'),
     Row('gravity', DEFAULT_GRAVITY, 'm/s^2', (-100.0, 100.0),
         'gravity vector in the base frame 0'),
-) + tuple(row for term in terms.TERMS for row in term.rows)
+) + GEOMETRY_ROWS + tuple(row for term in terms.TERMS for row in term.rows)
 ROW = {row.name: row for row in ROWS}
+# The rows of a 3-vector that follow a scalar: one value per actuator,
+# each the leader's until given.
+PER_ACTUATOR = frozenset({'bar_length'})
 
 
 def is_vector(row: 'Row') -> bool:
-    """Whether ``row``'s value is a 3-vector (its own or its leader's)."""
+    """
+    Whether ``row``'s value is a 3-vector (its own or its leader's).
+
+    A row of :data:`PER_ACTUATOR` is one per actuator, each component
+    following its scalar leader.
+    """
+    if row.name in PER_ACTUATOR:
+        return True
     return isinstance(ROW[row.follows].default if row.follows
                       else row.default, tuple)
 
@@ -110,17 +152,31 @@ class Robot:
             row.name for row in ROWS
             if row.follows and getattr(self, row.name) is None))
         for name in self.following:
-            object.__setattr__(self, name, getattr(self, ROW[name].follows))
+            value = getattr(self, ROW[name].follows)
+            object.__setattr__(self, name, (value,) * 3
+                               if name in PER_ACTUATOR else value)
         for row in ROWS:
             object.__setattr__(self, row.name, _checked(
                 row, getattr(self, row.name)))
-        # Derived once (not fields: no part of eq or repr): the kernel's
-        # constants, the terms whose force the robot has, and whether
-        # friction is among them.
+        _check_directions(self)
+        # Derived once (not fields: no part of eq or repr): each leg as
+        # built, whether they are the drawing's (then the mechanics take
+        # the drawing's closed forms), the kernel's constants, the terms
+        # whose force the robot has, and whether friction is among them.
+        object.__setattr__(self, 'legs', build_legs(self))
+        object.__setattr__(self, 'as_drawn', all(
+            leg.point == mechanics.ZERO and leg.attachment == mechanics.ZERO
+            and leg.offset == 0.0 and leg.length == self.l3
+            and leg.direction == axis
+            for leg, axis in zip(self.legs, legs.DRAWING_AXES)))
         object.__setattr__(self, 'constants', kernel_constants(self))
+        object.__setattr__(self, 'leg_constants',
+                           leg_constants(self, self.legs))
         object.__setattr__(self, 'active_terms', terms.active(self))
         object.__setattr__(self, 'has_friction', any(
             term.friction for term in self.active_terms))
+        if not self.as_drawn:
+            _check_assembly(self)
 
     @classmethod
     def parameter_names(cls) -> tuple[str, ...]:
@@ -177,6 +233,138 @@ def kernel_constants(robot: Robot) -> KernelConstants:
         robot.m1, robot.m2, robot.m3, robot.m4, terms.platform_mass(robot),
         robot.m6, robot.l2 / 2.0, robot.l1 * math.sin(robot.alpha),
         -robot.l / 2.0, gx, gy, gz)
+
+
+def build_legs(robot: Robot, **changes: Any) -> tuple[legs.Leg, ...]:
+    """
+    Return ``robot``'s legs (:func:`legs.build`), some rows ``changes``d.
+
+    ``changes``: geometry rows by name (``bar_length=...``) taken instead
+    of ``robot``'s values, unchecked.
+    """
+    def value(name):
+        return changes.get(name, getattr(robot, name))
+    return legs.build([value(f'axis_point_{leg}') for leg in LEGS],
+                      [value(f'axis_direction_{leg}') for leg in LEGS],
+                      value('joint_offset'), value('bar_length'),
+                      [value(f'attachment_{leg}') for leg in LEGS])
+
+
+def leg_constants(robot: Robot,
+                  built: tuple[legs.Leg, ...]) -> tuple[LegConstants, ...]:
+    """
+    Pack each leg's values the kernel uses (``kernel.solve_legs``).
+
+    Each leg's :class:`KernelConstants` are the robot's with its own bar
+    length ``L_i`` for ``l3`` (``h3 = L_i / 2``, ``i3 = L_i^2 / 3``) and
+    gravity in its frame, ``R_i^T g``; its frame row by row, ``r_i -
+    a_i`` and ``e_i``.
+    """
+    k = kernel_constants(robot)
+    out = []
+    for leg in built:
+        length = leg.length
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = leg.frame
+        gravity = (r00 * k.gx + r10 * k.gy + r20 * k.gz,
+                   r01 * k.gx + r11 * k.gy + r21 * k.gz,
+                   r02 * k.gx + r12 * k.gy + r22 * k.gz)
+        out.append(LegConstants(
+            k._replace(l3=length, minus_inv_l3=-1.0 / length,
+                       h3=length / 2.0, i3=length ** 2 / 3.0,
+                       gx=gravity[0], gy=gravity[1], gz=gravity[2]),
+            (r00, r01, r02, r10, r11, r12, r20, r21, r22),
+            tuple(r - a for r, a in zip(leg.attachment, leg.point)),
+            leg.offset))
+    return tuple(out)
+
+
+def _check_directions(robot):
+    """
+    Refuse an axis direction not a unit vector, tilted or parallel.
+
+    Each ``axis_direction_*`` must have a norm within UNIT_TOLERANCE of 1,
+    no other leg's direction within MAX_TILT_DEG of it (or of its
+    opposite: the axes must span space) and its drawing's axis within
+    MAX_TILT_DEG (:class:`ParameterError` naming the row).
+    """
+    seen = []
+    for leg, axis in zip(LEGS, legs.DRAWING_AXES):
+        name = f'axis_direction_{leg}'
+        value = getattr(robot, name)
+        norm = math.sqrt(sum(v * v for v in value))
+        if abs(norm - 1.0) > UNIT_TOLERANCE:
+            raise _bad(ROW[name], f'must be a unit vector (norm within '
+                       f'{UNIT_TOLERANCE:g} of 1), got {value!r} of norm '
+                       f'{norm:.6g}')
+        direction = legs.unit(value)
+        for other, earlier in seen:
+            apart = math.degrees(legs.angle(direction, earlier))
+            if min(apart, 180.0 - apart) < MAX_TILT_DEG:
+                raise _bad(ROW[name], (
+                    f'parallel to robot.{other} ({apart:.3g} deg apart): '
+                    'the three axes must span space'))
+        tilt = math.degrees(legs.angle(direction, axis))
+        if tilt > MAX_TILT_DEG:
+            raise _bad(ROW[name], (
+                f'must lie within {MAX_TILT_DEG:g} deg of the drawing\'s '
+                f'axis {list(axis)}, got {value!r}, {tilt:.3g} deg from it'))
+        seen.append((name, direction))
+
+
+def _assembly_problem(built, constants):
+    """
+    Why legs do not assemble at their home, or None where they do.
+
+    Home is the platform's position at ``lambda = (0, 0, 0)`` on the home
+    branch (:func:`legs.intersect`); it must stand at least the default
+    singularity margin from every singularity, as every figure of the
+    drawing's robot does (distance 1 there).
+    """
+    home, found = legs.intersect(built, mechanics.ZERO)
+    if not found:
+        return ('the legs do not assemble: no platform position on the '
+                'home branch (every alpha_i > 0) at lambda = (0, 0, 0)')
+    _, ratio, conditioning, _ = legs.status(built, constants, home)
+    distance = min(float(ratio.min()), float(conditioning))
+    margin = mechanics.DEFAULT_SINGULARITY_MARGIN
+    if distance < margin:
+        return (f'the legs assemble at lambda = (0, 0, 0) with the platform '
+                f'at {mechanics.format_vector(home)} m, too near a '
+                f'singularity (distance {distance:.3g} < {margin:g})')
+    return None
+
+
+def _check_assembly(robot):
+    """
+    Refuse legs that do not assemble at home, naming the row to blame.
+
+    A leg whose bars are shorter than the distance from its axis to its
+    platform point at the drawing's home is named by ``bar_length``;
+    otherwise the first geometry row whose drawing's value would make the
+    legs assemble, or else the first that differs from the drawing's.
+    """
+    problem = _assembly_problem(robot.legs, robot.leg_constants)
+    if problem is None:
+        return
+    for leg in robot.legs:
+        w = np.subtract(leg.attachment, leg.point)
+        reach = float(np.linalg.norm(w - (w @ leg.direction) * np.asarray(
+            leg.direction)))
+        if reach >= leg.length:
+            raise _bad(ROW['bar_length'], (
+                f'leg {leg.name.upper()}\'s bars ({leg.length:g} m) are '
+                f'shorter than its reach: its platform point at home is '
+                f'{reach:.4g} m from its axis'))
+    drawing = {row.name: row.default for row in GEOMETRY_ROWS}
+    drawing['bar_length'] = (robot.l3,) * 3
+    differing = [name for name, value in drawing.items()
+                 if getattr(robot, name) != value]
+    for name in differing:
+        changed = build_legs(robot, **{name: drawing[name]})
+        if _assembly_problem(changed, leg_constants(robot, changed)) is None:
+            raise _bad(ROW[name], f'{problem} (with the drawing\'s value '
+                       'they would)')
+    raise _bad(ROW[differing[0]], problem)
 
 
 def _checked(row, value):
