@@ -462,30 +462,6 @@ OTHER_ROBOT_VALUES = {
 # 3.2 kg) and a payload on its platform: keyword arguments of Robot.
 DRIVES_ROBOT_VALUES = {'armature': (3.2, 1.1, 0.45), 'payload': 5.0}
 
-# Robots as built (keyword arguments of Robot): every per-leg row off the
-# drawing, by the issue's largest errors (about 1 mm, 0.3 deg; directions
-# not quite unit vectors, as a user types them) and by ten times more.
-BUILT_ROBOT_VALUES = {
-    'axis_point_a': (0.0, 6e-4, -8e-4), 'axis_point_b': (-5e-4, 0.0, 9e-4),
-    'axis_point_c': (7e-4, -4e-4, 0.0),
-    'axis_direction_a': (1.0, 0.004, -0.0034),
-    'axis_direction_b': (-0.0029, 1.0, 0.0041),
-    'axis_direction_c': (0.0038, 0.0025, 1.0),
-    'joint_offset': (9e-4, -6e-4, 3e-4), 'bar_length': (0.8507, 0.8494, 0.8509),
-    'attachment_a': (2e-4, -3e-4, 5e-4), 'attachment_b': (-6e-4, 1e-4, 2e-4),
-    'attachment_c': (4e-4, 5e-4, -7e-4),
-}
-FAR_BUILT_ROBOT_VALUES = {
-    'axis_point_a': (0.0, 0.006, -0.008), 'axis_point_b': (-0.005, 0.0, 0.009),
-    'axis_point_c': (0.007, -0.004, 0.0),
-    'axis_direction_a': (0.9986, 0.04, -0.034),
-    'axis_direction_b': (-0.029, 0.9988, 0.041),
-    'axis_direction_c': (0.038, 0.025, 0.9989),
-    'joint_offset': (0.009, -0.006, 0.003), 'bar_length': (0.857, 0.844, 0.859),
-    'attachment_a': (0.002, -0.003, 0.005), 'attachment_b': (-0.006, 0.001, 0.002),
-    'attachment_c': (0.004, 0.005, -0.007),
-}
-
 # Fast trajectories of eq. (6)'s shape, r* (1 - cos(omega t)): targets
 # (m) whose whole path 0 .. 2 r* stays in the cube, and omega (rad/s).
 FAST_TRAJECTORIES = (
@@ -517,11 +493,10 @@ def cube_points(half=CUBE):
     return st.tuples(coordinate, coordinate, coordinate).map(np.array)
 
 
-# Deviations of a built robot from the drawing (m, deg), per kind of row:
-# the issue's (a built Orthoglide: 0.1-1 mm, 0.05-0.3 deg) and larger.
-DEVIATION_SIZES = {'issue': ((1e-4, 1e-3), (0.05, 0.3)),
+# Deviations of a robot as built from the drawing (m, deg): a built
+# Orthoglide's (0.1-1 mm, 0.05-0.3 deg) and ten to twenty times more.
+DEVIATION_SIZES = {'built': ((1e-4, 1e-3), (0.05, 0.3)),
                    'large': ((1e-3, 2e-2), (0.3, 3.0))}
-LEG_ROWS = ('axis_point', 'axis_direction', 'attachment')
 
 
 def _vector_of_length(draw, low, high):
@@ -541,7 +516,7 @@ def tilted(axis, degrees, towards):
     return tuple(np.cos(angle) * axis + np.sin(angle) * across)
 
 
-def deviations(size='issue', l3=0.85):
+def deviations(size='built', l3=0.85):
     """
     Hypothesis strategy: the per-leg rows of a robot as built (a dict).
 

@@ -23,11 +23,10 @@ Finite differences (4th order, ``mechanics_reference.derivative``, step
 from hypothesis import given, settings, strategies as st
 from hypothesis_profiles import examples
 from mechanics_reference import (
-    actuator_displacements, batch_rows, body_jacobians, BUILT_ROBOT_VALUES,
-    cube_points, derivative, deviations, FAR_BUILT_ROBOT_VALUES,
-    force_tolerance, lagrange_forces, lambda_jacobian, leg_geometry, LEGS,
-    mass_matrix, platform_position, potential_gradient, ROUNDING,
-    sphere_residuals, vectors)
+    actuator_displacements, batch_rows, body_jacobians, cube_points,
+    derivative, deviations, force_tolerance, lagrange_forces,
+    lambda_jacobian, leg_geometry, LEGS, mass_matrix, platform_position,
+    potential_gradient, ROUNDING, sphere_residuals, vectors)
 import numpy as np
 from orthoglide_ros.model import kernel, legs, mechanics
 from orthoglide_ros.model.bodies import elements, leg_joints
@@ -38,15 +37,17 @@ from orthoglide_ros.model.mechanics import (
 from orthoglide_ros.model.plant import rk4_step
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.trajectory import paper_sample
+from orthoglide_testing.robots_as_built import (
+    BUILT as BUILT_VALUES, FAR as FAR_VALUES)
 import pytest
 
 GEOMETRY = 1e-12
 RATE = 1e-12
 FD = 1e-9
 GRAVITIES = ((0.0, 0.0, -9.81), (0.0, 0.0, 0.0), (2.0, -5.0, -7.5))
-SIZES = ('issue', 'large')
-BUILT = Robot(**BUILT_ROBOT_VALUES)
-FAR = Robot(**FAR_BUILT_ROBOT_VALUES)
+SIZES = ('built', 'large')
+BUILT = Robot(**BUILT_VALUES)
+FAR = Robot(**FAR_VALUES)
 
 
 def built_robots():
@@ -390,3 +391,34 @@ def test_a_plant_as_built_moves_as_its_own_model_says():
     assert open_loop_error(BUILT, BUILT) <= 2e-6
     assert open_loop_error(BUILT, Robot()) >= 1e-3
     assert mechanics.solve(BUILT, (0.0, 0.0, 0.0)).lambda_ != (0.0,) * 3
+
+
+def test_a_roll_about_an_axis_moves_neither_readings_nor_forces():
+    """
+    Why the legs' frames take no roll (doc/model.md#the-machine-as-built).
+
+    A leg's frame turned about its own axis moves its joints' axes, yet
+    every reading and force is the same: the sphere is round about the
+    axis, and the bodies it turns spin about their own axes or translate
+    with the platform (as ``l``, ``l1``, ``l2``, ``alpha`` cancel).
+    """
+    robot = FAR.replace(gravity=(2.0, -5.0, -7.5))
+    rng = np.random.default_rng(47)
+    for angle in (0.3, -1.1, 2.5):
+        c, s = np.cos(angle), np.sin(angle)
+        roll = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+        rolled = []
+        for leg in robot.leg_constants:
+            frame = np.array(leg.frame).reshape(3, 3) @ roll
+            g = frame.T @ robot.gravity
+            rolled.append(leg._replace(
+                k=leg.k._replace(gx=g[0], gy=g[1], gz=g[2]),
+                frame=tuple(frame.ravel())))
+        for _ in range(5):
+            state = (*rng.uniform(-0.3, 0.3, 3), *rng.uniform(-3.0, 3.0, 3),
+                     *rng.uniform(-30.0, 30.0, 3))
+            here = kernel.solve_legs(robot.leg_constants, *state, np.sqrt)
+            there = kernel.solve_legs(rolled, *state, np.sqrt)
+            assert np.abs(np.subtract(here[0], there[0])).max() <= GEOMETRY
+            assert np.abs(np.subtract(here[3], there[3])).max() <= 1e-11
+            assert np.abs(np.subtract(here[2], there[2])).max() <= 1e-11

@@ -17,9 +17,9 @@ import math
 import re
 
 from mechanics_reference import (
-    BUILT_ROBOT_VALUES, lambda_jacobian, leg_geometry, LEGS,
-    platform_position, sphere_residuals)
+    lambda_jacobian, leg_geometry, LEGS, platform_position, sphere_residuals)
 import numpy as np
+from orthoglide_testing.robots_as_built import BUILT as BUILT_VALUES
 from orthoglide_ros.cores.parameters import ROBOT_SPECS
 from orthoglide_ros.formats.params_file import robot_from_parameters
 from orthoglide_ros.model import legs
@@ -60,16 +60,16 @@ def test_bar_length_follows_l3_on_each_leg_until_given():
 
 
 def test_each_leg_reads_its_rows_and_turns_its_drawing_frame_least():
-    robot = Robot(**BUILT_ROBOT_VALUES)
+    robot = Robot(**BUILT_VALUES)
     assert not robot.as_drawn
     for i, (leg, name) in enumerate(zip(robot.legs, 'abc')):
-        given = np.array(BUILT_ROBOT_VALUES[f'axis_direction_{name}'])
-        assert leg.point == BUILT_ROBOT_VALUES[f'axis_point_{name}']
+        given = np.array(BUILT_VALUES[f'axis_direction_{name}'])
+        assert leg.point == BUILT_VALUES[f'axis_point_{name}']
         assert np.abs(np.array(leg.direction)
                       - given / np.linalg.norm(given)).max() <= 1e-16
-        assert leg.offset == BUILT_ROBOT_VALUES['joint_offset'][i]
-        assert leg.length == BUILT_ROBOT_VALUES['bar_length'][i]
-        assert leg.attachment == BUILT_ROBOT_VALUES[f'attachment_{name}']
+        assert leg.offset == BUILT_VALUES['joint_offset'][i]
+        assert leg.length == BUILT_VALUES['bar_length'][i]
+        assert leg.attachment == BUILT_VALUES[f'attachment_{name}']
         frame = np.array(leg.frame)
         assert np.abs(frame.T @ frame - np.eye(3)).max() <= 1e-15
         assert abs(np.linalg.det(frame) - 1.0) <= 1e-15
@@ -81,11 +81,11 @@ def test_each_leg_reads_its_rows_and_turns_its_drawing_frame_least():
 
 
 def test_rows_round_trip_through_parameters_and_files():
-    robot = Robot(**BUILT_ROBOT_VALUES)
+    robot = Robot(**BUILT_VALUES)
     assert Robot(**robot.as_parameters()) == robot
     assert robot.replace(m5=16.0).legs == robot.legs
     values = {f'robot.{name}': [float(v) for v in value]
-              for name, value in BUILT_ROBOT_VALUES.items()}
+              for name, value in BUILT_VALUES.items()}
     assert robot_from_parameters(values) == robot
     specs = {spec.name: spec for spec in ROBOT_SPECS}
     assert specs['robot.bar_length'].type == 'double_array'

@@ -102,43 +102,54 @@ def solve_legs(legs: tuple, x: Any, y: Any, z: Any, vx: Any, vy: Any,
     row i is ``R_i (1, y'/alpha_i, z'/alpha_i)``: ``f = F1 + J_lambda^-T
     sum_i R_i Q_i`` (eq. 25). Takes and returns what :func:`solve` does.
     """
-    records: tuple = (None, None, None)
+    ra = rb = rc = None
     if record is not None:
-        records = record['A'], record['B'], record['C'] = {}, {}, {}
-    lam, lamd, lamdd, alphas, f1, rows = [], [], [], [], [], []
-    qx = qy = qz = 0.0
-    for index, leg in enumerate(legs):
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = leg.frame
-        k = leg.k
-        px, py, pz = leg_point(leg, x, y, z)
-        out = _leg(k, px, py, pz,
-                   r00 * vx + r10 * vy + r20 * vz,
-                   r01 * vx + r11 * vy + r21 * vz,
-                   r02 * vx + r12 * vy + r22 * vz,
-                   r00 * ax + r10 * ay + r20 * az,
-                   r01 * ax + r11 * ay + r21 * az,
-                   r02 * ax + r12 * ay + r22 * az,
-                   k.gx, k.gy, k.gz, index == 0, sqrt, records[index])
-        lam.append(out[0])
-        lamd.append(out[1])
-        lamdd.append(out[2])
-        alphas.append(out[3])
-        f1.append(out[4])
-        qy_leg, qz_leg = out[5], out[6]
-        qx = qx + r01 * qy_leg + r02 * qz_leg
-        qy = qy + r11 * qy_leg + r12 * qz_leg
-        qz = qz + r21 * qy_leg + r22 * qz_leg
-        ra = 1.0 / out[3]
-        ty, tz = py * ra, pz * ra
-        rows.extend((r00 + r01 * ty + r02 * tz, r10 + r11 * ty + r12 * tz,
-                     r20 + r21 * ty + r22 * tz))
-    cof, det, inverse_condition = cofactors(rows, sqrt)
+        ra, rb, rc = record['A'], record['B'], record['C'] = {}, {}, {}
+    lam_a, lamd_a, lamdd_a, al_a, f1_a, qa, ja = _leg_in_frame(
+        legs[0], x, y, z, vx, vy, vz, ax, ay, az, True, sqrt, ra)
+    lam_b, lamd_b, lamdd_b, al_b, f1_b, qb, jb = _leg_in_frame(
+        legs[1], x, y, z, vx, vy, vz, ax, ay, az, False, sqrt, rb)
+    lam_c, lamd_c, lamdd_c, al_c, f1_c, qc, jc = _leg_in_frame(
+        legs[2], x, y, z, vx, vy, vz, ax, ay, az, False, sqrt, rc)
+    qx = qa[0] + qb[0] + qc[0]
+    qy = qa[1] + qb[1] + qc[1]
+    qz = qa[2] + qb[2] + qc[2]
+    (c11, c12, c13, c21, c22, c23, c31, c32, c33), det, inverse_condition = \
+        cofactors(ja + jb + jc, sqrt)
     rd = 1.0 / det
-    force = tuple(f1[i] + (cof[3 * i] * qx + cof[3 * i + 1] * qy
-                           + cof[3 * i + 2] * qz) * rd for i in range(3))
-    return (tuple(lam), tuple(lamd), tuple(lamdd), force,
-            tuple(lamd[i] * force[i] for i in range(3)), tuple(alphas),
+    f_a = f1_a + (c11 * qx + c12 * qy + c13 * qz) * rd
+    f_b = f1_b + (c21 * qx + c22 * qy + c23 * qz) * rd
+    f_c = f1_c + (c31 * qx + c32 * qy + c33 * qz) * rd
+    return ((lam_a, lam_b, lam_c), (lamd_a, lamd_b, lamd_c),
+            (lamdd_a, lamdd_b, lamdd_c), (f_a, f_b, f_c),
+            (lamd_a * f_a, lamd_b * f_b, lamd_c * f_c), (al_a, al_b, al_c),
             inverse_condition)
+
+
+def _leg_in_frame(leg, x, y, z, vx, vy, vz, ax, ay, az, platform, sqrt,
+                  record):
+    """
+    One leg as built: ``_leg`` in its frame, its results in frame 0.
+
+    Returns ``(lambda, lambdadot, lambdaddot, alpha_i, F1, R_i (0, Qy,
+    Qz), J_lambda's row i)``, the last two 3-tuples in frame 0.
+    """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = leg.frame
+    k = leg.k
+    px, py, pz = leg_point(leg, x, y, z)
+    lam, lamd, lamdd, al, f1, qy, qz = _leg(
+        k, px, py, pz,
+        r00 * vx + r10 * vy + r20 * vz, r01 * vx + r11 * vy + r21 * vz,
+        r02 * vx + r12 * vy + r22 * vz,
+        r00 * ax + r10 * ay + r20 * az, r01 * ax + r11 * ay + r21 * az,
+        r02 * ax + r12 * ay + r22 * az,
+        k.gx, k.gy, k.gz, platform, sqrt, record)
+    ra = 1.0 / al
+    ty, tz = py * ra, pz * ra
+    return (lam, lamd, lamdd, al, f1,
+            (r01 * qy + r02 * qz, r11 * qy + r12 * qz, r21 * qy + r22 * qz),
+            (r00 + r01 * ty + r02 * tz, r10 + r11 * ty + r12 * tz,
+             r20 + r21 * ty + r22 * tz))
 
 
 def cofactors(j: Any, sqrt: Callable[[Any], Any]) -> tuple:
@@ -150,18 +161,19 @@ def cofactors(j: Any, sqrt: Callable[[Any], Any]) -> tuple:
     m]`` the cofactor of entry (i, m): ``J^-T = cof / det``).
     """
     j00, j01, j02, j10, j11, j12, j20, j21, j22 = j
-    cof = (j11 * j22 - j12 * j21, j12 * j20 - j10 * j22,
-           j10 * j21 - j11 * j20,
-           j02 * j21 - j01 * j22, j00 * j22 - j02 * j20,
-           j01 * j20 - j00 * j21,
-           j01 * j12 - j02 * j11, j02 * j10 - j00 * j12,
-           j00 * j11 - j01 * j10)
-    det = j00 * cof[0] + j01 * cof[1] + j02 * cof[2]
-    jj = cc = 0.0
-    for a, c in zip(j, cof):
-        jj = jj + a * a
-        cc = cc + c * c
-    return cof, det, 3.0 * abs(det) / sqrt(jj * cc)
+    c00, c01, c02 = j11 * j22 - j12 * j21, j12 * j20 - j10 * j22, \
+        j10 * j21 - j11 * j20
+    c10, c11, c12 = j02 * j21 - j01 * j22, j00 * j22 - j02 * j20, \
+        j01 * j20 - j00 * j21
+    c20, c21, c22 = j01 * j12 - j02 * j11, j02 * j10 - j00 * j12, \
+        j00 * j11 - j01 * j10
+    det = j00 * c00 + j01 * c01 + j02 * c02
+    jj = (j00 * j00 + j01 * j01 + j02 * j02 + j10 * j10 + j11 * j11
+          + j12 * j12 + j20 * j20 + j21 * j21 + j22 * j22)
+    cc = (c00 * c00 + c01 * c01 + c02 * c02 + c10 * c10 + c11 * c11
+          + c12 * c12 + c20 * c20 + c21 * c21 + c22 * c22)
+    return ((c00, c01, c02, c10, c11, c12, c20, c21, c22), det,
+            3.0 * abs(det) / sqrt(jj * cc))
 
 
 def jacobian_cofactors(x: Any, y: Any, z: Any, al_a: Any, al_b: Any, al_c: Any,

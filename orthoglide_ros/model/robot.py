@@ -44,9 +44,9 @@ GEOMETRY_ROWS = tuple(
         'holds its platform point when the slider\'s true position is 0 and '
         'the bars lie along the axis (frame 0; the drawing: the origin)')
     for leg in LEGS) + tuple(
-    Row(f'axis_direction_{leg}', axis, '1', DIRECTION_LIMITS,
+    Row(f'axis_direction_{leg}', axis, 'unit vector', DIRECTION_LIMITS,
         f'direction u of +lambda on actuator {leg.upper()}\'s axis (frame '
-        f'0): a unit vector within {MAX_TILT_DEG:g} deg of the drawing\'s')
+        f'0), within {MAX_TILT_DEG:g} deg of the drawing\'s')
     for leg, axis in zip(LEGS, legs.DRAWING_AXES)) + (
     Row('joint_offset', (0.0, 0.0, 0.0), 'm', OFFSET_LIMITS,
         'offsets e of the joint readings of A, B, C: a slider\'s true '
@@ -377,9 +377,6 @@ def _checked(row, value):
     low, high = row.limits
     within = (lambda v: low < v < high) if row.open \
         else (lambda v: low <= v <= high)
-    ends = ', '.join('pi/2' if v == math.pi / 2 else f'{v:g}'
-                     for v in (low, high))
-    bounds = f'({ends})' if row.open else f'[{ends}]'
     if is_vector(row):
         try:
             values = tuple(value)
@@ -390,7 +387,7 @@ def _checked(row, value):
         if not all(math.isfinite(v) for v in values):
             raise _bad(row, f'must be finite, got {value!r}')
         if not all(within(v) for v in values):
-            raise _bad(row, f'each component must lie in {bounds} '
+            raise _bad(row, f'each component must lie in {_bounds(row)} '
                        f'{row.unit}, got {value!r}')
         return tuple(float(v) for v in values)
     if not _number(value):
@@ -398,8 +395,16 @@ def _checked(row, value):
     if not math.isfinite(value):
         raise _bad(row, f'must be finite, got {value!r}')
     if not within(value):
-        raise _bad(row, f'must lie in {bounds} {row.unit}, got {value!r}')
+        raise _bad(row, f'must lie in {_bounds(row)} {row.unit}, got '
+                   f'{value!r}')
     return float(value)
+
+
+def _bounds(row):
+    """Return ``row``'s limits as a message writes them: ``[1e-4, 100]``."""
+    ends = ', '.join('pi/2' if v == math.pi / 2 else f'{v:g}'
+                     for v in row.limits)
+    return f'({ends})' if row.open else f'[{ends}]'
 
 
 def _number(value):
