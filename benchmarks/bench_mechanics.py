@@ -146,14 +146,14 @@ def main(argv=None):
           f'{verdict(friction_single <= SINGLE_TARGET_US)}, batch '
           f'{friction_rate:,.0f} samples/s')
     print(f'  legs as built: single median {built_single:.2f} us '
-          f'({built_single / s_med:.2f}x the drawing\'s)  '
+          f'({built_single / s_med:.2f}x the drawing\'s time)  '
           f'{verdict(built_single <= SINGLE_TARGET_US)}, batch '
-          f'{built_rate:,.0f} samples/s ({batch_rate / built_rate:.2f}x '
-          f'slower); forward single median {built_forward:.2f} us '
+          f'{built_rate:,.0f} samples/s ({batch_rate / built_rate:.2f}x); '
+          f'forward single median {built_forward:.2f} us '
           f'({built_forward / forward_med:.2f}x)  '
           f'{verdict(built_forward <= FORWARD_TARGET_US)}, batch '
           f'{built_forward_rate:,.0f} samples/s '
-          f'({forward_rate / built_forward_rate:.2f}x slower)')
+          f'({forward_rate / built_forward_rate:.2f}x)')
     return 0
 
 

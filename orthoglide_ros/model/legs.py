@@ -40,6 +40,11 @@ DRAWING_FRAMES = (
 
 Matrix = tuple[Triple, ...]
 
+# Smallest accepted singularity distance by default (the mechanics' margin,
+# mechanics.workspace_status): legs whose home stands nearer a singularity
+# do not assemble (robot.py).
+DEFAULT_SINGULARITY_MARGIN = 0.2
+
 Leg = namedtuple('Leg', ('name', 'point', 'direction', 'offset', 'length',
                          'attachment', 'frame'))
 Leg.__doc__ = """One leg's geometry, as built (doc/model.md#the-machine-as-built).

@@ -29,8 +29,9 @@ if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.robot import Robot
 
 # Smallest accepted singularity distance (see workspace_status): below it a
-# point is refused as too near a singularity of J1 or J2.
-DEFAULT_SINGULARITY_MARGIN = 0.2
+# point is refused as too near a singularity of J1 or J2 (defined with the
+# legs, whose home must stand beyond it).
+DEFAULT_SINGULARITY_MARGIN = legs.DEFAULT_SINGULARITY_MARGIN
 
 # Why an input was refused: the values of WorkspaceError.reason.
 REASONS = ('non_finite', 'unreachable', 'singular', 'overflow')
@@ -54,8 +55,9 @@ Solution.__doc__ = """Inverse kinematics and dynamics of one sample or a batch.
 
 Per actuator (A, B, C): ``lambda_`` (m), ``lambdadot`` (m/s),
 ``lambdaddot`` (m/s^2), ``force`` (N, on the slider along +lambda) and
-``power = lambdadot * force`` (W); ``alpha_ratio`` = ``alpha_i / l3``
-(eq. 17; 1 at home, 0 at a singularity of J1); ``conditioning`` =
+``power = lambdadot * force`` (W); ``alpha_ratio`` = ``alpha_i / L_i``
+(eq. 17, ``L_i`` the leg's bar length, ``l3`` as drawn; 1 at home, 0 at a
+singularity of J1); ``conditioning`` =
 ``1 / kappa_F(J_lambda)`` (1 at home, 0 at a singularity of J2);
 ``singularity_distance`` = the smallest of the four. A single sample holds
 3-tuples of floats and floats; a batch holds (N, 3) and (N,) arrays.
@@ -67,7 +69,8 @@ WorkspaceStatus = namedtuple('WorkspaceStatus', (
 WorkspaceStatus.__doc__ = """Where a platform position stands.
 
 ``reachable``: eq. (9) has a real solution on the home branch for every
-leg (``y^2 + z^2 < l3^2`` for leg A, cyclically). ``alpha_ratio``,
+leg (``y^2 + z^2 < l3^2`` for leg A, cyclically; ``y'^2 + z'^2 < L_i^2``
+in the frame of a leg as built). ``alpha_ratio``,
 ``conditioning`` and ``singularity_distance`` as in :class:`Solution` (0
 where unreachable). ``ok``: reachable and ``singularity_distance >=
 margin``.
@@ -401,8 +404,9 @@ def workspace_status(robot: Robot, position: Vector,
     Reachability and distance to the singularities of J1 and J2.
 
     ``position``: one point (3,) or N points (N, 3) in frame 0 (m). The
-    singularity distance is the smallest of ``alpha_i / l3 = cos(phi21)
-    cos(phi32)`` over the legs (J1 = diag(alpha_i) is singular at 0) and of
+    singularity distance is the smallest of ``alpha_i / L_i = cos(phi21)
+    cos(phi32)`` over the legs (``L_i = l3`` as drawn; J1 = diag(alpha_i)
+    is singular at 0) and of
     ``1 / kappa_F(J_lambda) = 3 |det J| / (|J|_F |J^-1 det J|_F)``, the
     normalised inverse Frobenius condition number of the inverse-kinematics
     Jacobian ``J_lambda = J1^-1 J2`` (eq. 16; J2 is singular at 0). Both are
@@ -467,7 +471,8 @@ def forward_kinematics_rows(robot: Robot, lam: Rows) -> tuple[Array, Array]:
     0``; ``positions`` (m) is meaningless elsewhere. Where both roots are
     valid platform positions (two assembly modes), a position on the other
     one is not given back: a robot started at home cannot reach it without
-    crossing a singularity of J2.
+    crossing a singularity of J2. Legs as built: :func:`legs.intersect`,
+    the spheres' trilateration.
     """
     if not robot.as_drawn:
         return legs.intersect(robot.legs, lam)
@@ -562,7 +567,8 @@ def jacobians(robot: Robot, position: Vector) -> tuple[Array, Array]:
 
     ``J1 lambdadot = J2 rdot_G`` (eq. 15) with ``J1 = diag(alpha_i)`` and
     ``J2 = [[alpha_1, y, z], [x, alpha_2, z], [x, y, alpha_3]]``, ``alpha_i``
-    of eq. (17) (m). ``position``: (3,) or (N, 3); returns (3, 3) or
+    of eq. (17) (m); for legs as built ``J2``'s row i is ``R_i (alpha_i,
+    y', z')`` (doc/model.md#the-machine-as-built). ``position``: (3,) or (N, 3); returns (3, 3) or
     (N, 3, 3) arrays. Raises :class:`WorkspaceError` where unreachable.
     """
     p = np.asarray(position, dtype=float)

@@ -3,7 +3,8 @@ The Orthoglide's constant description: lengths, masses, gravity, terms.
 
 One immutable :class:`Robot`, validated once, is every algorithm's first
 argument (as Pinocchio's ``Model``) and never validated again on the hot
-path; its fields are :data:`ROWS` (doc/model.md#parameters).
+path; its fields are :data:`ROWS` (doc/model.md#parameters), each leg's
+geometry among them (:mod:`legs`, doc/model.md#the-machine-as-built).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import Any, Tuple
 
 import numpy as np
 
-from orthoglide_ros.model import legs, mechanics, terms
+from orthoglide_ros.model import legs, terms
 from orthoglide_ros.model.kernel import KernelConstants, LegConstants
 from orthoglide_ros.model.terms import (  # noqa: F401 (the rows' names)
     FORCE_LIMITS, LENGTH_LIMITS, MASS_LIMITS, NO_FRICTION, Row,
@@ -26,6 +27,7 @@ LEGS = ('a', 'b', 'c')
 # every node, of the URDF and of the logs.
 JOINT_NAMES = tuple(f'slider_{leg}' for leg in LEGS)
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+ZERO = (0.0, 0.0, 0.0)
 # A leg's points and offsets lie within 0.1 m of the drawing's (m, each
 # coordinate), its axis within MAX_TILT_DEG of the drawing's, a unit vector
 # to UNIT_TOLERANCE: far beyond any built Orthoglide's errors.
@@ -135,15 +137,21 @@ class Robot:
     One field per row of :data:`ROWS`, its default, unit, limits and
     meaning there (doc/model.md#parameters). A row that ``follows``
     another (``m4`` and ``m6`` the paper's ``m2`` and ``m3``,
-    ``friction_coulomb_negative`` ``friction_coulomb``) takes its value
-    until given. Every value must be finite and within its row's limits, a
-    vector a 3-vector; otherwise :class:`ParameterError` names the
-    parameter (``robot.l3``). By default no term: the paper's robot.
+    ``friction_coulomb_negative`` ``friction_coulomb``, ``bar_length``
+    ``l3`` on each leg) takes its value until given. Every value must be
+    finite and within its row's limits, a vector a 3-vector, and the legs
+    must assemble (doc/model.md#the-machine-as-built); otherwise
+    :class:`ParameterError` names the parameter (``robot.l3``). By default
+    no term and the drawing's legs: the paper's robot. Derived once:
+    ``legs``, each leg as built (:class:`legs.Leg`), the one accessor of a
+    leg's geometry; ``as_drawn``, whether they are the drawing's.
 
     >>> Robot().l3
     0.85
     >>> Robot(m5=18.0).m4 == Robot().m2
     True
+    >>> Robot(bar_length=(0.85, 0.851, 0.85)).legs[1].length
+    0.851
     """
 
     def __post_init__(self):
@@ -165,7 +173,7 @@ class Robot:
         # whose force the robot has, and whether friction is among them.
         object.__setattr__(self, 'legs', build_legs(self))
         object.__setattr__(self, 'as_drawn', all(
-            leg.point == mechanics.ZERO and leg.attachment == mechanics.ZERO
+            leg.point == ZERO and leg.attachment == ZERO
             and leg.offset == 0.0 and leg.length == self.l3
             and leg.direction == axis
             for leg, axis in zip(self.legs, legs.DRAWING_AXES)))
@@ -320,17 +328,18 @@ def _assembly_problem(built, constants):
     singularity margin from every singularity, as every figure of the
     drawing's robot does (distance 1 there).
     """
-    home, found = legs.intersect(built, mechanics.ZERO)
+    home, found = legs.intersect(built, ZERO)
     if not found:
         return ('the legs do not assemble: no platform position on the '
                 'home branch (every alpha_i > 0) at lambda = (0, 0, 0)')
     _, ratio, conditioning, _ = legs.status(built, constants, home)
     distance = min(float(ratio.min()), float(conditioning))
-    margin = mechanics.DEFAULT_SINGULARITY_MARGIN
+    margin = legs.DEFAULT_SINGULARITY_MARGIN
     if distance < margin:
+        where = ', '.join(f'{v:.6g}' for v in home)
         return (f'the legs assemble at lambda = (0, 0, 0) with the platform '
-                f'at {mechanics.format_vector(home)} m, too near a '
-                f'singularity (distance {distance:.3g} < {margin:g})')
+                f'at [{where}] m, too near a singularity (distance '
+                f'{distance:.3g} < {margin:g})')
     return None
 
 
