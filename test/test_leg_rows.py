@@ -8,11 +8,13 @@ leg's point, direction, offset, length, attachment and frame, derived
 once. A value not finite, beyond 0.1 m of the drawing, a direction not a
 unit vector, tilted beyond 10 deg or parallel to another, and legs that
 do not assemble at home (no position, a leg shorter than its reach, too
-near a singularity) are refused when the robot is built, naming the row
+near a singularity) are refused when the robot is built, naming the row,
+by a parameters file and every node's table alike
 (doc/model.md#the-machine-as-built).
 """
 
 from collections import namedtuple
+import importlib
 import math
 import re
 
@@ -167,3 +169,21 @@ def test_legs_assembled_too_near_a_singularity_are_refused():
     assert float(found.group(2)) == float(f'{min(ratio, conditioning):.3g}')
     assert 0.1 < min(ratio, conditioning) < 0.2
     Robot(axis_point_a=(0.0, 0.05, 0.0), bar_length=(0.06, 0.85, 0.85))
+
+
+@pytest.mark.parametrize('module', [
+    'feedforward', 'simulator', 'tracking_controller',
+    'mechanism_state_publisher', 'planner'])
+def test_every_node_refuses_legs_that_do_not_assemble(module):
+    table = importlib.import_module(f'orthoglide_ros.cores.{module}').PARAMETERS
+    assert table.robot
+    values = {**table.defaults(),
+              'robot.bar_length': [0.05, 0.85, 0.85],
+              'robot.axis_point_a': [0.0, 0.08, 0.0]}
+    with pytest.raises(ParameterError) as error:
+        table.parse(values)
+    assert error.value.name == 'robot.bar_length'
+    built = table.parse({**table.defaults(), **{
+        f'robot.{name}': [float(v) for v in value]
+        for name, value in BUILT_VALUES.items()}})
+    assert built.robot == Robot(**BUILT_VALUES)
