@@ -348,9 +348,9 @@ def _check_assembly(robot):
     Refuse legs that do not assemble at home, naming the row to blame.
 
     A leg whose bars are shorter than the distance from its axis to its
-    platform point at the drawing's home is named by ``bar_length``;
-    otherwise the first geometry row whose drawing's value would make the
-    legs assemble, or else the first that differs from the drawing's.
+    platform point at the drawing's home (G at the origin) is named by
+    ``bar_length``; otherwise the first geometry row whose drawing's value
+    would make the legs assemble, or else the first that differs.
     """
     problem = _assembly_problem(robot.legs, robot.leg_constants)
     if problem is None:
@@ -362,8 +362,8 @@ def _check_assembly(robot):
         if reach >= leg.length:
             raise _bad(ROW['bar_length'], (
                 f'leg {leg.name.upper()}\'s bars ({leg.length:g} m) are '
-                f'shorter than its reach: its platform point at home is '
-                f'{reach:.4g} m from its axis'))
+                f'shorter than its reach: its platform point at the '
+                f'drawing\'s home is {reach:.4g} m from its axis'))
     drawing = {row.name: row.default for row in GEOMETRY_ROWS}
     drawing['bar_length'] = (robot.l3,) * 3
     differing = [name for name, value in drawing.items()
