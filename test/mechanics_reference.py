@@ -435,6 +435,24 @@ DM_RELATIVE = 1e-8
 ROUNDING = 1e-12
 
 
+def rest_forces(robot, position, acceleration):
+    """
+    Return the forces (N) at zero velocity, exact to rounding, and a bound.
+
+    No Christoffel term: ``f = J_lambda^-T (M qdd + dV/dq)`` from the
+    complex-step Jacobians alone, each term to ROUNDING of its size,
+    amplified by at most ``|J_lambda^-T|``.
+    """
+    mm = mass_matrix(robot, position)
+    grad = potential_gradient(robot, position)
+    jac = lambda_jacobian(robot, position)
+    expected = np.linalg.solve(jac.T, mm @ acceleration + grad)
+    bound = ROUNDING * np.linalg.norm(np.linalg.inv(jac.T), 2) * (
+        np.abs(mm).max() * 3.0 * np.abs(acceleration).max()
+        + np.abs(grad).max())
+    return expected, bound + 1e-300
+
+
 def force_tolerance(ref, velocity, acceleration):
     """Error bound (N) on ``ref.force``, a :class:`LagrangeSolution`."""
     inverse_t = np.linalg.norm(np.linalg.inv(ref.jacobian.T), 2)
