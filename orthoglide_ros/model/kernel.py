@@ -39,34 +39,26 @@ def solve(k: 'KernelConstants', x: Any, y: Any, z: Any, vx: Any, vy: Any,
     ra = rb = rc = None
     if record is not None:
         ra, rb, rc = record['A'], record['B'], record['C'] = {}, {}, {}
-    a = _leg(k, x, y, z, vx, vy, vz, ax, ay, az, gx, gy, gz, True, sqrt, ra)
-    b = _leg(k, y, z, x, vy, vz, vx, ay, az, ax, gy, gz, gx, False, sqrt, rb)
-    c = _leg(k, z, x, y, vz, vx, vy, az, ax, ay, gz, gx, gy, False, sqrt, rc)
+    lam_a, lamd_a, lamdd_a, al_a, f1_a, qy_a, qz_a = _leg(
+        k, x, y, z, vx, vy, vz, ax, ay, az, gx, gy, gz, True, sqrt, ra)
+    lam_b, lamd_b, lamdd_b, al_b, f1_b, qy_b, qz_b = _leg(
+        k, y, z, x, vy, vz, vx, ay, az, ax, gy, gz, gx, False, sqrt, rb)
+    lam_c, lamd_c, lamdd_c, al_c, f1_c, qy_c, qz_c = _leg(
+        k, z, x, y, vz, vx, vy, az, ax, ay, gz, gx, gy, False, sqrt, rc)
+
     # Generalised force on the platform in frame 0: leg B's local (y, z)
     # are frame 0's (z, x), leg C's are (x, y).
-    return _eq25(a, b, c, b[6] + c[5], a[5] + c[6], a[6] + b[5],
-                 jacobian_cofactors(x, y, z, a[3], b[3], c[3], sqrt))
+    qx = qz_b + qy_c
+    qy = qy_a + qz_c
+    qz = qz_a + qy_b
 
-
-def _eq25(a, b, c, qx, qy, qz, jacobian):
-    """
-    Return :func:`solve`'s result from each leg's and eq. (25).
-
-    ``a``, ``b``, ``c``: each leg's ``(lambda, lambdadot, lambdaddot,
-    alpha_i, F1, ...)``; ``(qx, qy, qz)``: the legs' generalised force on
-    the platform in frame 0; ``jacobian``: ``(cof, det,
-    inverse_condition)`` of ``J_lambda``. ``f = F1 + J_lambda^-T Q`` with
-    ``J_lambda^-T = cof / det``; the powers ``lambdadot f``.
-    """
-    lam_a, lamd_a, lamdd_a, al_a, f1_a = a[:5]
-    lam_b, lamd_b, lamdd_b, al_b, f1_b = b[:5]
-    lam_c, lamd_c, lamdd_c, al_c, f1_c = c[:5]
     (c11, c12, c13, c21, c22, c23, c31, c32, c33), det, inverse_condition = \
-        jacobian
+        jacobian_cofactors(x, y, z, al_a, al_b, al_c, sqrt)
     rd = 1.0 / det
     f_a = f1_a + (c11 * qx + c12 * qy + c13 * qz) * rd
     f_b = f1_b + (c21 * qx + c22 * qy + c23 * qz) * rd
     f_c = f1_c + (c31 * qx + c32 * qy + c33 * qz) * rd
+
     return ((lam_a, lam_b, lam_c), (lamd_a, lamd_b, lamd_c),
             (lamdd_a, lamdd_b, lamdd_c), (f_a, f_b, f_c),
             (lamd_a * f_a, lamd_b * f_b, lamd_c * f_c), (al_a, al_b, al_c),
@@ -113,15 +105,25 @@ def solve_legs(legs: tuple, x: Any, y: Any, z: Any, vx: Any, vy: Any,
     ra = rb = rc = None
     if record is not None:
         ra, rb, rc = record['A'], record['B'], record['C'] = {}, {}, {}
-    a = _leg_in_frame(legs[0], x, y, z, vx, vy, vz, ax, ay, az, True, sqrt,
-                      ra)
-    b = _leg_in_frame(legs[1], x, y, z, vx, vy, vz, ax, ay, az, False, sqrt,
-                      rb)
-    c = _leg_in_frame(legs[2], x, y, z, vx, vy, vz, ax, ay, az, False, sqrt,
-                      rc)
-    (qa, ja), (qb, jb), (qc, jc) = a[5:], b[5:], c[5:]
-    return _eq25(a, b, c, qa[0] + qb[0] + qc[0], qa[1] + qb[1] + qc[1],
-                 qa[2] + qb[2] + qc[2], cofactors(ja + jb + jc, sqrt))
+    lam_a, lamd_a, lamdd_a, al_a, f1_a, qa, ja = _leg_in_frame(
+        legs[0], x, y, z, vx, vy, vz, ax, ay, az, True, sqrt, ra)
+    lam_b, lamd_b, lamdd_b, al_b, f1_b, qb, jb = _leg_in_frame(
+        legs[1], x, y, z, vx, vy, vz, ax, ay, az, False, sqrt, rb)
+    lam_c, lamd_c, lamdd_c, al_c, f1_c, qc, jc = _leg_in_frame(
+        legs[2], x, y, z, vx, vy, vz, ax, ay, az, False, sqrt, rc)
+    qx = qa[0] + qb[0] + qc[0]
+    qy = qa[1] + qb[1] + qc[1]
+    qz = qa[2] + qb[2] + qc[2]
+    (c11, c12, c13, c21, c22, c23, c31, c32, c33), det, inverse_condition = \
+        cofactors(ja + jb + jc, sqrt)
+    rd = 1.0 / det
+    f_a = f1_a + (c11 * qx + c12 * qy + c13 * qz) * rd
+    f_b = f1_b + (c21 * qx + c22 * qy + c23 * qz) * rd
+    f_c = f1_c + (c31 * qx + c32 * qy + c33 * qz) * rd
+    return ((lam_a, lam_b, lam_c), (lamd_a, lamd_b, lamd_c),
+            (lamdd_a, lamdd_b, lamdd_c), (f_a, f_b, f_c),
+            (lamd_a * f_a, lamd_b * f_b, lamd_c * f_c), (al_a, al_b, al_c),
+            inverse_condition)
 
 
 def _leg_in_frame(leg, x, y, z, vx, vy, vz, ax, ay, az, platform, sqrt,
