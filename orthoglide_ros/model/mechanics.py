@@ -132,7 +132,6 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
     ax, ay, az = acceleration
     if not math.isfinite(x + y + z + vx + vy + vz + ax + ay + az):
         _check_finite_inputs(position, velocity, acceleration)
-    la, lb, lc = robot.bar_length
     if robot.as_drawn:
         l3sq = robot.l3 * robot.l3
         rho = max(y * y + z * z, z * z + x * x, x * x + y * y)
@@ -147,6 +146,9 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
             # as at x = y = z = l3/sqrt(3)), or a cosine's square rounded
             # below 0.
             raise _on_singularity(position) from None
+        alphas = out[5]
+        l3 = robot.l3
+        ratio = (alphas[0] / l3, alphas[1] / l3, alphas[2] / l3)
     else:
         try:
             out = kernel.solve_legs(
@@ -159,7 +161,9 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
             raise _leg_fault(robot, position, margin) or _on_singularity(
                 position) from None
         alphas = out[5]
-        if min(alphas[0] / la, alphas[1] / lb, alphas[2] / lc) < margin:
+        la, lb, lc = robot.bar_length
+        ratio = (alphas[0] / la, alphas[1] / lb, alphas[2] / lc)
+        if min(ratio) < margin:     # each leg's reach and J1 first
             raise _leg_error(robot, position, margin)
     lam, lamd, lamdd, force, power, alphas, conditioning = out
     if robot.active_terms:
@@ -172,7 +176,6 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
             f'position {format_vector(position)} m is too near a singularity of '
             f'J2: 1/kappa_F(J_lambda) = {conditioning:.3g} < margin '
             f'{margin:g}'))
-    ratio = (alphas[0] / la, alphas[1] / lb, alphas[2] / lc)
     if min(ratio) < margin:     # the leg test above, rounded apart
         raise _leg_error(robot, position, margin)
     if not math.isfinite(sum(lamdd) + sum(force) + sum(power)) and not all(
