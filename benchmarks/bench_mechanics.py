@@ -19,7 +19,9 @@ and ``forward_dynamics_batch``, the paper trajectory's feedforward forces
 as input) against the same two baselines; target: single <= 100 us median.
 And the cost of the sliders' friction: ``solve`` and ``solve_batch`` on a
 robot with viscous and Coulomb friction (the default robot has none, and
-``solve`` then skips it).
+``solve`` then skips it); and of legs as built (every per-leg row off the
+drawing, ``robots_as_built.BUILT``: each leg in its own frame, ``kernel.solve_legs``), the
+inverse and forward dynamics, against the drawing's.
 
 Usage: python benchmarks/bench_mechanics.py [--samples N] [--repeat R]
 """
@@ -35,6 +37,7 @@ import numpy as np
 from orthoglide_ros.model import trajectory  # noqa: E402
 from orthoglide_ros.model import mechanics  # noqa: E402
 from orthoglide_ros.model.robot import Robot  # noqa: E402
+from orthoglide_testing import robots_as_built  # noqa: E402
 from orthoglide_testing.arguments import script_parser  # noqa: E402
 
 SINGLE_TARGET_US = 25.0
@@ -104,15 +107,26 @@ def main(argv=None):
     s_med, batch_rate = measure(
         'Inverse dynamics', mechanics.solve, mechanics.solve_batch,
         (robot, p, v, a), args.calls, args)
-    friction_single, friction_rate = measure_friction(
+    friction_single, friction_rate = measure_variant(
+        'Inverse dynamics with friction', mechanics.solve,
+        mechanics.solve_batch,
         robot.replace(friction_viscous=(40.0, 40.0, 40.0),
                       friction_coulomb=(5.0, 5.0, 5.0)),
-        (p, v, a), args)
+        (p, v, a), args.calls, args)
+    built = robot.replace(**robots_as_built.BUILT)
+    built_single, built_rate = measure_variant(
+        'Inverse dynamics, legs as built', mechanics.solve,
+        mechanics.solve_batch, built, (p, v, a), args.calls, args)
     # Forward dynamics from the trajectory's feedforward forces.
     f = mechanics.solve_batch(robot, p, v, a).force
-    forward_med, _ = measure(
+    forward_med, forward_rate = measure(
         'Forward dynamics', mechanics.forward_dynamics,
         mechanics.forward_dynamics_batch, (robot, p, v, f),
+        args.calls // 4, args)
+    built_forward, built_forward_rate = measure_variant(
+        'Forward dynamics, legs as built', mechanics.forward_dynamics,
+        mechanics.forward_dynamics_batch, built,
+        (p, v, mechanics.solve_batch(built, p, v, a).force),
         args.calls // 4, args)
 
     n = len(p)
@@ -131,23 +145,31 @@ def main(argv=None):
     print(f'  with friction: single median {friction_single:.2f} us  '
           f'{verdict(friction_single <= SINGLE_TARGET_US)}, batch '
           f'{friction_rate:,.0f} samples/s')
+    print(f'  legs as built: single median {built_single:.2f} us '
+          f'({built_single / s_med:.2f}x the drawing\'s time)  '
+          f'{verdict(built_single <= SINGLE_TARGET_US)}, batch '
+          f'{built_rate:,.0f} samples/s ({batch_rate / built_rate:.2f}x); '
+          f'forward single median {built_forward:.2f} us '
+          f'({built_forward / forward_med:.2f}x)  '
+          f'{verdict(built_forward <= FORWARD_TARGET_US)}, batch '
+          f'{built_forward_rate:,.0f} samples/s '
+          f'({forward_rate / built_forward_rate:.2f}x)')
     return 0
 
 
-def measure_friction(robot, arrays, args):
-    """Time ``solve`` and ``solve_batch`` on a robot with friction."""
+def measure_variant(title, single_call, batch_call, robot, arrays, calls,
+                    args):
+    """Time ``single_call`` and ``batch_call`` on another ``robot``."""
     floats = [(robot, *(tuple(x) for x in row))
               for row in zip(*(arr.tolist() for arr in arrays))]
-    single = time_calls(mechanics.solve, floats, args.calls, args.warmup)
+    single = time_calls(single_call, floats, calls, args.warmup)
     s_med, s_p99 = np.percentile(single, [50, 99]) / 1e3
-    t_batch = best_time(lambda: mechanics.solve_batch(robot, *arrays),
-                        args.repeat)
+    t_batch = best_time(lambda: batch_call(robot, *arrays), args.repeat)
     rate = len(floats) / t_batch
-    print(f'\nInverse dynamics with friction ({args.calls} calls; batch N '
-          f'= {len(floats)}):')
-    print(f'  ours  {"solve (Python floats)":{WIDTH}s}median '
-          f'{s_med:8.2f} us   p99 {s_p99:8.2f} us')
-    print(f'  ours  {"solve_batch":{WIDTH}s}{rate:14,.0f} samples/s'
+    print(f'\n{title} ({calls} calls; batch N = {len(floats)}):')
+    print(f'  ours  {single_call.__name__ + " (Python floats)":{WIDTH}s}'
+          f'median {s_med:8.2f} us   p99 {s_p99:8.2f} us')
+    print(f'  ours  {batch_call.__name__:{WIDTH}s}{rate:14,.0f} samples/s'
           f'  ({t_batch * 1e3:.2f} ms)')
     return s_med, rate
 

@@ -8,7 +8,9 @@ checkout's; blocks of calls alternate between the two in one process,
 timed in CPU time (``time.process_time_ns``), which other processes'
 load does not inflate; the medians of the blocks are printed per robot:
 without terms, with viscous and Coulomb friction (bench_mechanics.py's),
-with every friction term, with drives. No ROS import.
+with every friction term, with drives; and a robot whose legs are as
+built (``robots_as_built.BUILT``) now against the drawing's before, what
+the per-leg geometry costs. No ROS import.
 
 Usage: python benchmarks/compare_mechanics.py [REVISION] [--rounds R]
 """
@@ -26,6 +28,7 @@ import numpy as np
 
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
+from orthoglide_testing import robots_as_built
 
 ROOT = Path(__file__).resolve().parents[1]
 ROBOTS = {
@@ -38,6 +41,8 @@ ROBOTS = {
                                 friction_stribeck=(2.0, 2.0, 2.0)),
     'drives (armature)': dict(armature=(3.2, 1.1, 0.45)),
 }
+# Robots of the checkout only, against the revision's drawing (no rows).
+NOW_ONLY = {'legs as built': robots_as_built.BUILT}
 BLOCK = 1000    # solve calls per timed block
 
 
@@ -96,8 +101,10 @@ def main(argv=None):
               'solve_batch of N = 10,000 in ms')
         print(f'{"robot":20s} {"call":16s} {"before":>8s} {"now":>8s} '
               f'{"ratio":>6s}')
-        for name, values in ROBOTS.items():
-            sides = ((before, BeforeRobot(**values)),
+        cases = [(name, values, values) for name, values in ROBOTS.items()]
+        cases += [(name, {}, values) for name, values in NOW_ONLY.items()]
+        for name, was_values, values in cases:
+            sides = ((before, BeforeRobot(**was_values)),
                      (mechanics, Robot(**values)))
             force = mechanics.solve_batch(sides[1][1], *arrays).force
             states = [(tuple(p), tuple(v), tuple(f)) for p, v, f in zip(

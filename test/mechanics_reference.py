@@ -4,10 +4,16 @@ An independent second model of the Orthoglide for the tests.
 Written from doc/model.md and the paper alone; it shares nothing with the
 package but the values of a :class:`Robot` (read as plain attributes).
 
+- :func:`leg_frame`: a leg as built, from the ``robot.*`` rows of its axis
+  point and direction, joint offset, bar length and attachment, its
+  rotation from the drawing's axis by scipy's ``Rotation``.
 - :func:`leg_geometry`: the chain (1)-(8) of one leg with plain 3x3 matrices
   (``a_k0`` products, joint centres, centres of mass, frame 0) from the
-  closed-form inverse geometry (9). It accepts a complex platform position
-  so that derivatives can be taken by complex step.
+  closed-form inverse geometry (9) on the leg's sphere (eq. 14 as built:
+  ``|G + r - a - (lambda + e - L) u| = L``). It accepts a complex platform
+  position so that derivatives can be taken by complex step.
+- :func:`platform_position`: the forward kinematics, the three spheres
+  solved by scipy's ``least_squares`` from home.
 - :func:`body_jacobians`: the linear (centre of mass) and angular Jacobians
   of every body with respect to the generalised coordinates ``q = r_G``,
   by complex step (exact to machine precision).
@@ -23,8 +29,11 @@ Units: m, kg, s, N, J; vectors in frame 0.
 """
 
 from collections import namedtuple
+import functools
 
 import numpy as np
+from scipy.optimize import least_squares
+from scipy.spatial.transform import Rotation
 
 # Complex-step size: the derivative is Im f(q + i h) / h, with no
 # subtraction, hence exact to rounding for any tiny h.
@@ -73,6 +82,37 @@ def unskew(s):
                            s[1, 0] - s[0, 1]])
 
 
+# The drawing's axis of each leg's slider, n_A = e_x, n_B = e_y, n_C = e_z.
+DRAWING_AXIS = {'A': U1, 'B': U2, 'C': U3}
+
+LegFrame = namedtuple('LegFrame', ('point', 'rotation', 'offset', 'length',
+                                   'attachment'))
+LegFrame.__doc__ = """One leg as built (doc/model.md#the-machine-as-built).
+
+``point`` a (m), ``rotation`` (3x3) the smallest rotation taking the
+drawing's axis onto the leg's direction u, ``offset`` e (m), ``length``
+L (m), ``attachment`` r (m); frame 0.
+"""
+
+
+@functools.lru_cache(maxsize=64)
+def leg_frame(robot, leg):
+    """Return leg ``leg``'s :class:`LegFrame` from the robot's rows."""
+    suffix = leg.lower()
+    index = LEGS.index(leg)
+    direction = np.asarray(getattr(robot, f'axis_direction_{suffix}'))
+    direction = direction / np.linalg.norm(direction)
+    axis = DRAWING_AXIS[leg]
+    cross = np.cross(axis, direction)
+    sine = np.linalg.norm(cross)
+    turn = np.zeros(3) if sine == 0.0 else cross / sine * np.arctan2(
+        sine, axis @ direction)
+    return LegFrame(np.asarray(getattr(robot, f'axis_point_{suffix}')),
+                    Rotation.from_rotvec(turn).as_matrix(),
+                    robot.joint_offset[index], robot.bar_length[index],
+                    np.asarray(getattr(robot, f'attachment_{suffix}')))
+
+
 Geometry = namedtuple('Geometry', (
     'lam', 'sin21', 'cos21', 'sin32', 'cos32', 'rotation', 'joints',
     'centre'))
@@ -89,20 +129,27 @@ def leg_geometry(robot, leg, position):
     """
     Build the chain (1)-(8) of leg ``leg`` for the centre ``position``.
 
-    ``position`` is (x, y, z) in frame 0, real or complex. Eq. (9) gives
-    the joint variables on the home branch (cosines positive).
+    ``position`` is (x, y, z) in frame 0, real or complex. The leg sees its
+    platform point ``G + r`` from its axis point ``a``, turned back by its
+    rotation and then as the drawing's leg does (``LEG_AXES``); eq. (9)
+    with its bar length gives the joint variables on the home branch
+    (cosines positive) and its slider's true position, the reading plus
+    its offset.
     """
-    p = [position[0], position[1], position[2]]
+    frame = leg_frame(robot, leg)
+    seen = frame.rotation.T @ (np.asarray(position) + frame.attachment
+                               - frame.point)
     i, j, k = LEG_AXES[leg]
-    x, y, z = p[i], p[j], p[k]
-    l3 = robot.l3
+    x, y, z = seen[i], seen[j], seen[k]
+    l3 = frame.length
     sin32 = -z / l3
     cos32 = np.sqrt(1.0 - sin32 * sin32)
     sin21 = y / (l3 * cos32)
     cos21 = np.sqrt(1.0 - sin21 * sin21)
-    lam = x + l3 * (1.0 - cos21 * cos32)
+    slider = x + l3 * (1.0 - cos21 * cos32)
+    lam = slider - frame.offset
 
-    a10 = BASE_ROTATION[leg]
+    a10 = BASE_ROTATION[leg] @ frame.rotation.T
     a21 = a_phi(sin21, cos21) @ PAPER_A2
     a32 = a_phi(sin32, cos32) @ PAPER_A3
     a43 = a_phi(sin32, cos32) @ PAPER_A4     # phi43 = phi32, eq. (5)
@@ -124,14 +171,15 @@ def leg_geometry(robot, leg, position):
     r54 = (l2 / 2.0) * U1
     r5g = np.array([l1 * sa, -side / 2.0, 0.0])
 
-    joints = {'A1': (lam - l1 * ca - l3 - side / 2.0) * (rot[1].T @ U3)}
+    joints = {'A1': frame.point + (slider - l1 * ca - l3 - side / 2.0)
+              * (rot[1].T @ U3)}
     joints['A2'] = joints['A1'] + rot[1].T @ r21
     joints['A3'] = joints['A2'] + rot[2].T @ r32
     joints['A6'] = joints['A2'] + rot[2].T @ r62
     joints['A4'] = joints['A3'] + rot[3].T @ r43
     joints['A7'] = joints['A6'] + rot[6].T @ r43
     joints['A5'] = joints['A4'] + rot[4].T @ r54
-    joints['G'] = joints['A5'] + rot[5].T @ r5g
+    joints['G'] = joints['A5'] + rot[5].T @ r5g - frame.attachment
 
     # Centres of mass (doc/model.md's table), each from its body's frame.
     centre = {
@@ -154,14 +202,16 @@ def masses(robot):
             5: robot.m5 + robot.payload, 6: robot.m6}
 
 
-def central_inertias(robot):
+def central_inertias(robot, leg='A'):
     """
     Inertia (kg m^2) about the centre of mass, body frame (doc/model.md).
 
-    Bodies 1 and 5 only translate; their inertia is given for
-    completeness (body 1 as a thin rod, body 5 as the cube).
+    Of leg ``leg``'s bodies (its bars of its own length). Bodies 1 and 5
+    only translate; their inertia is given for completeness (body 1 as a
+    thin rod, body 5 as the cube).
     """
-    l1, l2, l3, side = robot.l1, robot.l2, robot.l3, robot.l
+    l1, l2, side = robot.l1, robot.l2, robot.l
+    l3 = leg_frame(robot, leg).length
     return {
         1: robot.m1 * l1 ** 2 / 12.0 * np.diag([1.0, 1.0, 0.0]),
         2: robot.m2 * l2 ** 2 / 12.0 * np.diag([1.0, 1.0, 0.0]),
@@ -187,6 +237,37 @@ def lambda_jacobian(robot, position):
         dq[i] += 1j * COMPLEX_STEP
         jac[:, i] = actuator_displacements(robot, dq).imag / COMPLEX_STEP
     return jac
+
+
+def sphere_residuals(robot, position, lam):
+    """
+    Each leg's eq. (14) as built: ``|G + r - a - (lambda + e - L) u| - L``.
+
+    ``position`` G (m) and ``lam`` (m, A, B, C); zero where G is a
+    platform position of these joint readings.
+    """
+    out = []
+    for index, leg in enumerate(LEGS):
+        frame = leg_frame(robot, leg)
+        u = frame.rotation @ DRAWING_AXIS[leg]
+        centre = frame.point - frame.attachment + (
+            lam[index] + frame.offset - frame.length) * u
+        out.append(np.linalg.norm(np.asarray(position) - centre)
+                   - frame.length)
+    return np.array(out)
+
+
+def platform_position(robot, lam, start=(0.0, 0.0, 0.0)):
+    """
+    Forward kinematics: G (m) from the joint readings ``lam`` (m).
+
+    The three spheres of :func:`sphere_residuals` solved by scipy's
+    ``least_squares`` from ``start`` (home), to its tightest tolerances.
+    """
+    result = least_squares(lambda g: sphere_residuals(robot, g, lam),
+                           np.asarray(start, dtype=float), method='lm',
+                           xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    return result.x
 
 
 BodyJacobians = namedtuple('BodyJacobians', (
@@ -241,7 +322,8 @@ def body_jacobians(robot, position):
 
 def _body_mass_inertia(robot, key, rotation):
     mass = masses(robot)[key[1]]
-    inertia = central_inertias(robot)[key[1]]
+    inertia = central_inertias(robot, key[0] if key[0] in LEGS else 'A')[
+        key[1]]
     return mass, rotation @ inertia @ rotation.T
 
 
@@ -395,6 +477,24 @@ DM_RELATIVE = 1e-8
 ROUNDING = 1e-12
 
 
+def rest_forces(robot, position, acceleration):
+    """
+    Return the forces (N) at zero velocity, exact to rounding, and a bound.
+
+    No Christoffel term: ``f = J_lambda^-T (M qdd + dV/dq)`` from the
+    complex-step Jacobians alone, each term to ROUNDING of its size,
+    amplified by at most ``|J_lambda^-T|``.
+    """
+    mm = mass_matrix(robot, position)
+    grad = potential_gradient(robot, position)
+    jac = lambda_jacobian(robot, position)
+    expected = np.linalg.solve(jac.T, mm @ acceleration + grad)
+    bound = ROUNDING * np.linalg.norm(np.linalg.inv(jac.T), 2) * (
+        np.abs(mm).max() * 3.0 * np.abs(acceleration).max()
+        + np.abs(grad).max())
+    return expected, bound + 1e-300
+
+
 def force_tolerance(ref, velocity, acceleration):
     """Error bound (N) on ``ref.force``, a :class:`LagrangeSolution`."""
     inverse_t = np.linalg.norm(np.linalg.inv(ref.jacobian.T), 2)
@@ -451,6 +551,60 @@ def cube_points(half=CUBE):
     coordinate = st.floats(-half, half, allow_nan=False,
                            allow_infinity=False)
     return st.tuples(coordinate, coordinate, coordinate).map(np.array)
+
+
+# Deviations of a robot as built from the drawing (m, deg): a built
+# Orthoglide's (0.1-1 mm, 0.05-0.3 deg) and ten to twenty times more.
+DEVIATION_SIZES = {'built': ((1e-4, 1e-3), (0.05, 0.3)),
+                   'large': ((1e-3, 2e-2), (0.3, 3.0))}
+
+
+def _vector_of_length(draw, low, high):
+    """Draw a 3-vector of length in [low, high], any direction."""
+    from hypothesis import strategies as st
+    direction = draw(st.tuples(*[st.floats(-1.0, 1.0)] * 3).filter(
+        lambda v: 0.1 <= np.linalg.norm(v)))
+    length = draw(st.floats(low, high))
+    return tuple(length * np.asarray(direction) / np.linalg.norm(direction))
+
+
+def tilted(axis, degrees, towards):
+    """Return the unit ``axis`` turned by ``degrees`` towards ``towards``."""
+    across = np.asarray(towards) - (np.asarray(towards) @ axis) * axis
+    across /= np.linalg.norm(across)
+    angle = np.radians(degrees)
+    return tuple(np.cos(angle) * axis + np.sin(angle) * across)
+
+
+def deviations(size='built', l3=0.85):
+    """
+    Hypothesis strategy: the per-leg rows of a robot as built (a dict).
+
+    Every row deviates from the drawing by an amount of ``size``
+    (:data:`DEVIATION_SIZES`): each axis point and attachment by a vector
+    of that length, each direction tilted by that angle towards any side,
+    each joint offset and bar length (about ``l3``) by that much either
+    way.
+    """
+    from hypothesis import strategies as st
+    (low, high), (tilt_low, tilt_high) = DEVIATION_SIZES[size]
+
+    @st.composite
+    def rows(draw):
+        out = {}
+        signed = st.tuples(st.floats(low, high), st.sampled_from((-1, 1))).map(
+            lambda t: t[0] * t[1])
+        for leg, axis in zip('abc', (U1, U2, U3)):
+            out[f'axis_point_{leg}'] = _vector_of_length(draw, low, high)
+            out[f'attachment_{leg}'] = _vector_of_length(draw, low, high)
+            towards = draw(st.tuples(*[st.floats(-1.0, 1.0)] * 3).filter(
+                lambda v: np.linalg.norm(np.cross(v, axis)) >= 0.1))
+            out[f'axis_direction_{leg}'] = tilted(
+                axis, draw(st.floats(tilt_low, tilt_high)), towards)
+        out['joint_offset'] = tuple(draw(signed) for _ in range(3))
+        out['bar_length'] = tuple(l3 + draw(signed) for _ in range(3))
+        return out
+    return rows()
 
 
 def vectors(bound):

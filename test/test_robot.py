@@ -24,6 +24,10 @@ POSITIVE = ('l', 'l1', 'l2', 'l3', 'alpha', 'm1', 'm2', 'm3', 'm4', 'm5',
 FRICTION = ('friction_viscous', 'friction_coulomb',
             'friction_coulomb_negative', 'friction_stribeck')
 RIPPLE = ('ripple_sine', 'screw_lead', 'ripple_cosine')
+GEOMETRY = ('axis_point_a', 'axis_point_b', 'axis_point_c',
+            'axis_direction_a', 'axis_direction_b', 'axis_direction_c',
+            'joint_offset', 'bar_length',
+            'attachment_a', 'attachment_b', 'attachment_c')
 BAD_NUMBERS = (0.0, -0.1, -math.inf, math.inf, math.nan, '0.2', None,
                True, [0.2])
 
@@ -189,9 +193,12 @@ def test_parameter_names_and_values_round_trip():
                   friction_stribeck=(1.5, 2.5, 3.5),
                   friction_stribeck_velocity=0.005, armature=(3.2, 1.0, 0.0),
                   screw_lead=(0.005, 0.01, 0.0), ripple_sine=(0.5, -0.2, 0.0),
-                  ripple_cosine=(-0.3, 0.0, 0.0), payload=2.5)
+                  ripple_cosine=(-0.3, 0.0, 0.0), payload=2.5,
+                  joint_offset=(1e-3, 0.0, -2e-4),
+                  axis_direction_c=(0.001, 0.0, 1.0))
     assert set(Robot.parameter_names()) == set(POSITIVE) | {'gravity'} \
-        | set(FRICTION) | {'armature', 'payload'} | set(RIPPLE)
+        | set(GEOMETRY) | set(FRICTION) | {'armature', 'payload'} \
+        | set(RIPPLE)
     assert Robot(**robot.as_parameters()) == robot
     assert robot.replace() == robot
     assert robot.replace(m5=16.0).friction_coulomb == (4.0, 5.0, 6.0)

@@ -16,9 +16,9 @@ import math
 
 import numpy as np
 
-from orthoglide_ros.model import kernel
-from orthoglide_ros.model.mechanics import (DEFAULT_SINGULARITY_MARGIN, solve,
-                                            solve_batch, ZERO)
+from orthoglide_ros.model.mechanics import (DEFAULT_SINGULARITY_MARGIN,
+                                            kernel_solve, solve, solve_batch,
+                                            ZERO)
 from orthoglide_ros.model.robot import LEGS
 from orthoglide_ros.model.types import Array, Vector
 
@@ -68,7 +68,7 @@ def leg_joints(robot: Robot, position: Vector, velocity: Vector = ZERO,
             ZERO if velocity is None else velocity, dtype=float), p.shape)
         solve_batch(robot, p, v, None, margin)
         columns = (*p.T, *v.T, *np.zeros((3, len(p))))
-        kernel.solve(robot.constants, *columns, np.sqrt, record)
+        kernel_solve(robot, *columns, np.sqrt, record)
         atan2 = np.arctan2
     return {leg: _leg_joints(record[leg], atan2) for leg in LEG_LABELS}
 
@@ -99,7 +99,8 @@ def elements(robot: Robot, position: Vector, velocity: Vector = ZERO,
     """
     record = {}
     solve(robot, position, velocity, acceleration, margin, record)
-    return {leg: _leg_elements(robot, leg, record[leg]) for leg in LEG_LABELS}
+    return {label: _leg_elements(robot, leg, record[label])
+            for label, leg in zip(LEG_LABELS, robot.legs)}
 
 
 # Constant matrices of eq. (1)-(2); a1 = a10 of leg A.
@@ -107,12 +108,6 @@ A1 = np.array([[0, 0, -1], [0, 1, 0], [1, 0, 0]], dtype=float)
 A2 = np.array([[0, 0, 1], [0, 1, 0], [-1, 0, 0]], dtype=float)
 A3 = np.array([[0, 0, -1], [-1, 0, 0], [0, 1, 0]], dtype=float)
 A4 = np.array([[-1, 0, 0], [0, 1, 0], [0, 0, -1]], dtype=float)
-# Leg coordinates: P_leg r_G is the point a leg sees (b10 = a1 P, c10 = a1 P^2).
-LEG_PERMUTATION = {
-    'A': np.eye(3),
-    'B': np.array([[0, 1, 0], [0, 0, 1], [1, 0, 0]], dtype=float),
-    'C': np.array([[0, 0, 1], [1, 0, 0], [0, 1, 0]], dtype=float),
-}
 
 
 def rotation_z(sin_phi: float, cos_phi: float) -> Array:
@@ -122,13 +117,20 @@ def rotation_z(sin_phi: float, cos_phi: float) -> Array:
 
 
 def _leg_elements(robot, leg, rec):
-    """Frame-0 elements of one leg from the kernel's record (eqs. 1-8)."""
+    """
+    Frame-0 elements of one leg from the kernel's record (eqs. 1-8).
+
+    The kernel's leg runs in the leg's frame ``R_i`` with its origin at the
+    axis point ``a_i`` and its slider at its true position ``lambda_i +
+    e_i``: ``a10 = a1 R_i^T``, the chain starts from ``a_i`` and reaches
+    the platform point ``G + r_i`` (doc/model.md#the-machine-as-built).
+    """
     s1, c1 = rec['phi21']
     s2, c2 = rec['phi32']
     a21 = rotation_z(s1, c1) @ A2
     a32 = rotation_z(s2, c2) @ A3
     a43 = rotation_z(s2, c2) @ A4
-    a10 = A1 @ LEG_PERMUTATION[leg]
+    a10 = A1 @ np.array(leg.frame).T
     rot = {1: a10}
     rot[2] = a21 @ rot[1]
     rot[3] = a32 @ rot[2]
@@ -137,17 +139,18 @@ def _leg_elements(robot, leg, rec):
     rot[5] = a21 @ rot[4]           # a54 = a^phi21 a2 = a21
     ca, sa = math.cos(robot.alpha), math.sin(robot.alpha)
     u3 = np.array([0.0, 0.0, 1.0])
-    joints = {'A1': (rec['lam'] - robot.l1 * ca - robot.l3 - robot.l / 2)
-              * rot[1].T @ u3}
+    length = leg.length
+    joints = {'A1': (rec['lam'] + leg.offset - robot.l1 * ca - length
+                     - robot.l / 2) * rot[1].T @ u3 + leg.point}
     joints['A2'] = joints['A1'] + rot[1].T @ [0.0, robot.l1 * sa,
                                               robot.l1 * ca]
     joints['A3'] = joints['A2'] + rot[2].T @ [0.0, 0.0, -robot.l2 / 2]
     joints['A6'] = joints['A2'] + rot[2].T @ [0.0, 0.0, robot.l2 / 2]
-    joints['A4'] = joints['A3'] + rot[3].T @ [0.0, -robot.l3, 0.0]
-    joints['A7'] = joints['A6'] + rot[6].T @ [0.0, -robot.l3, 0.0]
+    joints['A4'] = joints['A3'] + rot[3].T @ [0.0, -length, 0.0]
+    joints['A7'] = joints['A6'] + rot[6].T @ [0.0, -length, 0.0]
     joints['A5'] = joints['A4'] + rot[4].T @ [robot.l2 / 2, 0.0, 0.0]
     joints['G'] = joints['A5'] + rot[5].T @ [robot.l1 * sa, -robot.l / 2,
-                                             0.0]
+                                             0.0] - leg.attachment
     origin = {1: 'A1', 2: 'A2', 3: 'A3', 4: 'A4', 5: 'A5', 6: 'A6'}
     bodies = {
         b: {'rotation': rot[b], 'origin': joints[origin[b]],

@@ -65,6 +65,117 @@ def solve(k: 'KernelConstants', x: Any, y: Any, z: Any, vx: Any, vy: Any,
             inverse_condition)
 
 
+# One leg as built, for :func:`solve_legs` (``robot.leg_constants``): ``k``
+# its KernelConstants (its bar length L_i as ``l3``, gravity in its frame),
+# ``frame`` its R_i row by row (9 floats), ``shift`` ``r_i - a_i`` (m,
+# frame 0) and ``offset`` its joint offset ``e_i`` (m).
+LegConstants = namedtuple('LegConstants', ('k', 'frame', 'shift', 'offset'))
+
+
+def leg_point(leg: 'LegConstants', x: Any, y: Any, z: Any) -> tuple:
+    """
+    Return the platform point as leg ``leg`` sees it, less its offset.
+
+    ``(x', y', z') = R_i^T (G + r_i - a_i) - (e_i, 0, 0)`` for ``G = (x,
+    y, z)`` (m, frame 0; floats or arrays): eq. (9) on it with ``l3 =
+    L_i`` gives the joint reading, ``lambda_i = x' + L_i - alpha_i``
+    (doc/model.md#the-machine-as-built).
+    """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = leg.frame
+    sx, sy, sz = leg.shift
+    px, py, pz = x + sx, y + sy, z + sz
+    return (r00 * px + r10 * py + r20 * pz - leg.offset,
+            r01 * px + r11 * py + r21 * pz,
+            r02 * px + r12 * py + r22 * pz)
+
+
+def solve_legs(legs: tuple, x: Any, y: Any, z: Any, vx: Any, vy: Any,
+               vz: Any, ax: Any, ay: Any, az: Any, sqrt: Callable[[Any], Any],
+               record: Optional[dict[str, Any]] = None) -> tuple:
+    """
+    :func:`solve` for legs as built: each in its own frame R_i.
+
+    ``legs``: three :data:`LegConstants` (A, B, C). Each leg runs the
+    one-leg recursion on :func:`leg_point` and on ``R_i^T`` of the
+    velocity, acceleration and gravity; its generalised force ``(0, Qy,
+    Qz)`` goes back to frame 0 as ``R_i (0, Qy, Qz)``, and ``J_lambda``'s
+    row i is ``R_i (1, y'/alpha_i, z'/alpha_i)``: ``f = F1 + J_lambda^-T
+    sum_i R_i Q_i`` (eq. 25). Takes and returns what :func:`solve` does.
+    """
+    ra = rb = rc = None
+    if record is not None:
+        ra, rb, rc = record['A'], record['B'], record['C'] = {}, {}, {}
+    lam_a, lamd_a, lamdd_a, al_a, f1_a, qa, ja = _leg_in_frame(
+        legs[0], x, y, z, vx, vy, vz, ax, ay, az, True, sqrt, ra)
+    lam_b, lamd_b, lamdd_b, al_b, f1_b, qb, jb = _leg_in_frame(
+        legs[1], x, y, z, vx, vy, vz, ax, ay, az, False, sqrt, rb)
+    lam_c, lamd_c, lamdd_c, al_c, f1_c, qc, jc = _leg_in_frame(
+        legs[2], x, y, z, vx, vy, vz, ax, ay, az, False, sqrt, rc)
+    qx = qa[0] + qb[0] + qc[0]
+    qy = qa[1] + qb[1] + qc[1]
+    qz = qa[2] + qb[2] + qc[2]
+    (c11, c12, c13, c21, c22, c23, c31, c32, c33), det, inverse_condition = \
+        cofactors(ja + jb + jc, sqrt)
+    rd = 1.0 / det
+    f_a = f1_a + (c11 * qx + c12 * qy + c13 * qz) * rd
+    f_b = f1_b + (c21 * qx + c22 * qy + c23 * qz) * rd
+    f_c = f1_c + (c31 * qx + c32 * qy + c33 * qz) * rd
+    return ((lam_a, lam_b, lam_c), (lamd_a, lamd_b, lamd_c),
+            (lamdd_a, lamdd_b, lamdd_c), (f_a, f_b, f_c),
+            (lamd_a * f_a, lamd_b * f_b, lamd_c * f_c), (al_a, al_b, al_c),
+            inverse_condition)
+
+
+def _leg_in_frame(leg, x, y, z, vx, vy, vz, ax, ay, az, platform, sqrt,
+                  record):
+    """
+    One leg as built: ``_leg`` in its frame, its results in frame 0.
+
+    Returns ``(lambda, lambdadot, lambdaddot, alpha_i, F1, R_i (0, Qy,
+    Qz), J_lambda's row i)``, the last two 3-tuples in frame 0.
+    """
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = leg.frame
+    k = leg.k
+    px, py, pz = leg_point(leg, x, y, z)
+    lam, lamd, lamdd, al, f1, qy, qz = _leg(
+        k, px, py, pz,
+        r00 * vx + r10 * vy + r20 * vz, r01 * vx + r11 * vy + r21 * vz,
+        r02 * vx + r12 * vy + r22 * vz,
+        r00 * ax + r10 * ay + r20 * az, r01 * ax + r11 * ay + r21 * az,
+        r02 * ax + r12 * ay + r22 * az,
+        k.gx, k.gy, k.gz, platform, sqrt, record)
+    ra = 1.0 / al
+    ty, tz = py * ra, pz * ra
+    return (lam, lamd, lamdd, al, f1,
+            (r01 * qy + r02 * qz, r11 * qy + r12 * qz, r21 * qy + r22 * qz),
+            (r00 + r01 * ty + r02 * tz, r10 + r11 * ty + r12 * tz,
+             r20 + r21 * ty + r22 * tz))
+
+
+def cofactors(j: Any, sqrt: Callable[[Any], Any]) -> tuple:
+    """
+    Cofactors, determinant and ``1 / kappa_F`` of any 3x3 ``J_lambda``.
+
+    ``j``: its 9 entries row by row. Returns ``(cof, det,
+    inverse_condition)`` as :func:`jacobian_cofactors` does (``cof[3 i +
+    m]`` the cofactor of entry (i, m): ``J^-T = cof / det``).
+    """
+    j00, j01, j02, j10, j11, j12, j20, j21, j22 = j
+    c00, c01, c02 = j11 * j22 - j12 * j21, j12 * j20 - j10 * j22, \
+        j10 * j21 - j11 * j20
+    c10, c11, c12 = j02 * j21 - j01 * j22, j00 * j22 - j02 * j20, \
+        j01 * j20 - j00 * j21
+    c20, c21, c22 = j01 * j12 - j02 * j11, j02 * j10 - j00 * j12, \
+        j00 * j11 - j01 * j10
+    det = j00 * c00 + j01 * c01 + j02 * c02
+    jj = (j00 * j00 + j01 * j01 + j02 * j02 + j10 * j10 + j11 * j11
+          + j12 * j12 + j20 * j20 + j21 * j21 + j22 * j22)
+    cc = (c00 * c00 + c01 * c01 + c02 * c02 + c10 * c10 + c11 * c11
+          + c12 * c12 + c20 * c20 + c21 * c21 + c22 * c22)
+    return ((c00, c01, c02, c10, c11, c12, c20, c21, c22), det,
+            3.0 * abs(det) / sqrt(jj * cc))
+
+
 def jacobian_cofactors(x: Any, y: Any, z: Any, al_a: Any, al_b: Any, al_c: Any,
                        sqrt: Callable[[Any], Any]) -> tuple:
     """

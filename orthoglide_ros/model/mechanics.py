@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from orthoglide_ros.model import kernel, terms
+from orthoglide_ros.model import kernel, legs, terms
 from orthoglide_ros.model.terms import ARRAYS, FLOATS
 from orthoglide_ros.model.types import Array, Rows, Triple, Vector
 
@@ -29,13 +29,17 @@ if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.robot import Robot
 
 # Smallest accepted singularity distance (see workspace_status): below it a
-# point is refused as too near a singularity of J1 or J2.
-DEFAULT_SINGULARITY_MARGIN = 0.2
+# point is refused as too near a singularity of J1 or J2 (defined with the
+# legs, whose home must stand beyond it).
+DEFAULT_SINGULARITY_MARGIN = legs.DEFAULT_SINGULARITY_MARGIN
 
 # Why an input was refused: the values of WorkspaceError.reason.
 REASONS = ('non_finite', 'unreachable', 'singular', 'overflow')
 
 ZERO = (0.0, 0.0, 0.0)
+
+# The legs' names in messages.
+LEG_NAMES = ('A', 'B', 'C')
 
 # The unit accelerations of the forward dynamics' columns.
 _UNITS = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
@@ -51,8 +55,9 @@ Solution.__doc__ = """Inverse kinematics and dynamics of one sample or a batch.
 
 Per actuator (A, B, C): ``lambda_`` (m), ``lambdadot`` (m/s),
 ``lambdaddot`` (m/s^2), ``force`` (N, on the slider along +lambda) and
-``power = lambdadot * force`` (W); ``alpha_ratio`` = ``alpha_i / l3``
-(eq. 17; 1 at home, 0 at a singularity of J1); ``conditioning`` =
+``power = lambdadot * force`` (W); ``alpha_ratio`` = ``alpha_i / L_i``
+(eq. 17, ``L_i`` the leg's bar length, ``l3`` as drawn; 1 at home, 0 at a
+singularity of J1); ``conditioning`` =
 ``1 / kappa_F(J_lambda)`` (1 at home, 0 at a singularity of J2);
 ``singularity_distance`` = the smallest of the four. A single sample holds
 3-tuples of floats and floats; a batch holds (N, 3) and (N,) arrays.
@@ -64,7 +69,8 @@ WorkspaceStatus = namedtuple('WorkspaceStatus', (
 WorkspaceStatus.__doc__ = """Where a platform position stands.
 
 ``reachable``: eq. (9) has a real solution on the home branch for every
-leg (``y^2 + z^2 < l3^2`` for leg A, cyclically). ``alpha_ratio``,
+leg (``y^2 + z^2 < l3^2`` for leg A, cyclically; ``y'^2 + z'^2 < L_i^2``
+in the frame of a leg as built). ``alpha_ratio``,
 ``conditioning`` and ``singularity_distance`` as in :class:`Solution` (0
 where unreachable). ``ok``: reachable and ``singularity_distance >=
 margin``.
@@ -88,6 +94,24 @@ class WorkspaceError(ValueError):
         self.row = row
 
 
+def kernel_solve(robot: Robot, x: Any, y: Any, z: Any, vx: Any, vy: Any,
+                 vz: Any, ax: Any, ay: Any, az: Any, sqrt: Any,
+                 record: Optional[dict[str, Any]] = None) -> Any:
+    """
+    Run the kernel on ``robot``'s legs, unchecked: floats or arrays.
+
+    :func:`kernel.solve` for a robot as drawn (``robot.as_drawn``),
+    :func:`kernel.solve_legs` for legs as built; the arguments and the
+    result are theirs. Callers check the state (:func:`solve`,
+    :func:`solve_batch`) first or after.
+    """
+    if robot.as_drawn:
+        return kernel.solve(robot.constants, x, y, z, vx, vy, vz, ax, ay, az,
+                            sqrt, record)
+    return kernel.solve_legs(robot.leg_constants, x, y, z, vx, vy, vz, ax,
+                             ay, az, sqrt, record)
+
+
 def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
           acceleration: Vector = ZERO,
           margin: float = DEFAULT_SINGULARITY_MARGIN,
@@ -108,19 +132,39 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
     ax, ay, az = acceleration
     if not math.isfinite(x + y + z + vx + vy + vz + ax + ay + az):
         _check_finite_inputs(position, velocity, acceleration)
-    l3sq = robot.l3 * robot.l3
-    rho = max(y * y + z * z, z * z + x * x, x * x + y * y)
-    if rho >= l3sq * (1.0 - margin * margin):
-        raise _leg_error(robot, position, margin)
-    try:
-        out = kernel.solve(robot.constants, float(x), float(y), float(z),
-                           float(vx), float(vy), float(vz), float(ax),
-                           float(ay), float(az), math.sqrt, record)
-    except (ZeroDivisionError, ValueError):
-        # Only exactly on a singularity: det J_lambda = 0 (J2 singular, as
-        # at x = y = z = l3/sqrt(3)), or a cosine's square rounded below 0.
-        raise WorkspaceError('singular', (
-            f'position {format_vector(position)} m is on a singularity')) from None
+    if robot.as_drawn:
+        l3sq = robot.l3 * robot.l3
+        rho = max(y * y + z * z, z * z + x * x, x * x + y * y)
+        if rho >= l3sq * (1.0 - margin * margin):
+            raise _leg_error(robot, position, margin)
+        try:
+            out = kernel.solve(robot.constants, float(x), float(y), float(z),
+                               float(vx), float(vy), float(vz), float(ax),
+                               float(ay), float(az), math.sqrt, record)
+        except (ZeroDivisionError, ValueError):
+            # Only exactly on a singularity: det J_lambda = 0 (J2 singular,
+            # as at x = y = z = l3/sqrt(3)), or a cosine's square rounded
+            # below 0.
+            raise _on_singularity(position) from None
+        alphas = out[5]
+        l3 = robot.l3
+        ratio = (alphas[0] / l3, alphas[1] / l3, alphas[2] / l3)
+    else:
+        try:
+            out = kernel.solve_legs(
+                robot.leg_constants, float(x), float(y), float(z), float(vx),
+                float(vy), float(vz), float(ax), float(ay), float(az),
+                math.sqrt, record)
+        except (ZeroDivisionError, ValueError):
+            # A leg out of reach (a negative square), or exactly on a
+            # singularity.
+            raise _leg_fault(robot, position, margin) or _on_singularity(
+                position) from None
+        alphas = out[5]
+        la, lb, lc = robot.bar_length
+        ratio = (alphas[0] / la, alphas[1] / lb, alphas[2] / lc)
+        if min(ratio) < margin:     # each leg's reach and J1 first
+            raise _leg_error(robot, position, margin)
     lam, lamd, lamdd, force, power, alphas, conditioning = out
     if robot.active_terms:
         fa, fb, fc = terms.forces(robot, robot.active_terms, lam, lamd,
@@ -132,8 +176,6 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
             f'position {format_vector(position)} m is too near a singularity of '
             f'J2: 1/kappa_F(J_lambda) = {conditioning:.3g} < margin '
             f'{margin:g}'))
-    l3 = robot.l3
-    ratio = (alphas[0] / l3, alphas[1] / l3, alphas[2] / l3)
     if min(ratio) < margin:     # the leg test above, rounded apart
         raise _leg_error(robot, position, margin)
     if not math.isfinite(sum(lamdd) + sum(force) + sum(power)) and not all(
@@ -171,13 +213,15 @@ def solve_batch(robot: Robot, positions: Rows,
         row = int(np.argmin(finite))
         _check_finite_inputs(p[row], v[row], a[row], row)
     x, y, z = p.T.copy()
-    with np.errstate(over='ignore'):    # a far point: inf, refused below
-        rho = np.maximum(np.maximum(y * y + z * z, z * z + x * x),
-                         x * x + y * y)
-    reach = rho < robot.l3 * robot.l3 * (1.0 - margin * margin)
-    if not reach.all():
-        row = int(np.argmin(reach))
-        raise _leg_error(robot, p[row], margin, row)
+    lengths = np.array(robot.bar_length)
+    if robot.as_drawn:
+        with np.errstate(over='ignore'):    # a far point: inf, refused below
+            rho = np.maximum(np.maximum(y * y + z * z, z * z + x * x),
+                             x * x + y * y)
+        reach = rho < robot.l3 * robot.l3 * (1.0 - margin * margin)
+        if not reach.all():
+            row = int(np.argmin(reach))
+            raise _leg_error(robot, p[row], margin, row)
     # Filled per actuator row (contiguous writes), returned as (N, 3) views.
     out = np.empty((6, 3, n))
     conditioning = np.empty(n)
@@ -185,11 +229,19 @@ def solve_batch(robot: Robot, positions: Rows,
     for start in range(0, n, BATCH_CHUNK):
         chunk = slice(start, start + BATCH_CHUNK)
         with np.errstate(all='ignore'):     # checked below, row by row
-            *values, conditioning[chunk] = kernel.solve(
-                robot.constants, *(c[chunk] for c in columns), np.sqrt)
+            *values, conditioning[chunk] = kernel_solve(
+                robot, *(c[chunk] for c in columns), np.sqrt)
         for j, triple in enumerate(values):
             for leg in range(3):
                 out[j, leg, chunk] = triple[leg]
+    if not robot.as_drawn:
+        # Each leg's reach and J1 first, as the drawing's test above (NaN:
+        # out of reach).
+        with np.errstate(invalid='ignore'):
+            reach = (out[5] / lengths[:, None]).min(0) >= margin
+        if not reach.all():
+            row = int(np.argmin(reach))
+            raise _leg_error(robot, p[row], margin, row)
     if robot.active_terms:
         with np.errstate(all='ignore'):     # checked below, row by row
             for leg, force in enumerate(terms.forces(
@@ -205,13 +257,12 @@ def solve_batch(robot: Robot, positions: Rows,
     if not accepted.all():
         row = int(np.argmin(accepted))
         if conditioning[row] == 0.0:
-            raise WorkspaceError('singular', (
-                f'position {format_vector(p[row])} m is on a singularity'), row)
+            raise _on_singularity(p[row], row)
         raise WorkspaceError('singular', (
             f'position {format_vector(p[row])} m is too near a singularity of J2: '
             f'1/kappa_F(J_lambda) = {conditioning[row]:.3g} < margin '
             f'{margin:g}'), row)
-    ratio = out[5] / robot.l3
+    ratio = out[5] / lengths
     near = ratio.min(1) < margin    # the leg test above, rounded apart
     if near.any():
         row = int(np.argmax(near))
@@ -286,11 +337,10 @@ def forward_dynamics(robot: Robot, position: Vector, velocity: Vector,
         raise _overflow_error(position, velocity, force, None,
                               'force') from None
     inertia = _inertia(robot)
-    k = inertia.constants
     x, y, z = float(position[0]), float(position[1]), float(position[2])
     columns = []
     for unit in _UNITS:
-        force, lamdd = _unit_column(k, x, y, z, unit)
+        force, lamdd = _unit_column(inertia, x, y, z, unit)
         if inertia.active_terms:    # the drives' terms: their part of M
             extra = terms.forces(inertia, inertia.active_terms, ZERO, ZERO,
                                  lamdd, FLOATS)
@@ -359,14 +409,21 @@ def workspace_status(robot: Robot, position: Vector,
     Reachability and distance to the singularities of J1 and J2.
 
     ``position``: one point (3,) or N points (N, 3) in frame 0 (m). The
-    singularity distance is the smallest of ``alpha_i / l3 = cos(phi21)
-    cos(phi32)`` over the legs (J1 = diag(alpha_i) is singular at 0) and of
+    singularity distance is the smallest of ``alpha_i / L_i = cos(phi21)
+    cos(phi32)`` over the legs (``L_i = l3`` as drawn; J1 = diag(alpha_i)
+    is singular at 0) and of
     ``1 / kappa_F(J_lambda) = 3 |det J| / (|J|_F |J^-1 det J|_F)``, the
     normalised inverse Frobenius condition number of the inverse-kinematics
     Jacobian ``J_lambda = J1^-1 J2`` (eq. 16; J2 is singular at 0). Both are
     1 at home. Returns a :class:`WorkspaceStatus` (arrays for N points).
     """
     p = np.asarray(position, dtype=float)
+    if not robot.as_drawn:
+        reachable, ratio, conditioning, _ = legs.status(
+            robot.legs, robot.leg_constants, p)
+        distance = np.minimum(ratio.min(-1), conditioning)
+        return WorkspaceStatus(reachable, ratio, conditioning, distance,
+                               reachable & (distance >= margin))
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     l3sq = robot.l3 * robot.l3
     q = 1.0 - np.stack([y * y + z * z, z * z + x * x, x * x + y * y],
@@ -419,8 +476,11 @@ def forward_kinematics_rows(robot: Robot, lam: Rows) -> tuple[Array, Array]:
     0``; ``positions`` (m) is meaningless elsewhere. Where both roots are
     valid platform positions (two assembly modes), a position on the other
     one is not given back: a robot started at home cannot reach it without
-    crossing a singularity of J2.
+    crossing a singularity of J2. Legs as built: :func:`legs.intersect`,
+    the spheres' trilateration.
     """
+    if not robot.as_drawn:
+        return legs.intersect(robot.legs, lam)
     lam = np.asarray(lam, dtype=float)
     l3 = robot.l3
     d = l3 - lam
@@ -512,17 +572,24 @@ def jacobians(robot: Robot, position: Vector) -> tuple[Array, Array]:
 
     ``J1 lambdadot = J2 rdot_G`` (eq. 15) with ``J1 = diag(alpha_i)`` and
     ``J2 = [[alpha_1, y, z], [x, alpha_2, z], [x, y, alpha_3]]``, ``alpha_i``
-    of eq. (17) (m). ``position``: (3,) or (N, 3); returns (3, 3) or
+    of eq. (17) (m); for legs as built ``J2``'s row i is ``R_i (alpha_i,
+    y', z')`` (doc/model.md#the-machine-as-built). ``position``: (3,) or (N, 3); returns (3, 3) or
     (N, 3, 3) arrays. Raises :class:`WorkspaceError` where unreachable.
     """
     p = np.asarray(position, dtype=float)
-    status = workspace_status(robot, p, 0.0)
-    if not np.all(status.reachable):
-        row = int(np.argmin(np.atleast_1d(status.reachable)))
+    if robot.as_drawn:
+        reachable, ratio = workspace_status(robot, p, 0.0)[:2]
+    else:
+        reachable, ratio, _, j_lambda = legs.status(
+            robot.legs, robot.leg_constants, p)
+    if not np.all(reachable):
+        row = int(np.argmin(np.atleast_1d(reachable)))
         raise _leg_error(robot, np.atleast_2d(p)[row], 0.0,
                          row if p.ndim == 2 else None)
-    alpha = robot.l3 * status.alpha_ratio
+    alpha = np.asarray(robot.bar_length) * ratio
     j1 = alpha[..., :, None] * np.eye(3)
+    if not robot.as_drawn:
+        return j1, alpha[..., :, None] * j_lambda
     j2 = np.broadcast_to(p[..., None, :], j1.shape).copy()
     j2[..., [0, 1, 2], [0, 1, 2]] = alpha
     return j1, j2
@@ -566,7 +633,8 @@ def _inertia(robot):
     """Return :func:`terms.inertial` of ``robot`` (built once per robot)."""
     drives = [getattr(robot, terms.coefficient_name(term))
               for term in robot.active_terms if term.inertial]
-    key = (robot.constants, *drives) if drives else robot.constants
+    key = robot.constants if robot.as_drawn else robot.leg_constants
+    key = (key, *drives) if drives else key
     inertia = _INERTIA.get(key)
     if inertia is None:
         if len(_INERTIA) >= 16:
@@ -576,10 +644,10 @@ def _inertia(robot):
     return inertia
 
 
-def _unit_column(k, x, y, z, unit):
+def _unit_column(robot, x, y, z, unit):
     """Return the kernel's forces and ``lambdaddot`` at rest under ``unit``."""
-    out = kernel.solve(k, x, y, z, 0.0, 0.0, 0.0, unit[0], unit[1], unit[2],
-                       math.sqrt)
+    out = kernel_solve(robot, x, y, z, 0.0, 0.0, 0.0, unit[0], unit[1],
+                       unit[2], math.sqrt)
     return out[3], out[2]
 
 
@@ -602,30 +670,57 @@ def _solve3(columns, rhs):
             (b0 * r20 + b1 * r21 + b2 * r22) * inv)
 
 
-def _leg_error(robot, position, margin, row=None):
-    """Explain which leg refuses ``position`` (a WorkspaceError)."""
+def _on_singularity(position, row=None):
+    """Refuse a position exactly on a singularity (a WorkspaceError)."""
+    return WorkspaceError('singular', (
+        f'position {format_vector(position)} m is on a singularity'), row)
+
+
+def _leg_fault(robot, position, margin, row=None):
+    """
+    Return the first leg's refusal of ``position`` (or None).
+
+    Leg i reaches the position where its point's distance from its axis,
+    ``sqrt(y'^2 + z'^2)`` (:func:`kernel.leg_point`), is below its bar
+    length ``L_i`` (``l3`` as drawn); ``alpha_i / L_i`` is then J1's
+    margin.
+    """
     x, y, z = (float(v) for v in position)
-    l3 = robot.l3
-    legs = (('A', y * y + z * z), ('B', z * z + x * x), ('C', x * x + y * y))
-    for leg, rho in legs:
-        if rho >= l3 * l3:
+    for leg, constants in zip(robot.legs, robot.leg_constants):
+        name = leg.name.upper()
+        length = leg.length
+        what = 'l3' if robot.as_drawn else f'L_{name}'
+        _, yq, zq = kernel.leg_point(constants, x, y, z)
+        rho = yq * yq + zq * zq
+        if rho >= length * length:
             return WorkspaceError('unreachable', (
-                f'position {format_vector(position)} m is out of reach of leg {leg}: '
+                f'position {format_vector(position)} m is out of reach of leg {name}: '
                 f'its distance {math.sqrt(rho):.4g} m from the leg\'s axis '
-                f'is not below l3 = {l3:g} m'), row)
-        ratio = math.sqrt(1.0 - rho / (l3 * l3))
+                f'is not below {what} = {length:g} m'), row)
+        ratio = math.sqrt(1.0 - rho / (length * length))
         if ratio < margin:
             return WorkspaceError('singular', (
                 f'position {format_vector(position)} m is too near a singularity of '
-                f'J1: leg {leg} has alpha/l3 = {ratio:.3g} < margin '
+                f'J1: leg {name} has alpha/{what} = {ratio:.3g} < margin '
                 f'{margin:g}'), row)
+    return None
+
+
+def _leg_error(robot, position, margin, row=None):
+    """Explain which leg refuses ``position`` (a WorkspaceError)."""
+    fault = _leg_fault(robot, position, margin, row)
+    if fault is not None:
+        return fault
     # On the margin's very edge the callers' test and the ones above can
     # round apart: the leg nearest its singularity refuses it.
-    leg, rho = max(legs, key=lambda item: item[1])
+    status = workspace_status(robot, np.asarray(position, dtype=float),
+                              margin)
+    leg = int(np.argmin(status.alpha_ratio))
+    what = 'l3' if robot.as_drawn else f'L_{LEG_NAMES[leg]}'
     return WorkspaceError('singular', (
         f'position {format_vector(position)} m is on the edge of the singularity '
-        f'margin {margin:g} of J1: leg {leg} has alpha/l3 = '
-        f'{math.sqrt(1.0 - rho / (l3 * l3)):.3g}'), row)
+        f'margin {margin:g} of J1: leg {LEG_NAMES[leg]} has alpha/{what} = '
+        f'{status.alpha_ratio[leg]:.3g}'), row)
 
 
 def format_vector(vec: Optional[Vector]) -> str:
