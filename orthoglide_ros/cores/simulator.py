@@ -112,7 +112,7 @@ PARAMETERS = Table('SimulatorSettings', (
                       'saturates, and the step counted'}),
     singularity_margin_spec(
         'workspace limit: smallest singularity distance a step may reach, '
-        'min(alpha_i / l3, 1 / kappa_F(J_lambda)); a step beyond it stops '
+        'min(alpha_i / L_i, 1 / kappa_F(J_lambda)); a step beyond it stops '
         'the simulation (applies at the next reset)', low=0.01),
     joint_names_spec('names of the prismatic joints of actuators A, B, C '
                      'in joint_states'),
