@@ -181,13 +181,13 @@ def test_mujoco_rigid_projection_gives_the_package_forces(geometry):
 
 
 def equality_jacobian(model, data):
-    """The rows of MuJoCo's constraint Jacobian of the loops' connects."""
+    """Return the rows of MuJoCo's constraint Jacobian of the connects."""
     return data.efc_J.reshape(-1, model.nv)[data.efc_type == 0].copy()
 
 
 def rigid_platform_acceleration(model, data, force, step=1e-6):
     """
-    The platform's acceleration with the loops held rigidly (m/s^2).
+    Return the platform's acceleration with the loops held rigid (m/s^2).
 
     MuJoCo's own mass matrix ``M``, bias ``c``, passive forces and loop
     Jacobian ``J`` at the state set: ``M qacc - J^T mu = B f + passive - c``

@@ -47,7 +47,7 @@ AS_BUILT = ['built', 'far']
 
 
 def names_of(which):
-    """The sliders' names of a robot's URDF here."""
+    """Return the sliders' names of a robot's URDF here."""
     return OTHER_NAMES if which == 'other' else JOINT_NAMES
 
 

@@ -114,8 +114,7 @@ def joint_limits(robot: Robot, margin: float = DEFAULT_SINGULARITY_MARGIN
 
 @functools.lru_cache(maxsize=8)
 def _joint_limits(robot, margin):
-    """Return :func:`joint_limits` as ``(leg, ((variable, (low, high)),
-    ...))`` pairs."""
+    """Return :func:`joint_limits` as ``(leg, ((variable, limits), ...))``."""
     searched = ('A',) if robot.as_drawn else LEG_LABELS
     found = {}
     for leg in searched:
@@ -302,8 +301,7 @@ def _leg(root, leg, slider_joint, home, limits, masses, radius):
         if body == 1:
             xyz = xyz - value * turn[:, 2]
         else:
-            turn = turn @ bodies.rotation_z(math.sin(value),
-                                         math.cos(value))
+            turn = turn @ bodies.rotation_z(math.sin(value), math.cos(value))
         name = slider_joint if suffix is None else f'{prefix}_{suffix}'
         _joint(root, name, 'prismatic' if body == 1 else 'revolute',
                BASE_LINK if parent == 0 else link_name(leg, parent),
