@@ -23,6 +23,9 @@ every leg's axis, offset, bars and attachment off the drawing):
   rest keep the platform on eq. (6) within 0.05 mm after 1 s, and the
   loops stay closed to 1e-5 m over the whole motion (the robot is open-loop
   unstable: errors grow about e-fold every 0.28 s, so this is strict).
+- A model file the simulator is given (``mjcf_file``) must have the legs
+  of its ``robot.*``, which its workspace checks use: one of another
+  robot's legs is refused, one of other masses or lengths taken.
 - Friction MuJoCo's joints cannot hold (a Coulomb level per direction, a
   Stribeck excess): the sliders' ``frictionloss`` is the mean Coulomb
   level, and ``MujocoPlant`` applies the rest as forces, so that its
@@ -372,6 +375,32 @@ def test_render_animates_the_paper_trajectory(tmp_path):
               for f in ImageSequence.Iterator(Image.open(out))]
     assert len(frames) == 5
     assert np.abs(frames[0] - frames[2]).mean() > 0.1     # it moved
+
+
+@pytest.mark.parametrize('model_rows, robot_rows, accepted', [
+    (BUILT, BUILT, True),
+    (BUILT, {}, False),
+    ({}, BUILT, False),
+    # A tilt alone moves nothing at home: seen away from it.
+    ({'axis_direction_b': FAR['axis_direction_b']}, {}, False),
+    # The other lengths and the masses are the file's own.
+    ({'l': 0.13, 'l1': 0.21, 'l2': 0.11, 'alpha': 0.61, 'm5': 20.0}, {},
+     True),
+])
+def test_a_model_file_must_have_the_robots_legs(tmp_path, model_rows,
+                                                robot_rows, accepted):
+    """The simulator's mjcf_file: its legs those of its robot.*."""
+    from orthoglide_ros.cores import simulator
+    path = tmp_path / 'model.xml'
+    path.write_text(mjcf(Robot(**model_rows)))
+    values = {'engine': 'mujoco', 'mjcf_file': str(path),
+              **{f'robot.{k}': list(v) for k, v in robot_rows.items()}}
+    if accepted:
+        simulator.PARAMETERS.parse(values)
+    else:
+        with pytest.raises(ValueError, match='^mjcf_file: its legs are not '
+                           'those of robot'):
+            simulator.PARAMETERS.parse(values)
 
 
 def test_friction_mujoco_cannot_hold_is_applied_by_the_plant():

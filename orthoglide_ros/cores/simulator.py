@@ -83,6 +83,15 @@ def _mjcf_file_needs_mujoco(settings):
         raise ParameterError('mjcf_file', 'needs engine mujoco')
 
 
+def _mjcf_file_has_the_robots_legs(settings):
+    """Refuse an mjcf_file whose legs are not robot.*'s (the workspace's)."""
+    if settings.mjcf_file:
+        try:
+            mujoco_plant.check_legs(settings.mjcf_file, settings.robot)
+        except ValueError as error:
+            raise ParameterError('mjcf_file', str(error)) from None
+
+
 def _timeout_of_a_step_at_least(settings):
     if settings.command_timeout * settings.rate_hz < 1.0:
         raise ParameterError('command_timeout', (
@@ -127,7 +136,8 @@ PARAMETERS = Table('SimulatorSettings', (
          'robot.* lengths; its masses, friction and armature its own); '
          'applies at the next reset', check=_mjcf_file),
     *realtime.SPECS,
-), rules=(_mjcf_file_needs_mujoco, _initial_position_in_workspace,
+), rules=(_mjcf_file_needs_mujoco, _mjcf_file_has_the_robots_legs,
+          _initial_position_in_workspace,
           at_most('publish_rate_hz', 'rate_hz', 'Hz'),
           _timeout_of_a_step_at_least, joint_limits_rule),
     robot=True, retired={'force_limit': joint_limit_name('max_effort')})
