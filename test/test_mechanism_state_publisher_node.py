@@ -160,6 +160,7 @@ def test_published_states_close_the_urdf(graph, model):
                     np.arcsin(value).imag / COMPLEX_STEP, abs=1e-11)
 
 
+@pytest.mark.slow     # its URDF: 6-9 s of CPU, one process, 2026-12-06
 def test_a_robot_as_built_with_its_own_urdf(graph, model):
     """
     robot.* of a robot as built, and the URDF of the same rows.

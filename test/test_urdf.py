@@ -43,7 +43,10 @@ OTHER = Robot(**OTHER_ROBOT_VALUES)
 ROBOTS = {'paper': PAPER, 'other': OTHER, 'built': Robot(**BUILT),
           'far': Robot(**FAR)}
 OTHER_NAMES = ('ja', 'jb', 'jc')
-AS_BUILT = ['built', 'far']
+# Their URDFs take 6-9 s of CPU each (three legs' joint limits), one
+# process, 2026-12-06: slow, whichever test asks first.
+AS_BUILT = [pytest.param(which, marks=pytest.mark.slow)
+            for which in ('built', 'far')]
 
 
 def names_of(which):

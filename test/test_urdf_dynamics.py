@@ -130,6 +130,7 @@ def test_rnea_gives_the_models_forces_fast_without_gravity(model, target,
     check(model, robot, zip(*trajectory.paper_batch(times, target, omega)))
 
 
+@pytest.mark.slow     # its URDF: 6-9 s of CPU, one process, 2026-12-06
 @pytest.mark.parametrize('which', list(AS_BUILT))
 def test_rnea_gives_a_robot_as_builts_forces(as_built, which):
     """The paper's trajectory (gravity), then a fast one without gravity."""
