@@ -25,8 +25,8 @@ import numpy as np
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.bodies import elements
 from orthoglide_ros.model.urdf import link_name, urdf
-from orthoglide_ros.ros.mechanism_state_publisher_node import \
-    MechanismStatePublisherNode
+from orthoglide_ros.ros.mechanism_state_publisher_node import (
+    AS_BUILT, MechanismStatePublisherNode)
 from orthoglide_ros.model.robot import Robot
 import pytest
 from rclpy.node import Node
@@ -127,9 +127,10 @@ def check_closes(model, msg, lam, with_velocity, robot=ROBOT):
     assert [sliders[n] for n in NAMES] == list(lam)
 
 
-def test_published_states_close_the_urdf(graph, model):
+def test_published_states_close_the_urdf(graph, model, capfd):
     """Random reachable configurations and the paper's trajectory."""
     g = graph()
+    assert AS_BUILT not in capfd.readouterr().err     # the drawing's robot
     rng = np.random.default_rng(4)
     points = rng.uniform(-0.35, 0.35, (40, 3))
     points = points[mechanics.workspace_status(ROBOT, points).ok][:20]
@@ -161,16 +162,18 @@ def test_published_states_close_the_urdf(graph, model):
 
 
 @pytest.mark.slow     # its URDF: 6-9 s of CPU, one process, 2026-12-06
-def test_a_robot_as_built_with_its_own_urdf(graph, model):
+def test_a_robot_as_built_with_its_own_urdf(graph, model, capfd):
     """
     robot.* of a robot as built, and the URDF of the same rows.
 
-    Every body's TF (yourdfpy's forward kinematics of that URDF with the
-    published joints) is where ``bodies.elements`` of the robot puts it;
-    the drawing's URDF with the same joints leaves a cut open.
+    The node says at configure that it needs that URDF. Every body's TF
+    (yourdfpy's forward kinematics of that URDF with the published
+    joints) is where ``bodies.elements`` of the robot puts it; the
+    drawing's URDF with the same joints leaves a cut open.
     """
     robot = Robot(**BUILT)
     g = graph({f'robot.{name}': list(value) for name, value in BUILT.items()})
+    assert AS_BUILT in capfd.readouterr().err
     built_model = load(urdf(robot))
     rng = np.random.default_rng(6)
     points = rng.uniform(-0.35, 0.35, (40, 3))
