@@ -105,7 +105,7 @@ def joint_limits(robot: Robot, margin: float = DEFAULT_SINGULARITY_MARGIN
     about the diagonal (its workspace symmetric under that turn), leg A's
     for all three. Found by a grid over the cube ``|x|, |y|, |z| < max_i(L_i
     + |a_i - r_i|)`` (``l3`` on the drawing), then seeded random samples
-    around the best points down to about 1e-9 m (about 1 s per leg,
+    around the best points down to about 1e-9 m (1-3 s per leg searched,
     remembered for the last robots asked).
     """
     return {leg: dict(limits) for leg, limits in _joint_limits(
