@@ -7,7 +7,10 @@ Measures, without ROS:
 - the core's work per joint state (``MechanismState.joint_state``: the
   sliders by name, the forward kinematics, every joint), positions only and
   with velocities, each call timed after a warm-up: median and p99 (us);
-- the time of ``orthoglide urdf`` (the URDF with its joint limits).
+- the time of ``orthoglide urdf`` (the URDF with its joint limits);
+
+each for the paper's robot and for a robot as built
+(``robots_as_built.BUILT``: each leg's joint limits its own).
 
 How closely the URDF's cuts close (yourdfpy) and its dynamics agree with
 the model (Pinocchio's RNEA) are the tests' (``test/test_urdf.py``,
@@ -23,16 +26,20 @@ import numpy as np
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.cores.mechanism_state_publisher import (
     MechanismState, PARAMETERS)
-from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.urdf import urdf
+from orthoglide_testing.robots_as_built import BUILT
 
 NAMES = ['slider_a', 'slider_b', 'slider_c']
+# The robots measured: their robot.* parameters.
+ROBOTS = {'drawing': {}, 'as built': {f'robot.{name}': list(value)
+                                      for name, value in BUILT.items()}}
 
 
-def timing(calls):
+def timing(calls, parameters):
     """Median and p99 (us) of the core's joint_state, without/with rates."""
-    core = MechanismState(PARAMETERS.parse({}))
-    s = mechanics.solve(Robot(), (0.05, 0.1, -0.2), (0.1, -0.1, 0.2))
+    core = MechanismState(PARAMETERS.parse(parameters))
+    s = mechanics.solve(core.settings.robot, (0.05, 0.1, -0.2),
+                        (0.1, -0.1, 0.2))
     rows = []
     for label, rates in (('positions only', []),
                          ('with velocities', list(s.lambdadot))):
@@ -53,12 +60,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
     parser.add_argument('--calls', type=int, default=5000)
     args = parser.parse_args()
-    for label, median, p99 in timing(args.calls):
-        print(f'joint_state, {label:16}: median {median:7.1f} us, p99 '
-              f'{p99:7.1f} us')
-    start = time.perf_counter()
-    urdf(Robot())
-    print(f'urdf(Robot()): {time.perf_counter() - start:.2f} s')
+    for robot, parameters in ROBOTS.items():
+        for label, median, p99 in timing(args.calls, parameters):
+            print(f'{robot:8}, joint_state, {label:16}: median {median:7.1f} '
+                  f'us, p99 {p99:7.1f} us')
+    for robot, parameters in ROBOTS.items():
+        start = time.perf_counter()
+        urdf(PARAMETERS.parse(parameters).robot)
+        print(f'{robot:8}, urdf: {time.perf_counter() - start:.2f} s')
 
 
 if __name__ == '__main__':

@@ -3,8 +3,9 @@ Tests of the mechanism state publisher's ROS-free logic (mechanism_state).
 
 The joint state of the sliders is checked against eq. (9) and its
 derivative written independently (the reference model, complex step), by
-name; the rules (matching by name, optional velocities, refusals counted by
-reason, the status rules) are driven by hand, time included.
+name, on the paper's robot and on two robots as built; the rules (matching
+by name, optional velocities, refusals counted by reason, the status rules)
+are driven by hand, time included.
 """
 
 from mechanics_reference import COMPLEX_STEP, leg_geometry
@@ -15,12 +16,15 @@ from orthoglide_ros.cores.mechanism_state_publisher import (
     joint_state, MechanismState, PARAMETERS, REASONS)
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.cores.status import ERROR, OK, WARN
+from orthoglide_testing.robots_as_built import BUILT, FAR
 import pytest
 
 NAMES = ('slider_a', 'slider_b', 'slider_c')
 NAN = float('nan')
 STAMP = (7, 5)     # a joint state's stamp: the output carries it
 PASSIVE = {'phi21': ('phi21', 'phi54'), 'phi32': ('phi32', 'phi62', 'phi43')}
+# Each leg's geometry: the drawing's, and two robots as built.
+GEOMETRIES = {'drawing': {}, 'built': BUILT, 'far': FAR}
 
 
 def expected(robot, position, velocity):
@@ -45,8 +49,9 @@ def by_name(state):
             dict(zip(state.names, state.velocity)))
 
 
-def test_joint_state_of_the_paper_trajectory_is_eq9_and_its_rates():
-    robot = Robot()
+@pytest.mark.parametrize('geometry', list(GEOMETRIES))
+def test_joint_state_of_the_paper_trajectory_is_eq9_and_its_rates(geometry):
+    robot = Robot(**GEOMETRIES[geometry])
     times = trajectory.paper_times(21)
     for p, v, a in zip(*trajectory.paper_batch(times)):
         s = mechanics.solve(robot, p, v, a)
@@ -160,6 +165,15 @@ def test_status_rules():
     assert dict(status.values)['rejected missing_joint'] == 1
     assert c.status(4.0).level == OK        # a new period without rejections
     assert c.status(5.0, internal_errors=2).level == ERROR
+    assert dict(c.status(6.0).values)['legs'] == 'as drawn'
+
+
+def test_status_says_a_robot_as_built():
+    """The installed URDF is the drawing's: the value says which robot."""
+    c = core(**{f'robot.{name}': list(value) for name, value in BUILT.items()})
+    assert dict(c.status(1.0).values)['legs'] == 'as built'
+    c.configure(PARAMETERS.parse({}))
+    assert dict(c.status(2.0).values)['legs'] == 'as drawn'
 
 
 def test_rejected_before_reading_counts():

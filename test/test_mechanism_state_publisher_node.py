@@ -9,7 +9,11 @@ by yourdfpy: ``platform`` at G (``mechanics.forward_kinematics`` of the
 sliders) with frame 0's orientation, each ``x_leg_end`` on its
 ``x_platform_mount`` and each parallelogram's two A7 frames together, to
 1e-9 m and 1e-9 rad, on random reachable configurations and on the paper's
-trajectory. Bad input publishes nothing and is counted in /diagnostics; the
+trajectory. A node given a robot as built (``robots_as_built.BUILT`` as
+``robot.*`` parameters) with that robot's URDF (``orthoglide urdf`` of the
+same rows) puts every body where ``bodies.elements`` does, and closes
+every cut, where the drawing's URDF would leave them open by about a
+millimetre. Bad input publishes nothing and is counted in /diagnostics; the
 topics' QoS is the other nodes'. As a process: the console script answers,
 exits 0 on SIGINT and 2 on an invalid parameter.
 """
@@ -19,8 +23,10 @@ import random
 from mechanics_reference import COMPLEX_STEP, leg_geometry, LEGS
 import numpy as np
 from orthoglide_ros.model import mechanics, trajectory
-from orthoglide_ros.ros.mechanism_state_publisher_node import \
-    MechanismStatePublisherNode
+from orthoglide_ros.model.bodies import elements
+from orthoglide_ros.model.urdf import link_name, urdf
+from orthoglide_ros.ros.mechanism_state_publisher_node import (
+    AS_BUILT, MechanismStatePublisherNode)
 from orthoglide_ros.model.robot import Robot
 import pytest
 from rclpy.node import Node
@@ -35,6 +41,7 @@ from orthoglide_testing.probe import (matched, node_graphs, PROBE_QOS,
                                       spin_until,
                                       wait_diagnostics as harness_wait_diagnostics)
 from orthoglide_testing.processes import node_executable, run_to_exit
+from orthoglide_testing.robots_as_built import BUILT
 from urdf_harness import COMMITTED_URDF, cut_errors, load, TOLERANCE
 
 pytestmark = pytest.mark.ros  # DDS and node processes
@@ -106,10 +113,10 @@ def exchange(g, stamp, lam, lamd=None):
     return g.probe.outputs[-1]
 
 
-def check_closes(model, msg, lam, with_velocity):
+def check_closes(model, msg, lam, with_velocity, robot=ROBOT):
     """Check that the published state closes every cut of the URDF at G."""
-    centre = mechanics.forward_kinematics(ROBOT, lam)
-    phi32 = np.arcsin([leg_geometry(ROBOT, leg, centre).sin32
+    centre = mechanics.forward_kinematics(robot, lam)
+    phi32 = np.arcsin([leg_geometry(robot, leg, centre).sin32
                        for leg in LEGS])
     assert len(msg.name) == len(msg.position) == 18
     assert len(msg.velocity) == (18 if with_velocity else 0)
@@ -120,9 +127,10 @@ def check_closes(model, msg, lam, with_velocity):
     assert [sliders[n] for n in NAMES] == list(lam)
 
 
-def test_published_states_close_the_urdf(graph, model):
+def test_published_states_close_the_urdf(graph, model, capfd):
     """Random reachable configurations and the paper's trajectory."""
     g = graph()
+    assert AS_BUILT not in capfd.readouterr().err     # the drawing's robot
     rng = np.random.default_rng(4)
     points = rng.uniform(-0.35, 0.35, (40, 3))
     points = points[mechanics.workspace_status(ROBOT, points).ok][:20]
@@ -151,6 +159,40 @@ def test_published_states_close_the_urdf(graph, model):
                                 (f'{x}_phi43', geo.sin32)):
                 assert rates[name] == pytest.approx(
                     np.arcsin(value).imag / COMPLEX_STEP, abs=1e-11)
+
+
+@pytest.mark.slow     # its URDF: 6-9 s of CPU, one process, 2026-12-06
+def test_a_robot_as_built_with_its_own_urdf(graph, model, capfd):
+    """
+    robot.* of a robot as built, and the URDF of the same rows.
+
+    The node says at configure that it needs that URDF. Every body's TF
+    (yourdfpy's forward kinematics of that URDF with the published
+    joints) is where ``bodies.elements`` of the robot puts it; the
+    drawing's URDF with the same joints leaves a cut open.
+    """
+    robot = Robot(**BUILT)
+    g = graph({f'robot.{name}': list(value) for name, value in BUILT.items()})
+    assert AS_BUILT in capfd.readouterr().err
+    built_model = load(urdf(robot))
+    rng = np.random.default_rng(6)
+    points = rng.uniform(-0.35, 0.35, (40, 3))
+    points = points[mechanics.workspace_status(robot, points).ok][:10]
+    for k, p in enumerate(points):
+        lam = mechanics.solve(robot, p).lambda_
+        msg = exchange(g, (400, k), lam)
+        check_closes(built_model, msg, lam, False, robot)
+        legs = elements(robot, p)
+        for leg in LEGS:
+            for body, frame in legs[leg]['bodies'].items():
+                tf = built_model.get_transform(link_name(leg, body))
+                assert np.allclose(tf[:3, 3], frame['origin'], rtol=0,
+                                   atol=1e-10)
+                assert np.allclose(tf[:3, :3], frame['rotation'].T, rtol=0,
+                                   atol=1e-10)
+        distance, _ = cut_errors(model, msg.name, msg.position, p,
+                                 np.zeros(3))
+        assert distance > 1e-4, distance
 
 
 @pytest.mark.parametrize('names, lam, reason', [

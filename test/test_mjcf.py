@@ -1,9 +1,13 @@
 """
 The MJCF (orthoglide_ros.model.mjcf) against MuJoCo, an engine no one here wrote.
 
+On the paper's robot and on two robots as built (``robots_as_built``:
+every leg's axis, offset, bars and attachment off the drawing):
+
 - The committed ``mjcf/orthoglide.xml`` is what ``orthoglide mjcf`` writes
   for the paper's robot; it loads; its names, actuators and total mass are
-  the contract's (doc/mujoco.md); qpos0 is home, closed.
+  the contract's (doc/mujoco.md); qpos0 is home (the platform at the
+  origin), closed, each joint at its value there (0 on the drawing's).
 - Kinematics: with the joints of the closed form (eqs. 9, 5) the
   constraints hold to 1e-12 m and the platform body is at G.
 - Dynamics, rigid: MuJoCo's mass matrix, bias and constraint Jacobian,
@@ -11,10 +15,17 @@ The MJCF (orthoglide_ros.model.mjcf) against MuJoCo, an engine no one here wrote
   actuator forces ``f`` with the qacc of the closed form), give the
   package's forces (eq. 25, viscous friction included) to 1e-6 relative at
   random states of several robots.
+- Forward dynamics, rigid: the platform's acceleration under random
+  forces at random states from MuJoCo's own mass matrix, bias and loop
+  Jacobian with the loops held rigidly is the package's
+  (``mechanics.forward_dynamics``) to 1e-8 relative.
 - Dynamics, simulated: the package's forces applied open loop from home at
   rest keep the platform on eq. (6) within 0.05 mm after 1 s, and the
   loops stay closed to 1e-5 m over the whole motion (the robot is open-loop
   unstable: errors grow about e-fold every 0.28 s, so this is strict).
+- A model file the simulator is given (``mjcf_file``) must have the legs
+  of its ``robot.*``, which its workspace checks use: one of another
+  robot's legs is refused, one of other masses or lengths taken.
 - Friction MuJoCo's joints cannot hold (a Coulomb level per direction, a
   Stribeck excess): the sliders' ``frictionloss`` is the mean Coulomb
   level, and ``MujocoPlant`` applies the rest as forces, so that its
@@ -32,14 +43,19 @@ from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.mjcf import joint_values, mjcf
 from orthoglide_ros.model.robot import JOINT_NAMES, Robot
 from orthoglide_ros.model.trajectory import PAPER_DURATION, paper_sample
+from orthoglide_testing.robots_as_built import BUILT, FAR
 
 mujoco = pytest.importorskip('mujoco')
 
 ROOT = __import__('pathlib').Path(__file__).resolve().parents[1]
 COMMITTED = ROOT / 'mjcf' / 'orthoglide.xml'
 PAPER = Robot()
+# Each leg's geometry: the drawing's, and two robots as built.
+GEOMETRIES = {'drawing': {}, 'built': BUILT, 'far': FAR}
+ROBOTS = {name: Robot(**rows) for name, rows in GEOMETRIES.items()}
 OPEN_LOOP_BOUND = 5e-5      # m after 1 s (0.05 mm)
 CLOSURE_BOUND = 1e-5        # m over the simulated motion
+FORWARD_DYNAMICS_BOUND = 1e-8  # relative
 
 
 def load(robot=PAPER, **kwargs):
@@ -96,17 +112,38 @@ def test_the_contract_names_and_mass():
     assert np.allclose(limited.actuator_ctrlrange, [[-500.0, 500.0]] * 3)
 
 
-def test_closed_form_joints_close_the_loops_and_place_the_platform():
-    model, data = load()
+@pytest.mark.parametrize('geometry', list(GEOMETRIES))
+def test_qpos0_is_home_closed_each_joint_at_its_value_there(geometry):
+    """The bodies as written: G at the origin, qpos0 the model's joints."""
+    robot = ROBOTS[geometry]
+    model, data = load(robot)
+    mujoco.mj_forward(model, data)
+    assert closure(data) < 1e-12
+    assert np.abs(data.body('platform').xpos).max() < 1e-12
+    home = joint_values(robot, (0.0, 0.0, 0.0))
+    assert {name: float(model.qpos0[model.joint(name).qposadr[0]])
+            for name in home} == {name: q for name, (q, _, _)
+                                  in home.items()}
+    if geometry == 'drawing':
+        assert not model.qpos0.any()
+    else:
+        assert np.abs(model.qpos0).min() > 0.0
+
+
+@pytest.mark.parametrize('geometry', list(GEOMETRIES))
+def test_closed_form_joints_close_the_loops_and_place_the_platform(geometry):
+    robot = ROBOTS[geometry]
+    model, data = load(robot)
     for t in np.linspace(0.0, PAPER_DURATION, 21):
         position = paper_sample(t)[0]
-        set_state(model, data, PAPER, position)
+        set_state(model, data, robot, position)
         assert closure(data) < 1e-12
         assert np.allclose(data.body('platform').xpos, position,
                            rtol=0.0, atol=1e-12)
 
 
-def robots(rng, count):
+def robots(rng, count, geometry=None):
+    """Random robots; with a ``geometry``'s rows, as built (its bars)."""
     for _ in range(count):
         yield Robot(m1=rng.uniform(0.1, 1.0), m2=rng.uniform(0.05, 0.5),
                     m3=rng.uniform(1.0, 4.0), m4=rng.uniform(0.05, 0.5),
@@ -114,13 +151,14 @@ def robots(rng, count):
                     l=rng.uniform(0.1, 0.3), l3=rng.uniform(0.7, 1.0),
                     friction_viscous=tuple(rng.uniform(0.0, 50.0, 3)),
                     armature=tuple(rng.uniform(0.0, 4.0, 3)),
-                    payload=rng.uniform(0.0, 10.0))
+                    payload=rng.uniform(0.0, 10.0), **(geometry or {}))
 
 
-def test_mujoco_rigid_projection_gives_the_package_forces():
+@pytest.mark.parametrize('geometry', list(GEOMETRIES))
+def test_mujoco_rigid_projection_gives_the_package_forces(geometry):
     rng = np.random.default_rng(7)
     worst = 0.0
-    for robot in robots(rng, 4):
+    for robot in robots(rng, 4, GEOMETRIES[geometry]):
         model, data = load(robot)
         actuated = np.zeros((model.nv, 3))
         for column, name in enumerate(JOINT_NAMES):
@@ -145,6 +183,73 @@ def test_mujoco_rigid_projection_gives_the_package_forces():
     assert worst < 1e-6
 
 
+def equality_jacobian(model, data):
+    """Return the rows of MuJoCo's constraint Jacobian of the connects."""
+    return data.efc_J.reshape(-1, model.nv)[data.efc_type == 0].copy()
+
+
+def rigid_platform_acceleration(model, data, force, step=1e-6):
+    """
+    Return the platform's acceleration with the loops held rigid (m/s^2).
+
+    MuJoCo's own mass matrix ``M``, bias ``c``, passive forces and loop
+    Jacobian ``J`` at the state set: ``M qacc - J^T mu = B f + passive - c``
+    with ``J qacc = -Jdot qvel`` (``Jdot qvel`` by central differences of
+    ``J qvel`` along ``qvel``, ``step`` s), solved by least squares (legs B
+    and C meet the platform in two connects: redundant rows); the platform
+    body's acceleration from that ``qacc`` by MuJoCo
+    (``mj_rnePostConstraint``, less its world's -gravity).
+    """
+    qpos, qvel = data.qpos.copy(), data.qvel.copy()
+    moved = []
+    for sign in (1.0, -1.0):
+        data.qpos[:] = qpos
+        mujoco.mj_integratePos(model, data.qpos, qvel, sign * step)
+        mujoco.mj_forward(model, data)
+        moved.append(equality_jacobian(model, data) @ qvel)
+    data.qpos[:] = qpos
+    mujoco.mj_forward(model, data)
+    mass = np.zeros((model.nv, model.nv))
+    mujoco.mj_fullM(model, data, mass)
+    jacobian = equality_jacobian(model, data)
+    applied = np.zeros(model.nv)
+    for name, f in zip(JOINT_NAMES, force):
+        applied[model.joint(name).dofadr[0]] = f
+    rows = len(jacobian)
+    solution = np.linalg.lstsq(
+        np.block([[mass, -jacobian.T], [jacobian, np.zeros((rows, rows))]]),
+        np.concatenate((applied + data.qfrc_passive - data.qfrc_bias,
+                        -(moved[0] - moved[1]) / (2.0 * step))),
+        rcond=None)[0]
+    data.qacc[:] = solution[:model.nv]
+    mujoco.mj_rnePostConstraint(model, data)
+    acceleration = np.zeros(6)
+    mujoco.mj_objectAcceleration(model, data, mujoco.mjtObj.mjOBJ_BODY,
+                                 model.body('platform').id, acceleration, 0)
+    return acceleration[3:] + model.opt.gravity
+
+
+@pytest.mark.parametrize('geometry', list(GEOMETRIES))
+def test_mujoco_forward_dynamics_is_the_packages(geometry):
+    """The platform's acceleration under random forces at random states."""
+    rng = np.random.default_rng(5)
+    worst = 0.0
+    for robot in robots(rng, 3, GEOMETRIES[geometry]):
+        model, data = load(robot)
+        for _ in range(5):
+            position = rng.uniform(-0.12, 0.12, 3)
+            velocity = rng.uniform(-0.5, 0.5, 3)
+            force = rng.uniform(-300.0, 300.0, 3)
+            set_state(model, data, robot, position, velocity)
+            got = rigid_platform_acceleration(model, data, force)
+            expected = np.array(mechanics.forward_dynamics(
+                robot, position, velocity, force))
+            worst = max(worst, np.abs(got - expected).max()
+                        / np.abs(expected).max())
+    print(f'{geometry}: largest relative difference {worst:.3g}')
+    assert worst < FORWARD_DYNAMICS_BOUND
+
+
 def open_loop(robot=PAPER, plant=None, duration=PAPER_DURATION):
     """Apply the package's forces (midpoint of each step); return errors."""
     model, data = load(plant or robot)
@@ -162,12 +267,14 @@ def open_loop(robot=PAPER, plant=None, duration=PAPER_DURATION):
     return np.array(times), np.array(errors), max(closures)
 
 
-def test_the_package_forces_drive_mujoco_along_eq_6():
-    times, errors, worst_closure = open_loop()
+@pytest.mark.parametrize('geometry', list(GEOMETRIES))
+def test_the_package_forces_drive_mujoco_along_eq_6(geometry):
+    times, errors, worst_closure = open_loop(ROBOTS[geometry])
     at = {t: errors[np.argmin(np.abs(times - t))] for t in (0.5, 1.0, 2.0)}
     figures = ', '.join(f'{e * 1e6:.2f} um at {t:g} s'
                         for t, e in at.items())
-    print(f'open loop: {figures}; loops closed to {worst_closure:.2g} m')
+    print(f'{geometry}, open loop: {figures}; loops closed to '
+          f'{worst_closure:.2g} m')
     assert errors[times <= 1.0].max() <= OPEN_LOOP_BOUND
     assert worst_closure <= CLOSURE_BOUND
 
@@ -268,6 +375,32 @@ def test_render_animates_the_paper_trajectory(tmp_path):
               for f in ImageSequence.Iterator(Image.open(out))]
     assert len(frames) == 5
     assert np.abs(frames[0] - frames[2]).mean() > 0.1     # it moved
+
+
+@pytest.mark.parametrize('model_rows, robot_rows, accepted', [
+    (BUILT, BUILT, True),
+    (BUILT, {}, False),
+    ({}, BUILT, False),
+    # A tilt alone moves nothing at home: seen away from it.
+    ({'axis_direction_b': FAR['axis_direction_b']}, {}, False),
+    # The other lengths and the masses are the file's own.
+    ({'l': 0.13, 'l1': 0.21, 'l2': 0.11, 'alpha': 0.61, 'm5': 20.0}, {},
+     True),
+])
+def test_a_model_file_must_have_the_robots_legs(tmp_path, model_rows,
+                                                robot_rows, accepted):
+    """The simulator's mjcf_file: its legs those of its robot.*."""
+    from orthoglide_ros.cores import simulator
+    path = tmp_path / 'model.xml'
+    path.write_text(mjcf(Robot(**model_rows)))
+    values = {'engine': 'mujoco', 'mjcf_file': str(path),
+              **{f'robot.{k}': list(v) for k, v in robot_rows.items()}}
+    if accepted:
+        simulator.PARAMETERS.parse(values)
+    else:
+        with pytest.raises(ValueError, match='^mjcf_file: its legs are not '
+                           'those of robot'):
+            simulator.PARAMETERS.parse(values)
 
 
 def test_friction_mujoco_cannot_hold_is_applied_by_the_plant():

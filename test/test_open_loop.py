@@ -16,6 +16,14 @@ negative stiffness), so the bound is set on the first second, where the
 one-tick latency has been amplified least: OPEN_LOOP_BOUND, 25 mm, the
 bound the test over DDS used (there the timing of two busy cores added
 up to 15.6 mm in the first second).
+
+The same on two robots as built (``robots_as_built``: every leg's axis,
+offset, bars and attachment off the drawing, given to the feedforward
+and to the simulator as ``robot.*`` rows), with either engine: the
+builtin plant and MuJoCo's, each a machine with those geometric errors.
+Both engines move the same machine: under the same loop their platforms
+stay within ENGINES_APART (0.05 mm, test_mjcf's bound of MuJoCo against
+the rigid model after 1 s) of each other over the first second.
 """
 
 import numpy as np
@@ -25,32 +33,41 @@ from orthoglide_ros.cores import feedforward, simulator, tracking_controller
 from orthoglide_ros.model import mujoco_plant
 from orthoglide_ros.model.robot import JOINT_NAMES, Robot
 from orthoglide_ros.model.trajectory import paper_sample, PAPER_DURATION
+from orthoglide_testing.robots_as_built import BUILT, FAR
 
 OPEN_LOOP_BOUND = 0.025     # m, largest position error in the first second
+ENGINES_APART = 5e-5        # m, largest distance between the engines' plants
 LOOP_RATE, PLANT_RATE = 250.0, 500.0
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
 STAMP = (1, 0)     # a joint state's stamp (the controller does not read it)
+# Each leg's geometry: the drawing's, and two robots as built.
+GEOMETRIES = {'drawing': {}, 'built': BUILT, 'far': FAR}
 
 
-def open_loop(mass_factor, duration=PAPER_DURATION, engine='builtin'):
+def open_loop(mass_factor, duration=PAPER_DURATION, engine='builtin',
+              geometry='drawing', positions=False):
     """
     Step the three cores along eq. (6); return (times, errors) of the plant.
 
     The plant's platform mass is ``mass_factor`` times the model's;
-    ``engine``: the simulator's (``builtin`` or ``mujoco``).
+    ``engine``: the simulator's (``builtin`` or ``mujoco``); ``geometry``:
+    the legs of both, a key of GEOMETRIES; ``positions``: the platform's
+    positions (N, 3) instead of its errors' norms.
     """
+    rows = {f'robot.{name}': list(value)
+            for name, value in GEOMETRIES[geometry].items()}
     model = Robot()
     ff = feedforward.Feedforward(feedforward.PARAMETERS.parse(
-        {'pose_only': False}))
+        {'pose_only': False, **rows}))
     control = tracking_controller.Tracking(
         tracking_controller.PARAMETERS.parse({
             'kp': [0.0] * 3, 'kd': [0.0] * 3, 'path_tolerance': [0.0] * 3,
             'stall_timeout': 0.0}))
     plant_settings = simulator.PARAMETERS.parse({
         'rate_hz': PLANT_RATE, 'robot.m5': model.m5 * mass_factor,
-        'engine': engine})
+        'engine': engine, **rows})
     plant = simulator.Simulator(plant_settings, now=0.0)
-    times, errors = [], []
+    times, places = [], []
     pending = None          # the command on its way to the plant
     stamp = 0
     for k in range(round(duration * LOOP_RATE) + 1):
@@ -64,7 +81,7 @@ def open_loop(mass_factor, duration=PAPER_DURATION, engine='builtin'):
             tick, instant = step
             assert tick.event is None, tick.event
             times.append(instant)
-            errors.append(np.subtract(tick.position, paper_sample(instant)[0]))
+            places.append(tick.position)
         lam, lamdot = tick.lambda_, tick.lambdadot
         control.measured(STAMP, '', JOINT_NAMES, lam, lamdot, (), now)
         stamp += 1
@@ -74,11 +91,15 @@ def open_loop(mass_factor, duration=PAPER_DURATION, engine='builtin'):
         s = output.solution
         pending = control.desired(STAMP, '', JOINT_NAMES, s.lambda_, s.lambdadot,
                                   s.force, now).force
-    return np.array(times), np.linalg.norm(errors, axis=1)
+    if positions:
+        return np.array(times), np.array(places)
+    return np.array(times), np.linalg.norm(np.subtract(
+        places, [paper_sample(t)[0] for t in times]), axis=1)
 
 
-def largest_early_error(mass_factor, engine):
-    times, errors = open_loop(mass_factor, duration=1.0, engine=engine)
+def largest_early_error(mass_factor, engine, geometry='drawing'):
+    times, errors = open_loop(mass_factor, duration=1.0, engine=engine,
+                              geometry=geometry)
     return float(errors[times <= 1.0].max())
 
 
@@ -86,21 +107,37 @@ ENGINES = ['builtin', pytest.param('mujoco', marks=pytest.mark.skipif(
     bool(mujoco_plant.unavailable()), reason=mujoco_plant.unavailable()))]
 
 
+@pytest.mark.parametrize('geometry', list(GEOMETRIES))
 @pytest.mark.parametrize('engine', ENGINES)
-def test_the_feedforward_alone_follows_the_trajectory(engine):
+def test_the_feedforward_alone_follows_the_trajectory(engine, geometry):
     """Gains zero, exact plant: within the bound for the first second."""
-    worst = largest_early_error(1.0, engine)
-    print(f'{engine}: largest error in the first second: '
+    worst = largest_early_error(1.0, engine, geometry)
+    print(f'{engine}, {geometry}: largest error in the first second: '
           f'{worst * 1e3:.3f} mm')
     assert worst <= OPEN_LOOP_BOUND
 
 
+@pytest.mark.parametrize('geometry', list(GEOMETRIES))
 @pytest.mark.parametrize('engine', ENGINES)
-def test_a_two_percent_heavier_platform_leaves_it(engine):
+def test_a_two_percent_heavier_platform_leaves_it(engine, geometry):
     """The bound is tight: a plant 2 % off the model breaks it."""
-    worst = largest_early_error(1.02, engine)
-    print(f'{engine}, 2 % heavier: {worst * 1e3:.3f} mm')
+    worst = largest_early_error(1.02, engine, geometry)
+    print(f'{engine}, {geometry}, 2 % heavier: {worst * 1e3:.3f} mm')
     assert worst > OPEN_LOOP_BOUND
+
+
+@pytest.mark.skipif(bool(mujoco_plant.unavailable()),
+                    reason=mujoco_plant.unavailable())
+@pytest.mark.parametrize('geometry', list(GEOMETRIES))
+def test_both_engines_move_the_same_machine(geometry):
+    """The builtin plant and MuJoCo's, each under its own loop, together."""
+    (times, builtin), (_, mujoco) = (
+        open_loop(1.0, duration=1.0, engine=engine, geometry=geometry,
+                  positions=True) for engine in ('builtin', 'mujoco'))
+    apart = float(np.linalg.norm(builtin - mujoco, axis=1).max())
+    print(f'{geometry}: the engines\' platforms at most {apart * 1e6:.3f} '
+          'um apart')
+    assert apart <= ENGINES_APART
 
 
 def test_the_stepped_loop_is_deterministic():

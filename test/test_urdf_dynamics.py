@@ -15,7 +15,10 @@ found equal ``mechanics.solve``'s to 1e-9 relative, on the paper's
 trajectory (gravity) and on a fast one without gravity (inertia alone).
 A robot with drives and a payload: its URDF's platform carries the
 payload, and Pinocchio's ``Model.armature`` on the slider joints (URDF has
-no place for it) gives the drives' forces.
+no place for it) gives the drives' forces. Two robots as built
+(``robots_as_built``: every leg's axis, offset, bars and attachment off
+the drawing): the URDF ``orthoglide urdf`` writes for each gives its
+forces, to the same bound.
 """
 
 from mechanics_reference import (
@@ -24,6 +27,7 @@ import numpy as np
 from orthoglide_ros.model import bodies, mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.urdf import moving_joints, urdf
+from orthoglide_testing.robots_as_built import BUILT, FAR
 import pytest
 from urdf_harness import COMMITTED_URDF
 
@@ -39,6 +43,22 @@ KEYS = {'lambda_': ('lambda', 'lambdadot', 'lambdaddot'),
 @pytest.fixture(scope='module')
 def model():
     return pin.buildModelFromXML(COMMITTED_URDF.read_text())
+
+
+AS_BUILT = {'built': BUILT, 'far': FAR}
+
+
+@pytest.fixture(scope='module')
+def as_built():
+    """``(robot, model)`` of AS_BUILT[which]: its URDF in Pinocchio."""
+    made = {}
+
+    def make(which):
+        if which not in made:
+            robot = Robot(**AS_BUILT[which])
+            made[which] = robot, pin.buildModelFromXML(urdf(robot))
+        return made[which]
+    return make
 
 
 def joint_index(model, name):
@@ -108,6 +128,19 @@ def test_rnea_gives_the_models_forces_fast_without_gravity(model, target,
     robot = Robot(gravity=(0.0, 0.0, 0.0))
     times = np.linspace(0.0, 2.0 * np.pi / omega, 13)
     check(model, robot, zip(*trajectory.paper_batch(times, target, omega)))
+
+
+@pytest.mark.slow     # its URDF: 6-9 s of CPU, one process, 2026-12-06
+@pytest.mark.parametrize('which', list(AS_BUILT))
+def test_rnea_gives_a_robot_as_builts_forces(as_built, which):
+    """The paper's trajectory (gravity), then a fast one without gravity."""
+    robot, model = as_built(which)
+    times = trajectory.paper_times(21)
+    check(model, robot, zip(*trajectory.paper_batch(times)))
+    target, omega = FAST_TRAJECTORIES[2]
+    times = np.linspace(0.0, 2.0 * np.pi / omega, 13)
+    check(model, robot.replace(gravity=(0.0, 0.0, 0.0)),
+          zip(*trajectory.paper_batch(times, target, omega)))
 
 
 def test_rnea_statics_at_home(model):

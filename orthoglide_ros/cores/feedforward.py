@@ -115,9 +115,9 @@ PARAMETERS = Table('Settings', (
          'waits for its partners before it is dropped; at most '
          'setpoint_timeout', (0.0001, 3600.0)),
     singularity_margin_spec(
-        'smallest accepted singularity distance, min(alpha_i / l3, '
-        '1 / kappa_F(J_lambda)), both 1 at home and 0 at a singularity of '
-        'J1 or J2'),
+        'smallest accepted singularity distance, min(alpha_i / L_i, '
+        '1 / kappa_F(J_lambda)) with L_i leg i\'s bar length, both 1 at '
+        'the drawing\'s home and 0 at a singularity of J1 or J2'),
     Spec('pose_only', 'bool', False,
          'serve each pose alone as a setpoint with zero velocity and '
          'acceleration (twist and accel topics ignored); trajectory points '

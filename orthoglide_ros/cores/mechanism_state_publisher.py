@@ -31,7 +31,7 @@ PARAMETERS = Table('MechanismStateSettings', (
         'joint_states by name, and the sliders\' names in the URDF and in '
         'mechanism/joint_states'),
     singularity_margin_spec(
-        'smallest singularity distance min(alpha_i / l3, 1 / '
+        'smallest singularity distance min(alpha_i / L_i, 1 / '
         'kappa_F(J_lambda)) of a published state; nearer a singularity '
         'the joint state is refused (singular)'),
     *realtime.SPECS,
@@ -151,7 +151,13 @@ class MechanismState(Core):
              'waiting for joint states'))
 
     def values(self, now, seconds, increases):
-        """Return the rate, the counters and the margin."""
+        """
+        Return the rate, the counters, the margin and the robot's legs.
+
+        ``legs``: ``as drawn`` (the installed URDF is the robot's) or
+        ``as built`` (robot_state_publisher needs the URDF of the same
+        ``robot.*``, doc/mechanism_state_publisher.md#a-robot-as-built).
+        """
         age = math.nan if self.latest_arrival is None \
             else now - self.latest_arrival
         return [
@@ -161,4 +167,6 @@ class MechanismState(Core):
             ('outputs withheld (inactive)', self.withheld),
             ('time since last published (s)', age),
             ('singularity margin', self.settings.singularity_margin),
+            ('legs', 'as drawn' if self.settings.robot.as_drawn
+             else 'as built'),
         ]

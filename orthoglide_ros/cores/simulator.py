@@ -83,6 +83,15 @@ def _mjcf_file_needs_mujoco(settings):
         raise ParameterError('mjcf_file', 'needs engine mujoco')
 
 
+def _mjcf_file_has_the_robots_legs(settings):
+    """Refuse an mjcf_file whose legs are not robot.*'s (the workspace's)."""
+    if settings.mjcf_file:
+        try:
+            mujoco_plant.check_legs(settings.mjcf_file, settings.robot)
+        except ValueError as error:
+            raise ParameterError('mjcf_file', str(error)) from None
+
+
 def _timeout_of_a_step_at_least(settings):
     if settings.command_timeout * settings.rate_hz < 1.0:
         raise ParameterError('command_timeout', (
@@ -112,7 +121,7 @@ PARAMETERS = Table('SimulatorSettings', (
                       'saturates, and the step counted'}),
     singularity_margin_spec(
         'workspace limit: smallest singularity distance a step may reach, '
-        'min(alpha_i / l3, 1 / kappa_F(J_lambda)); a step beyond it stops '
+        'min(alpha_i / L_i, 1 / kappa_F(J_lambda)); a step beyond it stops '
         'the simulation (applies at the next reset)', low=0.01),
     joint_names_spec('names of the prismatic joints of actuators A, B, C '
                      'in joint_states'),
@@ -127,7 +136,8 @@ PARAMETERS = Table('SimulatorSettings', (
          'robot.* lengths; its masses, friction and armature its own); '
          'applies at the next reset', check=_mjcf_file),
     *realtime.SPECS,
-), rules=(_mjcf_file_needs_mujoco, _initial_position_in_workspace,
+), rules=(_mjcf_file_needs_mujoco, _mjcf_file_has_the_robots_legs,
+          _initial_position_in_workspace,
           at_most('publish_rate_hz', 'rate_hz', 'Hz'),
           _timeout_of_a_step_at_least, joint_limits_rule),
     robot=True, retired={'force_limit': joint_limit_name('max_effort')})

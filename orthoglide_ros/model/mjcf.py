@@ -21,9 +21,10 @@ from orthoglide_ros.model import mechanics, terms
 from orthoglide_ros.model.bodies import elements, LEG_LABELS
 from orthoglide_ros.model.mechanics import ZERO
 from orthoglide_ros.model.robot import JOINT_NAMES
-from orthoglide_ros.model.urdf import (CHAIN, GREY, header_comment,
-                                       inertials, LEG_COLOURS, link_name,
-                                       PLATFORM)
+from orthoglide_ros.model.urdf import (CHAIN, ELEMENT_KEYS, GREY,
+                                       header_comment, inertials,
+                                       LEG_COLOURS, link_name, PLATFORM,
+                                       slider_axis)
 from orthoglide_ros.model.types import Vector
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
@@ -109,7 +110,8 @@ def mjcf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
     arguments.
     """
     home = elements(robot, ZERO)
-    masses = inertials(robot)
+    masses = {label: inertials(robot, leg)
+              for label, leg in zip(LEG_LABELS, robot.legs)}
     radius = robot.l2 / 8.0
     root = ET.Element('mujoco', model='orthoglide')
     root.append(header_comment(
@@ -139,17 +141,17 @@ def mjcf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
     world = ET.SubElement(root, 'worldbody')
     ET.SubElement(world, 'light', pos='1 1 2', dir='-0.5 -0.5 -1',
                   directional='true')
-    for leg in LEG_LABELS:
-        axis = home[leg]['bodies'][1]['rotation'].T[:, 2]
-        a1 = home[leg]['joints']['A1']
+    for leg, built in zip(LEG_LABELS, robot.legs):
+        axis, a1 = slider_axis(home[leg])
         ET.SubElement(world, 'geom', type='cylinder', material='rail',
                       size=_number(radius), fromto=_vector(np.concatenate(
-                          (a1 - robot.l3 * axis, a1 + robot.l3 * axis))))
+                          (a1 - built.length * axis,
+                           a1 + built.length * axis))))
     held = held_by_mujoco(robot)
     for j, (leg, name) in enumerate(zip(LEG_LABELS, joint_names)):
         slide = {term.mujoco: _number(getattr(
             held, terms.coefficient_name(term))[j]) for term in HELD}
-        _leg(world, robot, leg, name, home, masses, radius, slide)
+        _leg(world, robot, leg, name, home, masses[leg], radius, slide)
 
     equality = ET.SubElement(root, 'equality')
     for leg in LEG_LABELS:
@@ -177,23 +179,30 @@ def mjcf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
 
 
 def _leg(world, robot, leg, slider_joint, home, masses, radius, slide):
-    """Add one leg's bodies (1, 2, 3, 6, 4; the platform on leg A's 4)."""
+    """
+    Add one leg's bodies (1, 2, 3, 6, 4; the platform on leg A's 4).
+
+    The bodies where they are at home, the platform at the origin (there
+    every loop closes): each joint's ``ref`` is its value there
+    (:func:`ref`), 0 on the drawing's robot.
+    """
     bodies, joints = home[leg]['bodies'], home[leg]['joints']
     prefix = leg.lower()
     colour = f'leg_{prefix}'
     parents = {0: world}
-    for body, _, parent, suffix, _ in CHAIN:
+    for body, _, parent, suffix, variable in CHAIN:
         if body == 5:
             continue
         element = _body(parents[parent], link_name(leg, body), bodies[body],
                         bodies.get(parent), masses[body])
         parents[body] = element
+        reference = ref(home[leg], variable)
         if body == 1:
             ET.SubElement(element, 'joint', name=slider_joint, type='slide',
-                          axis='0 0 1', **slide)
+                          axis='0 0 1', **reference, **slide)
         else:
             ET.SubElement(element, 'joint', name=f'{prefix}_{suffix}',
-                          type='hinge', axis='0 0 1')
+                          type='hinge', axis='0 0 1', **reference)
         _shapes(element, body, bodies[body], joints, colour, radius)
     if leg == 'A':
         platform = ET.SubElement(
@@ -203,7 +212,7 @@ def _leg(world, robot, leg, slider_joint, home, masses, radius, slide):
         z5 = bodies[5]['rotation'].T[:, 2]      # frame 0 = the platform's
         ET.SubElement(platform, 'joint', name='a_phi54', type='hinge',
                       pos=_vector(joints['A5'] - joints['G']),
-                      axis=_vector(z5))
+                      axis=_vector(z5), **ref(home[leg], 'phi21'))
         _inertial(platform, masses[5])
         ET.SubElement(platform, 'geom', type='box', material='platform',
                       size=_vector((robot.l / 2.0,) * 3))
@@ -214,6 +223,19 @@ def _leg(world, robot, leg, slider_joint, home, masses, radius, slide):
                           fromto=_vector(np.concatenate((ZERO, mount))))
             ET.SubElement(platform, 'site', name=f'{other.lower()}_mount',
                           pos=_vector(mount), size=_number(radius))
+
+
+def ref(home: dict[str, Any], variable: str) -> dict[str, str]:
+    """
+    Return a joint's ``ref`` attribute: its value at home, none where 0.
+
+    ``home``: the leg's :func:`bodies.elements` with the platform at the
+    origin; ``variable``: the :class:`bodies.LegJoints` field the joint
+    takes. MuJoCo's ``ref`` is the joint value of the bodies as written
+    (qpos0), so qpos is the model's value everywhere.
+    """
+    value = home[ELEMENT_KEYS[variable]]
+    return {'ref': _number(value)} if value != 0.0 else {}
 
 
 def _body(parent, name, frame, parent_frame, inertial):

@@ -52,6 +52,55 @@ def check_model(text: str) -> None:
     mjcf.recorded(Robot(), numeric_data(model))
 
 
+# Largest distance (m) a model's loops may stand open, or its platform off
+# G, at the joint values of the robot's own legs: far above the rounding
+# of orthoglide mjcf's numbers (1e-15 m), far below a leg's error (1e-5 m).
+LEGS_TOLERANCE = 1e-9
+# Where the legs are compared: home and the corners of a cube of half side
+# this share of the shortest bar around it (a tilted axis shows only away
+# from home, where the slider stands where the legs meet).
+LEGS_CUBE = 0.15
+
+
+def check_legs(text: str, robot: Robot) -> None:
+    """
+    Refuse an MJCF whose legs are not ``robot``'s (ValueError, how far).
+
+    ``text``: a model :func:`check_model` accepts. With every joint at
+    ``robot``'s values (:func:`mjcf.joint_values`) at home and at the
+    corners of a cube around it, its loops must close and its platform
+    stand at G, to LEGS_TOLERANCE: each leg's axis, offset, bar length and
+    attachment are then the robot's (its other lengths cancel), as the
+    workspace checks of the simulator, made with ``robot``, need.
+    """
+    import mujoco
+    model = mujoco.MjModel.from_xml_string(text)
+    data = mujoco.MjData(model)
+    platform = model.body('platform').id
+    half = LEGS_CUBE * min(leg.length for leg in robot.legs)
+    corners = [(0.0, 0.0, 0.0)] + [(x, y, z) for x in (-half, half)
+                                   for y in (-half, half)
+                                   for z in (-half, half)]
+    for position in corners:
+        try:
+            values = mjcf.joint_values(robot, position)
+        except WorkspaceError:      # a corner out of this robot's reach
+            continue
+        for name, (q, _, _) in values.items():
+            data.qpos[model.joint(name).qposadr[0]] = q
+        mujoco.mj_forward(model, data)
+        loops = data.efc_pos[
+            data.efc_type == mujoco.mjtConstraint.mjCNSTR_EQUALITY]
+        off = max(float(np.abs(loops).max(initial=0.0)), float(
+            np.abs(data.xpos[platform] - position).max()))
+        if not off <= LEGS_TOLERANCE:
+            raise ValueError(
+                f'its legs are not those of robot.*: at the joints of '
+                f'robot.* with G at {mechanics.format_vector(position)} m '
+                f'its loops or platform stand {off:.3g} m off (write it '
+                'with orthoglide mjcf from the same robot.*)')
+
+
 def numeric_data(model: Any) -> dict[str, np.ndarray]:
     """Return a MuJoCo model's ``custom`` numeric data by name."""
     return {model.numeric(i).name: model.numeric(i).data.copy()

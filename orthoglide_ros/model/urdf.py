@@ -23,6 +23,7 @@ from orthoglide_ros.model.robot import JOINT_NAMES
 from orthoglide_ros.model.types import Array, Triple
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
+    from orthoglide_ros.model.legs import Leg
     from orthoglide_ros.model.robot import Robot
 
 BASE_LINK = 'base_link'
@@ -40,6 +41,8 @@ CHAIN = (
 )
 # The rate (LegJoints field) of each variable.
 RATES = {'lambda_': 'lambdadot', 'phi21': 'omega21', 'phi32': 'omega32'}
+# The key of each variable in a leg of :func:`bodies.elements`.
+ELEMENT_KEYS = {'lambda_': 'lambda', 'phi21': 'phi21', 'phi32': 'phi32'}
 # Joint limits are rounded outward to this step (m, rad). Their search: a
 # grid of SEARCH_GRID points per axis, then SEARCH_ROUNDS rounds of
 # SEARCH_SAMPLES normal samples around the SEARCH_KEEP best points so far,
@@ -89,38 +92,48 @@ def moving_joints(joint_names: Sequence[str] = JOINT_NAMES
     return tuple(joints)
 
 
-def joint_limits(robot: Robot,
-                 margin: float = DEFAULT_SINGULARITY_MARGIN) -> dict[str, tuple[float, float]]:
+def joint_limits(robot: Robot, margin: float = DEFAULT_SINGULARITY_MARGIN
+                 ) -> dict[str, dict[str, tuple[float, float]]]:
     """
-    Range of each joint variable over the workspace within ``margin``.
+    Range of each leg's joint variables over the workspace within ``margin``.
 
     On the home branch of the forward kinematics
-    (doc/mechanism_state_publisher.md#joints-and-links). Returns
-    ``{'lambda_': (low, high), 'phi21': ..., 'phi32': ...}`` (m, rad) of leg
-    A, rounded outward to LIMIT_STEP: legs B and C are leg A turned about the
-    diagonal, the workspace symmetric under that turn. Found by a grid over
-    the cube ``|x|, |y|, |z| < l3``, then seeded random samples around the
-    best points down to about 1e-9 m (about 1 s, remembered for the last
-    robots asked).
+    (doc/mechanism_state_publisher.md#joints-and-links). Returns ``{'A':
+    {'lambda_': (low, high), 'phi21': ..., 'phi32': ...}, 'B': ..., 'C':
+    ...}`` (m, rad), rounded outward to LIMIT_STEP: each leg's own on a
+    robot as built; on the drawing's, whose legs B and C are leg A turned
+    about the diagonal (its workspace symmetric under that turn), leg A's
+    for all three. Found by a grid over the cube ``|x|, |y|, |z| < max_i(L_i
+    + |a_i - r_i|)`` (``l3`` on the drawing), then seeded random samples
+    around the best points down to about 1e-9 m (1-3 s per leg searched,
+    remembered for the last robots asked).
     """
-    return dict(_joint_limits(robot, float(margin)))
+    return {leg: dict(limits) for leg, limits in _joint_limits(
+        robot, float(margin))}
 
 
 @functools.lru_cache(maxsize=8)
 def _joint_limits(robot, margin):
-    """Return :func:`joint_limits` as ``(variable, (low, high))`` pairs."""
-    limits = {}
-    for variable in ('lambda_', 'phi21', 'phi32'):
-        low = -_extreme(robot, margin, variable, -1.0)
-        high = _extreme(robot, margin, variable, 1.0)
-        limits[variable] = (
-            round(math.floor(low / LIMIT_STEP) * LIMIT_STEP, 10),
-            round(math.ceil(high / LIMIT_STEP) * LIMIT_STEP, 10))
-    return tuple(limits.items())
+    """Return :func:`joint_limits` as ``(leg, ((variable, limits), ...))``."""
+    searched = ('A',) if robot.as_drawn else LEG_LABELS
+    found = {}
+    for leg in searched:
+        limits = []
+        for variable in ('lambda_', 'phi21', 'phi32'):
+            low = -_extreme(robot, margin, leg, variable, -1.0)
+            high = _extreme(robot, margin, leg, variable, 1.0)
+            limits.append((variable, (
+                round(math.floor(low / LIMIT_STEP) * LIMIT_STEP, 10),
+                round(math.ceil(high / LIMIT_STEP) * LIMIT_STEP, 10))))
+        found[leg] = tuple(limits)
+    return tuple((leg, found.get(leg, found['A'])) for leg in LEG_LABELS)
 
 
-def _extreme(robot, margin, variable, sign):
-    """Largest ``sign * variable`` of leg A over the workspace."""
+def _extreme(robot, margin, leg, variable, sign):
+    """Largest ``sign * variable`` of ``leg`` over the workspace."""
+    extent = max(other.length + math.dist(other.point, other.attachment)
+                 for other in robot.legs)
+
     def values(points):
         ok = mechanics.workspace_status(robot, points, margin).ok
         points = points[ok]
@@ -132,11 +145,12 @@ def _extreme(robot, margin, variable, sign):
         # Only the home branch: the positions the forward kinematics gives
         # back (the others lie beyond a singularity of J2).
         back, found = mechanics.forward_kinematics_rows(
-            robot, np.column_stack([legs[leg].lambda_ for leg in LEG_LABELS]))
-        home = found & (np.abs(back - points).max(-1) <= 1e-9 * robot.l3)
-        return points[home], sign * getattr(legs['A'], variable)[home]
+            robot, np.column_stack([legs[name].lambda_
+                                    for name in LEG_LABELS]))
+        home = found & (np.abs(back - points).max(-1) <= 1e-9 * extent)
+        return points[home], sign * getattr(legs[leg], variable)[home]
 
-    axis = np.linspace(-robot.l3, robot.l3, SEARCH_GRID)
+    axis = np.linspace(-extent, extent, SEARCH_GRID)
     points, found = values(_grid(ZERO, axis))
     # The best points so far, each sampled around with a spread that
     # shrinks every round (a workspace edge may be curved or have corners,
@@ -161,29 +175,29 @@ def _grid(centre, offsets):
     return np.stack(mesh, -1).reshape(-1, 3) + np.asarray(centre)
 
 
-def inertials(robot: Robot) -> dict[int, Any]:
+def inertials(robot: Robot, leg: Leg) -> dict[int, Any]:
     """
     Return doc/model.md's bodies table: ``{body: (mass, centre, inertia)}``.
 
-    Per leg, bodies 1, 2, 3, 4, 6 and the platform 5 (once): mass (kg),
-    centre of mass (m, from the body's frame origin, in its frame) and
-    inertia about the centre of mass (kg m^2, 3x3, in the body's frame).
-    Body 1 only translates and the model gives it no inertia: zero. The
-    platform carries ``robot.payload``: its mass is
-    :func:`terms.platform_mass` (a body that only translates, its inertia
-    scaled alike).
+    ``leg``'s bodies 1, 2, 3, 4, 6 (its bars of its own length ``L_i``)
+    and the platform 5 (the robot's, counted once): mass (kg), centre of
+    mass (m, from the body's frame origin, in its frame) and inertia about
+    the centre of mass (kg m^2, 3x3, in the body's frame). Body 1 only
+    translates and the model gives it no inertia: zero. The platform
+    carries ``robot.payload``: its mass is :func:`terms.platform_mass` (a
+    body that only translates, its inertia scaled alike).
     """
-    l2, l3 = robot.l2, robot.l3
+    l2, length = robot.l2, leg.length
     sa, ca = math.sin(robot.alpha), math.cos(robot.alpha)
     platform = terms.platform_mass(robot)
     return {
         1: (robot.m1, (0.0, robot.l1 * sa / 2.0, robot.l1 * ca / 2.0),
             np.zeros((3, 3))),
         2: (robot.m2, ZERO, robot.m2 * l2 ** 2 / 12.0 * np.diag((1, 1, 0))),
-        3: (robot.m3, (0.0, -l3 / 2.0, 0.0),
-            robot.m3 * l3 ** 2 / 12.0 * np.diag((1, 0, 1))),
-        6: (robot.m6, (0.0, -l3 / 2.0, 0.0),
-            robot.m6 * l3 ** 2 / 12.0 * np.diag((1, 0, 1))),
+        3: (robot.m3, (0.0, -length / 2.0, 0.0),
+            robot.m3 * length ** 2 / 12.0 * np.diag((1, 0, 1))),
+        6: (robot.m6, (0.0, -length / 2.0, 0.0),
+            robot.m6 * length ** 2 / 12.0 * np.diag((1, 0, 1))),
         4: (robot.m4, (l2 / 2.0, 0.0, 0.0),
             robot.m4 * l2 ** 2 / 12.0 * np.diag((0, 1, 1))),
         5: (platform, ZERO, platform * robot.l ** 2 / 6.0 * np.eye(3)),
@@ -201,7 +215,8 @@ def urdf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
     """
     home = bodies.elements(robot, ZERO)
     limits = joint_limits(robot, margin)
-    masses = inertials(robot)
+    masses = {label: inertials(robot, leg)
+              for label, leg in zip(LEG_LABELS, robot.legs)}
     radius = robot.l2 / 8.0
     root = ET.Element('robot', name='orthoglide')
     root.append(header_comment(
@@ -218,16 +233,15 @@ def urdf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
                       rgba=_vector(rgba))
 
     base = _link(root, BASE_LINK)
-    for leg, name in zip(LEG_LABELS, joint_names):
-        low, high = limits['lambda_']
-        axis = home[leg]['bodies'][1]['rotation'].T[:, 2]     # z1, frame 0
-        a1 = home[leg]['joints']['A1']
+    for leg in LEG_LABELS:
+        low, high = limits[leg]['lambda_']
+        axis, a1 = slider_axis(home[leg])
         _shape(base, 'cylinder', 'rail', radius,
                a1 + low * axis, a1 + high * axis)
     for leg, name in zip(LEG_LABELS, joint_names):
-        _leg(root, robot, leg, name, home[leg], limits, masses, radius)
+        _leg(root, leg, name, home[leg], limits[leg], masses[leg], radius)
 
-    platform = _link(root, PLATFORM, masses[5])
+    platform = _link(root, PLATFORM, masses['A'][5])
     _shape(platform, 'box', 'platform', (robot.l,) * 3)
     a_end = home['A']['bodies'][5]
     _joint(root, 'platform_joint', 'fixed', link_name('A', 5), PLATFORM,
@@ -247,35 +261,65 @@ def urdf(robot: Robot, joint_names: Sequence[str] = JOINT_NAMES,
             + ET.tostring(root, encoding='unicode') + '\n')
 
 
-def _leg(root, robot, leg, slider_joint, home, limits, masses, radius):
-    """Add one leg's links and joints (bodies 1-6, the A7 cut)."""
-    bodies = home['bodies']
+def slider_axis(home: dict[str, Any]) -> tuple[Array, Array]:
+    """
+    Return a leg's actuator axis: ``(u_i, A1 at lambda_i = 0)`` (frame 0).
+
+    ``home``: the leg's :func:`bodies.elements` at any state; ``u_i`` is
+    its slider's z axis, along which A1 moves with lambda (m).
+    """
+    axis = home['bodies'][1]['rotation'].T[:, 2]
+    return axis, home['joints']['A1'] - home['lambda'] * axis
+
+
+def _leg(root, leg, slider_joint, home, limits, masses, radius):
+    """
+    Add one leg's links and joints (bodies 1-6, the A7 cut).
+
+    Each joint's origin is its child's frame seen from its parent's at
+    joint value 0: the frames of ``home`` (the platform at the origin)
+    with the slider moved back by its lambda and each revolute joint's
+    child turned back by its angle about z, so that a joint state of the
+    model's values (:func:`bodies.leg_joints`) puts every body where the
+    model does, on the drawing's robot as on one built.
+    """
+    frames = home['bodies']
     prefix = leg.lower()
     colour = f'leg_{prefix}'
     for body, _, parent, suffix, variable in CHAIN:
         link = _link(root, link_name(leg, body),
                      masses[body] if body != 5 else None)
-        frame = bodies[body]
+        frame = frames[body]
         if parent == 0:
             rotation, origin = np.eye(3), np.zeros(3)
         else:
-            rotation = bodies[parent]['rotation']
-            origin = bodies[parent]['origin']
+            rotation = frames[parent]['rotation']
+            origin = frames[parent]['origin']
+        xyz = rotation @ (frame['origin'] - origin)
+        turn = rotation @ frame['rotation'].T     # the child's axes
+        value = home[ELEMENT_KEYS[variable]]
+        if body == 1:
+            xyz = xyz - value * turn[:, 2]
+        else:
+            turn = turn @ bodies.rotation_z(math.sin(value), math.cos(value))
         name = slider_joint if suffix is None else f'{prefix}_{suffix}'
         _joint(root, name, 'prismatic' if body == 1 else 'revolute',
                BASE_LINK if parent == 0 else link_name(leg, parent),
-               link_name(leg, body), rotation @ (frame['origin'] - origin),
-               rotation @ frame['rotation'].T, limits[variable],
+               link_name(leg, body), xyz, turn, limits[variable],
                SLIDER_EFFORT if body == 1 else 0.0)
         _body_shapes(link, body, home, colour, radius)
+    # The cut at A7: two frames with body 6's axes at joint value 0, so
+    # that the rod's stands turned by -phi32 about z from the bar's (the
+    # cut joint's angle): at home the rod's turned back by home's phi32.
     joints = home['joints']
-    for body, side in ((6, 'bar'), (4, 'rod')):
-        frame = bodies[body]
+    for body, side, turned in ((6, 'bar', 0.0), (4, 'rod', home['phi32'])):
+        frame = frames[body]
         tip = f'{prefix}_a7_{side}'
         _link(root, tip)
         _joint(root, f'{tip}_joint', 'fixed', link_name(leg, body), tip,
                frame['rotation'] @ (joints['A7'] - frame['origin']),
-               frame['rotation'] @ bodies[6]['rotation'].T)
+               frame['rotation'] @ frames[6]['rotation'].T
+               @ bodies.rotation_z(math.sin(turned), math.cos(turned)))
 
 
 def _body_shapes(link, body, home, colour, radius):

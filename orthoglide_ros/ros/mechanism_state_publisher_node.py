@@ -15,6 +15,11 @@ from orthoglide_ros.cores.mechanism_state_publisher import (MechanismState,
 from orthoglide_ros.formats import cdr
 from orthoglide_ros.ros.managed_node import ManagedNode
 
+# Said at configure for a robot as built (doc/mechanism_state_publisher.md).
+AS_BUILT = ('robot.* describe legs as built: give robot_state_publisher '
+            'the URDF of the same robot.* (orthoglide urdf --params FILE); '
+            'the installed urdf/orthoglide.urdf is the drawing\'s')
+
 
 class MechanismStatePublisherNode(ManagedNode):
     """
@@ -32,6 +37,8 @@ class MechanismStatePublisherNode(ManagedNode):
     def build(self, settings):
         """Configure: the core, the output and the input."""
         self.core = MechanismState(settings, time.monotonic())
+        if not settings.robot.as_drawn:
+            self.log('info', AS_BUILT)
         self._publisher = self.create_output(JointState,
                                              'mechanism/joint_states')
         self._message = JointState()

@@ -121,16 +121,18 @@ class _Scene:
         ax.set_ylabel('y0 (m)')
         ax.set_zlabel('z0 (m)')
         ax.tick_params(labelsize=7)
-        # The workspace cube and the actuator axes (through frame 0's origin).
+        # The workspace cube and the actuator axes (each through its point
+        # a_i: frame 0's origin on the drawing's robot).
         ax.plot(*_cube_edges(np.zeros(3), WORKSPACE_CUBE), color='0.6',
                 linewidth=0.8, linestyle=':')
         self.axes = {}
-        for leg in 'ABC':
+        for leg, built in zip('ABC', robot.legs):
             bodies = home[leg]['bodies']
             axis = bodies[1]['rotation'][2]           # z1 in frame 0
-            ends = np.array([span[0] * axis, span[1] * axis])
+            ends = np.asarray(built.point) + np.array(
+                [span[0] * axis, span[1] * axis])
             ax.plot(*ends.T, color='0.45', linewidth=0.8, linestyle='--')
-            ax.text(*(span[0] * axis), f'actuator {leg}', fontsize=8,
+            ax.text(*ends[0], f'actuator {leg}', fontsize=8,
                     color=LEG_COLOURS[leg][:3])
             self.axes[leg] = axis
         self.lines = {}

@@ -15,7 +15,7 @@ from orthoglide_ros.model import mechanics, mjcf
 
 # The camera: at the workspace's centre, from the front-right, above.
 LOOKAT = (-0.3, -0.3, -0.45)
-DISTANCE_PER_L3 = 3.0       # distance / l3
+DISTANCE_PER_LENGTH = 3.0   # distance / the longest bars' length
 AZIMUTH, ELEVATION = 225.0, -25.0     # degrees
 
 
@@ -68,7 +68,8 @@ class Renderer:
             raise _no_backend(error) from None
         self.camera = mujoco.MjvCamera()
         self.camera.lookat[:] = LOOKAT
-        self.camera.distance = DISTANCE_PER_L3 * robot.l3
+        self.camera.distance = DISTANCE_PER_LENGTH * max(
+            leg.length for leg in robot.legs)
         self.camera.azimuth, self.camera.elevation = AZIMUTH, ELEVATION
 
     def image(self, position):
