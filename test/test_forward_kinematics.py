@@ -15,7 +15,7 @@ from mechanics_reference import (
     actuator_displacements, CUBE, cube_points)
 import numpy as np
 from orthoglide_ros.model.mechanics import (
-    forward_kinematics, solve, solve_batch, WorkspaceError)
+    forward_kinematics, solve, solve_batch, workspace_status, WorkspaceError)
 from orthoglide_ros.model.robot import Robot
 import pytest
 
@@ -44,6 +44,23 @@ def test_round_trip_batch_over_the_cube_and_its_corners(robot):
     back = forward_kinematics(robot, solve_batch(robot, positions).lambda_)
     assert back.shape == positions.shape
     assert np.abs(back - positions).max() <= TOLERANCE
+
+
+def test_round_trip_where_a_slider_reads_beyond_l3():
+    # Reachable positions past the cube where some lambda_j > l3: the
+    # smaller root of the drawing's quadratic is not the home branch there.
+    rng = np.random.default_rng(15)
+    positions = rng.uniform(-0.7, 0.7, (20000, 3))
+    status = workspace_status(Robot(), positions)
+    positions = positions[status.ok]
+    lam = solve_batch(Robot(), positions).lambda_
+    beyond = (lam > Robot().l3).any(1)
+    assert beyond.sum() >= 50
+    back = forward_kinematics(Robot(), lam[beyond])
+    assert np.abs(back - positions[beyond]).max() <= 1e-9
+    for position, row in zip(positions[beyond][:20], lam[beyond][:20]):
+        assert np.abs(forward_kinematics(Robot(), row)
+                      - position).max() <= 1e-9
 
 
 def test_home():

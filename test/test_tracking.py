@@ -567,7 +567,7 @@ def test_hold_bias_before_any_command():
 @pytest.mark.parametrize('source, position, velocity, effort, reason', [
     ('measured', (0.0, 5.0, 0.0), ZERO3, ZERO3, 'position_limit'),
     ('measured', ZERO3, (0.0, 0.0, 1e300), ZERO3, 'velocity_limit'),
-    ('desired', (0.0, 0.0, -1.5), ZERO3, ZERO3, 'position_limit'),
+    ('desired', (0.0, 0.0, -1.6), ZERO3, ZERO3, 'position_limit'),
     ('desired', ZERO3, (2.5, 0.0, 0.0), ZERO3, 'velocity_limit'),
     ('desired', ZERO3, ZERO3, (0.0, 1e300, 0.0), 'effort_limit'),
 ])

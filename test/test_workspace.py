@@ -120,6 +120,43 @@ def test_points_at_a_singularity_of_j2(kind, ulps):
     assert error.value.reason == 'singular' and error.value.row == 1
 
 
+def test_the_sphere_where_every_slider_reads_l3_is_singular():
+    # |G| = l3 with x, y, z > 0: every lambda_i = l3, the three spheres of
+    # eq. (14) one, J_lambda = [G/x; G/y; G/z] of rank one, det J a rounding
+    # (the diagonal point above is one of them). Before RANK_ONE, 1/kappa_F
+    # there was a ratio of roundings: up to 0.53, accepted by the margin.
+    rng = np.random.default_rng(31)
+    directions = rng.uniform(0.3, 1.0, (400, 3))
+    points = L3 * directions / np.linalg.norm(directions, axis=1)[:, None]
+    for position in points:
+        # alpha_i^2 = l3^2 - (|G|^2 - x_i^2) (eq. 9): here alpha_i = x_i.
+        alpha = np.sqrt(L3 ** 2 - (position @ position - position ** 2))
+        assert (alpha / L3).min() > 0.2     # J1 regular: J2 decides
+        assert_refused('singular', tuple(position), margin=1e-6)
+        assert workspace_status(Robot(), position).conditioning < 1e-6
+
+
+def test_the_other_assembly_mode_is_refused():
+    # det J_lambda < 0 (eq. 16) with 1/kappa_F = 0.25 by its absolute value:
+    # eq. (9) has these lambda, but the robot assembled as at home is at
+    # their mirror point, beyond a singularity of J2.
+    position = (-0.55242263, 0.58549502, 0.43323122)
+    alpha = np.array([L3 ** 2 - position[1] ** 2 - position[2] ** 2,
+                      L3 ** 2 - position[2] ** 2 - position[0] ** 2,
+                      L3 ** 2 - position[0] ** 2 - position[1] ** 2]) ** 0.5
+    j2 = np.array([[alpha[0], position[1], position[2]],
+                   [position[0], alpha[1], position[2]],
+                   [position[0], position[1], alpha[2]]])
+    assert np.linalg.det(j2) < -0.01 and (alpha / L3).min() > 0.3
+    error = assert_refused('singular', position, margin=0.0)
+    assert 'beyond a singularity of J2' in str(error)
+    status = workspace_status(Robot(), position)
+    assert status.conditioning == 0.0 and not status.ok
+    with pytest.raises(WorkspaceError) as batch:
+        solve_batch(Robot(), np.array([(0.0, 0.0, 0.0), position]), margin=0.0)
+    assert batch.value.reason == 'singular' and batch.value.row == 1
+
+
 def test_the_margin_decides():
     robot = Robot()
     position = (0.28, 0.28, -0.3)

@@ -80,11 +80,12 @@ PARAMETERS = Table('ControllerSettings', (
                          're-arm rule of path_tolerance), else the controller '
                          'holds the measured position (ERROR) until one '
                          'does; 0.0: off'),
-    Spec('max_position', 'double', 1.0,
+    Spec('max_position', 'double', 1.5,
          'largest |lambda| (m) of a measured or desired slider position, '
          'trajectory points included: a joint state or trajectory beyond '
          'it is refused (position_limit); the paper\'s robot reaches '
-         '-0.80 to 0.85 m', (0.001, 100.0)),
+         '-0.80 to 1.27 m within the default singularity margin',
+         (0.001, 100.0)),
     Spec('max_velocity', 'double', 2.0,
          'largest |lambdadot| (m/s) of a measured or desired slider '
          'velocity, a joint trajectory\'s planned motion included: beyond '

@@ -13,6 +13,12 @@ from __future__ import annotations
 from typing import Any, Callable, Optional
 from collections import namedtuple
 
+# |cof|_F^2 / |J|_F^4 at or below which J_lambda counts as of rank one
+# (1 / kappa_F = 0): there ``det J`` is rounding alone (about 1e-16 |J|^3
+# where every slider reads l3, on the sphere |G| = l3), the true 1 /
+# kappa_F below 1e-10, and the ratio of roundings would be any number.
+RANK_ONE = 1e-20
+
 # Constants of the kernel derived once from a Robot
 # (:func:`robot.kernel_constants`).
 KernelConstants = namedtuple('KernelConstants', (
@@ -173,7 +179,8 @@ def cofactors(j: Any, sqrt: Callable[[Any], Any]) -> tuple:
     cc = (c00 * c00 + c01 * c01 + c02 * c02 + c10 * c10 + c11 * c11
           + c12 * c12 + c20 * c20 + c21 * c21 + c22 * c22)
     return ((c00, c01, c02, c10, c11, c12, c20, c21, c22), det,
-            3.0 * abs(det) / sqrt(jj * cc))
+            3.0 * abs(det) / sqrt(jj * cc) * (cc > RANK_ONE * jj * jj)
+            * (det > 0.0))
 
 
 def jacobian_cofactors(x: Any, y: Any, z: Any, al_a: Any, al_b: Any, al_c: Any,
@@ -186,7 +193,11 @@ def jacobian_cofactors(x: Any, y: Any, z: Any, al_a: Any, al_b: Any, al_c: Any,
     transpose is ``cof / det``. Returns ``(cof, det, inverse_condition)``
     with ``cof`` the 9 cofactors row by row and ``inverse_condition =
     3 |det| / (|J|_F |cof|_F) = 1 / kappa_F``, the normalised inverse
-    Frobenius condition number: 1 at home, 0 where J2 is singular.
+    Frobenius condition number: 1 at home, 0 where J2 is singular (and
+    where ``J_lambda`` has rank one to rounding, :data:`RANK_ONE`) and
+    beyond it, where ``det J_lambda < 0``: the other assembly mode, where
+    a robot assembled as at home is never (its forward kinematics at these
+    lambda is the mirror point).
     """
     ra, rb, rc = 1.0 / al_a, 1.0 / al_b, 1.0 / al_c
     ja, jb = y * ra, z * ra
@@ -200,7 +211,8 @@ def jacobian_cofactors(x: Any, y: Any, z: Any, al_a: Any, al_b: Any, al_c: Any,
     cc = 0.0
     for c in cof:
         cc = cc + c * c
-    return cof, det, 3.0 * abs(det) / sqrt(jj * cc)
+    return cof, det, 3.0 * abs(det) / sqrt(jj * cc) * (
+        cc > RANK_ONE * jj * jj) * (det > 0.0)
 
 
 def _leg(k, x, y, z, vx, vy, vz, ax, ay, az, gx, gy, gz, platform, sqrt,

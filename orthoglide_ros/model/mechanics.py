@@ -171,8 +171,8 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
                                   lamdd, FLOATS)
         force = (force[0] + fa, force[1] + fb, force[2] + fc)
         power = (lamd[0] * force[0], lamd[1] * force[1], lamd[2] * force[2])
-    if conditioning < margin:
-        raise WorkspaceError('singular', (
+    if conditioning < margin or conditioning == 0.0:
+        raise _beyond_j2(robot, position) or WorkspaceError('singular', (
             f'position {format_vector(position)} m is too near a singularity of '
             f'J2: 1/kappa_F(J_lambda) = {conditioning:.3g} < margin '
             f'{margin:g}'))
@@ -257,7 +257,8 @@ def solve_batch(robot: Robot, positions: Rows,
     if not accepted.all():
         row = int(np.argmin(accepted))
         if conditioning[row] == 0.0:
-            raise _on_singularity(p[row], row)
+            raise _beyond_j2(robot, p[row], row) or _on_singularity(
+                p[row], row)
         raise WorkspaceError('singular', (
             f'position {format_vector(p[row])} m is too near a singularity of J2: '
             f'1/kappa_F(J_lambda) = {conditioning[row]:.3g} < margin '
@@ -471,13 +472,15 @@ def forward_kinematics_rows(robot: Robot, lam: Rows) -> tuple[Array, Array]:
     ``lam``: (3,) or (N, 3) (m). With ``d_j = l3 - lambda_j`` and ``s =
     |r_G|^2`` each sphere of eq. (14) reads ``s + 2 r_j d_j + d_j^2 =
     l3^2``, so ``r_j = (l3^2 - d_j^2 - s) / (2 d_j)`` and ``s`` solves a
-    quadratic whose smaller root is the home branch. ``found`` (bool, ()
-    or (N,)) says where that root gives a point with every ``alpha_i >
-    0``; ``positions`` (m) is meaningless elsewhere. Where both roots are
-    valid platform positions (two assembly modes), a position on the other
-    one is not given back: a robot started at home cannot reach it without
-    crossing a singularity of J2. Legs as built: :func:`legs.intersect`,
-    the spheres' trilateration.
+    quadratic whose smaller root is the home branch while every
+    ``lambda_j < l3``; elsewhere (a slider beyond l3, as at (0.442, -0.581,
+    -0.511) m) :func:`legs.intersect`, the spheres' trilateration, which
+    is also what legs as built use. ``found`` (bool, () or (N,)) says where
+    the home branch has a point with every ``alpha_i > 0``; ``positions``
+    (m) is meaningless elsewhere. Where both roots are valid platform
+    positions (two assembly modes), a position on the other one is not
+    given back: a robot started at home cannot reach it without crossing a
+    singularity of J2.
     """
     if not robot.as_drawn:
         return legs.intersect(robot.legs, lam)
@@ -495,6 +498,11 @@ def forward_kinematics_rows(robot: Robot, lam: Rows) -> tuple[Array, Array]:
         r = (kk - s[..., None]) / (2.0 * d)
         alpha = r + d
         found = (disc >= 0.0) & np.isfinite(r).all(-1) & (alpha > 0.0).all(-1)
+    beyond = (lam >= l3).any(-1)
+    if np.any(beyond):
+        trilaterated, reached = legs.intersect(robot.legs, lam)
+        r = np.where(beyond[..., None], trilaterated, r)
+        found = np.where(beyond, reached, found)
     return r, found
 
 
@@ -668,6 +676,22 @@ def _solve3(columns, rhs):
     return ((b0 * r00 + b1 * r01 + b2 * r02) * inv,
             (b0 * r10 + b1 * r11 + b2 * r12) * inv,
             (b0 * r20 + b1 * r21 + b2 * r22) * inv)
+
+
+def _beyond_j2(robot, position, row=None):
+    """
+    Refuse a position beyond a singularity of J2 (a WorkspaceError), or None.
+
+    Where ``det J_lambda < 0`` eq. (9) has its solution but the robot,
+    assembled as at home, is at the mirror point of those lambda: it
+    cannot get there without crossing the singularity.
+    """
+    if np.linalg.det(jacobians(robot, position)[1]) >= 0.0:   # J1 > 0
+        return None
+    return WorkspaceError('singular', (
+        f'position {format_vector(position)} m is beyond a singularity of '
+        'J2 (det J_lambda < 0): the other assembly mode, which a robot '
+        'assembled as at home cannot reach'), row)
 
 
 def _on_singularity(position, row=None):
