@@ -130,8 +130,8 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
     if conditioning < margin:
         raise WorkspaceError('singular', (
             f'position {format_vector(position)} m is too near a singularity of '
-            f'J2: 1/kappa_F(J_lambda) = {conditioning:.3g} < margin '
-            f'{margin:g}'))
+            f'J2: 1/kappa_F(J_lambda) = {below(conditioning, margin)} < '
+            f'margin {margin:g}'))
     l3 = robot.l3
     ratio = (alphas[0] / l3, alphas[1] / l3, alphas[2] / l3)
     if min(ratio) < margin:     # the leg test above, rounded apart
@@ -208,8 +208,8 @@ def solve_batch(robot: Robot, positions: Rows,
                 f'position {format_vector(p[row])} m is on a singularity'), row)
         raise WorkspaceError('singular', (
             f'position {format_vector(p[row])} m is too near a singularity of J2: '
-            f'1/kappa_F(J_lambda) = {conditioning[row]:.3g} < margin '
-            f'{margin:g}'), row)
+            f'1/kappa_F(J_lambda) = {below(conditioning[row], margin)} < '
+            f'margin {margin:g}'), row)
     ratio = out[5] / robot.l3
     near = ratio.min(1) < margin    # the leg test above, rounded apart
     if near.any():
@@ -615,8 +615,8 @@ def _leg_error(robot, position, margin, row=None):
         if ratio < margin:
             return WorkspaceError('singular', (
                 f'position {format_vector(position)} m is too near a singularity of '
-                f'J1: leg {leg} has alpha/l3 = {ratio:.3g} < margin '
-                f'{margin:g}'), row)
+                f'J1: leg {leg} has alpha/l3 = {below(ratio, margin)} < '
+                f'margin {margin:g}'), row)
     # On the margin's very edge the callers' test and the ones above can
     # round apart: the leg nearest its singularity refuses it.
     leg, rho = max(legs, key=lambda item: item[1])
@@ -624,6 +624,20 @@ def _leg_error(robot, position, margin, row=None):
         f'position {format_vector(position)} m is on the edge of the singularity '
         f'margin {margin:g} of J1: leg {leg} has alpha/l3 = '
         f'{math.sqrt(1.0 - rho / (l3 * l3)):.3g}'), row)
+
+
+def below(value: float, bound: float) -> str:
+    """
+    Return ``value`` with the fewest digits (3 at least) that show it below.
+
+    >>> below(0.19996, 0.2)
+    '0.19996'
+    """
+    for digits in range(3, 18):
+        text = f'{float(value):.{digits}g}'
+        if float(text) < bound:
+            return text
+    return repr(float(value))
 
 
 def format_vector(vec: Optional[Vector]) -> str:
