@@ -8,7 +8,8 @@ becomes a ``cartesian_trajectory`` within 60 um of the circle, within 5 %
 of toppra's optimum on the exact circle (on its own fine grid), every
 force within its limit; the feedforward converts it. An infeasible or
 malformed path publishes nothing, is counted by reason, and the node goes
-on.
+on: a pose 1e300 m away and a path of 10^5 poses with corners (beyond the
+node's memory) too; a straight path of 100 poses is planned.
 """
 
 import math
@@ -126,6 +127,13 @@ def counted(peer):
                if k.startswith('rejected '))
 
 
+def test_a_straight_path_of_100_poses_is_planned(graph):
+    points = np.linspace((0.0, 0.0, 0.0), (0.07, -0.03, 0.05), 100)
+    planned = send(graph, path_message(points))
+    assert planned is not None
+    assert np.allclose(positions(planned[0])[-1], points[-1], atol=1e-12)
+
+
 def test_a_circle_of_400_poses_is_planned_near_its_optimum(graph):
     motion, joints = send(graph, path_message(circle()))
     points = positions(motion)
@@ -159,6 +167,10 @@ def test_a_circle_of_400_poses_is_planned_near_its_optimum(graph):
 
 @pytest.mark.parametrize('points, frame, reason', (
     (((0.0, 0.0, 0.0), (0.9, 0.0, 0.0)), 'base_link', 'infeasible'),
+    (((0.0, 0.0, 0.0), (1e300, 0.0, 0.0)), 'base_link', 'infeasible'),
+    # 10^5 poses with corners: beyond the node's memory, counted first.
+    (np.random.default_rng(0).uniform(-0.1, 0.1, (100_000, 3)), 'base_link',
+     'oversize'),
     (((0.0, 0.0, 0.0), (math.nan, 0.0, 0.0)), 'base_link', 'non_finite'),
     (((0.0, 0.0, 0.0), (0.01, 0.0, 0.0)), 'map', 'frame'),
     (((0.0, 0.0, 0.0),), 'base_link', 'too_few_poses'),
