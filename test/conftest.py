@@ -168,7 +168,6 @@ SLOW = (
     'test_layers.py::test_the_tool_works_without_rclpy',
     'test_pep257.py::test_pep257',
     'test_plan_motion.py::test_random_programs_keep_every_limit_on_the_path',
-    'test_plan_paths.py::test_bezier_blends_stay_within_p_everywhere',
 )
 # Verdicts on a stream's timing or completeness against a fixed bound that
 # failed beside a parallel neighbour (three runs of the ``ros`` set with

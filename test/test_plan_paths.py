@@ -237,6 +237,7 @@ def random_g64_program(rng):
     return '\n'.join(lines), tolerance * 1e-3
 
 
+@pytest.mark.slow     # 7-11 s of CPU, one process, 2026-12-06
 def test_bezier_blends_stay_within_p_everywhere():
     """
     Each Bezier blend of 30 random programs is within P of the path.
