@@ -107,14 +107,27 @@ class Piece:
                       self.radius, self.angle, self.rise, self.length, w)
 
     def point(self, w: float) -> Array:
-        """Return ``p(w)`` (3,)."""
-        return self.evaluate(np.array([w]))[0][0]
+        """Return ``p(w)`` (3,): the helix formula on one point."""
+        if self.kind == 'bezier':
+            return self.evaluate(np.array([w]))[0][0]
+        phi = self.angle * w / self.length
+        half = math.sin(0.5 * phi)
+        return self.origin + self.radius * (
+            -2.0 * half * half * self.e1 + math.sin(phi) * _cross3(
+                self.e3, self.e1)) + (self.rise * w / self.length) * self.e3
 
     def tangent(self, w: float) -> Array:
         """Return the unit tangent at ``w`` (3,)."""
-        if self.kind == 'helix' and self.radius == 0.0:
+        if self.kind == 'bezier':
+            d1 = self.evaluate(np.array([w]))[1][0]
+        elif self.radius == 0.0:
             return self.e3
-        d1 = self.evaluate(np.array([w]))[1][0]
+        else:
+            phi = self.angle * w / self.length
+            d1 = (self.angle * self.radius / self.length) * (
+                math.cos(phi) * _cross3(self.e3, self.e1)
+                - math.sin(phi) * self.e1) + (self.rise / self.length) \
+                * self.e3
         return d1 / math.sqrt(float(d1 @ d1))
 
     def line_at(self, w: float) -> int:
@@ -127,7 +140,7 @@ class Piece:
     def sub(self, a: float, b: float) -> 'Piece':
         """Return the part from ``w = a`` to ``b`` of a helix, as a piece."""
         phi = self.angle * a / self.length
-        e2 = _cross(self.e3, self.e1)
+        e2 = _cross3(self.e3, self.e1)
         lines = None if self.lines is None else tuple(
             (max(start - a, 0.0), line) for start, line in self.lines
             if start < b)
@@ -146,10 +159,21 @@ def _cross(a, b):
                      a0 * b1 - a1 * b0), -1)
 
 
+def _cross3(a, b):
+    """Return ``a x b`` of two (3,) arrays, in Python floats (fast)."""
+    a0, a1, a2 = a.tolist()
+    b0, b1, b2 = b.tolist()
+    return np.array((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2,
+                     a0 * b1 - a1 * b0))
+
+
 def _turn(t1, t2):
     """Angle (rad) between unit vectors: atan2, exact near 0 and pi."""
-    across = _cross(t1, t2)
-    return math.atan2(math.sqrt(float(across @ across)), float(t1 @ t2))
+    a0, a1, a2 = t1.tolist()
+    b0, b1, b2 = t2.tolist()
+    return math.atan2(math.hypot(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2,
+                                 a0 * b1 - a1 * b0),
+                      a0 * b0 + a1 * b1 + a2 * b2)
 
 
 def _helix(origin, e1, e3, radius, angle, rise, length, w):
@@ -242,7 +266,7 @@ def line_piece(start: Array, end: Array, line: int, feed: float,
     delta = np.asarray(end, dtype=float) - start
     length = math.sqrt(float(delta @ delta))
     e3 = delta / length
-    e1 = _cross(e3, _AXES[int(np.argmin(np.abs(e3)))])
+    e1 = _cross3(e3, _AXES[int(np.argmin(np.abs(e3)))])
     return Piece('helix', length, line, feed, start,
                  e1 / math.sqrt(float(e1 @ e1)), e3, 0.0, 1.0, length,
                  lines=lines)
@@ -525,7 +549,7 @@ def _line_blend(first, second, tolerance, turn, room):
     e1 = -inward
     piece = Piece('helix', radius * turn, first.line_at(first.length),
                   min(first.feed, second.feed), corner - trim * t1, e1,
-                  _cross(e1, t1), radius, turn, 0.0)
+                  _cross3(e1, t1), radius, turn, 0.0)
     return piece, trim
 
 
