@@ -31,8 +31,8 @@ On the robot of doc/programs/drives.yaml (ball-screw drives, friction, a
   time of ``orthoglide plan`` (paper robot, default limits) and of the
   node's core, each case in a process of its own: programs and Paths the
   largest each bound accepts, and those it refuses, against the stated
-  bound (the interpreter's own, plus GRIDPOINT_BYTES a gridpoint and
-  SAMPLE_BYTES a sample).
+  bound (the interpreter's own, plus MOVE_BYTES a move or pose,
+  GRIDPOINT_BYTES a gridpoint and SAMPLE_BYTES a sample).
 
 Usage: python benchmarks/bench_plan.py [--repeat N] [--acceptance] [--node]
        [--memory]
@@ -289,9 +289,9 @@ def node(repeat):
 MEMORY_CASES = (
     ('5,000 waypoints, sharp corners (CSV)', 'cli', 'corners 5000'),
     ('1,000 waypoints, sharp corners (CSV)', 'cli', 'corners 1000'),
-    ('10 mm at 0.27 mm/min (2.2e6 samples)', 'cli', 'line 0.27'),
+    ('10 mm at 0.21 mm/min (2.9e6 samples)', 'cli', 'line 0.21'),
     ('the same, --format joint_trajectory', 'cli',
-     'line 0.27 joint_trajectory'),
+     'line 0.21 joint_trajectory'),
     ('helix of 2,500 turns (480,000 gridpoints)', 'cli', 'helix 2500'),
     ('10 mm at 0.035 mm/min (refused)', 'cli', 'line 0.035'),
     ('helix of 100,000 turns (refused)', 'cli', 'helix 100000'),
@@ -410,23 +410,26 @@ def memory_child(kind, case):
         except Rejected as rejection:
             outcome = f'refused ({rejection.reason})'
             print(rejection, file=sys.stderr)
+    moves = len(poses) if kind == 'node' else (
+        1 if case.split()[0] in ('line', 'helix') else int(case.split()[1]))
     print(json.dumps(dict(
         seen, outcome=outcome, cpu=time.process_time() - start, base=base,
-        peak=high_water())))
+        peak=high_water(), moves=moves)))
 
 
 def memory():
     """Peak memory and CPU of each case, each in a process of its own."""
     from orthoglide_ros.cores.planner import PLAN_BYTES
     from orthoglide_ros.planning.parametrization import (GRIDPOINT_BYTES,
+                                                         MOVE_BYTES,
                                                          SAMPLE_BYTES)
     from orthoglide_ros.tools.cli.planning import PLAN_BYTES as CLI_BYTES
     print(f'\nMemory (peak resident set) and CPU, each case a process; '
           f'bound (planned): the interpreter\'s own (its peak before the '
-          f'case, after a small plan) + {GRIDPOINT_BYTES} B a gridpoint + '
-          f'{SAMPLE_BYTES} B a sample; the plan may take '
-          f'{CLI_BYTES / 1e6:g} MB (orthoglide plan), {PLAN_BYTES / 1e6:g} '
-          f'MB (node)')
+          f'case, after a small plan) + {MOVE_BYTES} B a move or pose + '
+          f'{GRIDPOINT_BYTES} B a gridpoint + {SAMPLE_BYTES} B a sample; '
+          f'the plan may take {CLI_BYTES / 1e6:g} MB (orthoglide plan), '
+          f'{PLAN_BYTES / 1e6:g} MB (node)')
     print(f'{"case":<46}{"outcome":<20}{"gridpoints":>11}{"samples":>10}'
           f'{"peak MB":>9}{"bound MB":>9}{"CPU s":>8}')
     for name, kind, case in MEMORY_CASES:
@@ -438,8 +441,8 @@ def memory():
             continue
         found = json.loads(done.stdout.strip().splitlines()[-1])
         grid, samples = found.get('gridpoints', 0), found.get('samples', 0)
-        bound = (found['base'] + grid * GRIDPOINT_BYTES
-                 + samples * SAMPLE_BYTES) / 1e6
+        bound = (found['base'] + found['moves'] * MOVE_BYTES
+                 + grid * GRIDPOINT_BYTES + samples * SAMPLE_BYTES) / 1e6
         print(f'{name:<46}{found["outcome"]:<20}{grid or "":>11}'
               f'{samples or "":>10}{found["peak"] / 1e6:>9.0f}'
               f'{f"{bound:.0f}" if grid else "":>9}{found["cpu"]:>8.1f}')

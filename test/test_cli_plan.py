@@ -169,10 +169,11 @@ def test_limits_that_bound_nothing_are_refused(capsys, files, tmp_path):
 @pytest.mark.parametrize('program, words', (
     # 4.8 hours at 1 kHz: more samples than the command's memory holds.
     ('G21 G1 F0.035 X10\n', ['the motion lasts 17160 s: 17,160,001 samples '
-                             'at 1000 Hz, more than the 2,326,663 this '
+                             'at 1000 Hz, more than the 2,993,320 this '
                              'planner may hold']),
     ('G21 F6000\nG0 X10\nG2 X10 Y0 Z-1 I-10 J0 P100000\n',
-     ['needs 18,000,006 gridpoints: more than the 700 MB']),
+     ['needs 18,000,006 gridpoints: more than the 900 MB left for the '
+      'plan']),
     ('G1 F600 X' + '9' * 159 + '\n', ['line 1: X999', 'beyond 1,000,000,000']),
     ('G21 F600\nG0 X10\nG2 X20 I1000000 J0\n',
      ['line 3: the arc\'s end is 999990 mm from its centre']),

@@ -406,11 +406,11 @@ def test_a_start_out_of_the_workspace_is_not_blamed_on_a_line():
 @pytest.mark.parametrize('text, words', (
     # 100,000 turns of a 10 mm helix: 18,000,000 gridpoints, counted.
     ('G21 F6000\nG0 X10\nG2 X10 Y0 Z-1 I-10 J0 P100000', 'the path of 2 '
-     'pieces and 6283.2 m needs 18,000,006 gridpoints: more than the 700 MB '
-     'this planner may use holds (1000 bytes each)'),
+     'pieces and 6283.2 m needs 18,000,006 gridpoints: more than the 900 MB '
+     'left for the plan hold (1000 bytes each)'),
     # 10 mm at 0.035 mm/min: 4.8 hours.
     ('G21 G1 F0.035 X10', 'the motion lasts 17160 s: 17,160,001 samples at '
-     '1000 Hz, more than the 2,326,663 this planner may hold'),
+     '1000 Hz, more than the 2,993,320 this planner may hold'),
 ))
 def test_memory_is_bounded_before_anything_is_made(text, words):
     """Refused (TOO_LARGE) naming the size, within a few MB of memory."""

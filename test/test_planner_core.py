@@ -122,7 +122,7 @@ def test_a_path_beyond_the_nodes_memory_is_refused_before_it_is_made():
     assert error.value.reason == 'oversize'
     assert str(error.value) == ('100000 points make a path of 199997 pieces '
                                 'at least (lines and corner blends): more '
-                                'than 51200')
+                                'than 78769')
     assert peak < 50e6
     assert core.path('', (), LINE, 0.0) is not None     # the next one
 

@@ -53,9 +53,9 @@ REASONS = ('frame', 'non_finite', 'too_few_poses', 'infeasible',
 # The nav_msgs/Path read whole: 100,000 poses (about 8 MB).
 PATH_BYTES = 8 * 1024 * 1024
 MAX_POSES = 100_000
-# The memory a plan may take (bytes; parametrization's bound per gridpoint
-# and per sample).
-PLAN_BYTES = 256_000_000
+# The memory a path's plan may take (bytes: parametrization's bounds per
+# pose, gridpoint and sample), with the 100,000 poses of a path at most.
+PLAN_BYTES = 512_000_000
 
 
 def max_points(frame):

@@ -31,9 +31,9 @@ Anything else is refused with :class:`ProgramError` naming the line:
 ``line 7: G41 (cutter compensation) is not supported``. Lines are ended by
 ``\n``, ``\r\n`` or ``\r`` only, as an editor counts them. Every number
 follows one rule (:func:`read_number`): ASCII digits with at most one
-point and a sign, no exponent, at most NUMBER_BOUND in magnitude. Coordinates are
-those of G in the base frame, origin at home; :class:`Move` holds them in
-m, feeds in m/s.
+point and a sign, no exponent, at most NUMBER_BOUND in magnitude.
+Coordinates are those of G in the base frame, origin at home;
+:class:`Move` holds them in m, feeds in m/s.
 """
 
 from __future__ import annotations

@@ -69,12 +69,14 @@ ACCEPT_SHARE = 1e-3
 # The memory a plan may take: at most GRIDPOINT_BYTES a gridpoint (the
 # grid, its dynamics and rows, the passes, the path's pieces) and
 # SAMPLE_BYTES a sample of the motion (240 held, its output's chunk and
-# each block's work apart), as benchmarks/bench_plan.py --memory measures
-# (doc/measurements.md). By default (plan's max_bytes, max_samples) the
-# planner's share of 1 GB.
+# each block's work apart), and the path, made before, at most MOVE_BYTES a
+# move or pose (its text, moves and pieces), as benchmarks/bench_plan.py
+# --memory measures (doc/measurements.md). By default (plan's max_bytes,
+# max_samples) 900 MB: with the interpreter's 50, within 1 GB.
 GRIDPOINT_BYTES = 1000
 SAMPLE_BYTES = 300
-MAX_BYTES = 700_000_000
+MOVE_BYTES = 3000
+MAX_BYTES = 900_000_000
 MAX_SAMPLES = 20_000_000
 # Samples made, solved and checked at once; gridpoints solved at once.
 SAMPLE_BLOCK = 16_384
@@ -102,8 +104,14 @@ TIMEOUT = 'timeout'
 
 
 def most_pieces(max_bytes: int) -> int:
-    """Return the most pieces a path planned within ``max_bytes`` may have."""
-    return max_bytes // (GRIDPOINT_BYTES * (MIN_INTERVALS + 1))
+    """
+    Return the most pieces a path planned within ``max_bytes`` may have.
+
+    Each piece has MIN_INTERVALS + 1 gridpoints at least, and half a move
+    at least (a move makes a piece and a blend at most).
+    """
+    return max_bytes // (GRIDPOINT_BYTES * (MIN_INTERVALS + 1)
+                         + MOVE_BYTES // 2)
 
 
 class _Bounds:
@@ -119,9 +127,9 @@ class _Bounds:
         """Refuse ``count`` gridpoints beyond the memory (TOO_LARGE)."""
         if count * GRIDPOINT_BYTES + 2 * SAMPLE_BYTES > self.max_bytes:
             raise PlanningError(None, f'{why} {count:,} gridpoints: more '
-                                f'than the {self.max_bytes / 1e6:g} MB this '
-                                f'planner may use holds ({GRIDPOINT_BYTES} '
-                                'bytes each)', TOO_LARGE)
+                                f'than the {self.max_bytes / 1e6:.4g} MB left '
+                                f'for the plan hold ({GRIDPOINT_BYTES} bytes '
+                                'each)', TOO_LARGE)
 
     def samples(self, count, gridpoints, rate):
         """Refuse a motion of ``count`` samples beyond the bounds."""
@@ -195,15 +203,17 @@ def plan(robot: Robot, path: Path, limits: Limits, rate: float,
     actuator's ``max_effort`` at rest, and where nothing bounds the
     motion; (TOO_LARGE) before it is made where the grid (GRIDPOINT_BYTES
     a gridpoint) or the motion (SAMPLE_BYTES a sample, at most
-    ``max_samples``) would not fit in ``max_bytes``; (TIMEOUT) after
-    ``max_seconds``, checked between its steps.
+    ``max_samples``) would not fit in what the path (MOVE_BYTES a move)
+    leaves of ``max_bytes``; (TIMEOUT) after ``max_seconds``, checked
+    between its steps.
     """
     if not limits.bounding and max_speed == math.inf and all(
             piece.feed == math.inf for piece in path.pieces):
         raise PlanningError(None, 'nothing bounds the motion: no limit of '
                             'any actuator, no feed and no speed cap')
     models = _Models(robot, margin)
-    bounds = _Bounds(max_samples, max_bytes, max_seconds)
+    bounds = _Bounds(max_samples, max_bytes - MOVE_BYTES * path.moves,
+                     max_seconds)
     intervals = GRID_INTERVALS
     for refinement in range(REFINEMENTS + 1):
         counts = _grid_counts(path, intervals)

@@ -296,12 +296,14 @@ class Path:
     ``pieces``: the :class:`Piece` list; ``stops``: (len(pieces) + 1,) bool,
     ``stops[k]`` True where G is at rest at the start of piece k (always at
     the start and at the end, the last entry); ``start_line``: the line
-    that wrote the first point (None: where G starts, ``--start``).
+    that wrote the first point (None: where G starts, ``--start``);
+    ``moves``: the moves (or segments of waypoints) it was made of.
     """
 
     pieces: tuple
     stops: Array
     start_line: Optional[int] = None
+    moves: int = 0
 
     @property
     def length(self) -> float:
@@ -442,7 +444,7 @@ def from_moves(moves: Sequence[Move], tolerance: float,
             out_stops.append(False)
     out_stops.append(True)
     out_stops[0] = True
-    return Path(tuple(out), np.array(out_stops), start_line)
+    return Path(tuple(out), np.array(out_stops), start_line, len(moves))
 
 
 def _straight_runs(moves):

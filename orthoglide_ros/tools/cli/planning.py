@@ -25,8 +25,8 @@ from orthoglide_ros.tools.cli.solving import (_joint_names,
                                               _joint_trajectory_yaml)
 
 DEFAULT_RATE = 1000.0           # Hz
-# The memory the plan may take (bytes): with the interpreter and the
-# program (at most 32 MiB, 200,000 moves), the command stays within 1 GB.
+# The memory the path and its plan may take (bytes): with the
+# interpreter's 50 MB, the command stays within 1 GB.
 PLAN_BYTES = parametrization.MAX_BYTES
 DEFAULT_TOLERANCE = 1e-5        # m
 # The columns written: those ``batch`` reads.
