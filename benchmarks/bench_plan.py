@@ -27,14 +27,24 @@ On the robot of doc/programs/drives.yaml (ball-screw drives, friction, a
 - ``--node``: the ``planner`` node as a process, a 400-pose circle sent
   ``--repeat`` times (at least 10): its planning time (its diagnostics)
   and the time from publishing the path to receiving the motion.
+- ``--memory``: the peak memory (resident set, ``VmHWM``) and CPU
+  time of ``orthoglide plan`` (paper robot, default limits) and of the
+  node's core, each case in a process of its own: programs and Paths the
+  largest each bound accepts, and those it refuses, against the stated
+  bound (the interpreter's own, plus MOVE_BYTES a move or pose,
+  GRIDPOINT_BYTES a gridpoint and SAMPLE_BYTES a sample).
 
 Usage: python benchmarks/bench_plan.py [--repeat N] [--acceptance] [--node]
+       [--memory]
 """
 
 import argparse
+import json
 import math
 import os
+import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -273,13 +283,186 @@ def node(repeat):
           f'{np.median(rounds) * 1e3:.1f} ms, max {max(rounds) * 1e3:.1f} ms')
 
 
+# The memory cases: (name, kind, argument). ``cli``: orthoglide plan on a
+# program written by :func:`memory_program`; ``node``: the planner's core
+# on a Path of :func:`node_poses`.
+MEMORY_CASES = (
+    ('5,000 waypoints, sharp corners (CSV)', 'cli', 'corners 5000'),
+    ('1,000 waypoints, sharp corners (CSV)', 'cli', 'corners 1000'),
+    ('10 mm at 0.21 mm/min (2.9e6 samples)', 'cli', 'line 0.21'),
+    ('the same, --format joint_trajectory', 'cli',
+     'line 0.21 joint_trajectory'),
+    ('helix of 2,500 turns (480,000 gridpoints)', 'cli', 'helix 2500'),
+    ('10 mm at 0.035 mm/min (refused)', 'cli', 'line 0.035'),
+    ('helix of 100,000 turns (refused)', 'cli', 'helix 100000'),
+    ('200,000 G-code moves, corners (refused)', 'cli', 'moves 200000'),
+    ('100,000 G-code moves under G61 (refused)', 'cli', 'stops 100000'),
+    ('500,000 CSV waypoints, corners (refused)', 'cli', 'corners 500000'),
+    ('Path: 400-pose circle', 'node', 'circle 400'),
+    ('Path: 5,000-pose circle', 'node', 'circle 5000'),
+    ('Path: 3,000 poses, sharp corners (refused)', 'node', 'corners 3000'),
+    ('Path: 100,000 poses in a line', 'node', 'line 100000'),
+    ('Path: 100,000 poses, sharp corners (refused)', 'node',
+     'corners 100000'),
+    ('Path: 100,000-pose circle (refused)', 'node', 'circle 100000'),
+)
+
+
+def memory_program(case, directory):
+    """Write the program of a ``cli`` case; return its path and options."""
+    words = case.split()
+    kind, size = words[0], float(words[1])
+    rng = np.random.default_rng(1)
+    if kind == 'corners':
+        path = os.path.join(directory, 'waypoints.csv')
+        with open(path, 'w') as stream:
+            stream.write('x,y,z\n')
+            for row in rng.uniform(-0.1, 0.1, (int(size), 3)).tolist():
+                stream.write('%r,%r,%r\n' % tuple(row))
+        return path, []
+    path = os.path.join(directory, 'program.nc')
+    if kind == 'line':
+        text = f'G21 G1 F{words[1]} X10\n'
+    elif kind == 'helix':
+        text = f'G21 F60000\nG0 X10\nG2 X10 Y0 Z-1 I-10 J0 P{int(size)}\n'
+    else:       # moves, stops: corners blended, stopped at
+        points = rng.uniform(-100.0, 100.0, (int(size), 3)).tolist()
+        mode = 'G64 P0.01' if kind == 'moves' else 'G61'
+        text = f'G21 {mode} F6000\n' + ''.join(
+            'G1 X%.3f Y%.3f Z%.3f\n' % tuple(p) for p in points)
+    with open(path, 'w') as stream:
+        stream.write(text)
+    return path, (['--format', words[2]] if len(words) > 2 else [])
+
+
+def node_poses(case):
+    """Return the poses (N, 3) of a ``node`` case."""
+    kind, size = case.split()
+    count = int(size)
+    if kind == 'circle':
+        angles = np.linspace(0.0, 2.0 * math.pi, count)
+        return CIRCLE_CENTRE + CIRCLE_RADIUS * np.stack(
+            (np.cos(angles), np.sin(angles), np.zeros(count)), 1)
+    if kind == 'line':
+        return np.linspace((0.0, 0.0, 0.0), (0.07, -0.03, 0.05), count)
+    return np.random.default_rng(1).uniform(-0.1, 0.1, (count, 3))
+
+
+def high_water():
+    """
+    Return this process's peak resident set (bytes): VmHWM.
+
+    Not ``ru_maxrss``, which a process started from a larger one inherits
+    across fork and exec.
+    """
+    with open('/proc/self/status') as status:
+        for line in status:
+            if line.startswith('VmHWM:'):
+                return int(line.split()[1]) * 1024
+    raise RuntimeError('no VmHWM in /proc/self/status')
+
+
+def memory_child(kind, case):
+    """
+    Run one case in this process; print its figures as JSON.
+
+    ``base``: the peak before the case, after a small plan of the same
+    kind (the interpreter, the package and numpy's first allocations).
+    """
+    from orthoglide_ros.cores import planner
+    from orthoglide_ros.cores.inputs import Rejected
+    from orthoglide_ros.planning import parametrization
+    from orthoglide_ros.tools import cli
+    seen = {}
+    plan = parametrization.plan
+
+    def noted(*args, **kwargs):
+        motion = plan(*args, **kwargs)
+        seen.update(gridpoints=motion.gridpoints, samples=len(motion.t))
+        return motion
+    parametrization.plan = planner.plan = noted
+    base = high_water()
+    start = time.process_time()
+    if kind == 'cli':
+        with tempfile.TemporaryDirectory() as directory:
+            program, options = memory_program(case, directory)
+            os.mkdir(os.path.join(directory, 'small'))
+            small, _ = memory_program('line 6000',
+                                      os.path.join(directory, 'small'))
+            cli.main(['plan', '--input', small, '--output',
+                      os.path.join(directory, 'out'), *options])
+            seen.clear()
+            base = high_water()
+            start = time.process_time()
+            code = cli.main(['plan', '--input', program, '--output',
+                             os.path.join(directory, 'out'), *options])
+        outcome = 'planned' if code == 0 else 'refused'
+    else:
+        core = planner.Planner(planner.PARAMETERS.parse({}))
+        core.path('', (), node_poses('circle 40'), 0.0)
+        seen.clear()
+        poses = node_poses(case)
+        base = high_water()
+        start = time.process_time()
+        try:
+            core.path('', (), poses, 0.0)
+            outcome = 'planned'
+        except Rejected as rejection:
+            outcome = f'refused ({rejection.reason})'
+            print(rejection, file=sys.stderr)
+    moves = len(poses) if kind == 'node' else (
+        1 if case.split()[0] in ('line', 'helix') else int(case.split()[1]))
+    print(json.dumps(dict(
+        seen, outcome=outcome, cpu=time.process_time() - start, base=base,
+        peak=high_water(), moves=moves)))
+
+
+def memory():
+    """Peak memory and CPU of each case, each in a process of its own."""
+    from orthoglide_ros.cores.planner import PLAN_BYTES
+    from orthoglide_ros.planning.parametrization import (GRIDPOINT_BYTES,
+                                                         MOVE_BYTES,
+                                                         SAMPLE_BYTES)
+    from orthoglide_ros.tools.cli.planning import PLAN_BYTES as CLI_BYTES
+    print(f'\nMemory (peak resident set) and CPU, each case a process; '
+          f'bound (planned): the interpreter\'s own (its peak before the '
+          f'case, after a small plan) + {MOVE_BYTES} B a move or pose + '
+          f'{GRIDPOINT_BYTES} B a gridpoint + {SAMPLE_BYTES} B a sample; '
+          f'the plan may take {CLI_BYTES / 1e6:g} MB (orthoglide plan), '
+          f'{PLAN_BYTES / 1e6:g} MB (node)')
+    print(f'{"case":<46}{"outcome":<20}{"gridpoints":>11}{"samples":>10}'
+          f'{"peak MB":>9}{"bound MB":>9}{"CPU s":>8}')
+    for name, kind, case in MEMORY_CASES:
+        done = subprocess.run(
+            [sys.executable, __file__, '--memory-child', kind, case],
+            capture_output=True, text=True, timeout=3600)
+        if done.returncode != 0:
+            print(f'{name:<46}failed: {done.stderr.strip()[-300:]}')
+            continue
+        found = json.loads(done.stdout.strip().splitlines()[-1])
+        grid, samples = found.get('gridpoints', 0), found.get('samples', 0)
+        bound = (found['base'] + found['moves'] * MOVE_BYTES
+                 + grid * GRIDPOINT_BYTES + samples * SAMPLE_BYTES) / 1e6
+        print(f'{name:<46}{found["outcome"]:<20}{grid or "":>11}'
+              f'{samples or "":>10}{found["peak"] / 1e6:>9.0f}'
+              f'{f"{bound:.0f}" if grid else "":>9}{found["cpu"]:>8.1f}')
+        if found['outcome'] != 'planned':
+            print(f'  {done.stderr.strip().splitlines()[-1][:150]}')
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[1])
     parser.add_argument('--repeat', type=int, default=5)
     parser.add_argument('--acceptance', action='store_true')
     parser.add_argument('--node', action='store_true',
                         help='also time the planner node (starts DDS)')
+    parser.add_argument('--memory', action='store_true',
+                        help='also the memory of plan and the node\'s core')
+    parser.add_argument('--memory-child', nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.memory_child:
+        memory_child(*args.memory_child)
+        return
     robot = load_robot(os.path.join(PROGRAMS, 'drives.yaml'))
     limits = load_limits(os.path.join(PROGRAMS, 'drives_limits.yaml'))
     print(f'Robot: doc/programs/drives.yaml; limits {limits.effort} N')
@@ -290,6 +473,8 @@ def main():
         acceptance(robot, limits)
     if args.node:
         node(max(args.repeat, 10))
+    if args.memory:
+        memory()
 
 
 if __name__ == '__main__':

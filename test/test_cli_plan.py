@@ -131,7 +131,8 @@ def test_statics_beyond_max_effort_is_refused(capsys, files):
     limits.write_text(LIMITS.replace('400.0', '250.0'))
     assert_bad_input(*run(capsys, 'plan', '--input', path, '--output',
                           output, '--limits', limits),
-                     'line 2: at [', 'slider_c needs 256.5', 'N at rest',
+                     'part.nc: the start of the path at [0, 0, 0] m',
+                     'slider_c needs 256.5', 'N at rest',
                      'max_effort 250 N')
     assert not output.exists()
 
@@ -163,3 +164,43 @@ def test_limits_that_bound_nothing_are_refused(capsys, files, tmp_path):
     assert_bad_input(*run(capsys, 'plan', '--input', path, '--output',
                           output, '--limits', limits),
                      'joint_limits.slider_a.max_efort: not a joint limit')
+
+
+@pytest.mark.parametrize('program, words', (
+    # 4.8 hours at 1 kHz: more samples than the command's memory holds.
+    ('G21 G1 F0.035 X10\n', ['the motion lasts 17160 s: 17,160,001 samples '
+                             'at 1000 Hz, more than the 2,993,320 this '
+                             'planner may hold']),
+    ('G21 F6000\nG0 X10\nG2 X10 Y0 Z-1 I-10 J0 P100000\n',
+     ['needs 18,000,006 gridpoints: more than the 900 MB left for the '
+      'plan']),
+    ('G1 F600 X' + '9' * 159 + '\n', ['line 1: X999', 'beyond 1,000,000,000']),
+    ('G21 F600\nG0 X10\nG2 X20 I1000000 J0\n',
+     ['line 3: the arc\'s end is 999990 mm from its centre']),
+    ('x,y,z\n1e300,0,0\n', ['line 2: the point [1e+300, 0.0, 0.0] m is '
+                            'beyond 1,000,000,000 m']),
+))
+def test_hostile_programs_are_refused_in_one_line(capsys, files, program,
+                                                  words):
+    path, limits, output = files
+    path.write_text(program)
+    assert_bad_input(*run(capsys, 'plan', '--input', path, '--output',
+                          output, '--limits', limits), *words)
+    assert not output.exists()
+
+
+def test_a_start_out_of_the_workspace_is_named_as_the_start(capsys, files):
+    path, limits, output = files
+    assert_bad_input(*run(capsys, 'plan', '--input', path, '--output',
+                          output, '--limits', limits, '--start', '0.9', '0',
+                          '0'),
+                     'part.nc: the start of the path at [0.9, 0, 0] m is '
+                     'out of reach of leg B')
+
+
+def test_a_limits_file_with_a_key_twice_is_refused(capsys, files):
+    path, limits, output = files
+    limits.write_text(LIMITS + '  slider_a: {max_effort: 300.0}\n')
+    assert_bad_input(*run(capsys, 'plan', '--input', path, '--output',
+                          output, '--limits', limits),
+                     "the key 'slider_a' appears twice")

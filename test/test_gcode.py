@@ -146,3 +146,72 @@ def test_refusals_name_their_line(program, message):
     with pytest.raises(ProgramError) as error:
         read_gcode(program)
     assert str(error.value).startswith(message), str(error.value)
+
+
+@pytest.mark.parametrize('program, message', (
+    # A form feed, a vertical tab, U+0085, U+2028 and U+2029 end no line.
+    ('G21\f\nF100\x0b\nG1 X1 (\x85 \u2028 \u2029)\nG41',
+     'line 4: G41 (cutter compensation)'),
+    ('G21\rG1 X1 F1\r\nG41\n', 'line 3: G41 (cutter compensation)'),
+))
+def test_lines_are_counted_as_an_editor_counts_them(program, message):
+    with pytest.raises(ProgramError) as error:
+        read_gcode(program)
+    assert str(error.value).startswith(message), str(error.value)
+
+
+@pytest.mark.parametrize('program, message', (
+    ('G1 F600 X1e308', 'line 1: X1e308: a number with an exponent'),
+    ('o100 sub', 'line 1: O100 (subroutines) is not supported'),
+    ('G1 F600 X' + '9' * 159, 'the largest magnitude a number may have'),
+    ('G1 F' + '1' * 400 + ' X1', 'the largest magnitude a number may have'),
+    ('G64 P' + '1' * 400, 'the largest magnitude a number may have'),
+    ('G1 F600 X1000000001', 'X1000000001: beyond 1,000,000,000'),
+    ('G1 F600 X\u0661\u0662', 'malformed number X\u0661: a number is the '
+     'digits 0-9'),
+    ('G1 F600 X\uff11\uff12', 'malformed number X\uff11'),
+    ('G1 F600 X1\u0662', 'malformed number X1\u0662'),
+    ('G2 X20 Iinf J0 F1', 'malformed number I'),
+))
+def test_every_number_follows_one_rule(program, message):
+    """ASCII digits, at most one point, no exponent, at most 1e9."""
+    with pytest.raises(ProgramError) as error:
+        read_gcode(program)
+    assert message in str(error.value), str(error.value)
+    assert len(str(error.value)) < 200
+
+
+@pytest.mark.parametrize('program, words', (
+    # 10 mm off a 1 km circle: 0.001 % of the radius, 10 mm of it.
+    ('G21 F600\nG0 X10\nG2 X20 I1000000 J0', 'line 3: the arc\'s end is '
+     '999990 mm from its centre, its start 1e+06 mm'),
+    ('G21 F600\nG0 X10\nG2 X20 I1000000000000000000 J0',
+     'line 3: I1000000000000000000: beyond 1,000,000,000'),
+    # 0.005 mm off a 100 mm radius: within 0.1 %, not within 0.002 mm.
+    ('G21 F600\nG3 X200.005 I100 J0', 'line 2: the arc\'s end is 100.005 '
+     'mm from its centre, its start 100 mm'),
+    # 0.001 mm from a 5 mm radius, but the centre would move 5 mm.
+    ('G21 F600\nG0 X10\nG2 X10.001 I-5 J0', 'line 3: the arc\'s end is off '
+     'its circle: its centre moved onto the chord\'s bisector (5.0005 mm) '
+     'would move the arc by 10.001 mm'),
+))
+def test_an_arc_whose_end_is_off_its_circle_is_refused(program, words):
+    """
+    Both tolerances hold, and the centre moves the arc by rounding at most.
+
+    LinuxCNC's rule: an absolute and a relative tolerance, both kept.
+    """
+    with pytest.raises(ProgramError) as error:
+        read_gcode(program)
+    assert str(error.value).startswith(words), str(error.value)
+
+
+def test_a_centre_rounded_moves_the_arc_by_rounding_only():
+    """A quarter turn whose end is 1 um off: the arc moves by < 2 um."""
+    arc = read_gcode('G21 F600\nG3 X10 Y10.001 I0 J10')[0]
+    piece = move_piece(arc)
+    centre = np.array([0.0, 0.010, 0.0])
+    points = piece.evaluate(np.linspace(0.0, piece.length, 1001))[0]
+    moved = np.abs(np.linalg.norm(points - centre, axis=1) - 0.010)
+    assert moved.max() <= 2e-6
+    assert np.allclose(piece.point(piece.length), arc.end, atol=1e-12)

@@ -103,3 +103,39 @@ def test_parameters_and_the_config_file_give_the_paper_robots_limits():
     drives = limits_from_params_file(CONFIG, 'simulator')
     assert list(drives.effort) == [1000.0] * 3
     assert not np.isfinite(drives.velocity).any()
+
+
+@pytest.mark.parametrize('text, words', (
+    ('joint_limits:\n  slider_c:\n    max_effort: 520.0\n    max_effort: 5.0\n',
+     "the key 'max_effort' appears twice"),
+    ('joint_limits:\n  slider_c: {max_effort: 1.0}\n  slider_c: {}\n',
+     "the key 'slider_c' appears twice"),
+    ('joint_limits:\n  slider_c:\n    max_effort: 0x1F4\n',
+     "max_effort: must be a number (decimal), got '0x1F4'"),
+    ('joint_limits:\n  slider_c:\n    max_effort: 1_000\n',
+     "must be a number (decimal), got '1_000'"),
+    ('joint_limits:\n  slider_c:\n    max_effort: 8:20\n',
+     "must be a number (decimal), got '8:20'"),
+    ('joint_limits:\n  slider_c:\n    max_effort: .inf\n',
+     "must be a number (decimal), got '.inf'"),
+    ('joint_limits:\n  slider_c:\n    max_effort: 1e400\n', 'must be finite'),
+    ('joint_limits:\n  slider_c:\n    max_effort: ' + '9' * 400 + '\n',
+     'must be at most 1,000,000,000 in magnitude'),
+    ('joint_limits:\n  slider_c:\n    min_position: -1.0e300\n'
+     '    max_position: 0.3\n', 'min_position: must be at most '
+     '1,000,000,000 in magnitude'),
+))
+def test_numbers_and_keys_follow_the_programs_rule(tmp_path, text, words):
+    """Decimal, finite, at most 1e9 in magnitude; no key twice."""
+    path = tmp_path / 'joint_limits.yaml'
+    path.write_text(text)
+    with pytest.raises(LimitsError) as error:
+        load_limits(path)
+    assert words in str(error.value)
+    assert len(str(error.value)) < 300
+
+
+def test_a_leading_zero_is_decimal(tmp_path):
+    path = tmp_path / 'joint_limits.yaml'
+    path.write_text('joint_limits:\n  slider_c:\n    max_effort: 0520\n')
+    assert load_limits(path).effort[2] == 520.0

@@ -6,7 +6,7 @@ The node's section may be keyed ``feedforward``, ``/feedforward`` or
 nested or dotted, a double needs a decimal point or an exponent (``1e-3``
 is a double, as in rcl), arrays must not mix integers and doubles,
 booleans are not numbers, unknown ``robot.*`` names are refused and other
-names are ignored.
+names are ignored; a key given twice in one mapping is refused.
 """
 
 import math
@@ -102,6 +102,20 @@ def test_nested_and_dotted_keys_mix(tmp_path):
     robot = load_robot(write(tmp_path, text))
     assert (robot.l3, robot.m5, robot.m4) == (0.9, 18.0, 0.25)
     assert robot.gravity == (0.0, -9.81, 0.0)
+
+
+def test_a_key_given_twice_is_refused(tmp_path):
+    """YAML leaves a repeated key open (rcl keeps the last): refused here."""
+    text = """
+    feedforward:
+      ros__parameters:
+        robot:
+          m5: 18.0
+          m5: 15.0
+    """
+    with pytest.raises(ParametersFileError, match="the key 'm5' appears "
+                       'twice'):
+        load_robot(write(tmp_path, text))
 
 
 def test_exponent_notation_is_a_double(tmp_path):

@@ -329,3 +329,109 @@ def test_nothing_bounding_is_refused():
     with pytest.raises(PlanningError, match='line 1: nothing bounds the '
                        'acceleration'):
         plan(DRIVES, feed_only, limits_from_mapping({}), RATE)
+
+
+def velocity_steps(motion):
+    """
+    Return, per interval, the velocity change its accelerations leave out.
+
+    ``|dv / dt - (a_k + a_k+1) / 2| - |a_k+1 - a_k| / 2`` (m/s^2): the
+    trapezoid's error is at most half the acceleration's jump within the
+    interval (a switch of the time law there); the last interval (the last
+    sample holds no acceleration) left out.
+    """
+    v, a = motion.velocity, motion.acceleration
+    dt = np.diff(motion.t)[:, None]
+    change = np.linalg.norm(np.diff(v, axis=0) / dt
+                            - 0.5 * (a[1:] + a[:-1]), axis=1)
+    jump = np.linalg.norm(np.diff(a, axis=0), axis=1)
+    return (change - 0.5 * jump)[:-1]
+
+
+def test_g_velocity_is_continuous_through_bezier_blends():
+    """
+    At 100 kHz every change of G's velocity is its accelerations'.
+
+    A line meeting an arc under G64 P: a Bezier blend, its parameter its
+    arc length, so no velocity step where it begins and ends (a parameter
+    off its arc length by 1-20 % left 400 m/s^2 unexplained).
+    """
+    path = program_path('G21 G64 P0.5 F6000\nG1 X20\nG3 X40 Y0 I10 J0\n'
+                        'G1 Y20')
+    assert 'bezier' in [piece.kind for piece in path.pieces]
+    motion = plan(Robot(), path, efforts({'slider_a': 650.0, 'slider_b':
+                                          650.0, 'slider_c': 650.0}),
+                  100000.0)
+    largest = np.abs(motion.acceleration).max()
+    assert velocity_steps(motion).max() <= 1e-6 * largest
+    speed = np.linalg.norm(motion.velocity, axis=1)
+    assert (speed[1:-1] > 0.0).all()
+
+
+@pytest.mark.parametrize('text', (
+    'G21 G61 F6000\nG1 X10 Y20\nG1 X20 Y40\nG1 X30 Y60',
+    'G21 G64 P0.01 F6000\nG1 X10 Y20\nG1 X20 Y40\nG1 X30 Y60',
+    'G21 G64 F6000\nG1 X7 Y13 Z-3\nG1 X14 Y26 Z-6',
+))
+def test_collinear_moves_are_passed_at_speed(text):
+    """One line to the planner: planned as the single move would be."""
+    limits = efforts()
+    motion = plan(DRIVES, program_path(text), limits, RATE)
+    last = text.splitlines()[-1].split()[1:]
+    single = plan(DRIVES, program_path(text.splitlines()[0] + '\nG1 '
+                                       + ' '.join(last)), limits, RATE)
+    assert motion.duration == single.duration
+    assert np.allclose(motion.position, single.position, atol=1e-12)
+    speed = np.linalg.norm(motion.velocity, axis=1)
+    assert (speed[1:-1] > 0.0).all()
+
+
+def test_a_straight_runs_refusal_names_the_line_of_its_point():
+    path = program_path('G21 G90 F6000\nG1 X100\nG1 X500\nG1 X900\nM2')
+    assert len(path.pieces) == 1
+    with pytest.raises(PlanningError) as error:
+        plan(DRIVES, path, efforts(), RATE)
+    assert str(error.value).startswith('line 4: the path at ['), str(
+        error.value)
+
+
+def test_a_start_out_of_the_workspace_is_not_blamed_on_a_line():
+    path = program_path('G21 G90 F6000\nG1 X100\nM2', start=(0.9, 0.0, 0.0))
+    with pytest.raises(PlanningError) as error:
+        plan(DRIVES, path, efforts(), RATE)
+    assert error.value.line is None
+    assert str(error.value).startswith('the start of the path at [0.9, 0, '
+                                       '0] m is out of reach of leg B')
+
+
+@pytest.mark.parametrize('text, words', (
+    # 100,000 turns of a 10 mm helix: 18,000,000 gridpoints, counted.
+    ('G21 F6000\nG0 X10\nG2 X10 Y0 Z-1 I-10 J0 P100000', 'the path of 2 '
+     'pieces and 6283.2 m needs 18,000,006 gridpoints: more than the 900 MB '
+     'left for the plan hold (1000 bytes each)'),
+    # 10 mm at 0.035 mm/min: 4.8 hours.
+    ('G21 G1 F0.035 X10', 'the motion lasts 17160 s: 17,160,001 samples at '
+     '1000 Hz, more than the 2,993,320 this planner may hold'),
+))
+def test_memory_is_bounded_before_anything_is_made(text, words):
+    """Refused (TOO_LARGE) naming the size, within a few MB of memory."""
+    import tracemalloc
+    path = program_path(text)
+    tracemalloc.start()
+    try:
+        with pytest.raises(PlanningError) as error:
+            plan(Robot(), path, efforts(), RATE)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert error.value.reason == gcode.TOO_LARGE
+    assert words in str(error.value), str(error.value)
+    assert peak < 20e6
+
+
+def test_a_plan_past_its_time_is_refused():
+    with pytest.raises(PlanningError) as error:
+        plan(DRIVES, program_path(CONTOUR), efforts(), RATE,
+             max_seconds=1e-9)
+    assert error.value.reason == 'timeout'
+    assert str(error.value) == 'planning took more than 1e-09 s'

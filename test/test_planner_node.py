@@ -8,7 +8,8 @@ becomes a ``cartesian_trajectory`` within 60 um of the circle, within 5 %
 of toppra's optimum on the exact circle (on its own fine grid), every
 force within its limit; the feedforward converts it. An infeasible or
 malformed path publishes nothing, is counted by reason, and the node goes
-on.
+on: a pose 1e300 m away and a path of 10^5 poses with corners (beyond the
+node's memory) too; a straight path of 100 poses is planned.
 """
 
 import math
@@ -118,12 +119,26 @@ def send(graph, message):
     return motion, conversion()[-1]
 
 
+def rejected(peer, reason):
+    """Return the planner's rejections for ``reason``, by its diagnostics."""
+    with peer.lock:
+        found = peer.diagnostics.get('planner')
+    return int((found[2] if found else {}).get(f'rejected {reason}', 0))
+
+
 def counted(peer):
     """Return the planner's rejections so far, by its diagnostics."""
     with peer.lock:
         found = peer.diagnostics.get('planner')
     return sum(int(v) for k, v in (found[2] if found else {}).items()
                if k.startswith('rejected '))
+
+
+def test_a_straight_path_of_100_poses_is_planned(graph):
+    points = np.linspace((0.0, 0.0, 0.0), (0.07, -0.03, 0.05), 100)
+    planned = send(graph, path_message(points))
+    assert planned is not None
+    assert np.allclose(positions(planned[0])[-1], points[-1], atol=1e-12)
 
 
 def test_a_circle_of_400_poses_is_planned_near_its_optimum(graph):
@@ -159,6 +174,10 @@ def test_a_circle_of_400_poses_is_planned_near_its_optimum(graph):
 
 @pytest.mark.parametrize('points, frame, reason', (
     (((0.0, 0.0, 0.0), (0.9, 0.0, 0.0)), 'base_link', 'infeasible'),
+    (((0.0, 0.0, 0.0), (1e300, 0.0, 0.0)), 'base_link', 'infeasible'),
+    # 10^5 poses with corners: beyond the node's memory, counted first.
+    (np.random.default_rng(0).uniform(-0.1, 0.1, (100_000, 3)), 'base_link',
+     'oversize'),
     (((0.0, 0.0, 0.0), (math.nan, 0.0, 0.0)), 'base_link', 'non_finite'),
     (((0.0, 0.0, 0.0), (0.01, 0.0, 0.0)), 'map', 'frame'),
     (((0.0, 0.0, 0.0),), 'base_link', 'too_few_poses'),
@@ -166,9 +185,8 @@ def test_a_circle_of_400_poses_is_planned_near_its_optimum(graph):
 def test_bad_paths_publish_nothing_and_the_node_goes_on(graph, points,
                                                         frame, reason):
     peer = graph[0]
+    before = rejected(peer, reason)
     assert send(graph, path_message(points, frame)) is None
-    status = peer.status('planner', timeout=5.0)
-    assert status is not None
-    assert int(status[2][f'rejected {reason}']) >= 1
+    assert peer.wait(lambda: rejected(peer, reason) > before, 5.0), reason
     assert send(graph, path_message([(0.0, 0.0, 0.0),
                                      (0.0, 0.02, 0.0)])) is not None

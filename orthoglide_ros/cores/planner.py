@@ -18,8 +18,12 @@ neither empty nor ``base_frame`` (``frame``), a position is not finite
 (``too_few_poses``), or the robot cannot follow it within its limits
 (``infeasible``: out of the workspace, statics beyond ``max_effort``,
 nothing that bounds it; the reason names the pose, from 1); one refused
-before it is read counts as ``oversize`` or ``malformed``. Orientations
-are not used: the platform only translates.
+before it is read counts as ``oversize`` or ``malformed``, and so does one
+whose plan would not fit the node's bounds (``oversize``: more gridpoints
+than PLAN_BYTES holds, or a motion longer than the output message holds,
+both counted before they are made) or takes longer than
+``max_planning_time`` (``timeout``). Orientations are not used: the
+platform only translates.
 """
 
 import math
@@ -32,19 +36,37 @@ from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.inputs import Rejected
 from orthoglide_ros.cores.parameters import (base_frame_spec, field,
                                              joint_limit_specs, Spec, Table)
+from orthoglide_ros.cores.inputs import CARTESIAN_TRAJECTORY_BYTES
 from orthoglide_ros.cores.status import OK
+from orthoglide_ros.formats import cdr
 from orthoglide_ros.model.robot import JOINT_NAMES, ParameterError
-from orthoglide_ros.planning.gcode import ProgramError
+from orthoglide_ros.planning.gcode import EMPTY, ProgramError, TOO_LARGE
 from orthoglide_ros.planning.limits import (KINDS, limits_from_parameters,
                                             LimitsError, PAPER_LIMITS)
-from orthoglide_ros.planning.parametrization import plan
+from orthoglide_ros.planning.parametrization import (most_pieces, plan,
+                                                     TIMEOUT)
 from orthoglide_ros.planning.path import from_waypoints
 
 REASONS = ('frame', 'non_finite', 'too_few_poses', 'infeasible',
-           'malformed', 'oversize')
+           'malformed', 'oversize', 'timeout')
 # The nav_msgs/Path read whole: 100,000 poses (about 8 MB).
 PATH_BYTES = 8 * 1024 * 1024
 MAX_POSES = 100_000
+# The memory a path's plan may take (bytes: parametrization's bounds per
+# pose, gridpoint and sample), with the 100,000 poses of a path at most.
+PLAN_BYTES = 512_000_000
+
+
+def max_points(frame):
+    """
+    Return the most points of a motion published in ``frame``.
+
+    Its message within what the feedforward reads (CARTESIAN_TRAJECTORY_BYTES,
+    the input's PATH_BYTES): the header (64 bytes and the frame's) and
+    cdr's bytes a point.
+    """
+    return (CARTESIAN_TRAJECTORY_BYTES - 64 - len(frame.encode())) \
+        // cdr.MULTI_DOF_POINT_BYTES
 
 
 def _limits_rule(settings):
@@ -68,9 +90,17 @@ PARAMETERS = Table('PlannerSettings', (
     Spec('rate_hz', 'double', 1000.0,
          'points per second of the published motion (Hz)',
          (100.0, 100000.0)),
+    Spec('max_planning_time', 'double', 10.0,
+         'a path whose plan takes longer (s) is refused (timeout)',
+         (0.01, 600.0)),
     *joint_limit_specs(PAPER_LIMITS),
     *realtime.SPECS,
 ), rules=(_limits_rule,), robot=True)
+
+
+# The node's reason for a refusal of the planner's.
+_REASONS = {EMPTY: 'too_few_poses', TOO_LARGE: 'oversize',
+            TIMEOUT: 'timeout'}
 
 
 def limits_of(settings):
@@ -154,14 +184,16 @@ class Planner(Core):
         try:
             path = from_waypoints(positions, None,
                                   list(range(1, len(positions) + 1)),
-                                  settings.path_tolerance)
+                                  settings.path_tolerance,
+                                  most_pieces(PLAN_BYTES))
             motion = plan(settings.robot, path, self.limits,
-                          settings.rate_hz, settings.max_speed or math.inf)
+                          settings.rate_hz, settings.max_speed or math.inf,
+                          max_samples=max_points(base), max_bytes=PLAN_BYTES,
+                          max_seconds=settings.max_planning_time)
         except ProgramError as error:
-            reason = 'too_few_poses' if 'zero-length' in error.detail \
-                else 'infeasible'
             where = '' if error.line is None else f'pose {error.line}: '
-            raise Rejected(reason, where + error.detail) from None
+            raise Rejected(_REASONS.get(error.reason, 'infeasible'),
+                           where + error.detail) from None
         self.last_seconds = time.monotonic() - start
         self.last_duration = motion.duration
         self.last_points = len(motion.t)

@@ -518,3 +518,16 @@ def _unpack(layout, buf, offset):
     if offset + layout.size > len(buf):
         raise CdrError('truncated message')
     return layout.unpack_from(buf, offset)
+
+
+def _multi_dof_point_bytes():
+    """Return the bytes of each point after the first (all the same)."""
+    one, two = (len(multi_dof_trajectory(
+        (0, 0), '', ('platform',), np.zeros((n, 2), dtype=np.int64),
+        *(np.zeros((n, 3)) for _ in range(3)))) for n in (1, 2))
+    return two - one
+
+
+# Bytes of a point of :func:`multi_dof_trajectory` (a multiple of 8, so
+# every point but the first, whose padding may add 4, takes as much).
+MULTI_DOF_POINT_BYTES = _multi_dof_point_bytes()

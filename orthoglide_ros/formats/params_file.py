@@ -61,27 +61,73 @@ class _RclLoader(yaml.SafeLoader):
         finally:
             self._depth -= 1
 
+    def construct_mapping(self, node, deep=False):
+        """Refuse a key given twice in one mapping (YAML leaves it open)."""
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            if not isinstance(key, str):
+                continue
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f'the key {clip(key, 80)!r} appears twice',
+                    key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep)
 
+
+_INT, _FLOAT = 'tag:yaml.org,2002:int', 'tag:yaml.org,2002:float'
 _RclLoader.add_implicit_resolver(
-    'tag:yaml.org,2002:float',
+    _FLOAT,
     re.compile(r'^[-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)[eE][-+]?[0-9]+$'),
     list('-+0123456789.'))
 
 
-def read_yaml(path: Path, error: type = ParametersFileError) -> Any:
+class _DecimalLoader(_RclLoader):
+    """
+    _RclLoader whose numbers are decimal only: ASCII digits, a point, an exponent.
+
+    YAML 1.1's other spellings (``0x1F``, ``0o17``, ``1_000``, ``1:30``,
+    ``.inf``) stay strings, which a reader of numbers refuses.
+    """
+
+
+_DecimalLoader.yaml_implicit_resolvers = {
+    first: [(tag, rx) for tag, rx in resolvers if tag not in (_INT, _FLOAT)]
+    for first, resolvers in _RclLoader.yaml_implicit_resolvers.items()}
+_DecimalLoader.add_implicit_resolver(_INT, re.compile(r'^[-+]?[0-9]+$'),
+                                     list('-+0123456789'))
+
+
+def _decimal_int(loader: _DecimalLoader, node: yaml.ScalarNode) -> int:
+    """Return a plain integer scalar in base ten (010 is ten, not octal)."""
+    return int(str(loader.construct_scalar(node)))
+
+
+_DecimalLoader.add_constructor(_INT, _decimal_int)
+_DecimalLoader.add_implicit_resolver(
+    _FLOAT, re.compile(r'^[-+]?(?:[0-9]+\.[0-9]*|\.[0-9]+|[0-9]+)'
+                       r'(?:[eE][-+]?[0-9]+)?$'), list('-+0123456789.'))
+
+
+def read_yaml(path: Path, error: type = ParametersFileError,
+              decimal: bool = False) -> Any:
     """
     Return the YAML document in ``path``, read as a parameters file is.
 
     UTF-8, at most MAX_FILE_BYTES, no aliases, nested at most MAX_DEPTH
-    deep, ``1e-3`` a double. Raises ``error`` (a ValueError) naming the
-    path: the parameters file's or another YAML file's (joint limits).
+    deep, no key twice in a mapping, ``1e-3`` a double; ``decimal``:
+    numbers only in decimal (:class:`_DecimalLoader`). Raises ``error`` (a
+    ValueError) naming the path: the parameters file's or another YAML
+    file's (joint limits).
     """
     try:
         text = read_text(path, MAX_FILE_BYTES)
     except ValueError as failure:
         raise error(f'{path}: {failure}') from None
     try:
-        return yaml.load(text, Loader=_RclLoader)
+        return yaml.load(text, Loader=_DecimalLoader if decimal
+                         else _RclLoader)
     except yaml.YAMLError as failure:
         raise error(f'{path}: not valid YAML: '
                     f'{" ".join(str(failure).split())}') from None

@@ -174,8 +174,8 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
     if conditioning < margin or conditioning == 0.0:
         raise _beyond_j2(robot, position) or WorkspaceError('singular', (
             f'position {format_vector(position)} m is too near a singularity of '
-            f'J2: 1/kappa_F(J_lambda) = {conditioning:.3g} < margin '
-            f'{margin:g}'))
+            f'J2: 1/kappa_F(J_lambda) = {below(conditioning, margin)} < '
+            f'margin {margin:g}'))
     if min(ratio) < margin:     # the leg test above, rounded apart
         raise _leg_error(robot, position, margin)
     if not math.isfinite(sum(lamdd) + sum(force) + sum(power)) and not all(
@@ -261,8 +261,8 @@ def solve_batch(robot: Robot, positions: Rows,
                 p[row], row)
         raise WorkspaceError('singular', (
             f'position {format_vector(p[row])} m is too near a singularity of J2: '
-            f'1/kappa_F(J_lambda) = {conditioning[row]:.3g} < margin '
-            f'{margin:g}'), row)
+            f'1/kappa_F(J_lambda) = {below(conditioning[row], margin)} < '
+            f'margin {margin:g}'), row)
     ratio = out[5] / lengths
     near = ratio.min(1) < margin    # the leg test above, rounded apart
     if near.any():
@@ -725,8 +725,8 @@ def _leg_fault(robot, position, margin, row=None):
         if ratio < margin:
             return WorkspaceError('singular', (
                 f'position {format_vector(position)} m is too near a singularity of '
-                f'J1: leg {name} has alpha/{what} = {ratio:.3g} < margin '
-                f'{margin:g}'), row)
+                f'J1: leg {name} has alpha/{what} = {below(ratio, margin)} '
+                f'< margin {margin:g}'), row)
     return None
 
 
@@ -745,6 +745,20 @@ def _leg_error(robot, position, margin, row=None):
         f'position {format_vector(position)} m is on the edge of the singularity '
         f'margin {margin:g} of J1: leg {LEG_NAMES[leg]} has alpha/{what} = '
         f'{status.alpha_ratio[leg]:.3g}'), row)
+
+
+def below(value: float, bound: float) -> str:
+    """
+    Return ``value`` with the fewest digits (3 at least) that show it below.
+
+    >>> below(0.19996, 0.2)
+    '0.19996'
+    """
+    for digits in range(3, 18):
+        text = f'{float(value):.{digits}g}'
+        if float(text) < bound:
+            return text
+    return repr(float(value))
 
 
 def format_vector(vec: Optional[Vector]) -> str:

@@ -1,4 +1,4 @@
-"""
+r"""
 The G-code subset a CAM post-processor for a 3-axis mill emits, read into moves.
 
 :func:`read_gcode` turns the text of a program into :class:`Move` rows
@@ -28,9 +28,12 @@ The subset (doc/planning.md has the table):
   ``M2``/``M30`` (the end: what follows is not read).
 
 Anything else is refused with :class:`ProgramError` naming the line:
-``line 7: G41 (cutter compensation) is not supported``. Coordinates are
-those of G in the base frame, origin at home; :class:`Move` holds them in
-m, feeds in m/s.
+``line 7: G41 (cutter compensation) is not supported``. Lines are ended by
+``\n``, ``\r\n`` or ``\r`` only, as an editor counts them. Every number
+follows one rule (:func:`read_number`): ASCII digits with at most one
+point and a sign, no exponent, at most NUMBER_BOUND in magnitude.
+Coordinates are those of G in the base frame, origin at home;
+:class:`Move` holds them in m, feeds in m/s.
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from orthoglide_ros.formats.text import clip
 from orthoglide_ros.model.types import Array
 
 MM = 1e-3                   # m per program unit, G21
@@ -50,12 +54,17 @@ INCH = 25.4e-3              # m per program unit, G20
 MAX_LINE = 1024
 # Most moves in one program.
 MAX_MOVES = 200_000
-# Arc ends whose distances to the centre differ by more than this (m) or
-# this share of the radius, whichever is larger, are refused; a smaller
-# difference moves the centre onto the chord's bisector (LinuxCNC's rule,
-# 0.002 mm).
+# Largest magnitude of any number (a word's, in program units; a waypoint's
+# and a limit's): far beyond any machine, it keeps every square finite.
+NUMBER_BOUND = 1e9
+# An I J K arc is refused where its end's distance to the centre differs
+# from its start's by more than ARC_RADIUS_TOLERANCE (m) or by more than
+# ARC_RADIUS_SHARE of the radius: both must hold (LinuxCNC's rule, its
+# relative tolerance; its absolute one is 0.028 mm). Within them the
+# centre moves onto the chord's bisector only as far as moves no point of
+# the arc by more than ARC_RADIUS_TOLERANCE.
 ARC_RADIUS_TOLERANCE = 2e-6
-ARC_RADIUS_SHARE = 1e-4
+ARC_RADIUS_SHARE = 1e-3
 # In-plane distance (m) below which an arc's end is its start: a full turn.
 FULL_TURN_TOLERANCE = 1e-9
 # A move shorter than this (m) moves nothing and is dropped.
@@ -106,7 +115,19 @@ WORD_NAMES = {'S': 'spindle speed', 'T': 'tool', 'H': 'tool length offset',
               'Q': 'canned cycle or blending parameter Q',
               'L': 'loop count or data setting L', 'O': 'subroutines',
               '#': 'parameters', '[': 'expressions'}
-NUMBER = re.compile(r'[+-]?(?:\d+\.?\d*|\.\d+)$')
+# The letters of the subset's words.
+WORDS = frozenset('GMFNXYZIJKRP')
+NUMBER = re.compile(r'[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)\Z')
+NUMBER_CHARS = frozenset('0123456789.+-')
+# Where a refusal comes from, for callers that react to it (the node's
+# reasons): a program that moves nothing, one larger than a bound of the
+# planner, any other.
+EMPTY = 'empty'
+TOO_LARGE = 'too_large'
+INVALID = 'invalid'
+# Only these end a line (str.splitlines also breaks at form feeds, U+2028
+# and more, which an editor shows within a line).
+LINE_END = re.compile(r'\r\n|\r|\n')
 
 
 class ProgramError(ValueError):
@@ -114,15 +135,47 @@ class ProgramError(ValueError):
     A program the planner refuses: the message names the line (``line N``).
 
     ``line``: the program's line (from 1), None where no line is to blame;
-    ``detail``: the message without it.
+    ``detail``: the message without it; ``reason``: EMPTY, TOO_LARGE,
+    INVALID (or a subclass's), for callers that react to it.
     """
 
-    def __init__(self, line: Optional[int], message: str) -> None:
-        """Keep ``line`` (from 1, or None) and the message without it."""
+    reason = INVALID
+
+    def __init__(self, line: Optional[int], message: str,
+                 reason: Optional[str] = None) -> None:
+        """Keep ``line`` (from 1, or None), the message without it, why."""
         super().__init__(message if line is None
                          else f'line {line}: {message}')
         self.line = line
         self.detail = message
+        if reason is not None:
+            self.reason = reason
+
+
+def read_number(text: str, what: str) -> float:
+    """
+    Return the value of a number written ``text``, by the one rule.
+
+    ASCII digits with at most one point and an optional sign (RS274NGC's
+    form: no exponent), at most NUMBER_BOUND in magnitude. Raises
+    ValueError naming ``what`` (``X1..2``) otherwise.
+
+    >>> read_number('-12.5', 'X-12.5')
+    -12.5
+    """
+    if not NUMBER.match(text):
+        raise ValueError(f'malformed number {clip(what, 40)}: a number is '
+                         'the digits 0-9 with at most one point')
+    value = float(text)
+    if not abs(value) <= NUMBER_BOUND:
+        raise ValueError(f'{clip(what, 40)}: beyond {NUMBER_BOUND:,.0f}, '
+                         'the largest magnitude a number may have')
+    return value
+
+
+def lines_of(text: str) -> list[str]:
+    """Return the lines of ``text`` as an editor counts them (LINE_END)."""
+    return LINE_END.split(text)
 
 
 @dataclass(frozen=True)
@@ -183,7 +236,7 @@ def read_gcode(text: str,
     """
     state = _State(np.array(start, dtype=float))
     moves: list[Move] = []
-    for number, raw in enumerate(text.splitlines(), 1):
+    for number, raw in enumerate(lines_of(text), 1):
         if len(raw) > MAX_LINE:
             raise ProgramError(number, f'longer than {MAX_LINE} characters')
         words = _words(number, raw)
@@ -197,7 +250,12 @@ def read_gcode(text: str,
 
 
 def _words(number, raw):
-    """Return a line's words as ``[(letter, value, text)]``, None if none."""
+    """
+    Return a line's words as ``[(letter, value, text)]``, None if none.
+
+    The words up to the first one not in the subset, that one last with
+    the value None and the reason it is refused as its text.
+    """
     text = ''.join(_strip_comments(number, raw).split())
     if not text or text == '%':
         return None
@@ -207,22 +265,42 @@ def _words(number, raw):
     k = 0
     while k < len(text):
         letter = text[k].upper()
-        if not letter.isalpha():
-            name = WORD_NAMES.get(letter)
-            if name is not None:
-                raise ProgramError(number,
-                                   f'{letter} ({name}) is not supported')
-            raise ProgramError(number, f'unexpected {text[k]!r} where a word '
-                               '(a letter and a number) was expected')
         j = k + 1
-        while j < len(text) and (text[j].isdigit() or text[j] in '.+-'):
+        while j < len(text) and text[j] in NUMBER_CHARS:
             j += 1
         digits = text[k + 1:j]
-        if not NUMBER.match(digits):
-            raise ProgramError(number, f'malformed number {letter}{digits}')
-        words.append((letter, float(digits), f'{letter}{digits}'))
+        word = f'{letter}{digits}'
+        if letter not in WORDS:     # refused in its turn (a G code first)
+            words.append((letter, None, _unknown(text, k, j, words)))
+            return words
+        if j < len(text) and text[j].isdigit():     # not one of 0-9
+            raise ProgramError(number, f'malformed number {word}{text[j]}: '
+                               'a number is the digits 0-9 with at most one '
+                               'point')
+        try:
+            words.append((letter, read_number(digits, word), word))
+        except ValueError as error:
+            raise ProgramError(number, str(error)) from None
         k = j
     return words
+
+
+def _unknown(text, k, j, words):
+    """Say why the word at ``text[k:j]`` is not one of the subset's."""
+    letter = text[k].upper()
+    if letter == 'E' and words and k > 0 and text[k - 1] in NUMBER_CHARS:
+        before = words[-1][2]
+        return (f'{before}{text[k:j]}: a number with an exponent; a number '
+                'is the digits 0-9 with at most one point (and E, an '
+                'extruder axis, is not supported)')
+    name = WORD_NAMES.get(letter)
+    if name is not None:
+        word = letter + text[k + 1:j] if letter.isalpha() else letter
+        return f'{clip(word, 40)} ({name}) is not supported'
+    if letter.isalpha():
+        return f'{clip(text[k:j], 40)} (an unknown word) is not supported'
+    return (f'unexpected {text[k]!r} where a word (a letter and a number) '
+            'was expected')
 
 
 def _strip_comments(number, raw):
@@ -313,6 +391,8 @@ def _sort_words(number, words):
     groups = {}
     end = False
     for letter, value, text in words:
+        if value is None:
+            raise ProgramError(number, text)
         if letter == 'G':
             code = round(value, 1)
             if code not in SUPPORTED_G or abs(value - code) > 1e-9:
@@ -331,13 +411,10 @@ def _sort_words(number, words):
             else:
                 raise ProgramError(number, f'{text} ({_name(M_NAMES, value)})'
                                    ' is not supported')
-        elif letter in 'FNXYZIJKRP':
+        else:   # one of FNXYZIJKRP (_words refuses the others)
             if letter in values:
                 raise ProgramError(number, f'two {letter} words on one line')
             values[letter] = value
-        else:
-            name = WORD_NAMES.get(letter, 'an unknown word')
-            raise ProgramError(number, f'{text} ({name}) is not supported')
     return g_codes, values, end
 
 
@@ -394,13 +471,14 @@ def _arc(number, state, target, words, turns):
     a = np.array([start[i1], start[i2]])
     b = np.array([target[i1], target[i2]])
     ccw = state.motion == 3
+    shift = 0.0
     if 'R' in words:
         centre = _centre_from_radius(number, a, b, words['R'] * state.scale,
                                      ccw)
     else:
         offset = np.array([words.get(letters[0], 0.0),
                            words.get(letters[1], 0.0)]) * state.scale
-        centre = _centre_from_offsets(number, a, b, a + offset)
+        centre, shift = _centre_from_offsets(number, a, b, a + offset)
     ra, rb = a - centre, b - centre
     full = float(np.hypot(*(b - a))) <= FULL_TURN_TOLERANCE
     if full:
@@ -410,6 +488,15 @@ def _arc(number, state, target, words, turns):
             2.0 * math.pi)
         if not ccw:
             sweep = 2.0 * math.pi - sweep
+    # The centre moved by ``shift`` moves the arc's point at sweep psi by
+    # 2 shift sin(psi / 2): at most rounding.
+    moved = 2.0 * shift * math.sin(0.5 * min(sweep, math.pi))
+    if moved > ARC_RADIUS_TOLERANCE:
+        raise ProgramError(number, f'the arc\'s end is off its circle: its '
+                           f'centre moved onto the chord\'s bisector '
+                           f'({shift * 1e3:.6g} mm) would move the arc by '
+                           f'{moved * 1e3:.6g} mm, more than '
+                           f'{ARC_RADIUS_TOLERANCE * 1e3:g} mm')
     angle = (sweep + 2.0 * math.pi * (int(turns or 1) - 1)) * (
         1.0 if ccw else -1.0)
     centre3 = start.copy()
@@ -425,22 +512,30 @@ def _arc(number, state, target, words, turns):
 
 
 def _centre_from_offsets(number, a, b, centre):
-    """Check an I J K centre; move it onto the chord's bisector."""
+    """
+    Check an I J K centre; return it moved onto the chord's bisector.
+
+    Returns ``(centre, shift)``: ``shift`` (m) how far it moved.
+    """
     ra = float(np.hypot(*(a - centre)))
     rb = float(np.hypot(*(b - centre)))
     if ra <= ZERO_LENGTH:
         raise ProgramError(number, 'an arc of radius zero (its centre is its '
                            'start)')
-    if abs(rb - ra) > max(ARC_RADIUS_TOLERANCE, ARC_RADIUS_SHARE * ra):
+    differ = abs(rb - ra)
+    if differ > ARC_RADIUS_TOLERANCE or differ > ARC_RADIUS_SHARE * max(
+            ra, rb):
         raise ProgramError(number, f'the arc\'s end is {rb * 1e3:.6g} mm from '
                            f'its centre, its start {ra * 1e3:.6g} mm: no arc '
-                           'joins them')
+                           f'joins them (at most {ARC_RADIUS_TOLERANCE * 1e3:g}'
+                           f' mm and {ARC_RADIUS_SHARE:.1%} apart)')
     chord = b - a
     length = float(np.hypot(*chord))
     if length <= FULL_TURN_TOLERANCE:
-        return centre
+        return centre, 0.0
     along = chord / length
-    return centre - along * float((centre - 0.5 * (a + b)) @ along)
+    shift = float((centre - 0.5 * (a + b)) @ along)
+    return centre - along * shift, abs(shift)
 
 
 def _centre_from_radius(number, a, b, radius, ccw):

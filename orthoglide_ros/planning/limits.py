@@ -41,8 +41,10 @@ import numpy as np
 from orthoglide_ros.formats.params_file import (load_parameters,
                                                 ParametersFileError,
                                                 read_yaml)
+from orthoglide_ros.formats.text import clip
 from orthoglide_ros.model.robot import JOINT_NAMES
 from orthoglide_ros.model.types import Array, Path
+from orthoglide_ros.planning.gcode import NUMBER_BOUND
 
 # Every limit: (its key, the has_ key, unit, what it bounds).
 KINDS = (
@@ -57,8 +59,9 @@ POSITION_KEYS = ('has_position_limits', 'min_position', 'max_position')
 # ros2_control's keys the planner accepts and does not use.
 UNUSED_KEYS = ('has_soft_limits', 'k_position', 'k_velocity',
                'soft_lower_limit', 'soft_upper_limit', 'angle_wraparound')
-# Largest value of any limit: far beyond any drive, it keeps squares finite.
-LIMIT_BOUND = 1e9
+# Largest value of any limit, and magnitude of a position limit: the
+# program's bound on every number (far beyond any drive).
+LIMIT_BOUND = NUMBER_BOUND
 
 # The paper robot's limits: each drive the same; see doc/planning.md.
 PAPER_LIMITS = {name: {'has_velocity_limits': True, 'max_velocity': 1.0,
@@ -159,9 +162,14 @@ def _number(entry, prefix, key):
     if value is None:
         return None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise LimitsError(f'{prefix}.{key}: must be a number, got {value!r}')
-    if not math.isfinite(value):
+        raise LimitsError(f'{prefix}.{key}: must be a number (decimal), got '
+                          f'{clip(repr(value), 80)}')
+    if isinstance(value, float) and not math.isfinite(value):
         raise LimitsError(f'{prefix}.{key}: must be finite, got {value!r}')
+    if not abs(value) <= LIMIT_BOUND:     # an int of any size too
+        raise LimitsError(f'{prefix}.{key}: must be at most '
+                          f'{LIMIT_BOUND:,.0f} in magnitude, got '
+                          f'{clip(repr(value), 40)}')
     return float(value)
 
 
@@ -199,10 +207,10 @@ def load_limits(path: Path, names: Sequence[str] = JOINT_NAMES) -> Limits:
     Return the limits of a YAML file's top-level ``joint_limits:``.
 
     The file is read as a parameters file is (:func:`read_yaml`: UTF-8, at
-    most 1 MiB, no aliases, nested at most 32 deep). Raises
-    :class:`LimitsError`.
+    most 1 MiB, no aliases, nested at most 32 deep, no key twice), its
+    numbers decimal only. Raises :class:`LimitsError`.
     """
-    document = read_yaml(path, LimitsError)
+    document = read_yaml(path, LimitsError, decimal=True)
     if not isinstance(document, dict) or 'joint_limits' not in document:
         raise LimitsError(f'{path}: no top-level joint_limits: mapping')
     try:

@@ -31,25 +31,28 @@ What TOPP-RA lacks, added here:
   around it are tightened by the excess and the plan made again, so that
   no sample exceeds a limit by more than ACCEPT_SHARE (0.1 %).
 
-The two passes are TOPP-RA's: backward, the largest controllable ``x`` at
-each gridpoint (the one-dimensional programme of each stage solved in
-closed form: ``u`` is bounded by affine functions of ``x``); forward, the
-largest ``u`` keeping the next ``x`` controllable. Within an interval ``u``
-is constant, so the samples are exact quadratics in time.
+The two passes are TOPP-RA's (:mod:`reachability`). Within an interval
+``u`` is constant, so the samples are exact quadratics in time. Memory and
+time are linear in the gridpoints and the samples: the gridpoints are
+counted before the grid is made and the samples before they are made, and
+both are refused (TOO_LARGE) beyond the caller's bounds; the dynamics and
+the samples are computed SAMPLE_BLOCK at a time.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 import math
+import time
 
 import numpy as np
 
 from orthoglide_ros.model import mechanics, terms
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.types import Array
-from orthoglide_ros.planning.gcode import ProgramError
+from orthoglide_ros.planning.gcode import ProgramError, TOO_LARGE
 from orthoglide_ros.planning.limits import Limits
+from orthoglide_ros.planning import reachability
 from orthoglide_ros.planning.path import Path
 
 # Intervals of the grid over the whole path, at least; each piece has at
@@ -63,22 +66,86 @@ REVERSAL_OFFSETS = (2e-5, 2e-4)
 # the plan is refused (a PlanningError) if one exceeds ACCEPT_SHARE.
 VERIFY_SHARE = 2e-4
 ACCEPT_SHARE = 1e-3
-# Most samples of a motion.
+# The memory a plan may take: at most GRIDPOINT_BYTES a gridpoint (the
+# grid, its dynamics and rows, the passes, the path's pieces) and
+# SAMPLE_BYTES a sample of the motion (240 held, its output's chunk and
+# each block's work apart), and the path, made before, at most MOVE_BYTES a
+# move or pose (its text, moves and pieces), as benchmarks/bench_plan.py
+# --memory measures (doc/measurements.md). By default (plan's max_bytes,
+# max_samples) 900 MB: with the interpreter's 50, within 1 GB.
+GRIDPOINT_BYTES = 1000
+SAMPLE_BYTES = 300
+MOVE_BYTES = 3000
+MAX_BYTES = 900_000_000
 MAX_SAMPLES = 20_000_000
+# Samples made, solved and checked at once; gridpoints solved at once.
+SAMPLE_BLOCK = 16_384
 # Rounds of planning: friction's fixed point, then verification.
 FRICTION_ROUNDS = 8
 FRICTION_AGREEMENT = 1e-3
 VERIFY_ROUNDS = 16
 # Grid refinements where a stage has no solution.
 REFINEMENTS = 3
-# |coefficient of u| below this: a row bounds x alone.
-U_ZERO = 1e-10
-# x (m^2/s^2) where nothing else bounds it (G at 1e6 m/s: never reached).
-X_BIG = 1e12
 
 
 class PlanningError(ProgramError):
-    """A path the robot cannot follow within its limits (``line N``)."""
+    """
+    A path the robot cannot follow within its limits (``line N``).
+
+    ``reason``: INFEASIBLE, or TOO_LARGE where the path needs more
+    gridpoints, or its motion more samples, than the caller allows.
+    """
+
+    reason = 'infeasible'
+
+
+INFEASIBLE = PlanningError.reason
+TIMEOUT = 'timeout'
+
+
+def most_pieces(max_bytes: int) -> int:
+    """
+    Return the most pieces a path planned within ``max_bytes`` may have.
+
+    Each piece has MIN_INTERVALS + 1 gridpoints at least, and half a move
+    at least (a move makes a piece and a blend at most).
+    """
+    return max_bytes // (GRIDPOINT_BYTES * (MIN_INTERVALS + 1)
+                         + MOVE_BYTES // 2)
+
+
+class _Bounds:
+    """A plan's bounds: its samples, its memory (bytes), its time (s)."""
+
+    def __init__(self, max_samples, max_bytes, seconds):
+        self.max_samples = max_samples
+        self.max_bytes = max_bytes
+        self.seconds = seconds
+        self.deadline = time.monotonic() + seconds
+
+    def gridpoints(self, count, why):
+        """Refuse ``count`` gridpoints beyond the memory (TOO_LARGE)."""
+        if count * GRIDPOINT_BYTES + 2 * SAMPLE_BYTES > self.max_bytes:
+            raise PlanningError(None, f'{why} {count:,} gridpoints: more '
+                                f'than the {self.max_bytes / 1e6:.4g} MB left '
+                                f'for the plan hold ({GRIDPOINT_BYTES} bytes '
+                                'each)', TOO_LARGE)
+
+    def samples(self, count, gridpoints, rate):
+        """Refuse a motion of ``count`` samples beyond the bounds."""
+        room = min(self.max_samples, (self.max_bytes - gridpoints
+                                      * GRIDPOINT_BYTES) // SAMPLE_BYTES)
+        if count > room:
+            raise PlanningError(None, f'the motion lasts {(count - 1) / rate:.6g}'
+                                f' s: {count:,} samples at {rate:g} Hz, more '
+                                f'than the {room:,} this planner may hold',
+                                TOO_LARGE)
+
+    def clock(self):
+        """Refuse a plan past its time (TIMEOUT)."""
+        if time.monotonic() > self.deadline:
+            raise PlanningError(None, f'planning took more than '
+                                f'{self.seconds:g} s', TIMEOUT)
 
 
 @dataclass(frozen=True)
@@ -120,7 +187,9 @@ class _Grid:
 
 def plan(robot: Robot, path: Path, limits: Limits, rate: float,
          max_speed: float = math.inf,
-         margin: float = mechanics.DEFAULT_SINGULARITY_MARGIN) -> Motion:
+         margin: float = mechanics.DEFAULT_SINGULARITY_MARGIN, *,
+         max_samples: int = MAX_SAMPLES, max_bytes: int = MAX_BYTES,
+         max_seconds: float = math.inf) -> Motion:
     """
     Return the fastest motion of G along ``path`` within ``limits``.
 
@@ -132,50 +201,73 @@ def plan(robot: Robot, path: Path, limits: Limits, rate: float,
     path is out of the workspace or nearer a singularity than ``margin``,
     beyond an actuator's position limits, or needs more than an
     actuator's ``max_effort`` at rest, and where nothing bounds the
-    motion.
+    motion; (TOO_LARGE) before it is made where the grid (GRIDPOINT_BYTES
+    a gridpoint) or the motion (SAMPLE_BYTES a sample, at most
+    ``max_samples``) would not fit in what the path (MOVE_BYTES a move)
+    leaves of ``max_bytes``; (TIMEOUT) after ``max_seconds``, checked
+    between its steps.
     """
     if not limits.bounding and max_speed == math.inf and all(
             piece.feed == math.inf for piece in path.pieces):
         raise PlanningError(None, 'nothing bounds the motion: no limit of '
                             'any actuator, no feed and no speed cap')
     models = _Models(robot, margin)
+    bounds = _Bounds(max_samples, max_bytes - MOVE_BYTES * path.moves,
+                     max_seconds)
     intervals = GRID_INTERVALS
-    for _ in range(REFINEMENTS + 1):
-        grid = _grid(path, intervals)
-        dyn = models.dynamics(path, grid.index, grid.w)
-        grid, dyn = _add_reversals(models, path, grid, dyn)
+    for refinement in range(REFINEMENTS + 1):
+        counts = _grid_counts(path, intervals)
+        bounds.gridpoints(int(counts.sum()) + len(counts), (
+            f'the path of {len(path.pieces)} pieces and {path.length:.6g} m '
+            'needs' + (f', its grid refined {refinement} times,'
+                       if refinement else '')))
+        grid = _grid(path, counts)
+        dyn = models.dynamics(path, grid.index, grid.w, bounds)
+        grid, dyn = _add_reversals(models, path, grid, dyn, bounds)
         _check_rest(path, grid, dyn, limits)
+        rows = _Rows(dyn, grid, limits, max_speed)
+        dyn = None      # its memory: the rows hold what the passes use
         try:
-            return _plan_on(models, path, grid, dyn, limits, rate, max_speed)
-        except _StageFailure:
+            return _plan_on(models, path, grid, rows, limits, rate,
+                            max_speed, bounds)
+        except reachability.StageFailure:
             intervals *= 4
     raise PlanningError(None, 'no motion found: the time-optimal '
                         'parametrization failed on every grid')
 
 
-class _StageFailure(Exception):
-    """A stage without a solution: the grid is refined."""
+def _grid_counts(path, intervals):
+    """
+    Return the intervals of each piece: (pieces,) int, counted, not made.
+
+    ``intervals`` over the whole path, at least MIN_INTERVALS a piece, one
+    per MAX_ARC_STEP of an arc, 32 on a Bezier.
+    """
+    table = path.table
+    with np.errstate(over='ignore'):
+        counts = np.maximum(MIN_INTERVALS, np.ceil(
+            table['length'] * (intervals / path.length)))
+        arcs = table['helix'] & (table['radius'] > 0.0)
+        counts = np.where(arcs, np.maximum(counts, np.ceil(
+            np.abs(table['angle']) / MAX_ARC_STEP)), counts)
+    counts = np.where(table['helix'], counts, np.maximum(counts, 32))
+    return np.minimum(counts, 2.0 ** 62).astype(np.int64)
 
 
-def _grid(path, intervals):
+def _grid(path, counts):
     """Gridpoints of every piece, both ends included, ends shared twice."""
-    spacing = path.length / intervals
-    index, w, stop, feed = [], [], [], []
-    for k, piece in enumerate(path.pieces):
-        n = max(MIN_INTERVALS, math.ceil(piece.length / spacing))
-        if piece.kind == 'helix' and piece.radius > 0.0:
-            n = max(n, math.ceil(abs(piece.angle) / MAX_ARC_STEP))
-        elif piece.kind == 'bezier':
-            n = max(n, 32)
-        index.append(np.full(n + 1, k))
-        w.append(np.linspace(0.0, piece.length, n + 1))
-        flags = np.zeros(n + 1, dtype=bool)
-        flags[0] = path.stops[k]
-        flags[-1] = path.stops[k + 1]
-        stop.append(flags)
-        feed.append(np.full(n + 1, piece.feed))
-    return _make_grid(np.concatenate(index), np.concatenate(w),
-                      np.concatenate(stop), np.concatenate(feed))
+    sizes = counts + 1
+    last = np.cumsum(sizes) - 1
+    first = last - counts
+    lengths = path.table['length']
+    index = np.repeat(np.arange(len(counts)), sizes)
+    w = (np.arange(last[-1] + 1) - first[index]) * (lengths / counts)[index]
+    w[last] = lengths
+    stop = np.zeros(len(w), dtype=bool)
+    stop[first] = path.stops[:-1]
+    stop[last] |= path.stops[1:]
+    feed = np.array([piece.feed for piece in path.pieces])[index]
+    return _make_grid(index, w, stop, feed)
 
 
 def _make_grid(index, w, stop, feed):
@@ -219,34 +311,61 @@ class _Models:
         self.inertia = terms.inertial(robot)
         self.margin = margin
 
-    def dynamics(self, path, index, w):
-        """Return a, b, c and the rates: three batch solves over the points."""
-        p, d1, d2 = path.evaluate(index, w)
-        margin = self.margin
-        try:
-            statics = mechanics.solve_batch(self.statics, p, None, None,
-                                            margin)
-            along = mechanics.solve_batch(self.inertia, p, None, d1, margin)
-            curving = mechanics.solve_batch(self.inertia, p, d1, d2, margin)
-        except mechanics.WorkspaceError as error:
-            row = error.row if error.row is not None else 0
-            point = mechanics.format_vector(p[row])
-            detail = error.detail.removeprefix(f'position {point} m ')
-            raise PlanningError(path.pieces[index[row]].line,
-                                f'the path at {point} m {detail}') from None
-        return _Dynamics(p, along.force, curving.force, statics.force,
-                         statics.lambda_, curving.lambdadot,
-                         curving.lambdaddot, np.linalg.norm(d1, axis=1))
+    def dynamics(self, path, index, w, bounds):
+        """
+        Return a, b, c and the rates: three batch solves over the points.
 
-    def friction(self, dyn, x):
+        SAMPLE_BLOCK points at a time, into arrays made once.
+        """
+        out = _Dynamics(*(np.empty((len(w), 3)) for _ in _DYNAMICS[:-1]),
+                        np.empty(len(w)))
+        for start in range(0, len(w), SAMPLE_BLOCK):
+            bounds.clock()
+            rows = slice(start, start + SAMPLE_BLOCK)
+            p, d1, d2 = path.evaluate(index[rows], w[rows])
+            margin = self.margin
+            try:
+                statics = mechanics.solve_batch(self.statics, p, None, None,
+                                                margin)
+                along = mechanics.solve_batch(self.inertia, p, None, d1,
+                                              margin)
+                curving = mechanics.solve_batch(self.inertia, p, d1, d2,
+                                                margin)
+            except mechanics.WorkspaceError as error:
+                row = start + (error.row or 0)
+                point = mechanics.format_vector(p[row - start])
+                detail = error.detail.removeprefix(f'position {point} m ')
+                line, what = _at(path, index[row], w[row])
+                raise PlanningError(line, f'{what} at {point} m {detail}') \
+                    from None
+            for name, value in zip(_DYNAMICS, (
+                    p, along.force, curving.force, statics.force,
+                    statics.lambda_, curving.lambdadot, curving.lambdaddot,
+                    np.linalg.norm(d1, axis=1))):
+                getattr(out, name)[rows] = value
+        return out
+
+    def friction(self, lam1, x):
         """Friction (N, (M, 3)) at each gridpoint at the speeds ``sqrt(x)``."""
         if not self.robot.has_friction:
-            return np.zeros_like(dyn.c)
+            return np.zeros_like(lam1)
         return mechanics.friction_force(self.robot,
-                                        dyn.lam1 * np.sqrt(x)[:, None])
+                                        lam1 * np.sqrt(x)[:, None])
 
 
-def _add_reversals(models, path, grid, dyn):
+def _at(path, index, w):
+    """Return ``(line, words)`` naming a gridpoint: the path's start apart."""
+    if index == 0 and w == 0.0:
+        return path.line_at(0, 0.0), 'the start of the path'
+    return path.line_at(int(index), float(w)), 'the path'
+
+
+def _stage_line(path, grid, i):
+    """Return the program's line of stage ``i`` (from gridpoint ``i``)."""
+    return path.pieces[grid.index[i]].line_at(float(grid.w[i]))
+
+
+def _add_reversals(models, path, grid, dyn, bounds):
     """Add gridpoints around every zero of lambda' within a piece."""
     inside = grid.delta > 0.0
     change = (np.sign(dyn.lam1[1:]) * np.sign(dyn.lam1[:-1]) < 0) & \
@@ -262,8 +381,10 @@ def _add_reversals(models, path, grid, dyn):
     at = np.repeat(stage, len(offsets))
     keep = (w > grid.w[at]) & (w < grid.w[at + 1])
     w, at = w[keep], at[keep]
+    bounds.gridpoints(len(grid.w) + len(w), f'the path needs, with '
+                      f'{len(w):,} around the reversals of its actuators,')
     index = grid.index[at]
-    extra = models.dynamics(path, index, w)
+    extra = models.dynamics(path, index, w, bounds)
     order = np.lexsort((np.r_[grid.w, w], np.r_[grid.index, index]))
     all_w = np.r_[grid.w, w][order]
     all_index = np.r_[grid.index, index][order]
@@ -289,46 +410,75 @@ def _check_rest(path, grid, dyn, limits):
                 f'{limits.effort[j]:g} N'))):
         if bad.any():
             row, j = np.argwhere(bad)[0]
+            line, what = _at(path, grid.index[row], grid.w[row])
+            where = 'the start of the path ' if what != 'the path' else ''
             raise PlanningError(
-                path.pieces[grid.index[row]].line,
-                f'at {mechanics.format_vector(dyn.position[row])} m '
-                f'{limits.names[j]} {why(row, j)}')
+                line, f'{where}at {mechanics.format_vector(dyn.position[row])}'
+                f' m {limits.names[j]} {why(row, j)}')
 
 
-def _plan_on(models, path, grid, dyn, limits, rate, max_speed):
+def _plan_on(models, path, grid, rows, limits, rate, max_speed, bounds):
     """Plan on one grid: friction's fixed point, then verification rounds."""
-    rows = _Rows(dyn, grid, limits, max_speed)
     x = np.zeros(len(grid.w))
     rounds = 0
     for _ in range(FRICTION_ROUNDS if models.robot.has_friction else 1):
         rounds += 1
         previous = x
-        x, u = _passes(rows, grid, models.friction(dyn, x), path,
+        bounds.clock()
+        x, u = _passes(rows, grid, models.friction(rows.lam1, x), path,
                        rounds == 1)
         if np.abs(x - previous).max() <= FRICTION_AGREEMENT * max(
                 x.max(), 1e-12):
             break
-    timing = _Timing(path, grid, x, u, rate, 0.0)
     smoothing = 0.0
     if np.isfinite(limits.jerk).any():
-        smoothing = _first_smoothing(models, path, timing, limits)
-    for _ in range(VERIFY_ROUNDS):
-        timing = _Timing(path, grid, x, u, rate, smoothing)
-        motion, samples = _sample(models, path, timing, rounds)
-        worst, longer = rows.tighten(motion, samples, max_speed, x)
-        if worst <= VERIFY_SHARE:
+        smoothing = _first_smoothing(models, path, _Timing(
+            path, grid, x, u, rate, 0.0, bounds), limits)
+    for attempt in range(VERIFY_ROUNDS + 1):
+        timing = _Timing(path, grid, x, u, rate, smoothing, bounds)
+        motion, verdict = _verify(models, path, timing, rounds, rows,
+                                  max_speed, x, bounds)
+        if verdict.worst <= (VERIFY_SHARE if attempt < VERIFY_ROUNDS
+                             else ACCEPT_SHARE):
             return motion
+        if attempt == VERIFY_ROUNDS:
+            break
+        motion = None       # its memory, before the next is made
+        rows.tighten(verdict)
         rounds += 1
-        smoothing *= longer
-        x, u = _passes(rows, grid, models.friction(dyn, x), path, False)
-    timing = _Timing(path, grid, x, u, rate, smoothing)
-    motion, samples = _sample(models, path, timing, rounds)
-    worst, _ = rows.tighten(motion, samples, max_speed, x)
-    if worst <= ACCEPT_SHARE:
-        return motion
+        smoothing *= verdict.longer
+        bounds.clock()
+        x, u = _passes(rows, grid, models.friction(rows.lam1, x), path,
+                       False)
     raise PlanningError(None, f'no motion found within the limits: a sample '
-                        f'still exceeds one by {worst:.3%} after '
+                        f'still exceeds one by {verdict.worst:.3%} after '
                         f'{rounds} rounds')
+
+
+def _verify(models, path, timing, rounds, rows, max_speed, x, bounds):
+    """
+    Sample the motion and check every sample: ``(Motion, _Verdict)``.
+
+    SAMPLE_BLOCK samples at a time (:func:`_sample`), each block checked
+    (:meth:`_Rows.check`) and written into the motion's arrays, made once.
+    """
+    n = len(timing.t)
+    triples = [np.empty((n, 3)) for _ in range(9)]
+    solution = mechanics.Solution(*triples[3:], np.empty(n), np.empty(n))
+    verdict = _Verdict(rows)
+    before = None
+    for start in range(0, n, SAMPLE_BLOCK):
+        bounds.clock()
+        block = slice(start, min(n, start + SAMPLE_BLOCK))
+        motion, samples = _sample(models, path, timing, rounds, block)
+        rows.check(motion, samples, max_speed, x, verdict, before)
+        for whole, part in zip(triples[:3] + list(solution), (
+                motion.position, motion.velocity, motion.acceleration,
+                *motion.solution)):
+            whole[block] = part
+        before = (motion.t[-1], motion.solution.lambdaddot[-1])
+    return Motion(timing.t, *triples[:3], solution, len(timing.grid.w),
+                  rounds), verdict
 
 
 def _first_smoothing(models, path, timing, limits):
@@ -339,10 +489,14 @@ def _first_smoothing(models, path, timing, limits):
     ``lambdaddot`` about its change over ``T`` divided by ``T``: ``T =
     max_j (range of lambdaddot_j) / max_jerk_j``.
     """
-    motion, _ = _sample(models, path, timing, 0)
-    accelerations = motion.solution.lambdaddot
-    spread = accelerations.max(0) - accelerations.min(0)
-    return float(max(np.max(spread / limits.jerk), 1.0 / timing.rate))
+    high, low = np.full(3, -np.inf), np.full(3, np.inf)
+    for start in range(0, len(timing.t), SAMPLE_BLOCK):
+        block = slice(start, start + SAMPLE_BLOCK)
+        accelerations = _sample(models, path, timing, 0,
+                                block)[0].solution.lambdaddot
+        high = np.maximum(high, accelerations.max(0))
+        low = np.minimum(low, accelerations.min(0))
+    return float(max(np.max((high - low) / limits.jerk), 1.0 / timing.rate))
 
 
 # The families of two-sided rows of a gridpoint: each actuator's force,
@@ -368,6 +522,7 @@ class _Rows:
     def __init__(self, dyn, grid, limits, max_speed):
         lam1 = dyn.lam1
         self.alpha = np.hstack((dyn.a, lam1))
+        self.lam1 = self.alpha[:, 3:]
         self.beta = np.hstack((dyn.b, dyn.lam2))
         up, down = _acceleration_bounds(limits, lam1 >= 0.0)
         self.high = np.hstack((limits.effort - dyn.c, up))
@@ -379,42 +534,45 @@ class _Rows:
                            np.inf).min(1)
             cap = np.minimum(cap, (np.minimum(grid.feed, max_speed)
                                    / dyn.speed) ** 2)
-        self.cap = np.where(grid.stop, 0.0, np.minimum(cap, X_BIG))
+        self.cap = np.where(grid.stop, 0.0, np.minimum(cap, reachability.X_BIG))
         self.cap_extra = np.full_like(self.cap, np.inf)
         self.limits = limits
 
-    def bounds(self, friction):
-        """Return ``(low, high)`` with ``friction`` (N, (M, 3)) at each point."""
-        f = np.hstack((friction, np.zeros_like(friction)))
-        high = self.high - f
-        low = self.low - f
-        return (np.where(low < 0.0, low * self.scale_low, low),
-                np.where(high > 0.0, high * self.scale_high, high))
-
-    def tighten(self, motion, samples, max_speed, x):
+    def bounds(self, friction, part):
         """
-        Check every sample; tighten the rows where one exceeds a limit.
+        Return ``(low, high)`` of the gridpoints ``part`` (a slice).
+
+        With ``friction`` (N, (M, 3)) at each gridpoint.
+        """
+        f = np.hstack((friction[part], np.zeros_like(friction[part])))
+        high = self.high[part] - f
+        low = self.low[part] - f
+        return (np.where(low < 0.0, low * self.scale_low[part], low),
+                np.where(high > 0.0, high * self.scale_high[part], high))
+
+    def check(self, motion, samples, max_speed, x, verdict, before):
+        """
+        Check the samples of ``motion`` (a block); note what to tighten.
 
         ``samples``: what :func:`_sample` tells of each sample (the
         gridpoints whose rows shaped it, its feed, its statics and
         friction, its jerk's share from the smoothing); ``x``: the
-        solution's. Returns ``(worst, longer)``: the largest excess over a
-        limit as a share of it (negative: all within), and the factor by
-        which the smoothing time must grow (1: none).
+        solution's; ``before``: the sample before the block's ``(t,
+        lambdaddot)`` (None for the first). Updates ``verdict``: the
+        largest excess over a limit as a share of it (negative: all
+        within), the factor by which the smoothing time must grow (1:
+        none), the room and the caps of the gridpoints to tighten.
         """
-        worst = -np.inf
-        longer = 1.0
-        scale_high = np.ones_like(self.scale_high)
-        scale_low = np.ones_like(self.scale_low)
-        cap = np.full_like(self.cap, np.inf)
         sol = motion.solution
         signed = np.hstack((sol.force, sol.lambdaddot))
-        for value, bound, family, rising in _checks(motion, samples,
-                                                    self.limits, max_speed):
+        for value, bound, family in _checks(motion, samples, self.limits,
+                                            max_speed, before):
             with np.errstate(divide='ignore', invalid='ignore'):
                 share = np.where(np.isfinite(bound), value / bound - 1.0,
                                  -np.inf)
-            worst = max(worst, float(share.max(initial=-np.inf)))
+            verdict.worst = max(verdict.worst,
+                                float(share.max(initial=-np.inf)))
+            cap = verdict.cap
             for sample, j in np.argwhere(share > VERIFY_SHARE):
                 points = slice(samples.first[sample],
                                samples.last[sample] + 1)
@@ -422,7 +580,8 @@ class _Rows:
                 if family == JERK:
                     if samples.smoothed_jerk[sample, j] >= 0.5 * value[
                             sample, j]:
-                        longer = max(longer, min(1.5, 1.02 / ratio))
+                        verdict.longer = max(verdict.longer,
+                                             min(1.5, 1.02 / ratio))
                     else:       # the jump of lambda'' x at a junction
                         cap[points] = np.minimum(cap[points],
                                                  x[points] * ratio)
@@ -437,17 +596,32 @@ class _Rows:
                 room = math.copysign(bound[sample, j], total) - static
                 if room * total > 0.0 and abs(total - static) > abs(room):
                     share_left = room / (total - static)
-                    scale = scale_high if total > 0.0 else scale_low
+                    scale = verdict.scale_high if total > 0.0 \
+                        else verdict.scale_low
                     scale[points, column] = np.minimum(
                         scale[points, column], share_left)
                 else:   # statics and friction alone: slower, less friction
                     cap[points] = np.minimum(cap[points], x[points] * 0.81)
+
+    def tighten(self, verdict):
+        """Tighten the rows where a sample exceeded a limit (``verdict``)."""
         margin = 1.0 - 0.5 * VERIFY_SHARE
-        self.scale_high *= np.where(scale_high < 1.0, scale_high * margin,
-                                    1.0)
-        self.scale_low *= np.where(scale_low < 1.0, scale_low * margin, 1.0)
-        self.cap_extra = np.minimum(self.cap_extra, cap)
-        return worst, longer
+        self.scale_high *= np.where(verdict.scale_high < 1.0,
+                                    verdict.scale_high * margin, 1.0)
+        self.scale_low *= np.where(verdict.scale_low < 1.0,
+                                   verdict.scale_low * margin, 1.0)
+        self.cap_extra = np.minimum(self.cap_extra, verdict.cap)
+
+
+class _Verdict:
+    """What the checks of a motion found (see :meth:`_Rows.check`)."""
+
+    def __init__(self, rows):
+        self.worst = -np.inf
+        self.longer = 1.0
+        self.scale_high = np.ones_like(rows.scale_high)
+        self.scale_low = np.ones_like(rows.scale_low)
+        self.cap = np.full_like(rows.cap, np.inf)
 
 
 JERK = 'jerk'
@@ -461,189 +635,39 @@ def _acceleration_bounds(limits, forward):
     return np.where(forward, acc, dec), np.where(forward, dec, acc)
 
 
-def _checks(motion, samples, limits, max_speed):
-    """Yield ``(value, bound, family, rising)`` of every limit per sample."""
+def _checks(motion, samples, limits, max_speed, before):
+    """Yield ``(value, bound, family)`` of every limit per sample."""
     sol = motion.solution
     n = len(motion.t)
-    force = sol.force
-    yield (np.abs(force), np.broadcast_to(limits.effort, (n, 3)), FORCE,
-           force >= 0.0)
+    yield np.abs(sol.force), np.broadcast_to(limits.effort, (n, 3)), FORCE
     yield (np.abs(sol.lambdadot), np.broadcast_to(limits.velocity, (n, 3)),
-           None, None)
+           None)
     up, down = _acceleration_bounds(limits, sol.lambdadot >= 0.0)
-    rising = sol.lambdaddot >= 0.0
-    yield (np.abs(sol.lambdaddot), np.where(rising, up, down), ACCELERATION,
-           rising)
+    yield (np.abs(sol.lambdaddot),
+           np.where(sol.lambdaddot >= 0.0, up, down), ACCELERATION)
     speed = np.linalg.norm(motion.velocity, axis=1)[:, None]
-    yield (speed, np.minimum(samples.feed, max_speed)[:, None], None, None)
+    yield speed, np.minimum(samples.feed, max_speed)[:, None], None
     if np.isfinite(limits.jerk).any():
-        jerk = np.zeros((n, 3))
-        jerk[1:] = np.abs(np.diff(sol.lambdaddot, axis=0)) / np.diff(
-            motion.t)[:, None]
-        yield (jerk, np.broadcast_to(limits.jerk, (n, 3)), JERK, None)
+        t, lambdaddot = motion.t, sol.lambdaddot
+        if before is not None:
+            t = np.r_[before[0], t]
+            lambdaddot = np.vstack((before[1], lambdaddot))
+        jerk = np.abs(np.diff(lambdaddot, axis=0)) / np.diff(t)[:, None]
+        if before is None:
+            jerk = np.vstack((np.zeros(3), jerk))
+        yield jerk, np.broadcast_to(limits.jerk, (n, 3)), JERK
 
 
 def _passes(rows, grid, friction, path, first):
-    """
-    Run TOPP-RA's backward and forward passes: ``x`` (M,) and ``u`` (M - 1,).
-
-    Each stage's rows are its gridpoints' (the interpolation scheme: at
-    ``i + 1``, ``x + 2 delta u`` for ``x``). ``first``: the first plan on
-    this grid, where a stage without a solution means the grid is too
-    coarse (:class:`_StageFailure`); later (friction at other speeds)
-    such a stage stops G.
-    """
-    low, high = rows.bounds(friction)
-    delta = grid.delta
-    twice = 2.0 * delta[:, None]
-    alpha = np.hstack((rows.alpha[:-1], rows.alpha[1:] + twice
-                       * rows.beta[1:]))
-    beta = np.hstack((rows.beta[:-1], rows.beta[1:]))
-    low = np.hstack((low[:-1], low[1:]))
-    high = np.hstack((high[:-1], high[1:]))
-    bounded = np.isfinite(high) | np.isfinite(low)
-    bounded[delta == 0.0] = False
-    used = bounded.any(0)
-    alpha, beta = alpha[:, used], beta[:, used]
-    low, high, bounded = low[:, used], high[:, used], bounded[:, used]
-    cap = np.minimum(rows.cap, rows.cap_extra)
-    positive = (alpha > U_ZERO) & bounded
-    negative = (alpha < -U_ZERO) & bounded
-    alone = bounded & ~(positive | negative)
-    with np.errstate(divide='ignore', invalid='ignore'):
-        # alpha > 0: u <= (high - beta x) / alpha, u >= (low - beta x) /
-        # alpha; alpha < 0 the other way round.
-        slope = np.where(positive | negative, -beta / alpha, 0.0)
-        top = np.where(positive, high / alpha,
-                       np.where(negative, low / alpha, np.inf))
-        bottom = np.where(positive, low / alpha,
-                          np.where(negative, high / alpha, -np.inf))
-        x_alone = np.where(alone & (beta > 0.0), high / beta, np.inf)
-        x_alone = np.minimum(x_alone, np.where(alone & (beta < 0.0),
-                                               low / beta, np.inf))
-        blocked = (alone & ((high < 0.0) | (low > 0.0))
-                   & ((beta == 0.0) | (high < 0.0) & (beta <= 0.0)
-                      | (low > 0.0) & (beta >= 0.0))).any(1)
-    top = np.where(np.isnan(top), np.inf, top)
-    bottom = np.where(np.isnan(bottom), -np.inf, bottom)
-    free = (delta > 0.0) & (np.isinf(top).all(1) | np.isinf(bottom).all(1))
-    if free.any():
-        i = int(np.argmax(free))
+    """Run the reachability passes (:func:`reachability.passes`): x, u."""
+    try:
+        return reachability.passes(rows, grid.delta, friction, first)
+    except reachability.Unbounded as error:
         raise PlanningError(
-            path.pieces[grid.index[i]].line, 'nothing bounds the '
+            _stage_line(path, grid, error.stage), 'nothing bounds the '
             'acceleration of G along the path there: give the actuators '
-            'effort or acceleration limits (max_effort, max_acceleration)')
-    start = np.minimum(cap[:-1], x_alone.min(1, initial=np.inf))
-    mvc = _largest_feasible(top, slope, bottom, slope, start)
-    failed = ((mvc < 0.0) | blocked) & (delta > 0.0)
-    if failed.any():
-        if first:
-            raise _StageFailure()
-        mvc[failed] = 0.0
-    with np.errstate(divide='ignore', invalid='ignore'):
-        rate = 1.0 + twice * slope
-        valid = np.isfinite(bottom) & (rate > 0.0)
-        shift = np.where(valid, twice * bottom, -np.inf).tolist()
-        scale = np.where(valid, 1.0 / rate, 1.0).tolist()
-    k = _backward(delta.tolist(), cap.tolist(), mvc.tolist(), shift, scale)
-    # Where G is on the controllable bound, it stays on it if the largest
-    # acceleration there reaches the next bound (the backward pass made
-    # sure the smallest does not overshoot it): known for every stage at
-    # once.
-    bound = np.array(k)
-    with np.errstate(invalid='ignore'):
-        fastest = (top + slope * bound[:-1, None]).min(1)
-        follows = (bound[:-1] + twice[:, 0] * fastest >= bound[1:]) & (
-            delta > 0.0)
-    return _forward(delta.tolist(), k, top.tolist(), slope.tolist(),
-                    bottom.tolist(), follows.tolist())
-
-
-def _largest_feasible(h, n, low, m, start):
-    """
-    Return the largest ``x`` of each stage where some ``u`` meets every row.
-
-    ``u <= h + n x`` and ``u >= low + m x`` per row: the gap ``min(h + n
-    x) - max(low + m x)`` is concave and piecewise linear in ``x``, so
-    Newton's method from ``start`` (an upper bound) reaches its last zero
-    in finitely many steps. -1 where no ``x >= 0`` has a ``u``.
-    """
-    x = np.minimum(start, X_BIG)
-    rows = np.arange(len(x))
-    active = np.ones(len(x), dtype=bool)
-    for _ in range(200):
-        hx = h + n * x[:, None]
-        j = np.argmin(hx, 1)
-        lx = low + m * x[:, None]
-        k = np.argmax(lx, 1)
-        top, bottom = hx[rows, j], lx[rows, k]
-        with np.errstate(invalid='ignore'):
-            gap = top - bottom
-            active &= gap < -1e-12 * (np.abs(top) + np.abs(bottom))
-        if not active.any():
-            return x
-        slope = n[rows, j] - m[rows, k]
-        with np.errstate(divide='ignore', invalid='ignore'):
-            target = x - gap / slope
-        # Concave: where the gap rises to the left, or its tangent's zero
-        # is below 0, no x in [0, x] has a u.
-        failed = active & ((slope >= 0.0) | (target < 0.0))
-        # A step below the rounding of x: there (a hair below, to be on
-        # the feasible side).
-        settled = active & ~failed & (x - target <= 1e-12 * x)
-        x = np.where(active, target, x)
-        x[settled] *= 1.0 - 1e-12
-        x[failed] = -1.0
-        active &= ~(failed | settled)
-    return x
-
-
-def _backward(delta, cap, mvc, shift, scale):
-    """Return the largest controllable ``x`` of every gridpoint, from the end."""
-    count = len(delta)
-    k = [0.0] * (count + 1)
-    for i in range(count - 1, -1, -1):
-        after = k[i + 1]
-        if delta[i] == 0.0:
-            k[i] = min(after, cap[i])
-            continue
-        best = mvc[i]
-        for a, b in zip(shift[i], scale[i]):
-            value = (after - a) * b
-            if value < best:
-                best = value
-        k[i] = best if best > 0.0 else 0.0
-    return k
-
-
-def _forward(delta, k, top, slope, bottom, follows):
-    """
-    From rest, the largest ``u`` of each stage keeping ``x`` controllable.
-
-    ``follows[i]``: G on the bound ``k[i]`` can reach ``k[i + 1]``.
-    """
-    count = len(delta)
-    x = [0.0] * (count + 1)
-    u = [0.0] * count
-    for i in range(count):
-        xi = x[i]
-        if delta[i] == 0.0:
-            x[i + 1] = min(xi, k[i + 1])
-            continue
-        twice = 2.0 * delta[i]
-        if follows[i] and xi == k[i]:
-            x[i + 1] = k[i + 1]
-            u[i] = (k[i + 1] - xi) / twice
-            continue
-        rows = list(zip(top[i], slope[i], bottom[i]))
-        ui = min(min(t + m * xi for t, m, _ in rows), (k[i + 1] - xi) / twice)
-        least = max(b + m * xi for _, m, b in rows)
-        if ui < least:
-            ui = least
-        following = min(max(xi + twice * ui, 0.0), k[i + 1])
-        u[i] = (following - xi) / twice
-        x[i + 1] = following
-    return np.array(x), np.array(u)
+            'effort or acceleration limits (max_effort, max_acceleration)') \
+            from None
 
 
 class _Timing:
@@ -663,15 +687,15 @@ class _Timing:
     ``T`` in duration.
     """
 
-    def __init__(self, path, grid, x, u, rate, smoothing):
+    def __init__(self, path, grid, x, u, rate, smoothing, bounds):
         speed = np.sqrt(x)
         delta = grid.delta
         pace = speed[:-1] + speed[1:]
         moving = delta > 0.0
         if (moving & (pace <= 0.0)).any():
             i = int(np.argmax(moving & (pace <= 0.0)))
-            raise PlanningError(path.pieces[grid.index[i]].line, 'G cannot '
-                                'move there within the limits')
+            raise PlanningError(_stage_line(path, grid, i), 'G cannot move '
+                                'there within the limits')
         with np.errstate(divide='ignore', invalid='ignore'):
             dt = np.where(moving, 2.0 * delta / pace, 0.0)
         # Smoothed, G rests for T at each stop within the path: the moving
@@ -694,10 +718,7 @@ class _Timing:
             self.smoothing = 0.0
             stretch = periods / rate / duration
             times *= stretch
-        if periods > MAX_SAMPLES:
-            raise PlanningError(None, f'the motion lasts {periods / rate:.6g}'
-                                f' s: more than {MAX_SAMPLES} samples at '
-                                f'{rate:g} Hz')
+        bounds.samples(periods + 1, len(grid.w), rate)
         self.t = np.arange(periods + 1) / rate
         if smoothing == 0.0:
             times[-1] = self.t[-1]
@@ -707,6 +728,7 @@ class _Timing:
         starts = np.concatenate(([0.0], np.cumsum(
             [piece.length for piece in path.pieces])))
         self.starts = starts
+        self.feeds = np.array([piece.feed for piece in path.pieces])
         self.s = starts[grid.index] + grid.w
         self.grid = grid
         self.rate = rate
@@ -751,14 +773,17 @@ class _Timing:
         return s, sdot, u, integral, stage
 
 
-def _sample(models, path, timing, rounds):
+def _sample(models, path, timing, rounds, block):
     """
     Sample the motion at the timing's rate: ``(Motion, _Samples)``.
 
-    The last sample is exactly at the end, at rest.
+    The samples ``block`` (a slice) of the motion; the first at rest, the
+    last exactly at the end, at rest.
     """
-    t = timing.t
+    t = timing.t[block]
     grid = timing.grid
+    first_sample = block.start == 0
+    last_sample = block.start + len(t) == len(timing.t)
     if timing.smoothing > 0.0:
         span = timing.smoothing
         s1, v1, a1, i1, stage = timing.law(t)
@@ -772,14 +797,17 @@ def _sample(models, path, timing, rounds):
         s, sdot, sddot, _, stage = timing.law(t)
         third = np.zeros_like(t)
         first = stage
-    sdot[0] = sdot[-1] = sddot[-1] = 0.0
-    if timing.smoothing > 0.0:
-        sddot[0] = 0.0
+    if first_sample:
+        sdot[0] = 0.0
+        if timing.smoothing > 0.0:
+            sddot[0] = 0.0
     piece = np.clip(np.searchsorted(timing.starts, s, side='right') - 1, 0,
                     len(path.pieces) - 1)
     lengths = timing.starts[1:] - timing.starts[:-1]
     w = np.clip(s - timing.starts[piece], 0.0, lengths[piece])
-    piece[-1], w[-1] = len(path.pieces) - 1, lengths[-1]
+    if last_sample:
+        sdot[-1] = sddot[-1] = 0.0
+        piece[-1], w[-1] = len(path.pieces) - 1, lengths[-1]
     p, d1, d2 = path.evaluate(piece, w)
     v = d1 * sdot[:, None] + 0.0        # (+ 0.0: no negative zeros)
     a = d1 * sddot[:, None] + d2 * (sdot * sdot)[:, None] + 0.0
@@ -789,7 +817,7 @@ def _sample(models, path, timing, rounds):
                          / sdot[:, None], np.inf)
         smoothed = np.where(third[:, None] == 0.0, 0.0,
                             np.abs(rates * third[:, None]))
-    feeds = np.array([pc.feed for pc in path.pieces])[piece]
+    feeds = timing.feeds[piece]
     static = mechanics.solve_batch(models.statics, p, None, None, 0.0).force
     if models.robot.has_friction:
         static = static + mechanics.friction_force(models.robot,

@@ -15,14 +15,15 @@ import contextlib
 import io
 import math
 import sys
-from typing import Sequence
+from typing import Optional, Sequence
 
 import numpy as np
 
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
 from orthoglide_ros.formats.text import read_text
 from orthoglide_ros.model.types import Path as FilePath
-from orthoglide_ros.planning.gcode import ProgramError, read_gcode
+from orthoglide_ros.planning.gcode import (EMPTY, lines_of, ProgramError,
+                                           read_gcode)
 from orthoglide_ros.planning.path import from_moves, from_waypoints, Path
 
 # Largest program read (bytes).
@@ -32,17 +33,19 @@ WAYPOINT_GROUPS = (('position', ('x', 'y', 'z'), True),
 _NAME = '<program>'
 
 
-def read_program(path: FilePath, start: Sequence[float],
-                 tolerance: float) -> Path:
+def read_program(path: FilePath, start: Sequence[float], tolerance: float,
+                 max_pieces: Optional[int] = None) -> Path:
     """
     Return the path of the program file ``path`` (``-``: standard input).
 
-    ``tolerance`` (m): the blends' of waypoints and of G64 without P.
-    Raises :class:`ProgramError` (``line N`` where a line is to blame; a
-    program that moves nothing: "zero-length program").
+    ``tolerance`` (m): the blends' of waypoints and of G64 without P;
+    ``max_pieces``: the most pieces the path may have. Raises
+    :class:`ProgramError` (``line N`` where a line is to blame; a program
+    that moves nothing: "zero-length program", EMPTY; one of more pieces:
+    TOO_LARGE).
     """
     text = _read_text(path)
-    first = next((line for line in text.splitlines() if line.strip()), '')
+    first = next((line for line in lines_of(text) if line.strip()), '')
     cells = {c.strip().lower() for c in first.split(',')}
     if {'x', 'y', 'z'} <= cells:
         points, feeds, lines = _waypoints(text)
@@ -50,8 +53,9 @@ def read_program(path: FilePath, start: Sequence[float],
         return from_waypoints(np.vstack((origin, points)),
                               None if feeds is None
                               else np.r_[math.inf, feeds],
-                              [0, *lines], tolerance)
-    return from_moves(read_gcode(text, start), tolerance)
+                              [0, *lines], tolerance, max_pieces)
+    return from_moves(read_gcode(text, start), tolerance,
+                      max_pieces=max_pieces)
 
 
 def _read_text(path):
@@ -72,7 +76,7 @@ def _waypoints(text):
             from None
     points = values['position']
     if len(points) == 0:
-        raise ProgramError(None, 'zero-length program: no waypoint')
+        raise ProgramError(None, 'zero-length program: no waypoint', EMPTY)
     feeds = values['feed']
     if feeds is not None:
         feeds = feeds[:, 0]

@@ -333,30 +333,35 @@ def solve_trajectory(robot, where, times, lines, p, v, a):
 
 def joint_trajectory_yaml(nanoseconds, sol, names):
     """
-    Format a trajectory_msgs/JointTrajectory as YAML (bytes).
+    Format a trajectory_msgs/JointTrajectory as YAML (chunks of bytes).
 
     The message as ``ros2 topic pub`` and launch files read it: a zero
     header stamp (joint_trajectory_controller starts it on arrival),
     ``names``, one point per row with positions = lambda (m), velocities =
     lambdadot (m/s), accelerations = lambdaddot (m/s^2), effort = f (N)
     and time_from_start = ``nanoseconds`` (int64). Doubles in full
-    precision.
+    precision. Yields CSV_CHUNK_ROWS points at a time, for
+    :func:`write_output`: the text is never held whole.
     """
     def row(values):
-        return '[' + ', '.join(repr(float(x)) for x in values) + ']'
-    out = ['header:', '  stamp:', '    sec: 0', '    nanosec: 0',
-           "  frame_id: ''",
-           'joint_names: [' + ', '.join(map(json.dumps, names)) + ']',
-           'points:']
-    for k in range(len(nanoseconds)):
-        sec, nanosec = divmod(int(nanoseconds[k]), 10**9)
-        out += [f'- positions: {row(sol.lambda_[k])}',
-                f'  velocities: {row(sol.lambdadot[k])}',
-                f'  accelerations: {row(sol.lambdaddot[k])}',
-                f'  effort: {row(sol.force[k])}',
-                '  time_from_start:', f'    sec: {sec}',
-                f'    nanosec: {nanosec}']
-    return ('\n'.join(out) + '\n').encode('utf-8')
+        return '[' + ', '.join(map(repr, values)) + ']'
+    yield ('\n'.join(['header:', '  stamp:', '    sec: 0', '    nanosec: 0',
+                      "  frame_id: ''", 'joint_names: ['
+                      + ', '.join(map(json.dumps, names)) + ']', 'points:'])
+           + '\n').encode('utf-8')
+    for start in range(0, len(nanoseconds), CSV_CHUNK_ROWS):
+        part = slice(start, start + CSV_CHUNK_ROWS)
+        out = []
+        for ns, lam, rate, acc, force in zip(
+                nanoseconds[part].tolist(), sol.lambda_[part].tolist(),
+                sol.lambdadot[part].tolist(), sol.lambdaddot[part].tolist(),
+                sol.force[part].tolist()):
+            sec, nanosec = divmod(int(ns), 10**9)
+            out += [f'- positions: {row(lam)}', f'  velocities: {row(rate)}',
+                    f'  accelerations: {row(acc)}', f'  effort: {row(force)}',
+                    '  time_from_start:', f'    sec: {sec}',
+                    f'    nanosec: {nanosec}']
+        yield ('\n'.join(out) + '\n').encode('utf-8')
 
 
 def table_row(label, *values):

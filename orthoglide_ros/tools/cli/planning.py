@@ -25,6 +25,9 @@ from orthoglide_ros.tools.cli.solving import (_joint_names,
                                               _joint_trajectory_yaml)
 
 DEFAULT_RATE = 1000.0           # Hz
+# The memory the path and its plan may take (bytes): with the
+# interpreter's 50 MB, the command stays within 1 GB.
+PLAN_BYTES = parametrization.MAX_BYTES
 DEFAULT_TOLERANCE = 1e-5        # m
 # The columns written: those ``batch`` reads.
 PLAN_COLUMNS = tuple(c for _, names, _ in INPUT_GROUPS for c in names)
@@ -74,17 +77,18 @@ def run_plan(robot, args):
     names = _joint_names(args.params)
     limits, told = _limits(args, names)
     try:
-        path = read_program(args.input, args.start, args.tolerance)
+        path = read_program(args.input, args.start, args.tolerance,
+                            parametrization.most_pieces(PLAN_BYTES))
         motion = parametrization.plan(robot, path, limits, args.rate,
-                                      args.max_speed)
+                                      args.max_speed, max_bytes=PLAN_BYTES)
     except ProgramError as error:
         raise CliError(f'{name}: {error}') from None
     if args.format == 'joint_trajectory':
         nanoseconds = np.round(motion.t * 1e9).astype(np.int64)
         data = _joint_trajectory_yaml(nanoseconds, motion.solution, names)
     else:
-        data = table_csv(PLAN_COLUMNS, motion.t, np.hstack((
-            motion.position, motion.velocity, motion.acceleration)))
+        data = table_csv(PLAN_COLUMNS, motion.t, _Joined(
+            motion.position, motion.velocity, motion.acceleration))
     write_output(args.output, data)
     if not told:
         print('orthoglide: note: no --limits and no planner section in '
@@ -94,6 +98,19 @@ def run_plan(robot, args):
         print(f'planned {motion.duration:.6g} s ({len(motion.t)} samples at '
               f'{args.rate:g} Hz) along {path.length:.6g} m')
     return 0
+
+
+class _Joined:
+    """Arrays side by side, joined a chunk at a time (for table_csv)."""
+
+    def __init__(self, *arrays):
+        self.arrays = arrays
+
+    def __len__(self):
+        return len(self.arrays[0])
+
+    def __getitem__(self, part):
+        return np.hstack([array[part] for array in self.arrays])
 
 
 def _limits(args, names):
