@@ -99,10 +99,8 @@ def combination_text(params: Sequence[Parameter], found: Identifiability,
         return 'not separated: too few readings'
     out = ''
     for c, name in sorted(terms, key=lambda t: -abs(t[0])):
-        size = abs(c)
-        if abs(size - round(size)) <= 1e-6:
-            size = round(size)
-        factor = '' if size == 1 else f'{size:.4g} '
+        size = f'{abs(c):.4g}'
+        factor = '' if size == '1' else size + ' '
         out += (('-' if c < 0 else '') if not out else
                 (' - ' if c < 0 else ' + ')) + factor + name
     return out

@@ -53,7 +53,7 @@ def run_calibration_poses(robot, args):
         design = poses.design(robot, args.count, args.type, args.seed,
                               args.evaluations)
     except ValueError as error:
-        raise CliError(f'--count {args.count}: {error}') from None
+        raise CliError(f'--{error}') from None     # 'count N: ...'
     gauge = args.type == 'gauge'
     print(f'Calibration poses: {args.count} '
           + ('readings of one coordinate (a dial gauge\'s), at '
