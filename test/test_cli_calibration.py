@@ -65,8 +65,8 @@ def test_the_poses_measured_calibrate_the_machine(capsys, tmp_path):
         'separable values, unit-norm columns):' in out
     rows = read_poses(poses_file)
     assert list(rows[0]) == HEADER.split(',') and len(rows) == 12
-    lam = np.array([[float(r[c]) for c in ('lambda_a', 'lambda_b',
-                                            'lambda_c')] for r in rows])
+    lam = np.array([[float(r[f'lambda_{leg}']) for leg in 'abc']
+                    for r in rows])
     nominal = np.array([[float(r[c]) for c in 'xyz'] for r in rows])
     assert np.allclose(mechanics.forward_kinematics(Robot(), lam), nominal,
                        atol=1e-12)
