@@ -7,8 +7,8 @@ readings separate (:func:`identifiability.identifiable`) by scipy's
 by robust statistics: a fit with a robust loss (soft L1, its scale the
 median absolute studentized residual) names the rows beyond
 BLUNDER_SIGMAS as candidates, each left out only if the fit without them
-predicts it that badly; then plain least squares leaves out, one at a
-time, a row whose externally studentized residual still lies beyond
+all predicts it that badly; then plain least squares leaves out, one at
+a time, a row whose externally studentized residual still lies beyond
 BLUNDER_SIGMAS. The standard errors follow from the noise the residuals
 imply (doc/calibration.md#the-least-squares).
 """
@@ -16,6 +16,7 @@ imply (doc/calibration.md#the-least-squares).
 from __future__ import annotations
 
 from collections import namedtuple
+import functools
 import math
 from typing import TYPE_CHECKING
 
@@ -36,10 +37,13 @@ if TYPE_CHECKING:   # annotations only: no import cycle at run time
 # to 1 cm and 3 deg (robots_as_built.FAR) is at most 60 mm off in the
 # workspace cube, a built Orthoglide about 7 mm.
 MAX_DEVIATION = 0.1
-# A row whose studentized residual (its readings' RMS over the noise's
-# standard deviation) exceeds this is a blunder: with 12 positions
-# measured in x, y, z, noise reaches it once in 2000 calibrations, with 30
-# far less often.
+# A row is a blunder where noise alone would give its residual with the
+# probability of BLUNDER_SIGMAS standard deviations of a normal variable
+# (2e-9): its studentized residual's F statistic beyond that quantile of
+# F(readings of the row, readings to spare) (36 for one reading among
+# many, 904,596 for three among six to spare: few readings hide a
+# blunder). The robust fits name candidates beyond BLUNDER_SIGMAS of their
+# scale.
 BLUNDER_SIGMAS = 6.0
 # At most this share of the rows may be left out as blunders: more is no
 # blunder but measurements of another robot, setup or frame.
@@ -102,13 +106,21 @@ def calibrate(nominal: Robot, data: Measurements,
     kept = np.ones(len(data.lines), dtype=bool)
     found = problem.identify(kept)
     deviation, candidates = _robust_candidates(problem, kept)
-    for row in candidates:      # each left out if the others confirm it
+    if candidates:      # left out where the rows without them confirm it
         trial = kept.copy()
-        trial[row] = False
-        problem.identify(trial)
+        trial[candidates] = False
+        try:
+            problem.identify(trial)
+        except CalibrationError:    # too few without them to judge
+            candidates = []
+    if candidates:
         fitted = _fit(problem, deviation, trial)
-        if _predicted(problem, fitted, trial, row) > BLUNDER_SIGMAS:
-            kept, deviation = trial, fitted
+        confirmed = [row for row, score in zip(candidates, _predicted(
+            problem, fitted, trial, candidates)) if score > 1.0]
+        if confirmed:
+            kept[confirmed] = False
+            _check_left_out(data, kept)
+            deviation = fitted
     for _ in range(MAX_REFITS + 1):
         found = problem.identify(kept)
         deviation = _fit(problem, deviation, kept)
@@ -309,28 +321,53 @@ def _robust_candidates(problem, kept):
         deviation = _fit(problem, deviation, kept, 'soft_l1', scale)
     order = np.argsort(-studentized)
     beyond = rows[judged][order][studentized[order] > BLUNDER_SIGMAS * scale]
-    most = int(MAX_LEFT_OUT * len(kept))
-    return deviation, list(dict.fromkeys(int(row) for row in beyond))[:most]
+    return deviation, list(dict.fromkeys(int(row) for row in beyond))[
+        :int(MAX_LEFT_OUT * len(kept))]
 
 
-def _predicted(problem, deviation, kept, row):
+def _beyond(statistic, readings, spare):
+    """Return an F statistic over its blunder quantile (above 1: a blunder)."""
+    return statistic / _quantile(readings, spare)
+
+
+@functools.lru_cache(maxsize=256)
+def _quantile(readings, spare):
     """
-    Return how badly a fit without ``row`` predicts it (in sigmas).
+    Return the blunder quantile of F(``readings``, ``spare``).
 
-    ``sqrt(e^T C^-1 e / m) / sigma``: ``e`` the row's m residuals, ``C =
+    What noise exceeds with the probability of BLUNDER_SIGMAS standard
+    deviations of a normal variable.
+    """
+    from scipy import stats
+    alarm = 2.0 * stats.norm.sf(BLUNDER_SIGMAS)
+    return float(stats.f.isf(alarm, readings, spare))
+
+
+def _predicted(problem, deviation, kept, rows):
+    """
+    Return how badly a fit without ``rows`` predicts each (:func:`_beyond`).
+
+    ``F = e^T C^-1 e / (m sigma^2)``: ``e`` the row's m residuals, ``C =
     I + J_B (J^T J)^-1 J_B^T`` their prediction's covariance over
-    ``sigma^2``, ``sigma`` the fit's noise.
+    ``sigma^2``, ``sigma`` the fit's noise of ``n - k`` readings to spare.
     """
     residual = problem.residuals(deviation, kept)
-    sigma = math.sqrt(float(residual @ residual)
-                      / max(len(residual) - len(problem.free), 1))
-    measured = problem.mask[row]
-    e = problem.residual_table(deviation)[row, measured]
-    jac = problem.columns(deviation)[row][measured][:, problem.free]
-    cov = np.eye(len(e)) + jac @ np.linalg.solve(
-        _normal(problem, deviation, kept), jac.T)
-    return math.sqrt(float(e @ np.linalg.solve(cov, e)) / len(e)) / max(
-        sigma, 1e-12)
+    spare = len(residual) - len(problem.free)
+    if spare < 1:
+        return [0.0] * len(rows)
+    sigma2 = max(float(residual @ residual) / spare, 1e-300)
+    inverse = np.linalg.inv(_normal(problem, deviation, kept))
+    table = problem.residual_table(deviation)
+    columns = problem.columns(deviation)
+    out = []
+    for row in rows:
+        measured = problem.mask[row]
+        e = table[row, measured]
+        jac = columns[row][measured][:, problem.free]
+        cov = np.eye(len(e)) + jac @ inverse @ jac.T
+        out.append(_beyond(float(e @ np.linalg.solve(cov, e)) / len(e)
+                           / sigma2, len(e), spare))
+    return out
 
 
 def _worst_row(problem, deviation, kept):
@@ -339,9 +376,10 @@ def _worst_row(problem, deviation, kept):
 
     Row B's ``q = e_B^T (I - H_BB)^-1 e_B`` (H the hat matrix), ``sigma_B^2
     = (RSS - q) / (dof - m_B)`` (the fit without the row), the statistic
-    ``sqrt(q / m_B) / sigma_B``; None where none exceeds BLUNDER_SIGMAS or
-    the readings leave fewer than MIN_REDUNDANCY to judge by. A row no
-    other reading checks (leverage near 1) is not judged.
+    ``F = q / (m_B sigma_B^2)`` against its quantile (:func:`_beyond`);
+    None where none exceeds it or the readings leave fewer than
+    MIN_REDUNDANCY to judge by. A row no other reading checks (leverage
+    near 1) is not judged.
     """
     rows = np.nonzero(problem.mask & kept[:, None])[0]
     residual = problem.residuals(deviation, kept)
@@ -351,7 +389,7 @@ def _worst_row(problem, deviation, kept):
     jac = problem.free_columns(deviation, kept)
     projected = jac @ np.linalg.inv(jac.T @ jac)
     total = float(residual @ residual)
-    worst, statistic = None, BLUNDER_SIGMAS
+    worst, score = None, 1.0
     for row in np.unique(rows):
         at = rows == row
         m = int(at.sum())
@@ -361,9 +399,10 @@ def _worst_row(problem, deviation, kept):
             continue
         q = float(e @ np.linalg.solve(rest, e))
         spread = (total - q) / (dof - m)
-        value = math.sqrt(q / m / spread) if spread > 0.0 else math.inf
-        if value > statistic:
-            worst, statistic = int(row), value
+        value = _beyond(q / m / spread, m, dof - m) if spread > 0.0 \
+            else math.inf
+        if value > score:
+            worst, score = int(row), value
     return worst
 
 

@@ -54,8 +54,8 @@ def lines(data: Measurements, result: Calibration) -> list[str]:
     for row, residual, column in result.left_out:
         out.append(f'left out: line {data.lines[row]} (a blunder: its '
                    f'{COORDINATES[column]} reading {1e3 * residual:+.4g} mm '
-                   f'from the calibrated robot\'s, {abs(residual) / result.sigma:.3g} '
-                   'times the noise)')
+                   'from the calibrated robot\'s, '
+                   f'{abs(residual) / result.sigma:.3g} times the noise)')
     out.append(
         f'residual RMS: {1e3 * result.rms_before:.4g} mm with the nominal '
         f'robot, {1e6 * result.rms_after:.4g} um calibrated, over '
@@ -94,9 +94,11 @@ def draw(figure: Any, data: Measurements, result: Calibration) -> None:
     axes = figure.subplots(2, 2)
     lines_ = np.asarray(data.lines)
     kept = result.kept
-    for ax, table, factor, unit, when in (
-            (axes[0, 0], result.before, 1e3, 'mm', 'nominal robot'),
-            (axes[0, 1], result.after, 1e6, 'um', 'calibrated robot')):
+    for ax, table, rms, factor, unit, when in (
+            (axes[0, 0], result.before, result.rms_before, 1e3, 'mm',
+             'nominal robot'),
+            (axes[0, 1], result.after, result.rms_after, 1e6, 'um',
+             'calibrated robot')):
         for k, (coordinate, colour) in enumerate(zip(
                 COORDINATES, ('tab:red', 'tab:green', 'tab:blue'))):
             ax.plot(lines_[kept], factor * table[kept, k], 'o',
@@ -104,8 +106,7 @@ def draw(figure: Any, data: Measurements, result: Calibration) -> None:
         ax.set_xlabel('line of the measurements file')
         ax.set_ylabel(f'measured - modelled ({unit})')
         ax.grid(True, alpha=0.4)
-        ax.set_title(f'{when}: RMS '
-                     f'{factor * (result.rms_before if table is result.before else result.rms_after):.3g} {unit}')
+        ax.set_title(f'{when}: RMS {factor * rms:.3g} {unit}')
     axes[0, 1].axhspan(-3e6 * result.sigma, 3e6 * result.sigma,
                        color='0.85', zorder=0, label='+-3 sigma')
     for row, residual, _ in result.left_out:
