@@ -52,7 +52,7 @@ NOISE = 10e-6           # m, each coordinate
 TARGETS = 500
 BLUNDER = 5e-3          # m
 TIMED = 100             # measurements of the timed command
-# The figures: (RMS, worst) um of each case, None where none.
+# The figures aimed at: (RMS, worst) um of each case, None where none.
 TARGET = {'xyz 30': (10.0, 45.0), 'gauge 90': (8.5, None),
           'poses 12': (14.0, None), 'random 12': (18.0, None),
           'blunder 30': (12.0, None), 'instrument 30': (None, None)}

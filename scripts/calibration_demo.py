@@ -205,7 +205,7 @@ def _rms(errors):
 
 
 def plot(path, passes):
-    """The error's norm over time (log) and at rest at each target."""
+    """Draw the error's norm over time (log) and at rest at each target."""
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt

@@ -51,7 +51,7 @@ def workspace(count, seed, robot=NOMINAL):
 
 
 def readings_of(robot, positions, nominal=NOMINAL):
-    """The joint readings of ``nominal``'s IK, ``robot``'s FK there."""
+    """Return the joint readings of ``nominal``'s IK, ``robot``'s FK there."""
     lam = mechanics.solve_batch(nominal, positions).lambda_
     return lam, mechanics.forward_kinematics(robot, lam)
 
@@ -97,7 +97,7 @@ def test_the_jacobian_is_the_models_derivative(instrument):
 
 
 def separable(robot, instrument=False, count=30):
-    """What x, y, z readings at ``count`` positions separate (robot's)."""
+    """Find what x, y, z readings at ``count`` positions separate."""
     lam = mechanics.solve_batch(robot, workspace(count, 3, robot)).lambda_
     start = geometry.IDENTITY if instrument else None
     params = geometry.parameters(instrument)
@@ -144,7 +144,7 @@ def test_xyz_readings_separate_18_values_and_hold_the_rest_for_a_reason(
 
 def rigid_motions(nominal):
     """
-    The six rigid motions of the whole robot against the instrument.
+    Return the six rigid motions of the whole robot against the instrument.
 
     36-vectors of the calibration's parameters: the legs' points,
     directions and attachments moved by a small translation or rotation of
@@ -212,7 +212,7 @@ def test_noise_free_readings_give_the_machine_back(size):
 
 @pytest.fixture(scope='module')
 def noisy():
-    """A built machine measured at 30 positions: (truth fit, noisy fits)."""
+    """Measure a built machine at 30 positions: (truth fit, noisy fits)."""
     machine = Robot(**random_built(np.random.default_rng(11)))
     lam, exact = readings_of(machine, workspace(30, 6))
     truth = calibration.calibrate(NOMINAL, data(lam, exact))

@@ -29,8 +29,8 @@ FAR = {
     'attachment_c': (0.004, 0.005, -0.007),
 }
 
-# A built Orthoglide's errors (doc/calibration.md, issue "the machine as
-# built"): lengths 0.1-1 mm, angles 0.05-0.3 deg.
+# A built Orthoglide's errors (doc/calibration.md): lengths 0.1-1 mm,
+# angles 0.05-0.3 deg.
 BUILT_LENGTHS = (1e-4, 1e-3)
 BUILT_TILTS = (0.05, 0.3)
 

@@ -41,9 +41,9 @@ MAX_DEVIATION = 0.1
 # probability of BLUNDER_SIGMAS standard deviations of a normal variable
 # (2e-9): its studentized residual's F statistic beyond that quantile of
 # F(readings of the row, readings to spare) (36 for one reading among
-# many, 904,596 for three among six to spare: few readings hide a
-# blunder). The robust fits name candidates beyond BLUNDER_SIGMAS of their
-# scale.
+# many, 2068 for three against six to spare: few readings hide a blunder
+# rather than name the noise one). The robust fits name candidates beyond
+# BLUNDER_SIGMAS of their scale.
 BLUNDER_SIGMAS = 6.0
 # At most this share of the rows may be left out as blunders: more is no
 # blunder but measurements of another robot, setup or frame.

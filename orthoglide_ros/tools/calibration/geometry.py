@@ -10,7 +10,7 @@ frame into it. :func:`measured` is the measurement model, forward
 kinematics (:func:`legs.intersect`) then the instrument's map;
 :func:`jacobian` its derivative in closed form, by the implicit function
 theorem on the legs' spheres (eq. 14 generalised)
-(doc/calibration.md#the-model).
+(doc/calibration.md#identifiability).
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ and the platform centre G an instrument measured; an empty ``x``, ``y`` or
 line and the column, a cell that is not a finite number, a missing
 column, a row that measures nothing, a row pasted twice and joint readings
 that put the nominal robot's platform outside its workspace
-(doc/calibration.md#measurements).
+(doc/calibration.md#what-to-measure-and-how).
 """
 
 from __future__ import annotations
