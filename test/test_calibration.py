@@ -22,7 +22,8 @@ built Orthoglide's errors (``robots_as_built``). Checked:
   the chi-square spread of 10 um, and the calibrated inverse kinematics
   within the accuracy the covariance predicts;
 - blunders: a 5 mm one named by its row and the result exactly the fit
-  without it; three at once; none named in pure noise;
+  without it; three at once; none named in pure noise; the threshold,
+  scipy's F quantile at the probability of six normal sigmas;
 - fewer readings: what they separate, and a note; too few: refused;
 - the positions worth measuring: a better conditioned Jacobian and a
   smaller predicted error than random positions', in the workspace.
@@ -390,3 +391,14 @@ def test_gauge_positions_name_one_coordinate_each():
         poses.design(NOMINAL, 23, 'gauge')
     with pytest.raises(ValueError, match='below 8'):
         poses.design(NOMINAL, 7, 'xyz')
+
+
+@pytest.mark.parametrize('readings, spare', [(1, 5), (3, 6), (3, 72),
+                                             (1, 1000)])
+def test_the_blunder_threshold_is_the_f_quantile_of_six_sigma(readings,
+                                                              spare):
+    from scipy import stats
+    from orthoglide_ros.tools.calibration import estimate
+    alarm = 2.0 * stats.norm.sf(estimate.BLUNDER_SIGMAS)
+    assert estimate._quantile(readings, spare) == pytest.approx(
+        stats.f.isf(alarm, readings, spare), rel=1e-8)

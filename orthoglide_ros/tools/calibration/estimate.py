@@ -336,11 +336,15 @@ def _quantile(readings, spare):
     Return the blunder quantile of F(``readings``, ``spare``).
 
     What noise exceeds with the probability of BLUNDER_SIGMAS standard
-    deviations of a normal variable.
+    deviations of a normal variable, ``alarm = erfc(6 / sqrt(2))``: with
+    ``P(F > x) = I_z(spare / 2, readings / 2)``, ``z = spare / (spare +
+    readings x)`` (the regularized incomplete beta function, inverted by
+    scipy's ``betaincinv``).
     """
-    from scipy import stats
-    alarm = 2.0 * stats.norm.sf(BLUNDER_SIGMAS)
-    return float(stats.f.isf(alarm, readings, spare))
+    from scipy.special import betaincinv
+    alarm = math.erfc(BLUNDER_SIGMAS / math.sqrt(2.0))
+    z = float(betaincinv(0.5 * spare, 0.5 * readings, alarm))
+    return spare * (1.0 - z) / (readings * z)
 
 
 def _predicted(problem, deviation, kept, rows):
