@@ -358,6 +358,7 @@ def test_an_instrument_frame_is_found_with_the_geometry():
         calibration.calibrate(NOMINAL, data(lam, seen))
 
 
+@pytest.mark.slow     # 1.4-1.7 s: the design of 2000 candidates, 2026-12-06
 def test_the_designed_positions_condition_the_calibration_best():
     design = poses.design(NOMINAL, 12, 'xyz')
     assert design.condition < 0.5 * design.random_condition
@@ -383,14 +384,15 @@ def test_the_designed_positions_condition_the_calibration_best():
 
 
 def test_gauge_positions_name_one_coordinate_each():
-    design = poses.design(NOMINAL, 30, 'gauge', evaluations=5000)
+    design = poses.design(NOMINAL, 30, 'gauge', evaluations=5000,
+                          candidates=500)
     assert design.coordinates.shape == (30,)
     assert set(design.coordinates.tolist()) <= {0, 1, 2}
     assert design.condition < design.random_condition
     with pytest.raises(ValueError, match='below 24'):
-        poses.design(NOMINAL, 23, 'gauge')
+        poses.design(NOMINAL, 23, 'gauge', candidates=200)
     with pytest.raises(ValueError, match='below 8'):
-        poses.design(NOMINAL, 7, 'xyz')
+        poses.design(NOMINAL, 7, 'xyz', candidates=200)
 
 
 @pytest.mark.parametrize('readings, spare', [(1, 5), (3, 6), (3, 72),

@@ -56,6 +56,7 @@ def twenty(tmp_path_factory):
     return write_measurements(path, lam, measured(lam)), lam
 
 
+@pytest.mark.slow     # 2.5-4 s: the design, the report's matplotlib, 2026-12-06
 def test_the_poses_measured_calibrate_the_machine(capsys, tmp_path):
     poses_file = tmp_path / 'poses.csv'
     code, out, err = run(capsys, 'calibration-poses', '--count', 12,
