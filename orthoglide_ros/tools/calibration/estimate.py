@@ -53,7 +53,8 @@ ROBUST_ROUNDS = 3
 # Evaluations of the residuals one least squares may make (a fit takes
 # 5 to 20).
 MAX_EVALUATIONS = 200
-# Plain fits after the robust ones, each leaving out one blunder at most.
+# Plain fits after the robust ones that may each leave out one blunder
+# (one more fits what is left).
 MAX_REFITS = 5
 # The MAD's factor to the standard deviation of normal noise.
 MAD_TO_SIGMA = 1.4826
@@ -104,7 +105,7 @@ def calibrate(nominal: Robot, data: Measurements,
     problem = _Problem(nominal, data, _start(nominal, data, instrument))
     _check_deviations(problem, data)
     kept = np.ones(len(data.lines), dtype=bool)
-    found = problem.identify(kept)
+    problem.identify(kept)
     deviation, candidates = _robust_candidates(problem, kept)
     if candidates:      # left out where the rows without them confirm it
         trial = kept.copy()
@@ -121,10 +122,11 @@ def calibrate(nominal: Robot, data: Measurements,
             kept[confirmed] = False
             _check_left_out(data, kept)
             deviation = fitted
-    for _ in range(MAX_REFITS + 1):
+    for refit in range(MAX_REFITS + 1):     # the last one leaves none out
         found = problem.identify(kept)
         deviation = _fit(problem, deviation, kept)
-        row = _worst_row(problem, deviation, kept)
+        row = _worst_row(problem, deviation, kept) \
+            if refit < MAX_REFITS else None
         if row is None:
             break
         kept[row] = False
