@@ -281,3 +281,18 @@ def test_a_file_beyond_the_measurement_limit_is_refused(capsys, tmp_path,
                          '--output', tmp_path / 'robot.yaml')
     assert_bad_input(code, out, err, 'more than 15 data rows')
     assert csvfile.MAX_ROWS > 15
+
+
+@pytest.mark.parametrize('command', ['calibrate', 'calibration-poses'])
+def test_a_nominal_robot_whose_legs_do_not_assemble_is_refused(
+        capsys, tmp_path, twenty, command):
+    params = tmp_path / 'nominal.yaml'
+    params.write_text('/**:\n  ros__parameters:\n    robot:\n'
+                      '      axis_direction_b: [0.9962, 0.0872, 0.0]\n')
+    output = tmp_path / 'out.file'
+    argv = (['--input', twenty[0]] if command == 'calibrate'
+            else ['--count', '12'])
+    code, out, err = run(capsys, command, *argv, '--params', params,
+                         '--output', output)
+    assert_bad_input(code, out, err, 'robot.axis_direction_b')
+    assert not output.exists()
