@@ -6,14 +6,14 @@ continuations joined):
 
 - each of the ``orthoglide`` tool's commands that need no robot and no DDS
   (paper, solve, batch, plan, excitation, urdf, mjcf, draw, animate,
-  identify, validate) is a test of its own, named by its document and line.
-  It runs in the test's process (``cli.main``; ``test_cli.py`` runs the
-  console script) in a scratch folder with the clone's ``config`` and
-  ``doc/programs``, after the earlier commands of its document that write
-  what it reads (the last writer of each file, each run once per test
-  process): exit 0, no error line. identify and validate of a log that only
-  a robot gives (a bag ``record`` writes) are skipped, once the document is
-  seen to record it;
+  identify, validate, calibration-poses, calibrate) is a test of its own,
+  named by its document and line. It runs in the test's process
+  (``cli.main``; ``test_cli.py`` runs the console script) in a scratch
+  folder with the clone's ``config`` and ``doc/programs``, after the
+  earlier commands of its document that write what it reads (the last
+  writer of each file, each run once per test process): exit 0, no error
+  line. identify and validate of a log that only a robot gives (a bag
+  ``record`` writes) are skipped, once the document is seen to record it;
 - the nodes' commands (``.venv/bin/NODE ...``, ``ros2 run orthoglide_ros
   NODE ...``) are checked against the node's parameter table: every
   ``-p``/``-r``/``--params-file`` after ``--ros-args`` (rcl takes one
@@ -52,7 +52,8 @@ TOOL = '.venv/bin/orthoglide '
 # The tool's subcommands that need no robot and no DDS; identify and
 # validate also need their log, run where an earlier command wrote it.
 OFFLINE = {'paper', 'solve', 'batch', 'plan', 'excitation', 'urdf', 'mjcf',
-           'draw', 'animate', 'identify', 'validate'}
+           'draw', 'animate', 'identify', 'validate', 'calibration-poses',
+           'calibrate'}
 LOGS = {'identify', 'validate'}
 NODE = re.compile(r'^(?:\.venv/bin/|ros2 run orthoglide_ros )(\w+)(.*)$')
 

@@ -1,5 +1,5 @@
 """
-The public API of model/, formats/ and the identification tool is typed.
+The public API of model/, formats/, identification and calibration is typed.
 
 Every public function and method there has annotations on its parameters
 and its return (checked from the source), and mypy, with the project's
@@ -16,7 +16,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 TYPED = ('orthoglide_ros/model', 'orthoglide_ros/formats',
-         'orthoglide_ros/tools/identification')
+         'orthoglide_ros/tools/identification',
+         'orthoglide_ros/tools/calibration')
 
 
 def public_functions():

@@ -37,7 +37,9 @@ class CsvError(ValueError):
 
 
 def read_columns(path: Path, groups: Sequence[tuple[str, Sequence[str], bool]],
-                 name: Optional[str] = None) -> dict[str, Optional[Array]]:
+                 name: Optional[str] = None, blank: Sequence[str] = (),
+                 max_rows: Optional[int] = None
+                 ) -> dict[str, Optional[Array]]:
     """
     Read the ``groups`` of columns of the CSV file ``path`` (``-``: stdin).
 
@@ -45,16 +47,21 @@ def read_columns(path: Path, groups: Sequence[tuple[str, Sequence[str], bool]],
     ('x', 'y', 'z'), True)``. Returns ``(values, lines)``: ``values`` maps
     each group to an (N, len(columns)) array of floats, or None if absent;
     ``lines`` the file line of each data row. ``name`` names the file in
-    messages (default ``path``). Raises :class:`CsvError`.
+    messages (default ``path``); an empty cell of a column in ``blank`` is
+    read as NaN (not measured), of another refused; at most ``max_rows``
+    data rows and twice as many lines (default MAX_ROWS and MAX_LINES).
+    Raises :class:`CsvError`.
     """
     name = name or ('<stdin>' if path == '-' else str(path))
     try:
         with contextlib.ExitStack() as stack:
             stream = sys.stdin if path == '-' else stack.enter_context(
                 open(path, encoding='utf-8-sig', newline=''))
-            reader = csv.reader(_lines(stream, name))
+            reader = csv.reader(_lines(stream, name, None if max_rows is None
+                                       else 2 * max_rows))
             try:
-                return _read(reader, groups, name)
+                return _read(reader, groups, name, frozenset(blank),
+                             max_rows)
             except csv.Error as error:
                 raise CsvError(f'{name}: line {reader.line_num}: '
                                f'{error}') from None
@@ -64,15 +71,16 @@ def read_columns(path: Path, groups: Sequence[tuple[str, Sequence[str], bool]],
         raise CsvError(f'{name}: not a UTF-8 text file') from None
 
 
-def _lines(stream, name):
+def _lines(stream, name, most=None):
     """
     Yield the lines of ``stream``; refuse one of over MAX_LINE characters.
 
     Each line is read at most MAX_LINE + 2 characters at a time (its end
     included), so a longer one is refused before it is held whole; at most
-    MAX_LINES lines.
+    ``most`` lines (default MAX_LINES).
     """
-    for number in range(1, MAX_LINES + 1):
+    most = MAX_LINES if most is None else most
+    for number in range(1, most + 1):
         line = stream.readline(MAX_LINE + 2)
         if not line:
             return
@@ -81,10 +89,10 @@ def _lines(stream, name):
                            'characters: not a CSV file of numbers')
         yield line
     if stream.readline(1):
-        raise CsvError(f'{name}: more than {MAX_LINES} lines: split the file')
+        raise CsvError(f'{name}: more than {most} lines: split the file')
 
 
-def _read(reader, groups, name):
+def _read(reader, groups, name, blank=frozenset(), max_rows=None):
     """Read the header and the data rows of ``reader`` (see read_columns)."""
     header = next(reader, None)
     if not header:
@@ -108,16 +116,20 @@ def _read(reader, groups, name):
         present.append(columns if found else None)
     wanted = [c for columns in present if columns for c in columns]
     cells_at = [index[c] for c in wanted]
+    max_rows = MAX_ROWS if max_rows is None else max_rows
     data, lines = array('d'), array('q')
     for cells in reader:
         if not any(cell.strip() for cell in cells):
             continue        # blank line
         row, line = len(lines) + 1, reader.line_num
-        if row > MAX_ROWS:
-            raise CsvError(f'{name}: more than {MAX_ROWS} data rows: split '
+        if row > max_rows:
+            raise CsvError(f'{name}: more than {max_rows} data rows: split '
                            'the file')
         for column, i in zip(wanted, cells_at):
             cell = cells[i].strip() if i < len(cells) else ''
+            if not cell and column in blank:
+                data.append(math.nan)
+                continue
             try:
                 value = float(cell)
             except ValueError:

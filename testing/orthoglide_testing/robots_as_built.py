@@ -28,3 +28,42 @@ FAR = {
     'attachment_b': (-0.006, 0.001, 0.002),
     'attachment_c': (0.004, 0.005, -0.007),
 }
+
+# A built Orthoglide's errors (doc/calibration.md): lengths 0.1-1 mm,
+# angles 0.05-0.3 deg.
+BUILT_LENGTHS = (1e-4, 1e-3)
+BUILT_TILTS = (0.05, 0.3)
+
+
+def random_built(rng, l3=0.85, lengths=BUILT_LENGTHS, tilts=BUILT_TILTS):
+    """
+    Return a random robot as built: ``Robot`` keyword arguments.
+
+    ``rng``: a numpy Generator. Every axis point and attachment off by a
+    vector of length uniform in ``lengths`` (m), any direction; every
+    axis tilted by an angle uniform in ``tilts`` (deg) towards any side;
+    every joint offset and bar length (about ``l3``) off by a length in
+    ``lengths`` either way.
+    """
+    import numpy as np
+
+    def vector():
+        v = rng.normal(size=3)
+        return tuple(rng.uniform(*lengths) * v / np.linalg.norm(v))
+
+    def signed():
+        return float(rng.uniform(*lengths) * rng.choice((-1.0, 1.0)))
+
+    out = {}
+    for leg, axis in zip('abc', np.eye(3)):
+        out[f'axis_point_{leg}'] = vector()
+        out[f'attachment_{leg}'] = vector()
+        side = rng.normal(size=3)
+        side -= (side @ axis) * axis
+        side /= np.linalg.norm(side)
+        angle = np.radians(rng.uniform(*tilts))
+        out[f'axis_direction_{leg}'] = tuple(np.cos(angle) * axis
+                                             + np.sin(angle) * side)
+    out['joint_offset'] = tuple(signed() for _ in range(3))
+    out['bar_length'] = tuple(l3 + signed() for _ in range(3))
+    return out

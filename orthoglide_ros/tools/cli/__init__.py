@@ -11,8 +11,8 @@ import sys
 
 from orthoglide_ros.formats.params_file import ParametersFileError
 from orthoglide_ros.model.robot import ParameterError
-from orthoglide_ros.tools.cli import (identifying, models, pictures,
-                                      planning, solving)
+from orthoglide_ros.tools.cli import (calibrating, identifying, models,
+                                      pictures, planning, solving)
 from orthoglide_ros.tools.cli.common import (check_distinct, check_output,
                                              CliError, CSV_COLUMNS,
                                              OUTPUT_OPTIONS, print_error,
@@ -51,6 +51,17 @@ def main(argv=None):
         return 2
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser whose usage errors take one line (exit code 2)."""
+
+    def error(self, message):
+        """Print ``orthoglide: error: COMMAND: message`` and exit 2."""
+        command = self.prog.removeprefix(PROG).strip()
+        print_error(f'{command + ": " if command else ""}{message} '
+                    f'({self.prog} --help lists the options)')
+        self.exit(2)
+
+
 def _version():
     try:
         from importlib.metadata import version
@@ -61,21 +72,22 @@ def _version():
 
 def _parser():
     """Return the tool's parser: the options every subcommand shares once."""
-    common = argparse.ArgumentParser(add_help=False)
+    common = _Parser(add_help=False)
     common.add_argument(
         '--params', metavar='FILE',
         help='ROS 2 parameters file with the robot.* parameters (as '
              'config/orthoglide.yaml: lengths m, angle rad, masses kg, '
              'gravity m/s^2, slider friction N s/m and N); default: the '
              'paper\'s robot')
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog=PROG, description='Inverse kinematics and dynamics of the '
         'Orthoglide, without ROS. Units: m, m/s, m/s^2, N, W, s. Bad input '
         'exits with code 2 and one line on standard error.')
     parser.add_argument('--version', action='version',
                         version=f'%(prog)s {_version()}')
     sub = parser.add_subparsers(dest='command', metavar='COMMAND')
-    for module in (solving, planning, identifying, models, pictures):
+    for module in (solving, planning, identifying, calibrating, models,
+                   pictures):
         for command in module.SUBCOMMANDS:
             one = sub.add_parser(
                 command.name, parents=[common] if command.robot else [],

@@ -1,0 +1,194 @@
+"""
+Calibrate a robot's legs: ``calibration-poses``, ``calibrate``.
+
+From the positions worth measuring to the calibrated parameters file;
+see doc/calibration.md.
+"""
+
+import contextlib
+import warnings
+
+import numpy as np
+
+from orthoglide_ros.formats import params_file
+from orthoglide_ros.tools import calibration
+from orthoglide_ros.tools.calibration import poses, report
+from orthoglide_ros.tools.cli.common import (
+    CliError, count, drawn_png, positive_count, Subcommand, write_output)
+
+FRAMES = ('robot', 'instrument')
+
+
+def add_calibration_poses(parser):
+    """Add the options of ``calibration-poses``: the positions to measure."""
+    parser.add_argument('--count', type=positive_count, required=True,
+                        metavar='N', help='positions to choose (measurements'
+                        ' with --type gauge), from '
+                        f'{poses.minimum_count("xyz")} (xyz) or '
+                        f'{poses.minimum_count("gauge")} (gauge) to '
+                        f'{poses.MAX_COUNT}')
+    parser.add_argument('--output', required=True, metavar='POSES.csv',
+                        help='CSV file: lambda_a, lambda_b, lambda_c (m, '
+                        'the joint positions to drive to), x, y, z (m, '
+                        'where the nominal robot puts the platform there) '
+                        'and, with --type gauge, the column gauge: the '
+                        'coordinate to read (x, y or z); - for standard '
+                        'output')
+    parser.add_argument('--type', choices=poses.TYPES, default='xyz',
+                        help='xyz (default): each position measured in x, '
+                        'y and z (a laser tracker, a CMM); gauge: one '
+                        'coordinate per measurement (a dial gauge)')
+    parser.add_argument('--seed', type=count, default=0, metavar='N',
+                        help='seed of the candidate positions, an integer '
+                        '>= 0 (default 0)')
+    parser.add_argument('--evaluations', type=positive_count,
+                        default=poses.DEFAULT_EVALUATIONS, metavar='N',
+                        help='condition numbers the exchange search may '
+                        'compute (default %(default)s: a few seconds)')
+
+
+def run_calibration_poses(robot, args):
+    """Write the positions whose measurements best condition a calibration."""
+    try:
+        design = poses.design(robot, args.count, args.type, args.seed,
+                              args.evaluations)
+    except ValueError as error:
+        raise CliError(f'--{error}') from None     # 'count N: ...'
+    gauge = args.type == 'gauge'
+    print(f'Calibration poses: {args.count} '
+          + ('readings of one coordinate (a dial gauge\'s), at '
+             f'{len(set(map(tuple, design.lambdas)))} positions'
+             if gauge else 'positions measured in x, y and z')
+          + ' within the workspace cube |x|, |y|, |z| <= '
+          f'{poses.CUBE:g} m and the singularity margin')
+    print(f'condition number of the calibration\'s Jacobian (the '
+          f'{len(design.identified)} separable values, unit-norm columns):'
+          f' {design.condition:.4g} (random positions of the cube: '
+          f'{design.random_condition:.4g}; {design.evaluations} '
+          'evaluations)')
+    write_output(args.output, _poses_csv(design))
+    if args.output not in (None, '-'):
+        print(f'written: {args.output}')
+    return 0
+
+
+def _poses_csv(design):
+    """
+    Format the design as CSV bytes (full precision, repr).
+
+    The measurements' columns (:data:`calibration.COLUMNS`) and, for a
+    gauge, ``gauge``: the coordinate each row reads.
+    """
+    gauge = design.coordinates is not None
+    lines = [','.join(calibration.COLUMNS + (('gauge',) if gauge else ()))]
+    for k, row in enumerate(np.column_stack((design.lambdas,
+                                             design.positions)).tolist()):
+        lines.append(','.join(map(repr, row)) + (
+            ',' + 'xyz'[design.coordinates[k]] if gauge else ''))
+    return ('\n'.join(lines) + '\n').encode('utf-8')
+
+
+def add_calibrate(parser):
+    """Add the options of ``calibrate``: the legs from measurements."""
+    parser.add_argument('--input', required=True, metavar='MEASUREMENTS.csv',
+                        help='CSV file with the header lambda_a, lambda_b, '
+                        'lambda_c, x, y, z (m, any order): per row the '
+                        'joint readings and the platform centre measured; '
+                        'an empty x, y or z cell is not measured; - for '
+                        'standard input')
+    parser.add_argument('--output', required=True, metavar='ROBOT.yaml',
+                        help='the calibrated robot as a ROS 2 parameters '
+                        'file (section feedforward, every robot.* '
+                        'parameter, --params\' masses, friction and drives '
+                        'kept) for --params-file and --params')
+    parser.add_argument('--report', metavar='FILE.png',
+                        help='draw every measurement\'s residual before and '
+                        'after and the identified deviations with their '
+                        'standard errors as a PNG image')
+    parser.add_argument('--frame', choices=FRAMES, default='robot',
+                        help='robot (default): the measurements are in the '
+                        'robot\'s base frame; instrument: in the '
+                        'instrument\'s own frame (a laser tracker), whose '
+                        'pose is identified with the geometry and reported')
+
+
+def run_calibrate(robot, args):
+    """Calibrate the legs; print, write the file and the report."""
+    with _refusals_in_one_line(args.input):
+        data = calibration.read(args.input, robot)
+        result = calibration.calibrate(robot, data,
+                                       args.frame == 'instrument')
+    image = None if args.report is None else drawn_png(
+        lambda f: report.draw(f, data, result), (13, 9), '--report')
+    summary = report.lines(data, result)
+    print('\n'.join(summary))
+    comments = [f'Calibrated by `orthoglide calibrate` from {args.input}'
+                + (f' (nominal robot: {args.params})' if args.params
+                   else ' (nominal robot: the drawing\'s)'),
+                *summary[1:]]
+    write_output(args.output, params_file.robot_file_text(
+        result.robot, comments).encode('utf-8'))
+    print(f'written: {args.output}')
+    if image is not None:
+        write_output(args.report, image)
+        print(f'written: {args.report}')
+    return 0
+
+
+@contextlib.contextmanager
+def _refusals_in_one_line(source):
+    """
+    Run the calibration; its refusals become a CliError (one line).
+
+    A numpy warning (a computation that left the finite numbers) is
+    refused in one line too, never shown as warnings and figures of inf.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter('error', RuntimeWarning)
+        try:
+            yield
+        except (calibration.MeasurementError,
+                calibration.CalibrationError) as error:
+            raise CliError(str(error)) from None
+        except (RuntimeWarning, np.linalg.LinAlgError) as warning:
+            raise CliError(f'{source}: the calibration left the finite '
+                           f'numbers ({warning}): the measurements cannot '
+                           'separate the values they seemed to') from None
+
+
+SUBCOMMANDS = (
+    Subcommand(
+        'calibration-poses', run_calibration_poses, add_calibration_poses,
+        'the joint positions to measure for a calibration',
+        'Choose the N joint positions (with --type gauge, N readings of one '
+        'coordinate) of the workspace cube |x|, |y|, |z| <= '
+        f'{poses.CUBE:g} m, within the singularity margin of the --params '
+        'robot, whose measurements best condition the calibration: among '
+        f'{poses.CANDIDATES} random positions, a greedy choice then '
+        'exchanges that lower the condition number of the calibration\'s '
+        'Jacobian (the separable values, unit-norm columns), as '
+        'excitation --optimize does for the dynamics. Writes a CSV file '
+        'with lambda_a, lambda_b, lambda_c (m, to drive to) and x, y, z (m, '
+        'where the nominal robot puts the platform, for whoever measures), '
+        'and with --type gauge a column gauge naming the coordinate read; '
+        'prints the condition number, and that of random positions.'),
+    Subcommand(
+        'calibrate', run_calibrate, add_calibrate,
+        'calibrate every leg\'s geometry from measured positions',
+        'Identify every leg\'s geometry (doc/model.md#the-machine-as-built) '
+        'from measurements: a CSV file with the header lambda_a, lambda_b, '
+        'lambda_c, x, y, z (m), one row per measurement, the joint readings '
+        'and the platform centre measured (an empty cell: a coordinate not '
+        'measured). What the readings can separate is found from them (a '
+        'QR decomposition with pivoting of the Jacobian of the readings '
+        'with respect to the 30 values of the legs, 36 with --frame '
+        'instrument): 18 from x, y, z on enough positions; the rest is '
+        'held at its nominal value and named. Nonlinear least squares from '
+        'the --params robot (scipy); a blunder is named by its line and '
+        'left out. Prints each identified value with its standard error, '
+        'the held ones, the residual RMS before and after and the noise '
+        'it implies; writes the calibrated robot as a parameters file '
+        '(the masses, friction and drives of --params kept) with a '
+        'comment block of the same. Bad input exits with code 2, nothing '
+        'written.'),
+)
