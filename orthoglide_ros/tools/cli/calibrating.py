@@ -98,7 +98,7 @@ def add_calibrate(parser):
                         'standard input')
     parser.add_argument('--output', required=True, metavar='ROBOT.yaml',
                         help='the calibrated robot as a ROS 2 parameters '
-                        'file (section feedforward, every robot.* '
+                        'file (section /**, every node\'s: every robot.* '
                         'parameter, --params\' masses, friction and drives '
                         'kept) for --params-file and --params')
     parser.add_argument('--report', metavar='FILE.png',

@@ -248,7 +248,7 @@ def add_identify(parser):
     _add_log_options(parser)
     parser.add_argument('--output', required=True, metavar='FILE',
                         help='the identified robot as a ROS 2 parameters '
-                        'file (section feedforward, every robot.* '
+                        'file (section /**, every node\'s: every robot.* '
                         'parameter) for --params-file and --params')
     parser.add_argument('--report', metavar='FILE',
                         help='draw the measured and predicted forces (N) '
