@@ -10,6 +10,7 @@ import csv
 
 import numpy as np
 import pytest
+import yaml
 
 from cli_runs import assert_bad_input, PNG_MAGIC, run
 from orthoglide_testing.robots_as_built import BUILT
@@ -296,3 +297,23 @@ def test_a_nominal_robot_whose_legs_do_not_assemble_is_refused(
                          '--output', output)
     assert_bad_input(code, out, err, 'robot.axis_direction_b')
     assert not output.exists()
+
+
+def test_poses_on_standard_output_are_the_csv_alone(capsys):
+    code, out, err = run(capsys, 'calibration-poses', '--count', 8,
+                         '--output', '-', '--evaluations', 500)
+    assert code == 0
+    rows = list(csv.reader(out.splitlines()))
+    assert rows[0] == HEADER.split(',') and len(rows) == 9
+    assert all(len(row) == 6 for row in rows)
+    assert 'condition number' in err and 'written' not in out + err
+
+
+def test_a_calibration_on_standard_output_is_the_yaml_alone(capsys, twenty):
+    code, out, err = run(capsys, 'calibrate', '--input', twenty[0],
+                         '--output', '-')
+    assert code == 0
+    document = yaml.safe_load(out)
+    assert not params_file.robot_from_parameters(
+        params_file.ParametersFile('-', document).section()).as_drawn
+    assert err.startswith('Calibration from ') and 'written' not in err

@@ -6,6 +6,7 @@ see doc/calibration.md.
 """
 
 import contextlib
+import sys
 import warnings
 
 import numpy as np
@@ -33,7 +34,7 @@ def add_calibration_poses(parser):
                         'where the nominal robot puts the platform there) '
                         'and, with --type gauge, the column gauge: the '
                         'coordinate to read (x, y or z); - for standard '
-                        'output')
+                        'output (the summary then goes to standard error)')
     parser.add_argument('--type', choices=poses.TYPES, default='xyz',
                         help='xyz (default): each position measured in x, '
                         'y and z (a laser tracker, a CMM); gauge: one '
@@ -55,21 +56,38 @@ def run_calibration_poses(robot, args):
     except ValueError as error:
         raise CliError(f'--{error}') from None     # 'count N: ...'
     gauge = args.type == 'gauge'
+    summary = _summary_stream(args)
     print(f'Calibration poses: {args.count} '
           + ('readings of one coordinate (a dial gauge\'s), at '
              f'{len(set(map(tuple, design.lambdas)))} positions'
              if gauge else 'positions measured in x, y and z')
           + ' within the workspace cube |x|, |y|, |z| <= '
-          f'{poses.CUBE:g} m and the singularity margin')
+          f'{poses.CUBE:g} m and the singularity margin', file=summary)
     print(f'condition number of the calibration\'s Jacobian (the '
           f'{len(design.identified)} separable values, unit-norm columns):'
           f' {design.condition:.4g} (random positions of the cube: '
           f'{design.random_condition:.4g}; {design.evaluations} '
-          'evaluations)')
-    write_output(args.output, _poses_csv(design))
-    if args.output not in (None, '-'):
-        print(f'written: {args.output}')
+          'evaluations)', file=summary)
+    _write(args.output, _poses_csv(design), summary)
     return 0
+
+
+def _summary_stream(args):
+    """
+    Return where the summary goes: standard error if an output is ``-``.
+
+    The file on standard output stays the file alone, for a pipe.
+    """
+    return sys.stderr if '-' in (args.output,
+                                 getattr(args, 'report', None)) \
+        else sys.stdout
+
+
+def _write(path, data, summary):
+    """Write an output; say so unless it went to standard output."""
+    write_output(path, data)
+    if path != '-':
+        print(f'written: {path}', file=summary)
 
 
 def _poses_csv(design):
@@ -100,7 +118,9 @@ def add_calibrate(parser):
                         help='the calibrated robot as a ROS 2 parameters '
                         'file (section /**, every node\'s: every robot.* '
                         'parameter, --params\' masses, friction and drives '
-                        'kept) for --params-file and --params')
+                        'kept) for --params-file and --params; - for '
+                        'standard output (the summary then goes to '
+                        'standard error)')
     parser.add_argument('--report', metavar='FILE.png',
                         help='draw every measurement\'s residual before and '
                         'after and the identified deviations with their '
@@ -121,17 +141,16 @@ def run_calibrate(robot, args):
     image = None if args.report is None else drawn_png(
         lambda f: report.draw(f, data, result), (13, 9), '--report')
     summary = report.lines(data, result)
-    print('\n'.join(summary))
+    stream = _summary_stream(args)
+    print('\n'.join(summary), file=stream)
     comments = [f'Calibrated by `orthoglide calibrate` from {args.input}'
                 + (f' (nominal robot: {args.params})' if args.params
                    else ' (nominal robot: the drawing\'s)'),
                 *summary[1:]]
-    write_output(args.output, params_file.robot_file_text(
-        result.robot, comments).encode('utf-8'))
-    print(f'written: {args.output}')
+    _write(args.output, params_file.robot_file_text(
+        result.robot, comments).encode('utf-8'), stream)
     if image is not None:
-        write_output(args.report, image)
-        print(f'written: {args.report}')
+        _write(args.report, image, stream)
     return 0
 
 
