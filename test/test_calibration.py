@@ -16,7 +16,8 @@ built Orthoglide's errors (``robots_as_built``). Checked:
   an instrument in its own frame, the six rigid motions of the whole robot
   against it in the Jacobian's null space, held, 18 in all;
 - noise-free measurements give back the machine exactly, for a built
-  robot and one ten times further off;
+  robot and one ten times further off, and name no blunder at 8, 12 or 30
+  positions (the implied noise at its 1 nm floor);
 - with 10 um of noise: each identified value within 4.5 of its standard
   errors of the noise-free fit's, the noise the residuals imply within
   the chi-square spread of 10 um, and the calibrated inverse kinematics
@@ -39,7 +40,7 @@ from orthoglide_testing.robots_as_built import BUILT, FAR, random_built
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.tools import calibration
-from orthoglide_ros.tools.calibration import geometry, poses
+from orthoglide_ros.tools.calibration import estimate, geometry, poses
 from orthoglide_ros.tools.calibration.estimate import CalibrationError
 
 NOMINAL = Robot()
@@ -209,6 +210,19 @@ def test_noise_free_readings_give_the_machine_back(size):
     rms, worst = ik_error(result.robot, machine, targets)
     assert worst < 1e-8
     assert ik_error(NOMINAL, machine, targets)[0] > 1e-3
+
+
+@pytest.mark.parametrize('count', [8, 12, 30])
+def test_exact_readings_are_calibrated_with_no_blunder(count):
+    """Noise-free readings: no made-up blunder, the noise at its floor."""
+    for seed in range(3):
+        machine = Robot(**random_built(np.random.default_rng(seed)))
+        lam, exact = readings_of(machine, workspace(count, 50 + seed))
+        result = calibration.calibrate(NOMINAL, data(lam, exact))
+        assert not result.left_out
+        assert result.rms_after < 1e-9
+        assert result.sigma == estimate.SIGMA_FLOOR
+        assert ik_error(result.robot, machine, workspace(100, 5))[1] < 1e-7
 
 
 @pytest.fixture(scope='module')
@@ -400,7 +414,6 @@ def test_gauge_positions_name_one_coordinate_each():
 def test_the_blunder_threshold_is_the_f_quantile_of_six_sigma(readings,
                                                               spare):
     from scipy import stats
-    from orthoglide_ros.tools.calibration import estimate
     alarm = 2.0 * stats.norm.sf(estimate.BLUNDER_SIGMAS)
     assert estimate._quantile(readings, spare) == pytest.approx(
         stats.f.isf(alarm, readings, spare), rel=1e-8)

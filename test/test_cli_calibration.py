@@ -7,6 +7,9 @@ the file's line and column, nothing written.
 """
 
 import csv
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -317,3 +320,25 @@ def test_a_calibration_on_standard_output_is_the_yaml_alone(capsys, twenty):
     assert not params_file.robot_from_parameters(
         params_file.ParametersFile('-', document).section()).as_drawn
     assert err.startswith('Calibration from ') and 'written' not in err
+
+
+def test_the_commands_pipe_into_each_other():
+    """``calibration-poses --output - | calibrate --input - --output -``."""
+    tool = os.path.join(os.path.dirname(sys.executable), 'orthoglide')
+    design = subprocess.Popen(
+        [tool, 'calibration-poses', '--count', '8', '--evaluations', '500',
+         '--output', '-'], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    fit = subprocess.run([tool, 'calibrate', '--input', '-', '--output', '-'],
+                         stdin=design.stdout, capture_output=True,
+                         timeout=60)
+    design.stdout.close()
+    assert design.wait(60) == 0, design.stderr.read()
+    assert 'condition number' in design.stderr.read().decode()
+    design.stderr.close()
+    assert fit.returncode == 0, fit.stderr
+    # The designed positions are the nominal robot's exactly: calibrated,
+    # the drawing again, within the rounding of the file's digits.
+    robot = params_file.robot_from_parameters(params_file.ParametersFile(
+        '-', yaml.safe_load(fit.stdout)).section())
+    assert np.allclose(np.array(robot.bar_length), Robot().l3, atol=1e-9)
+    assert fit.stderr.decode().startswith('Calibration from <stdin>: 8 ')

@@ -58,6 +58,12 @@ MAX_EVALUATIONS = 200
 MAX_REFITS = 5
 # The MAD's factor to the standard deviation of normal noise.
 MAD_TO_SIGMA = 1.4826
+# The least noise a reading is taken to have (m): 1 nm, a thousand times
+# below a dial gauge's, a CMM's or a laser tracker's resolution (1-10 um)
+# and above what the least squares leaves of exact readings (1e-12 m).
+# The implied noise and the robust scale are at least this, so that
+# exact readings name no row a blunder for residuals of rounding.
+SIGMA_FLOOR = 1e-9
 # A reading whose leverage exceeds this is checked by no other: not judged.
 MAX_LEVERAGE = 0.99
 # How far off a reading is modelled where the legs tried do not assemble
@@ -81,7 +87,8 @@ per blunder; ``before`` and ``after`` (N, 3): each reading's residual
 (measured less modelled, m, NaN where not measured) of the nominal robot
 (with the instrument's frame fitted to it) and of the calibrated one;
 ``rms_before`` and ``rms_after`` (m) over the kept readings; ``sigma``:
-the noise the residuals imply, ``sqrt(RSS / (n - k))`` (m); ``readings``:
+the noise the residuals imply, ``sqrt(RSS / (n - k))``, at least
+SIGMA_FLOOR (m); ``readings``:
 the kept readings ``n``; ``notes``: what the data did not allow, as
 sentences.
 """
@@ -133,7 +140,7 @@ def calibrate(nominal: Robot, data: Measurements,
         _check_left_out(data, kept)
     residual = problem.residuals(deviation, kept)
     dof = len(residual) - len(problem.free)
-    sigma = math.sqrt(float(residual @ residual) / dof)
+    sigma = max(math.sqrt(float(residual @ residual) / dof), SIGMA_FLOOR)
     std = np.full(len(params), math.nan)
     std[problem.free] = sigma * np.sqrt(np.diag(np.linalg.inv(
         _normal(problem, deviation, kept))))
@@ -317,7 +324,8 @@ def _robust_candidates(problem, kept):
         judged = leverage < MAX_LEVERAGE
         studentized = np.abs(problem.residuals(deviation, kept))[judged] \
             / np.sqrt(1.0 - leverage[judged])
-        scale = max(MAD_TO_SIGMA * float(np.median(studentized)), 1e-12)
+        scale = max(MAD_TO_SIGMA * float(np.median(studentized)),
+                    SIGMA_FLOOR)
         if _ == ROBUST_ROUNDS:
             break
         deviation = _fit(problem, deviation, kept, 'soft_l1', scale)
@@ -361,7 +369,7 @@ def _predicted(problem, deviation, kept, rows):
     spare = len(residual) - len(problem.free)
     if spare < 1:
         return [0.0] * len(rows)
-    sigma2 = max(float(residual @ residual) / spare, 1e-300)
+    sigma2 = max(float(residual @ residual) / spare, SIGMA_FLOOR ** 2)
     inverse = np.linalg.inv(_normal(problem, deviation, kept))
     table = problem.residual_table(deviation)
     columns = problem.columns(deviation)
@@ -404,9 +412,8 @@ def _worst_row(problem, deviation, kept):
         if np.linalg.eigvalsh(rest)[0] < 1.0 - MAX_LEVERAGE or dof <= m:
             continue
         q = float(e @ np.linalg.solve(rest, e))
-        spread = (total - q) / (dof - m)
-        value = _beyond(q / m / spread, m, dof - m) if spread > 0.0 \
-            else math.inf
+        spread = max((total - q) / (dof - m), SIGMA_FLOOR ** 2)
+        value = _beyond(q / m / spread, m, dof - m)
         if value > score:
             worst, score = int(row), value
     return worst
