@@ -200,6 +200,16 @@ GOOD = '0.0,0.0,0.0,0.0,0.0,0.0\n'
     (HEADER + '\n' + GOOD * 2, ('line 3', 'the same row as line 2')),
     (HEADER + '\n0.0,0.0,0.0,,,\n', ('line 2, columns x, y, z',
                                      'no coordinate measured')),
+    (HEADER + '\n' + GOOD + '0.01,0.0,0.0,-1e308,0.0,0.0\n',
+     ("line 3, column 'x'", '-1e+308 m is 1e+308 m from')),
+    (HEADER + '\n' + GOOD + '0.01,0.0,0.0,0.0,0.0,1e308\n',
+     ("line 3, column 'z'", 'beyond the 100 mm')),
+    (HEADER + '\n' + GOOD + '0.01,0.0,0.0,0.0,1e200,0.0\n',
+     ("line 3, column 'y'", 'beyond the 100 mm')),
+    (HEADER + '\n' + GOOD + '1e308,0.0,0.0,0.0,0.0,0.0\n',
+     ("line 3, column 'lambda_a'", 'outside')),
+    (HEADER + '\n' + GOOD + '0.0,-1e308,0.0,0.0,0.0,0.0\n',
+     ("line 3, column 'lambda_b'", 'outside')),
     (HEADER + '\n', ('no measurement',)),
     ('', ('empty file',)),
 ])
@@ -342,3 +352,22 @@ def test_the_commands_pipe_into_each_other():
         '-', yaml.safe_load(fit.stdout)).section())
     assert np.allclose(np.array(robot.bar_length), Robot().l3, atol=1e-9)
     assert fit.stderr.decode().startswith('Calibration from <stdin>: 8 ')
+
+
+@pytest.mark.parametrize('value', ['-1e308', '1e308'])
+def test_a_reading_near_the_largest_double_is_refused_in_any_frame(
+        capsys, tmp_path, twenty, value):
+    _, lam = twenty
+    path = write_measurements(tmp_path / 'm.csv', lam, measured(lam))
+    lines = path.read_text().splitlines()
+    cells = lines[5].split(',')
+    cells[4] = value
+    lines[5] = ','.join(cells)
+    path.write_text('\n'.join(lines) + '\n')
+    for frame in ('robot', 'instrument'):
+        code, out, err = run(capsys, 'calibrate', '--input', path,
+                             '--output', tmp_path / 'robot.yaml', '--frame',
+                             frame)
+        assert_bad_input(code, out, err, "line 6, column 'y'",
+                         f'{float(value):.6g} m is ', 'beyond the 100 mm')
+    assert not (tmp_path / 'robot.yaml').exists()

@@ -259,10 +259,14 @@ def _check_deviations(problem, data):
         frame = ('the instrument\'s frame fitted to the rows' if
                  problem.start is not None else 'the base frame; '
                  'an instrument in its own frame needs --frame instrument')
+        # In m from 1 m on: a reading near the largest double (1e308)
+        # has no value in mm.
+        distance = abs(float(residual[row, column]))
         raise CalibrationError(
             f'{where(data, row, COORDINATES[column])}: '
             f'{data.readings[row, column]:.6g} m is '
-            f'{1e3 * abs(residual[row, column]):.4g} mm from where the '
+            + (f'{1e3 * distance:.4g} mm' if distance < 1.0
+               else f'{distance:.4g} m') + ' from where the '
             f'nominal robot puts the platform, beyond the '
             f'{1e3 * MAX_DEVIATION:g} mm geometric errors can explain '
             f'(units m; {frame})')
