@@ -371,3 +371,16 @@ def test_a_reading_near_the_largest_double_is_refused_in_any_frame(
         assert_bad_input(code, out, err, "line 6, column 'y'",
                          f'{float(value):.6g} m is ', 'beyond the 100 mm')
     assert not (tmp_path / 'robot.yaml').exists()
+
+
+def test_a_robot_that_reaches_too_little_is_refused_by_its_file(capsys,
+                                                                tmp_path):
+    params = tmp_path / 'short.yaml'
+    params.write_text('/**:\n  ros__parameters:\n    robot:\n'
+                      '      l3: 0.05\n')
+    output = tmp_path / 'poses.csv'
+    code, out, err = run(capsys, 'calibration-poses', '--count', 12,
+                         '--params', params, '--output', output)
+    assert_bad_input(code, out, err, f'error: {params}: the robot reaches '
+                     'too little of the workspace cube')
+    assert not output.exists()

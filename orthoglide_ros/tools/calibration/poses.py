@@ -58,6 +58,20 @@ numbers computed.
 """
 
 
+class DesignError(ValueError):
+    """
+    Positions that cannot be designed; the message says why.
+
+    ``option``: the argument at fault (``count``, ``type``), or None
+    where the robot is (it reaches too little of the cube).
+    """
+
+    def __init__(self, message: str, option: str | None = None) -> None:
+        """Keep ``message`` and the ``option`` at fault."""
+        super().__init__(message)
+        self.option = option
+
+
 def minimum_count(kind: str, parameters: int = 18) -> int:
     """Return the fewest positions of ``kind`` for ``parameters`` values."""
     per = 3 if kind == 'xyz' else 1
@@ -72,11 +86,12 @@ def design(robot: Robot, count: int, kind: str = 'xyz', seed: int = 0,
 
     ``robot``: the nominal robot; ``kind``: ``xyz`` or ``gauge`` (a
     candidate is then a position and a coordinate); ``seed``: of the
-    candidates. Raises ValueError for a count below
-    :func:`minimum_count` or above MAX_COUNT.
+    candidates. Raises :class:`DesignError` for a count below
+    :func:`minimum_count` or above MAX_COUNT, or a robot that reaches too
+    little of the cube.
     """
     if kind not in TYPES:
-        raise ValueError(f'type {kind!r}: one of {", ".join(TYPES)}')
+        raise DesignError(f'{kind!r}: one of {", ".join(TYPES)}', 'type')
     rng = np.random.default_rng(seed)
     positions = _workspace(robot, rng, candidates)
     lambdas = mechanics.solve_batch(robot, positions).lambda_
@@ -85,13 +100,13 @@ def design(robot: Robot, count: int, kind: str = 'xyz', seed: int = 0,
     found = identifiable(columns.reshape(-1, len(params)), params)
     low = minimum_count(kind, len(found.identified))
     if not low <= count <= MAX_COUNT:
-        raise ValueError(
-            f'count {count}: {"below" if count < low else "above"} '
+        raise DesignError(
+            f'{count}: {"below" if count < low else "above"} '
             f'{low if count < low else MAX_COUNT}, the '
             + ('fewest whose readings identify the '
                f'{len(found.identified)} separable values with '
                f'{MIN_REDUNDANCY} readings to spare'
-               if count < low else 'most this command designs'))
+               if count < low else 'most this command designs'), 'count')
     blocks = columns[:, :, list(found.identified)]
     if kind == 'gauge':     # a candidate per position and coordinate
         blocks = blocks.reshape(-1, 1, blocks.shape[2])
@@ -132,7 +147,7 @@ def _workspace(robot, rng, count):
                                                               draw).ok]))
         if len(out) >= count:
             return out[:count]
-    raise ValueError('the robot reaches too little of the workspace cube '
+    raise DesignError('the robot reaches too little of the workspace cube '
                      f'|x|, |y|, |z| <= {CUBE:g} m within its singularity '
                      'margin')
 

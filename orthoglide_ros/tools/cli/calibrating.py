@@ -53,8 +53,10 @@ def run_calibration_poses(robot, args):
     try:
         design = poses.design(robot, args.count, args.type, args.seed,
                               args.evaluations)
-    except ValueError as error:
-        raise CliError(f'--{error}') from None     # 'count N: ...'
+    except poses.DesignError as error:
+        raise CliError(f'--{error.option} {error}' if error.option
+                       else f'{args.params or "the drawing"}: {error}') \
+            from None
     gauge = args.type == 'gauge'
     summary = _summary_stream(args)
     print(f'Calibration poses: {args.count} '
