@@ -38,7 +38,7 @@ import pytest
 from mechanics_reference import platform_position
 from orthoglide_testing.robots_as_built import BUILT, FAR, random_built
 from orthoglide_ros.model import mechanics
-from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.robot import ParameterError, Robot
 from orthoglide_ros.tools import calibration
 from orthoglide_ros.tools.calibration import estimate, geometry, poses
 from orthoglide_ros.tools.calibration.estimate import CalibrationError
@@ -417,3 +417,14 @@ def test_the_blunder_threshold_is_the_f_quantile_of_six_sigma(readings,
     alarm = 2.0 * stats.norm.sf(estimate.BLUNDER_SIGMAS)
     assert estimate._quantile(readings, spare) == pytest.approx(
         stats.f.isf(alarm, readings, spare), rel=1e-8)
+
+
+def test_calibrated_legs_the_robot_refuses_are_shown_as_numbers():
+    deviation = np.zeros(30)
+    deviation[5] = 0.2      # leg A's joint offset, beyond 0.1 m
+    with pytest.raises(ParameterError, match=r'got \(0\.2, 0\.0, 0\.0\)$'):
+        geometry.calibrated_robot(NOMINAL, deviation)
+    robot = geometry.calibrated_robot(NOMINAL, np.full(30, 1e-4))
+    assert all(type(v) is float for name in Robot.parameter_names()
+               for value in [getattr(robot, name)]
+               for v in (value if isinstance(value, tuple) else (value,)))

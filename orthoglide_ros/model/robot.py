@@ -307,7 +307,7 @@ def _check_directions(robot):
         norm = math.sqrt(sum(v * v for v in value))
         if abs(norm - 1.0) > UNIT_TOLERANCE:
             raise _bad(ROW[name], f'must be a unit vector (norm within '
-                       f'{UNIT_TOLERANCE:g} of 1), got {value!r} of norm '
+                       f'{UNIT_TOLERANCE:g} of 1), got {_shown(value)} of norm '
                        f'{norm:.6g}')
         direction = legs.unit(value)
         for other, earlier in seen:
@@ -320,7 +320,7 @@ def _check_directions(robot):
         if tilt > MAX_TILT_DEG:
             raise _bad(ROW[name], (
                 f'must lie within {MAX_TILT_DEG:g} deg of the drawing\'s '
-                f'axis {list(axis)}, got {value!r}, {tilt:.3g} deg from it'))
+                f'axis {list(axis)}, got {_shown(value)}, {tilt:.3g} deg from it'))
         seen.append((name, direction))
 
 
@@ -397,20 +397,20 @@ def _checked(row, value):
         try:
             values = tuple(value)
         except TypeError:
-            raise _bad(row, f'must be a 3-vector, got {value!r}') from None
+            raise _bad(row, f'must be a 3-vector, got {_shown(value)}') from None
         if len(values) != 3 or not all(_number(v) for v in values):
-            raise _bad(row, f'must be a 3-vector of numbers, got {value!r}')
+            raise _bad(row, f'must be a 3-vector of numbers, got {_shown(value)}')
         if not all(math.isfinite(v) for v in values):
-            raise _bad(row, f'must be finite, got {value!r}')
+            raise _bad(row, f'must be finite, got {_shown(value)}')
         if not all(within(v) for v in values):
-            raise _bad(row, f'each component must {place}, got {value!r}')
+            raise _bad(row, f'each component must {place}, got {_shown(value)}')
         return tuple(float(v) for v in values)
     if not _number(value):
-        raise _bad(row, f'must be a number, got {value!r}')
+        raise _bad(row, f'must be a number, got {_shown(value)}')
     if not math.isfinite(value):
-        raise _bad(row, f'must be finite, got {value!r}')
+        raise _bad(row, f'must be finite, got {_shown(value)}')
     if not within(value):
-        raise _bad(row, f'must {place}, got {value!r}')
+        raise _bad(row, f'must {place}, got {_shown(value)}')
     return float(value)
 
 
@@ -435,6 +435,22 @@ def _bounds(row):
     ends = ', '.join('pi/2' if v == math.pi / 2 else f'{v:g}'
                      for v in row.limits)
     return f'({ends})' if row.open else f'[{ends}]'
+
+
+def _shown(value):
+    """
+    Return ``value`` as a refusal writes it: numpy's numbers as numbers.
+
+    ``(0.2, 0.0, 0.0)`` for a tuple of numpy floats, ``[0.0, 0.1, 0.0]``
+    for an array, ``repr`` otherwise.
+    """
+    if isinstance(value, (np.ndarray, np.generic)):
+        value = value.tolist()
+    if isinstance(value, (tuple, list)):
+        inner = ', '.join(map(_shown, value))
+        return (f'({inner}{"," if len(value) == 1 else ""})'
+                if isinstance(value, tuple) else f'[{inner}]')
+    return repr(value)
 
 
 def _number(value):

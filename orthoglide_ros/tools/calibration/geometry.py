@@ -283,18 +283,23 @@ def calibrated_robot(nominal: Robot, deviation: Vector) -> Robot:
     """
     Return ``nominal`` with its legs ``deviation`` away (validated).
 
-    Every other row (masses, friction, drives, terms) kept. Raises
-    :class:`robot.ParameterError` for legs the robot refuses.
+    Every other row (masses, friction, drives, terms) kept, the legs' as
+    floats. Raises :class:`robot.ParameterError` for legs the robot
+    refuses.
     """
     built = deviated_legs(nominal.legs, deviation[:30])
     rows = {}
     for leg, suffix in zip(built, 'abc'):
-        rows[f'axis_point_{suffix}'] = leg.point
-        rows[f'axis_direction_{suffix}'] = leg.direction
-        rows[f'attachment_{suffix}'] = leg.attachment
-    rows['joint_offset'] = tuple(leg.offset for leg in built)
-    rows['bar_length'] = tuple(leg.length for leg in built)
+        rows[f'axis_point_{suffix}'] = _floats(leg.point)
+        rows[f'axis_direction_{suffix}'] = _floats(leg.direction)
+        rows[f'attachment_{suffix}'] = _floats(leg.attachment)
+    rows['joint_offset'] = _floats(leg.offset for leg in built)
+    rows['bar_length'] = _floats(leg.length for leg in built)
     return nominal.replace(**rows)
+
+
+def _floats(values):
+    return tuple(float(v) for v in values)
 
 
 def rotation_vector(matrix: Array) -> Array:
