@@ -315,6 +315,54 @@ def test_noise_alone_names_no_blunder(count):
                                                        readings)).left_out
 
 
+@pytest.mark.parametrize('count, spare', [(9, 9), (11, 15), (12, None),
+                                          (30, None)])
+def test_too_few_readings_to_spare_to_find_a_blunder_are_said(count, spare):
+    machine = Robot(**random_built(np.random.default_rng(count)))
+    lam, exact = readings_of(machine, workspace(count, 70 + count))
+    readings = exact + np.random.default_rng(count).normal(0.0, NOISE,
+                                                           exact.shape)
+    notes = calibration.calibrate(NOMINAL, data(lam, readings)).notes
+    said = [n for n in notes if 'too few to find a blunder' in n]
+    if spare is None:
+        assert not said
+    else:
+        more = calibration.BLUNDER_REDUNDANCY - spare
+        assert said == [f'{spare} readings to spare: too few to find a '
+                        'blunder reliably '
+                        f'({calibration.BLUNDER_REDUNDANCY} or more do); '
+                        f'measure {more} more coordinates '
+                        f'({math.ceil(more / 3)} more positions in x, y and '
+                        'z)']
+
+
+def test_a_blunder_too_few_readings_hide_is_refused_by_the_noise_left():
+    """A 5 mm blunder among 8 positions: the fit absorbs it, 0.26-0.9 mm."""
+    for seed in (0, 2, 3):
+        machine = Robot(**random_built(np.random.default_rng(seed)))
+        lam, exact = readings_of(machine, workspace(8, 60 + seed))
+        readings = exact + np.random.default_rng(seed).normal(0.0, NOISE,
+                                                              exact.shape)
+        readings[3, 1] += 5e-3
+        with pytest.raises(CalibrationError) as error:
+            calibration.calibrate(NOMINAL, data(lam, readings))
+        assert 'beyond any instrument a calibration uses (100 um)' in \
+            str(error.value)
+        assert 'measure 12 more coordinates' in str(error.value)
+
+
+def test_readings_noisier_than_any_instrument_are_refused():
+    machine = Robot(**BUILT)
+    lam, exact = readings_of(machine, workspace(30, 16))
+    readings = exact + np.random.default_rng(2).normal(0.0, 0.3e-3,
+                                                       exact.shape)
+    with pytest.raises(CalibrationError, match=(
+            r'beyond any instrument a calibration uses \(100 um\): '
+            r'measurements of another robot .* the largest residual: line '
+            r"\d+, column '[xyz]' \([+-]\d")):
+        calibration.calibrate(NOMINAL, data(lam, readings))
+
+
 def test_one_coordinate_per_reading_separates_the_same_values():
     machine = Robot(**BUILT)
     lam, exact = readings_of(machine, workspace(90, 9))

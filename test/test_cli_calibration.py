@@ -135,24 +135,43 @@ def test_a_blunder_is_named_by_its_line(capsys, tmp_path, twenty):
     assert '# left out: line 8' in (tmp_path / 'robot.yaml').read_text()
 
 
-def test_a_gauges_readings_leave_cells_empty(capsys, tmp_path):
+def test_a_gauge_design_leaves_the_readings_to_fill_in(capsys, tmp_path):
     poses_file = tmp_path / 'poses.csv'
     code, out, _ = run(capsys, 'calibration-poses', '--count', 40,
                        '--type', 'gauge', '--output', poses_file,
                        '--evaluations', 2000)
     assert code == 0 and '40 readings of one coordinate' in out
+    assert 'note' not in out
     rows = read_poses(poses_file)
-    assert list(rows[0]) == HEADER.split(',') + ['gauge']
+    assert list(rows[0]) == HEADER.split(',') + [
+        'gauge', 'nominal_x', 'nominal_y', 'nominal_z']
+    assert all(r['x'] == r['y'] == r['z'] == '' for r in rows)
     lam = np.array([[float(r[f'lambda_{leg}']) for leg in 'abc']
                     for r in rows])
+    nominal = np.array([[float(r[f'nominal_{c}']) for c in 'xyz']
+                        for r in rows])
+    assert np.allclose(mechanics.forward_kinematics(Robot(), lam), nominal,
+                       atol=1e-12)
+    # Unfilled, the file is refused, not read as the drawing's positions.
+    code, out, err = run(capsys, 'calibrate', '--input', poses_file,
+                         '--output', tmp_path / 'robot.yaml')
+    assert_bad_input(code, out, err, 'line 2, columns x, y, z: no '
+                     'coordinate measured')
+    # Each row's gauge cell filled in, the rest of the file as written.
     readings = measured(lam)
+    with open(poses_file) as stream:
+        lines = stream.read().splitlines()
     for k, r in enumerate(rows):
-        readings[k, ['x', 'y', 'z'] != np.array(r['gauge'])] = np.nan
-    path = write_measurements(tmp_path / 'm.csv', lam, readings)
-    code, out, _ = run(capsys, 'calibrate', '--input', path, '--output',
-                       tmp_path / 'robot.yaml')
+        cells = lines[k + 1].split(',')
+        cells[3 + 'xyz'.index(r['gauge'])] = repr(float(
+            readings[k, 'xyz'.index(r['gauge'])]))
+        lines[k + 1] = ','.join(cells)
+    poses_file.write_text('\n'.join(lines) + '\n')
+    code, out, _ = run(capsys, 'calibrate', '--input', poses_file,
+                       '--output', tmp_path / 'robot.yaml')
     assert code == 0
-    assert '40 readings (x ' in out and 'separate 18 of the 30' in out
+    assert '40 measurements, 40 readings (x ' in out
+    assert 'separate 18 of the 30' in out
 
 
 def test_an_instrument_frame_is_reported(capsys, tmp_path, twenty):
@@ -272,7 +291,9 @@ def test_an_unknown_option_is_refused_in_one_line(capsys, tmp_path, twenty,
 
 
 @pytest.mark.parametrize('argv, words', [
-    (['--count', '7'], ('--count 7: below 8',)),
+    (['--count', '7'], ('--count 7: below 8, the fewest whose readings '
+                        'identify the 18 separable values with 6 readings '
+                        'to spare',)),
     (['--count', '23', '--type', 'gauge'], ('--count 23: below 24',)),
     (['--count', '1001'], ('--count 1001: above 1000',)),
     (['--count', '12', '--type', 'laser'], ("invalid choice: 'laser'",)),
@@ -320,6 +341,8 @@ def test_poses_on_standard_output_are_the_csv_alone(capsys):
     assert rows[0] == HEADER.split(',') and len(rows) == 9
     assert all(len(row) == 6 for row in rows)
     assert 'condition number' in err and 'written' not in out + err
+    assert 'note: 8 positions leave 6 readings to spare: too few to find a ' \
+        'blunder reliably; 12 or more do' in err
 
 
 def test_a_calibration_on_standard_output_is_the_yaml_alone(capsys, twenty):
@@ -384,3 +407,23 @@ def test_a_robot_that_reaches_too_little_is_refused_by_its_file(capsys,
     assert_bad_input(code, out, err, f'error: {params}: the robot reaches '
                      'too little of the workspace cube')
     assert not output.exists()
+
+
+def test_a_fit_that_leaves_more_than_any_instruments_noise_is_refused(
+        capsys, tmp_path):
+    """A 5 mm blunder among 8 positions, absorbed: 0.47 mm per reading."""
+    from orthoglide_testing.robots_as_built import random_built
+    from orthoglide_ros.tools.calibration import poses
+    machine = Robot(**random_built(np.random.default_rng(0)))
+    lam = mechanics.solve_batch(Robot(), poses._workspace(
+        Robot(), np.random.default_rng(60), 8)).lambda_
+    readings = measured(lam, robot=machine)
+    readings[3, 1] += 5e-3
+    path = write_measurements(tmp_path / 'm.csv', lam, readings)
+    code, out, err = run(capsys, 'calibrate', '--input', path, '--output',
+                         tmp_path / 'robot.yaml')
+    assert_bad_input(code, out, err, 'um of noise per reading',
+                     'beyond any instrument a calibration uses (100 um)',
+                     'with 6 readings to spare a blunder may hide: measure '
+                     '12 more coordinates (4 more positions in x, y and z)')
+    assert not (tmp_path / 'robot.yaml').exists()

@@ -25,7 +25,7 @@ import numpy as np
 from orthoglide_ros.model.robot import ParameterError
 from orthoglide_ros.tools.calibration import geometry
 from orthoglide_ros.tools.calibration.identifiability import (
-    identifiable, MIN_REDUNDANCY)
+    BLUNDER_REDUNDANCY, identifiable, MIN_REDUNDANCY)
 from orthoglide_ros.tools.calibration.measurements import (
     COORDINATES, Measurements, where)
 
@@ -64,6 +64,11 @@ MAD_TO_SIGMA = 1.4826
 # The implied noise and the robust scale are at least this, so that
 # exact readings name no row a blunder for residuals of rounding.
 SIGMA_FLOOR = 1e-9
+# The most noise a calibration's instrument has (m): ten times a laser
+# tracker's or a dial gauge's (1-10 um). A fit that leaves more per
+# reading is no calibration (a blunder the readings to spare could not
+# find, the robot moved, another robot or frame): refused.
+MAX_NOISE = 100e-6
 # A reading whose leverage exceeds this is checked by no other: not judged.
 MAX_LEVERAGE = 0.99
 # How far off a reading is modelled where the legs tried do not assemble
@@ -141,6 +146,9 @@ def calibrate(nominal: Robot, data: Measurements,
     residual = problem.residuals(deviation, kept)
     dof = len(residual) - len(problem.free)
     sigma = max(math.sqrt(float(residual @ residual) / dof), SIGMA_FLOOR)
+    after = problem.residual_table(deviation)
+    if sigma > MAX_NOISE:
+        raise CalibrationError(_too_noisy(data, after, kept, sigma, dof))
     std = np.full(len(params), math.nan)
     std[problem.free] = sigma * np.sqrt(np.diag(np.linalg.inv(
         _normal(problem, deviation, kept))))
@@ -150,7 +158,6 @@ def calibrate(nominal: Robot, data: Measurements,
         raise CalibrationError(f'{data.source}: the calibrated legs are no '
                                f'robot ({error})') from None
     before = problem.residual_table(np.zeros(len(params)))
-    after = problem.residual_table(deviation)
     left_out = tuple(
         (int(row), float(after[row, column]), column)
         for row in np.flatnonzero(~kept)
@@ -163,6 +170,10 @@ def calibrate(nominal: Robot, data: Measurements,
             f'(a fit keeps {MIN_REDUNDANCY} readings more than it '
             f'identifies); measure {found.separable - len(found.identified)}'
             ' more coordinates to identify all')
+    if dof < BLUNDER_REDUNDANCY:
+        notes.append(f'{dof} readings to spare: too few to find a blunder '
+                     f'reliably ({BLUNDER_REDUNDANCY} or more do); '
+                     f'{_more(dof)}')
     frame = geometry.instrument_map(problem.start, deviation[30:]) \
         if instrument else geometry.IDENTITY
     return Calibration(
@@ -421,6 +432,36 @@ def _worst_row(problem, deviation, kept):
         if value > score:
             worst, score = int(row), value
     return worst
+
+
+def _more(dof):
+    """Say how many more readings give BLUNDER_REDUNDANCY to spare."""
+    more = BLUNDER_REDUNDANCY - dof
+    return (f'measure {more} more coordinates ({math.ceil(more / 3)} more '
+            'positions in x, y and z)')
+
+
+def _too_noisy(data, after, kept, sigma, dof):
+    """
+    Say why a fit that leaves more than MAX_NOISE is refused.
+
+    With few readings to spare, a blunder the fit absorbed (its row's
+    residual no longer the largest); else the largest residual's row.
+    """
+    if dof < BLUNDER_REDUNDANCY:
+        why = f'with {dof} readings to spare a blunder may hide: {_more(dof)}'
+    else:
+        table = np.where(kept[:, None], np.abs(np.nan_to_num(after)), 0.0)
+        row, column = np.unravel_index(int(np.argmax(table)), table.shape)
+        why = ('measurements of another robot (--params), setup or frame '
+               '(--frame instrument), or a robot that moved; the largest '
+               f'residual: line {data.lines[row]}, column '
+               f'{COORDINATES[column]!r} ({1e3 * after[row, column]:+.4g} '
+               'mm)')
+    return (f'{data.source}: the calibrated robot leaves '
+            f'{1e6 * sigma:.4g} um of noise per reading (sqrt(RSS / (n - '
+            f'k))), beyond any instrument a calibration uses '
+            f'({1e6 * MAX_NOISE:g} um): {why}')
 
 
 def _check_left_out(data, kept):

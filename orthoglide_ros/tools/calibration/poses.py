@@ -24,7 +24,7 @@ from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.types import Array
 from orthoglide_ros.tools.calibration import geometry
 from orthoglide_ros.tools.calibration.identifiability import (
-    identifiable, MIN_REDUNDANCY)
+    BLUNDER_REDUNDANCY, identifiable, MIN_REDUNDANCY)
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.robot import Robot
@@ -44,7 +44,7 @@ TYPES = ('xyz', 'gauge')
 
 Design = namedtuple('Design', ('lambdas', 'positions', 'coordinates',
                                'condition', 'random_condition',
-                               'identified', 'evaluations'))
+                               'identified', 'evaluations', 'notes'))
 Design.__doc__ = """The positions :func:`design` chose.
 
 ``lambdas`` (N, 3): the joint readings (m) to drive to; ``positions``
@@ -54,7 +54,7 @@ Design.__doc__ = """The positions :func:`design` chose.
 (unit-norm columns); ``random_condition``: the median of as many random
 candidates' (for comparison); ``identified``: the parameters
 (:data:`geometry.LEG_PARAMETERS` indices); ``evaluations``: condition
-numbers computed.
+numbers computed; ``notes``: what the count does not allow, as sentences.
 """
 
 
@@ -72,10 +72,16 @@ class DesignError(ValueError):
         self.option = option
 
 
-def minimum_count(kind: str, parameters: int = 18) -> int:
-    """Return the fewest positions of ``kind`` for ``parameters`` values."""
+def minimum_count(kind: str, parameters: int,
+                  spare: int = MIN_REDUNDANCY) -> int:
+    """
+    Return the fewest positions of ``kind`` for ``parameters`` values.
+
+    Positions in x, y, z (``xyz``) or gauge readings whose readings
+    leave ``spare`` more than the values.
+    """
     per = 3 if kind == 'xyz' else 1
-    return math.ceil((parameters + MIN_REDUNDANCY) / per)
+    return math.ceil((parameters + spare) / per)
 
 
 def design(robot: Robot, count: int, kind: str = 'xyz', seed: int = 0,
@@ -116,10 +122,16 @@ def design(robot: Robot, count: int, kind: str = 'xyz', seed: int = 0,
     random_condition = float(np.median([
         condition(gram[rng.choice(len(gram), count, replace=False)].sum(0))
         for _ in range(15)]))
+    sure = minimum_count(kind, len(found.identified), BLUNDER_REDUNDANCY)
+    notes = () if count >= sure else (
+        f'{count} {"positions" if kind == "xyz" else "readings"} leave '
+        f'{count * (3 if kind == "xyz" else 1) - len(found.identified)} '
+        'readings to spare: too few to find a blunder reliably; '
+        f'{sure} or more do',)
     return Design(lambdas[rows], positions[rows],
                   chosen % 3 if kind == 'gauge' else None,
                   condition(gram[chosen].sum(0)), random_condition,
-                  found.identified, spent)
+                  found.identified, spent, notes)
 
 
 def condition(information: Array) -> Any:

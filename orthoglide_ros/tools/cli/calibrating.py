@@ -18,23 +18,29 @@ from orthoglide_ros.tools.cli.common import (
     CliError, count, drawn_png, positive_count, Subcommand, write_output)
 
 FRAMES = ('robot', 'instrument')
+# The columns of a gauge design's nominal position (m): x, y, z are left
+# for the readings.
+GAUGE_NOMINAL = ('nominal_x', 'nominal_y', 'nominal_z')
 
 
 def add_calibration_poses(parser):
     """Add the options of ``calibration-poses``: the positions to measure."""
     parser.add_argument('--count', type=positive_count, required=True,
-                        metavar='N', help='positions to choose (measurements'
-                        ' with --type gauge), from '
-                        f'{poses.minimum_count("xyz")} (xyz) or '
-                        f'{poses.minimum_count("gauge")} (gauge) to '
-                        f'{poses.MAX_COUNT}')
+                        metavar='N', help='positions to choose (readings '
+                        'with --type gauge): enough to identify the values '
+                        'the readings separate with '
+                        f'{calibration.MIN_REDUNDANCY} readings to spare '
+                        '(a count below is refused naming the fewest), at '
+                        f'most {poses.MAX_COUNT}')
     parser.add_argument('--output', required=True, metavar='POSES.csv',
                         help='CSV file: lambda_a, lambda_b, lambda_c (m, '
                         'the joint positions to drive to), x, y, z (m, '
-                        'where the nominal robot puts the platform there) '
-                        'and, with --type gauge, the column gauge: the '
-                        'coordinate to read (x, y or z); - for standard '
-                        'output (the summary then goes to standard error)')
+                        'where the nominal robot puts the platform there; '
+                        'with --type gauge empty, to fill with the '
+                        'readings, and the columns gauge, the coordinate '
+                        'to read, and nominal_x, nominal_y, nominal_z, the '
+                        'nominal position); - for standard output (the '
+                        'summary then goes to standard error)')
     parser.add_argument('--type', choices=poses.TYPES, default='xyz',
                         help='xyz (default): each position measured in x, '
                         'y and z (a laser tracker, a CMM); gauge: one '
@@ -70,6 +76,8 @@ def run_calibration_poses(robot, args):
           f' {design.condition:.4g} (random positions of the cube: '
           f'{design.random_condition:.4g}; {design.evaluations} '
           'evaluations)', file=summary)
+    for note in design.notes:
+        print(f'note: {note}', file=summary)
     _write(args.output, _poses_csv(design), summary)
     return 0
 
@@ -96,15 +104,22 @@ def _poses_csv(design):
     """
     Format the design as CSV bytes (full precision, repr).
 
-    The measurements' columns (:data:`calibration.COLUMNS`) and, for a
-    gauge, ``gauge``: the coordinate each row reads.
+    The measurements' columns (:data:`calibration.COLUMNS`), x, y, z the
+    nominal position; for a gauge x, y, z empty (the reading to fill in,
+    so that a row left unfilled is refused, not read as the drawing's),
+    ``gauge`` (the coordinate each row reads) and GAUGE_NOMINAL.
     """
-    gauge = design.coordinates is not None
-    lines = [','.join(calibration.COLUMNS + (('gauge',) if gauge else ()))]
-    for k, row in enumerate(np.column_stack((design.lambdas,
-                                             design.positions)).tolist()):
-        lines.append(','.join(map(repr, row)) + (
-            ',' + 'xyz'[design.coordinates[k]] if gauge else ''))
+    if design.coordinates is None:
+        lines = [','.join(calibration.COLUMNS)] + [
+            ','.join(map(repr, row)) for row in np.column_stack(
+                (design.lambdas, design.positions)).tolist()]
+    else:
+        lines = [','.join(calibration.COLUMNS + ('gauge',) + GAUGE_NOMINAL)]
+        lines += [','.join(map(repr, lam)) + ',,,,' + 'xyz'[coordinate]
+                  + ',' + ','.join(map(repr, position))
+                  for lam, coordinate, position in zip(
+                      design.lambdas.tolist(), design.coordinates.tolist(),
+                      design.positions.tolist())]
     return ('\n'.join(lines) + '\n').encode('utf-8')
 
 
