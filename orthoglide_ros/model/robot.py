@@ -32,6 +32,8 @@ ZERO = (0.0, 0.0, 0.0)
 # coordinate), its axis within MAX_TILT_DEG of the drawing's, a unit vector
 # to UNIT_TOLERANCE: far beyond any built Orthoglide's errors.
 OFFSET_LIMITS = (-0.1, 0.1)
+# A leg's bars within this of the drawing's l3 (m), as its points are.
+MAX_LENGTH_DEVIATION = 0.1
 DIRECTION_LIMITS = (-1.001, 1.001)
 UNIT_TOLERANCE = 1e-3
 MAX_TILT_DEG = 10.0
@@ -54,8 +56,9 @@ GEOMETRY_ROWS = tuple(
         'offsets e of the joint readings of A, B, C: a slider\'s true '
         'position is its reading plus its offset'),
     Row('bar_length', None, 'm', LENGTH_LIMITS,
-        'length L of the parallelogram bars of legs A, B, C; defaults to l3 '
-        'on each leg', 'l3'),
+        'length L of the parallelogram bars of legs A, B, C, each within '
+        f'{MAX_LENGTH_DEVIATION:g} m of l3; defaults to l3 on each leg',
+        'l3'),
 ) + tuple(
     Row(f'attachment_{leg}', (0.0, 0.0, 0.0), 'm', OFFSET_LIMITS,
         f'leg {leg.upper()}\'s point r on the platform relative to its '
@@ -172,6 +175,7 @@ class Robot:
             _check_needs(row, getattr(self, row.name),
                          getattr(self, row.needs))
         _check_directions(self)
+        _check_lengths(self)
         # Derived once (not fields: no part of eq or repr): each leg as
         # built, whether they are the drawing's (then the mechanics take
         # the drawing's closed forms), the kernel's constants, the terms
@@ -289,6 +293,20 @@ def leg_constants(robot: Robot,
             tuple(r - a for r, a in zip(leg.attachment, leg.point)),
             leg.offset))
     return tuple(out)
+
+
+def _check_lengths(robot):
+    """
+    Refuse a bar length beyond MAX_LENGTH_DEVIATION of ``l3``.
+
+    To 1e-12 m, so that decimal ends (0.3 and 0.4) are within.
+    """
+    if any(abs(length - robot.l3) > MAX_LENGTH_DEVIATION + 1e-12
+           for length in robot.bar_length):
+        raise _bad(ROW['bar_length'], (
+            f'each component must lie within {MAX_LENGTH_DEVIATION:g} m of '
+            f'robot.l3 ({robot.l3:g} m), the drawing\'s, got '
+            f'{_shown(robot.bar_length)}'))
 
 
 def _check_directions(robot):
