@@ -230,6 +230,10 @@ GOOD = '0.0,0.0,0.0,0.0,0.0,0.0\n'
     (HEADER + '\n' + GOOD + '0.0,-1e308,0.0,0.0,0.0,0.0\n',
      ("line 3, column 'lambda_b'", 'outside')),
     (HEADER + '\n', ('no measurement',)),
+    (HEADER + '\n' + GOOD + '0.01,0.0,0.0,0.0,0.0\n',
+     ('data row 2 (line 3): 5 cells where the header has 6',)),
+    (HEADER + '\n0.01,0.0,0.0,0.0,0.0,0.0,0.0\n',
+     ('data row 1 (line 2): 7 cells where the header has 6',)),
     ('', ('empty file',)),
 ])
 def test_bad_measurements_are_refused_naming_line_and_column(

@@ -288,6 +288,9 @@ CSV = {
     'unterminated_quote': ('0,' * 3 + '"0\n' + '1,' * 3 + '0\n',
                            'is not a finite number'),
     'not_utf8': (b'0,0,0,\xff\n', 'not a UTF-8 text file'),
+    'a_cell_short': ('0,' * 2 + '0\n', 'data row 1 (line 2): '),
+    'a_cell_more': ('0,' * 4 + '0\n', 'cells where the header has '),
+    'a_trailing_comma': ('0,' * 4 + '\n', 'cells where the header has '),
 }
 HEADERS = {'batch': 't,x,y,z', 'animate': 't,x,y,z'}
 
