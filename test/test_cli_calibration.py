@@ -216,7 +216,6 @@ GOOD = '0.0,0.0,0.0,0.0,0.0,0.0\n'
      ("line 3, column 'lambda_", 'outside')),
     (HEADER + '\n' + GOOD + '0.0,0.7,0.8,0.0,0.0,0.0\n',
      ("line 3, column 'lambda_c'", 'nearer a singularity than the margin')),
-    (HEADER + '\n' + GOOD * 2, ('line 3', 'the same row as line 2')),
     (HEADER + '\n0.0,0.0,0.0,,,\n', ('line 2, columns x, y, z',
                                      'no coordinate measured')),
     (HEADER + '\n' + GOOD + '0.01,0.0,0.0,-1e308,0.0,0.0\n',
@@ -431,3 +430,20 @@ def test_a_fit_that_leaves_more_than_any_instruments_noise_is_refused(
                      'with 6 readings to spare a blunder may hide: measure '
                      '12 more coordinates (4 more positions in x, y and z)')
     assert not (tmp_path / 'robot.yaml').exists()
+
+
+def test_a_row_repeated_exactly_counts_twice_and_is_said(capsys, tmp_path,
+                                                         twenty):
+    """A quantised gauge and encoders may read a position again alike."""
+    lines = twenty[0].read_text().splitlines()
+    path = tmp_path / 'm.csv'
+    path.write_text('\n'.join(lines[:5] + [lines[3]] + lines[5:]) + '\n')
+    code, out, err = run(capsys, 'calibrate', '--input', path, '--output',
+                         tmp_path / 'robot.yaml')
+    assert (code, err) == (0, '')
+    assert '21 measurements, 63 readings' in out
+    note = ('note: line 6 repeats line 4 exactly: counted as two '
+            'measurements (a quantised instrument reads a position again '
+            'alike; a row pasted twice would count twice too)')
+    assert note in out.splitlines()
+    assert f'# {note}' in (tmp_path / 'robot.yaml').read_text()

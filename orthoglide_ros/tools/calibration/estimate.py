@@ -27,7 +27,7 @@ from orthoglide_ros.tools.calibration import geometry
 from orthoglide_ros.tools.calibration.identifiability import (
     BLUNDER_REDUNDANCY, identifiable, MIN_REDUNDANCY)
 from orthoglide_ros.tools.calibration.measurements import (
-    COORDINATES, Measurements, where)
+    COORDINATES, Measurements, repeats, where)
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.robot import Robot
@@ -162,7 +162,10 @@ def calibrate(nominal: Robot, data: Measurements,
         (int(row), float(after[row, column]), column)
         for row in np.flatnonzero(~kept)
         for column in [int(np.nanargmax(np.abs(after[row])))])
-    notes = []
+    notes = [f'line {data.lines[row]} repeats line {data.lines[earlier]} '
+             'exactly: counted as two measurements (a quantised instrument '
+             'reads a position again alike; a row pasted twice would count '
+             'twice too)' for row, earlier in repeats(data)]
     if len(found.identified) < found.separable:
         notes.append(
             f'{found.readings} readings: {len(found.identified)} of the '
