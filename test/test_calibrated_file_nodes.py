@@ -33,7 +33,7 @@ START_WAIT = 40.0   # s for a process to come up and answer
 
 @pytest.fixture(scope='module')
 def calibrated(tmp_path_factory):
-    """The file calibrate writes from a built machine's 20 positions."""
+    """Write what calibrate makes of a built machine's 20 positions."""
     folder = tmp_path_factory.mktemp('calibrated')
     positions = np.random.default_rng(5).uniform(-0.25, 0.25, (20, 3))
     lam = mechanics.solve_batch(Robot(), positions).lambda_

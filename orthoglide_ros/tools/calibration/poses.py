@@ -160,8 +160,8 @@ def _workspace(robot, rng, count):
         if len(out) >= count:
             return out[:count]
     raise DesignError('the robot reaches too little of the workspace cube '
-                     f'|x|, |y|, |z| <= {CUBE:g} m within its singularity '
-                     'margin')
+                      f'|x|, |y|, |z| <= {CUBE:g} m within its singularity '
+                      'margin')
 
 
 def _exchange(gram, count, evaluations):

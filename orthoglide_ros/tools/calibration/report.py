@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from orthoglide_ros.tools.calibration.estimate import (Calibration,
-                                                        SIGMA_FLOOR)
+from orthoglide_ros.tools.calibration.estimate import (
+    Calibration, SIGMA_FLOOR)
 from orthoglide_ros.tools.calibration.geometry import rotation_vector
 from orthoglide_ros.tools.calibration.identifiability import (
     combination_text, RANK_TOLERANCE)

@@ -5,9 +5,7 @@ From the positions worth measuring to the calibrated parameters file;
 see doc/calibration.md.
 """
 
-import contextlib
 import sys
-import warnings
 
 import numpy as np
 
@@ -15,7 +13,8 @@ from orthoglide_ros.formats import params_file
 from orthoglide_ros.tools import calibration
 from orthoglide_ros.tools.calibration import poses, report
 from orthoglide_ros.tools.cli.common import (
-    CliError, count, drawn_png, positive_count, Subcommand, write_output)
+    CliError, count, drawn_png, positive_count, refusals_in_one_line,
+    Subcommand, write_output)
 
 FRAMES = ('robot', 'instrument')
 # The columns of a gauge design's nominal position (m): x, y, z are left
@@ -151,7 +150,11 @@ def add_calibrate(parser):
 
 def run_calibrate(robot, args):
     """Calibrate the legs; print, write the file and the report."""
-    with _refusals_in_one_line(args.input):
+    with refusals_in_one_line(
+            args.input, (calibration.MeasurementError,
+                         calibration.CalibrationError),
+            'the measurements cannot separate the values they seemed to',
+            (np.linalg.LinAlgError,)):
         data = calibration.read(args.input, robot)
         result = calibration.calibrate(robot, data,
                                        args.frame == 'instrument')
@@ -169,27 +172,6 @@ def run_calibrate(robot, args):
     if image is not None:
         _write(args.report, image, stream)
     return 0
-
-
-@contextlib.contextmanager
-def _refusals_in_one_line(source):
-    """
-    Run the calibration; its refusals become a CliError (one line).
-
-    A numpy warning (a computation that left the finite numbers) is
-    refused in one line too, never shown as warnings and figures of inf.
-    """
-    with warnings.catch_warnings():
-        warnings.simplefilter('error', RuntimeWarning)
-        try:
-            yield
-        except (calibration.MeasurementError,
-                calibration.CalibrationError) as error:
-            raise CliError(str(error)) from None
-        except (RuntimeWarning, np.linalg.LinAlgError) as warning:
-            raise CliError(f'{source}: the calibration left the finite '
-                           f'numbers ({warning}): the measurements cannot '
-                           'separate the values they seemed to') from None
 
 
 SUBCOMMANDS = (
