@@ -49,6 +49,7 @@ import time
 import numpy as np
 
 from orthoglide_testing import use_checkout
+from orthoglide_testing.arguments import seeds
 from orthoglide_testing.robots_as_built import random_built
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
@@ -67,14 +68,6 @@ TARGET = {'xyz 30': (10.0, 45.0), 'gauge 90': (8.5, None),
           'poses 12': (14.0, None), 'random 12': (18.0, None),
           'blunder 30': (12.0, None), 'instrument 30': (None, None)}
 CASES = tuple(TARGET)
-
-
-def seeds(text):
-    """Parse ``0-9`` or ``0,3,5`` into a list of seeds."""
-    if '-' in text:
-        first, last = (int(v) for v in text.split('-'))
-        return list(range(first, last + 1))
-    return [int(v) for v in text.split(',')]
 
 
 def cube(robot, rng, count):
