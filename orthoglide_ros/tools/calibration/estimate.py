@@ -335,7 +335,7 @@ def _robust_candidates(problem, kept):
     rows = np.nonzero(problem.mask & kept[:, None])[0]
     if len(rows) - len(problem.free) < MIN_REDUNDANCY:
         return deviation, []
-    for _ in range(ROBUST_ROUNDS + 1):
+    for robust_round in range(ROBUST_ROUNDS + 1):
         jac = problem.free_columns(deviation, kept)
         leverage = np.einsum('ij,ij->i', jac @ np.linalg.inv(jac.T @ jac),
                              jac)
@@ -344,7 +344,7 @@ def _robust_candidates(problem, kept):
             / np.sqrt(1.0 - leverage[judged])
         scale = max(MAD_TO_SIGMA * float(np.median(studentized)),
                     SIGMA_FLOOR)
-        if _ == ROBUST_ROUNDS:
+        if robust_round == ROBUST_ROUNDS:
             break
         deviation = _fit(problem, deviation, kept, 'soft_l1', scale)
     order = np.argsort(-studentized)
