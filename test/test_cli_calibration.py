@@ -321,19 +321,38 @@ def test_a_file_beyond_the_measurement_limit_is_refused(capsys, tmp_path,
     assert csvfile.MAX_ROWS > 15
 
 
-@pytest.mark.parametrize('command', ['calibrate', 'calibration-poses'])
-def test_a_nominal_robot_whose_legs_do_not_assemble_is_refused(
-        capsys, tmp_path, twenty, command):
+def refused_nominal(capsys, tmp_path, twenty, command, rows):
+    """Run ``command`` with a --params robot of ``rows``: its error line."""
     params = tmp_path / 'nominal.yaml'
-    params.write_text('/**:\n  ros__parameters:\n    robot:\n'
-                      '      axis_direction_b: [0.9962, 0.0872, 0.0]\n')
+    params.write_text('/**:\n  ros__parameters:\n    robot:\n' + ''.join(
+        f'      {name}: {value}\n' for name, value in rows.items()))
     output = tmp_path / 'out.file'
     argv = (['--input', twenty[0]] if command == 'calibrate'
             else ['--count', '12'])
     code, out, err = run(capsys, command, *argv, '--params', params,
                          '--output', output)
-    assert_bad_input(code, out, err, 'robot.axis_direction_b')
+    assert_bad_input(code, out, err, f'{params}: robot.')
     assert not output.exists()
+    return err
+
+
+@pytest.mark.parametrize('command', ['calibrate', 'calibration-poses'])
+def test_a_nominal_robot_whose_legs_do_not_assemble_is_refused(
+        capsys, tmp_path, twenty, command):
+    # A small robot (bars of 0.1 m) whose leg A is shorter than its reach.
+    err = refused_nominal(capsys, tmp_path, twenty, command, {
+        'l3': '0.1', 'bar_length': '[0.05, 0.1, 0.1]',
+        'axis_point_a': '[0.0, 0.08, 0.0]'})
+    assert "robot.bar_length: leg A's bars (0.05 m) are shorter than its " \
+        'reach' in err
+
+
+@pytest.mark.parametrize('command', ['calibrate', 'calibration-poses'])
+def test_a_nominal_robot_with_parallel_axes_is_refused(capsys, tmp_path,
+                                                       twenty, command):
+    err = refused_nominal(capsys, tmp_path, twenty, command, {
+        'axis_direction_b': '[0.9962, 0.0872, 0.0]'})
+    assert 'robot.axis_direction_b: parallel to robot.axis_direction_a' in err
 
 
 def test_poses_on_standard_output_are_the_csv_alone(capsys):
