@@ -445,6 +445,22 @@ def test_the_designed_positions_condition_the_calibration_best():
     assert predicted(design.lambdas) < 0.7 * float(np.median(random))
 
 
+@pytest.mark.parametrize('rows', [1, 3])
+def test_the_greedy_start_is_the_largest_determinant_each_step(rows):
+    """The determinant lemma's choice: the full determinants' (no exchange)."""
+    rng = np.random.default_rng(rows)
+    blocks = rng.normal(size=(60, rows, 6))
+    gram = np.einsum('nki,nkj->nij', blocks, blocks)
+    chosen, spent = poses._exchange(blocks, gram, 10, 0)
+    ridge = 1e-9 * np.trace(gram.mean(0)) * np.eye(6)
+    picked = []
+    for _ in range(10):
+        logdet = [-np.inf if c in picked else np.linalg.slogdet(
+            ridge + gram[picked + [c]].sum(0))[1] for c in range(60)]
+        picked.append(int(np.argmax(logdet)))
+    assert (chosen.tolist(), spent) == (sorted(picked), 0)
+
+
 def test_gauge_positions_name_one_coordinate_each():
     design = poses.design(NOMINAL, 30, 'gauge', evaluations=5000,
                           candidates=500)

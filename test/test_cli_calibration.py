@@ -299,6 +299,8 @@ def test_an_unknown_option_is_refused_in_one_line(capsys, tmp_path, twenty,
                         'to spare',)),
     (['--count', '23', '--type', 'gauge'], ('--count 23: below 24',)),
     (['--count', '1001'], ('--count 1001: above 1000',)),
+    (['--count', '12', '--evaluations', '10000001'],
+     ('--evaluations: must be an integer in [1, 1e+07], got',)),
     (['--count', '12', '--type', 'laser'], ("invalid choice: 'laser'",)),
 ])
 def test_calibration_poses_refuses_bad_arguments(capsys, tmp_path, argv,

@@ -34,8 +34,10 @@ if TYPE_CHECKING:   # annotations only: no import cycle at run time
 CUBE = 0.3
 # Positions drawn as candidates.
 CANDIDATES = 2000
-# Condition numbers an exchange search may compute (about 30 us each).
+# Condition numbers an exchange search may compute (about 20 us each:
+# 2 s by default, 3 min at most; doc/measurements.md#calibration).
 DEFAULT_EVALUATIONS = 100_000
+MAX_EVALUATIONS = 10_000_000
 # Most positions asked: a campaign of a thousand measurements or readings.
 MAX_COUNT = 1000
 # Types of measurement: x, y and z at each position, or one coordinate
@@ -117,7 +119,7 @@ def design(robot: Robot, count: int, kind: str = 'xyz', seed: int = 0,
     if kind == 'gauge':     # a candidate per position and coordinate
         blocks = blocks.reshape(-1, 1, blocks.shape[2])
     gram = np.einsum('nki,nkj->nij', blocks, blocks)
-    chosen, spent = _exchange(gram, count, evaluations)
+    chosen, spent = _exchange(blocks, gram, count, evaluations)
     rows = chosen // 3 if kind == 'gauge' else chosen
     random_condition = float(np.median([
         condition(gram[rng.choice(len(gram), count, replace=False)].sum(0))
@@ -164,23 +166,30 @@ def _workspace(robot, rng, count):
                       'margin')
 
 
-def _exchange(gram, count, evaluations):
+def _exchange(blocks, gram, count, evaluations):
     """
     Return the indices of ``count`` candidates and the evaluations spent.
 
-    ``gram``: each candidate's ``J_c^T J_c`` (M, k, k). Greedy on the
-    determinant of the information (regularised until it has full rank),
-    then exchanges that lower the condition number, best first.
+    ``blocks``: each candidate's readings' Jacobian ``J_c`` (M, r, k),
+    ``gram`` its ``J_c^T J_c`` (M, k, k). Greedy on the determinant of
+    the information ``A`` (regularised until it has full rank): the
+    candidate of the largest ``det(A + J_c^T J_c) = det(A) det(I + J_c
+    A^-1 J_c^T)`` (the matrix determinant lemma: an r x r determinant
+    per candidate, so that the greedy's ``count`` steps over M candidates
+    take about a second at the limits); then exchanges that lower the
+    condition number, best first, at most ``evaluations`` of them.
     """
     size = gram.shape[1]
     ridge = 1e-9 * np.trace(gram.mean(0)) * np.eye(size)
     information = ridge.copy()
     chosen = []
     free = np.ones(len(gram), dtype=bool)
+    eye = np.eye(blocks.shape[1])
     for _ in range(count):
-        sign, logdet = np.linalg.slogdet(information + gram)
-        logdet[~free | (sign <= 0)] = -np.inf
-        best = int(np.argmax(logdet))
+        seen = blocks @ np.linalg.inv(information)
+        gain = np.linalg.slogdet(eye + seen @ blocks.transpose(0, 2, 1))[1]
+        gain[~free] = -np.inf
+        best = int(np.argmax(gain))
         chosen.append(best)
         free[best] = False
         information = information + gram[best]
