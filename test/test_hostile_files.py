@@ -317,6 +317,19 @@ def test_a_hostile_csv_is_refused_in_one_line(capsys, tmp_path, name,
     assert not (tmp_path / output).exists()
 
 
+@pytest.mark.parametrize('row', ['0.1,0.0', '0.1,0.0,0.0,0.0'])
+def test_a_waypoint_row_of_another_cell_count_is_refused(capsys, tmp_path,
+                                                         row):
+    path = tmp_path / 'waypoints.csv'
+    path.write_text(f'x,y,z\n0.0,0.0,0.0\n{row}\n0.1,0.1,0.0\n')
+    code, out, err = run(capsys, 'plan', '--input', path, '--output',
+                         tmp_path / 'plan.yaml')
+    assert code == 2 and out == ''
+    assert f'{path}: data row 2 (line 3): {row.count(",") + 1} cells where ' \
+        'the header has 3' in err
+    assert not (tmp_path / 'plan.yaml').exists()
+
+
 def test_a_csv_beyond_the_row_limit_is_refused_without_reading_it_all(
         capsys, tmp_path, monkeypatch):
     """The rule of MAX_ROWS (2,000,000), shown on a limit of 100."""
