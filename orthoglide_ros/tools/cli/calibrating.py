@@ -192,9 +192,13 @@ SUBCOMMANDS = (
         'Jacobian (the separable values, unit-norm columns), as '
         'excitation --optimize does for the dynamics. Writes a CSV file '
         'with lambda_a, lambda_b, lambda_c (m, to drive to) and x, y, z (m, '
-        'where the nominal robot puts the platform, for whoever measures), '
-        'and with --type gauge a column gauge naming the coordinate read; '
-        'prints the condition number, and that of random positions.'),
+        'where the nominal robot puts the platform, for whoever measures, '
+        'to overwrite with the measurements); with --type gauge x, y, z '
+        'are empty, the column gauge names the one to fill in and '
+        'nominal_x, nominal_y, nominal_z hold the nominal position. Prints '
+        'the condition number, and that of random positions, and a note '
+        'when the count leaves too few readings to spare to find a '
+        'blunder.'),
     Subcommand(
         'calibrate', run_calibrate, add_calibrate,
         'calibrate every leg\'s geometry from measured positions',
@@ -211,7 +215,8 @@ SUBCOMMANDS = (
         'left out. Prints each identified value with its standard error, '
         'the held ones, the residual RMS before and after and the noise '
         'it implies; writes the calibrated robot as a parameters file '
-        '(the masses, friction and drives of --params kept) with a '
-        'comment block of the same. Bad input exits with code 2, nothing '
-        'written.'),
+        'every node reads (section /**; the masses, friction and drives '
+        'of --params kept) with a comment block of the same. A fit that '
+        'leaves more noise than any instrument has (100 um per reading) '
+        'is refused. Bad input exits with code 2, nothing written.'),
 )
