@@ -24,7 +24,17 @@ without the calibration's rank analysis, analytic Jacobian or robust
 statistics. Then the time of ``orthoglide calibrate`` (a process, imports
 included, no ``--report``) on 100 measurements. No ROS import.
 
-Usage: python benchmarks/bench_calibration.py [--seeds 0-9]
+``--sweep``: instead, how many readings to spare find a blunder. For
+each count of random positions in x, y, z (8 to 13) and of gauge
+readings (24 to 36), a 5 mm blunder in one random reading of each seed's
+machine (a joint reading or a coordinate): how often it is named alone,
+how often the calibration is refused for the noise it leaves
+(``estimate.MAX_NOISE``), how often it is missed (and of those, how often
+harmfully: the calibrated IK's RMS error over the held-out targets more
+than twice the calibration's without the blunder's row), and how often a
+robot is written that the targets find worse than the drawing.
+
+Usage: python benchmarks/bench_calibration.py [--seeds 0-9] [--sweep]
 """
 
 import argparse
@@ -39,6 +49,7 @@ import time
 import numpy as np
 
 from orthoglide_testing import use_checkout
+from orthoglide_testing.arguments import seeds
 from orthoglide_testing.robots_as_built import random_built
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
@@ -57,14 +68,6 @@ TARGET = {'xyz 30': (10.0, 45.0), 'gauge 90': (8.5, None),
           'poses 12': (14.0, None), 'random 12': (18.0, None),
           'blunder 30': (12.0, None), 'instrument 30': (None, None)}
 CASES = tuple(TARGET)
-
-
-def seeds(text):
-    """Parse ``0-9`` or ``0,3,5`` into a list of seeds."""
-    if '-' in text:
-        first, last = (int(v) for v in text.split('-'))
-        return list(range(first, last + 1))
-    return [int(v) for v in text.split(',')]
 
 
 def cube(robot, rng, count):
@@ -187,6 +190,59 @@ def one_machine(seed, design):
     return out
 
 
+def sweep(seeds_):
+    """Print, per count, what a 5 mm blunder does (see the docstring)."""
+    nominal = Robot()
+    print(f'a {1e3 * BLUNDER:g} mm blunder in one reading, '
+          f'{1e6 * NOISE:g} um noise, {len(seeds_)} machines per count; '
+          'named: left out alone; refused: for the noise left '
+          f'(> {1e6 * calibration.MAX_NOISE:g} um) or otherwise; harmful: '
+          'missed, the IK error twice the fit\'s without it or more; '
+          'worse: a robot written whose IK is worse than the drawing\'s '
+          f'(RMS, {TARGETS} targets)')
+    columns = (('named', 8), ('missed', 8), ('harmful', 9), ('refused', 9),
+               ('other', 7), ('worse', 7))
+    print(f'{"readings":>18}{"to spare":>10}'
+          + ''.join(f'{k:>{w}}' for k, w in columns))
+    for kind, counts in (('xyz', range(8, 15)), ('gauge', range(24, 40, 3))):
+        for count in counts:
+            tally = dict.fromkeys((k for k, _ in columns), 0)
+            for seed in seeds_:
+                true = Robot(**random_built(np.random.default_rng(seed)))
+                rng = np.random.default_rng(100 + seed)
+                targets = cube(nominal, rng, TARGETS)
+                lam = mechanics.solve_batch(nominal, cube(
+                    nominal, rng, count)).lambda_
+                readings = measurements(rng, true, lam, kind == 'gauge')
+                row = int(rng.integers(count))
+                column = int(rng.integers(4)) if kind == 'gauge' \
+                    else int(rng.integers(6))
+                kept = np.arange(count) != row
+                clean = (lam[kept], readings[kept])
+                if column < 3:
+                    lam[row, column] += BLUNDER
+                else:
+                    readings[row, int(np.flatnonzero(~np.isnan(
+                        readings[row]))[0]) if kind == 'gauge'
+                        else column - 3] += BLUNDER
+                try:
+                    result = calibrated(nominal, lam, readings)
+                except calibration.CalibrationError as error:
+                    tally['refused' if 'beyond any instrument' in str(error)
+                          else 'other'] += 1
+                    continue
+                named = [r for r, _, _ in result.left_out] == [row]
+                tally['named' if named else 'missed'] += 1
+                error = accuracy(result.robot, true, targets)[0]
+                tally['harmful'] += not named and error > 2.0 * accuracy(
+                    calibrated(nominal, *clean).robot, true, targets)[0]
+                tally['worse'] += error > accuracy(nominal, true,
+                                                   targets)[0]
+            spare = count * (3 if kind == 'xyz' else 1) - 18
+            print(f'{count:>4} {kind:<13}{spare:>10}' + ''.join(
+                f'{tally[k]:>{w}}' for k, w in columns), flush=True)
+
+
 def timed():
     """Return the median seconds of ``orthoglide calibrate`` on TIMED rows."""
     rng = np.random.default_rng(7)
@@ -220,7 +276,13 @@ def main(argv=None):
         description=__doc__.strip().split('\n\n')[0])
     parser.add_argument('--seeds', type=seeds, default=seeds('0-9'),
                         help='machines to draw (default 0-9)')
+    parser.add_argument('--sweep', action='store_true',
+                        help='how many readings to spare find a blunder '
+                        '(see above), instead of the accuracy')
     args = parser.parse_args(argv)
+    if args.sweep:
+        sweep(args.seeds)
+        return 0
     print(f'Python {platform.python_version()}, {platform.machine()}, '
           f'{os.cpu_count()} CPUs; noise {1e6 * NOISE:g} um per coordinate;'
           f' {TARGETS} held-out targets in the cube; |FK_true(IK(t)) - t| '

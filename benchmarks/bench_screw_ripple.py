@@ -30,6 +30,7 @@ import time
 import numpy as np
 
 from orthoglide_testing import use_checkout
+from orthoglide_testing.arguments import seeds
 from orthoglide_testing import rough_guideways as rough
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
@@ -37,14 +38,6 @@ from orthoglide_ros.tools import identification
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 use_checkout(ROOT)
-
-
-def seeds(text):
-    """Parse ``0-9`` or ``0,3,5`` into a list of seeds."""
-    if '-' in text:
-        first, last = (int(v) for v in text.split('-'))
-        return list(range(first, last + 1))
-    return [int(v) for v in text.split(',')]
 
 
 def identified(nominal, robot, defects, log, motion, times):

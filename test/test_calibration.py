@@ -16,7 +16,8 @@ built Orthoglide's errors (``robots_as_built``). Checked:
   an instrument in its own frame, the six rigid motions of the whole robot
   against it in the Jacobian's null space, held, 18 in all;
 - noise-free measurements give back the machine exactly, for a built
-  robot and one ten times further off;
+  robot and one ten times further off, and name no blunder at 8, 12 or 30
+  positions (the implied noise at its 1 nm floor);
 - with 10 um of noise: each identified value within 4.5 of its standard
   errors of the noise-free fit's, the noise the residuals imply within
   the chi-square spread of 10 um, and the calibrated inverse kinematics
@@ -37,9 +38,9 @@ import pytest
 from mechanics_reference import platform_position
 from orthoglide_testing.robots_as_built import BUILT, FAR, random_built
 from orthoglide_ros.model import mechanics
-from orthoglide_ros.model.robot import Robot
+from orthoglide_ros.model.robot import ParameterError, Robot
 from orthoglide_ros.tools import calibration
-from orthoglide_ros.tools.calibration import geometry, poses
+from orthoglide_ros.tools.calibration import estimate, geometry, poses
 from orthoglide_ros.tools.calibration.estimate import CalibrationError
 
 NOMINAL = Robot()
@@ -211,6 +212,19 @@ def test_noise_free_readings_give_the_machine_back(size):
     assert ik_error(NOMINAL, machine, targets)[0] > 1e-3
 
 
+@pytest.mark.parametrize('count', [8, 12, 30])
+def test_exact_readings_are_calibrated_with_no_blunder(count):
+    """Noise-free readings: no made-up blunder, the noise at its floor."""
+    for seed in range(3):
+        machine = Robot(**random_built(np.random.default_rng(seed)))
+        lam, exact = readings_of(machine, workspace(count, 50 + seed))
+        result = calibration.calibrate(NOMINAL, data(lam, exact))
+        assert not result.left_out
+        assert result.rms_after < 1e-9
+        assert result.sigma == estimate.SIGMA_FLOOR
+        assert ik_error(result.robot, machine, workspace(100, 5))[1] < 1e-7
+
+
 @pytest.fixture(scope='module')
 def noisy():
     """Measure a built machine at 30 positions: (truth fit, noisy fits)."""
@@ -301,6 +315,54 @@ def test_noise_alone_names_no_blunder(count):
                                                        readings)).left_out
 
 
+@pytest.mark.parametrize('count, spare', [(9, 9), (11, 15), (12, None),
+                                          (30, None)])
+def test_too_few_readings_to_spare_to_find_a_blunder_are_said(count, spare):
+    machine = Robot(**random_built(np.random.default_rng(count)))
+    lam, exact = readings_of(machine, workspace(count, 70 + count))
+    readings = exact + np.random.default_rng(count).normal(0.0, NOISE,
+                                                           exact.shape)
+    notes = calibration.calibrate(NOMINAL, data(lam, readings)).notes
+    said = [n for n in notes if 'too few to find a blunder' in n]
+    if spare is None:
+        assert not said
+    else:
+        more = calibration.BLUNDER_REDUNDANCY - spare
+        assert said == [f'{spare} readings to spare: too few to find a '
+                        'blunder reliably '
+                        f'({calibration.BLUNDER_REDUNDANCY} or more do); '
+                        f'measure {more} more coordinates '
+                        f'({math.ceil(more / 3)} more positions in x, y and '
+                        'z)']
+
+
+def test_a_blunder_too_few_readings_hide_is_refused_by_the_noise_left():
+    """A 5 mm blunder among 8 positions: the fit absorbs it, 0.26-0.9 mm."""
+    for seed in (0, 2, 3):
+        machine = Robot(**random_built(np.random.default_rng(seed)))
+        lam, exact = readings_of(machine, workspace(8, 60 + seed))
+        readings = exact + np.random.default_rng(seed).normal(0.0, NOISE,
+                                                              exact.shape)
+        readings[3, 1] += 5e-3
+        with pytest.raises(CalibrationError) as error:
+            calibration.calibrate(NOMINAL, data(lam, readings))
+        assert 'beyond any instrument a calibration uses (100 um)' in \
+            str(error.value)
+        assert 'measure 12 more coordinates' in str(error.value)
+
+
+def test_readings_noisier_than_any_instrument_are_refused():
+    machine = Robot(**BUILT)
+    lam, exact = readings_of(machine, workspace(30, 16))
+    readings = exact + np.random.default_rng(2).normal(0.0, 0.3e-3,
+                                                       exact.shape)
+    with pytest.raises(CalibrationError, match=(
+            r'beyond any instrument a calibration uses \(100 um\): '
+            r'measurements of another robot .* the largest residual: line '
+            r"\d+, column '[xyz]' \([+-]\d")):
+        calibration.calibrate(NOMINAL, data(lam, readings))
+
+
 def test_one_coordinate_per_reading_separates_the_same_values():
     machine = Robot(**BUILT)
     lam, exact = readings_of(machine, workspace(90, 9))
@@ -383,6 +445,22 @@ def test_the_designed_positions_condition_the_calibration_best():
     assert predicted(design.lambdas) < 0.7 * float(np.median(random))
 
 
+@pytest.mark.parametrize('rows', [1, 3])
+def test_the_greedy_start_is_the_largest_determinant_each_step(rows):
+    """The determinant lemma's choice: the full determinants' (no exchange)."""
+    rng = np.random.default_rng(rows)
+    blocks = rng.normal(size=(60, rows, 6))
+    gram = np.einsum('nki,nkj->nij', blocks, blocks)
+    chosen, spent = poses._exchange(blocks, gram, 10, 0)
+    ridge = 1e-9 * np.trace(gram.mean(0)) * np.eye(6)
+    picked = []
+    for _ in range(10):
+        logdet = [-np.inf if c in picked else np.linalg.slogdet(
+            ridge + gram[picked + [c]].sum(0))[1] for c in range(60)]
+        picked.append(int(np.argmax(logdet)))
+    assert (chosen.tolist(), spent) == (sorted(picked), 0)
+
+
 def test_gauge_positions_name_one_coordinate_each():
     design = poses.design(NOMINAL, 30, 'gauge', evaluations=5000,
                           candidates=500)
@@ -400,7 +478,17 @@ def test_gauge_positions_name_one_coordinate_each():
 def test_the_blunder_threshold_is_the_f_quantile_of_six_sigma(readings,
                                                               spare):
     from scipy import stats
-    from orthoglide_ros.tools.calibration import estimate
     alarm = 2.0 * stats.norm.sf(estimate.BLUNDER_SIGMAS)
     assert estimate._quantile(readings, spare) == pytest.approx(
         stats.f.isf(alarm, readings, spare), rel=1e-8)
+
+
+def test_calibrated_legs_the_robot_refuses_are_shown_as_numbers():
+    deviation = np.zeros(30)
+    deviation[5] = 0.2      # leg A's joint offset, beyond 0.1 m
+    with pytest.raises(ParameterError, match=r'got \(0\.2, 0\.0, 0\.0\)$'):
+        geometry.calibrated_robot(NOMINAL, deviation)
+    robot = geometry.calibrated_robot(NOMINAL, np.full(30, 1e-4))
+    assert all(type(v) is float for name in Robot.parameter_names()
+               for value in [getattr(robot, name)]
+               for v in (value if isinstance(value, tuple) else (value,)))

@@ -390,6 +390,31 @@ def test_console_script_runs_batch_and_reports_errors(tmp_path):
     assert done.stderr.startswith('orthoglide: error: ')
 
 
+@pytest.mark.parametrize('argv', [
+    ['solve', '--position', '0', '0', '0'],             # one print
+    ['paper', '--samples', '20000', '--csv', '-'],      # chunks of bytes
+])
+def test_output_whose_reader_is_gone_ends_quietly(argv):
+    """``orthoglide ... | head -1``: status 141 as SIGPIPE's, no traceback."""
+    script = console_script()
+    if script is None:
+        pytest.skip('the orthoglide console script is not installed')
+    read, write = os.pipe()
+    os.close(read)      # the reader gone before the first write
+    try:
+        done = subprocess.run([script, *argv], stdout=write,
+                              stderr=subprocess.PIPE, timeout=60)
+    finally:
+        os.close(write)
+    assert (done.returncode, done.stderr) == (141, b'')
+    shell = subprocess.run(f'{script} {" ".join(argv)} | head -1; exit '
+                           '"${PIPESTATUS[0]}"', shell=True,
+                           executable='/bin/bash', capture_output=True,
+                           timeout=60)
+    assert shell.stderr == b'' and len(shell.stdout.splitlines()) == 1
+    assert shell.returncode in (0, 141)
+
+
 # batch --format joint_trajectory ---------------------------------------------
 def joint_trajectory_of(document):
     """Fill a trajectory_msgs/JointTrajectory from its YAML mapping."""

@@ -7,9 +7,13 @@ the file's line and column, nothing written.
 """
 
 import csv
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
+import yaml
 
 from cli_runs import assert_bad_input, PNG_MAGIC, run
 from orthoglide_testing.robots_as_built import BUILT
@@ -131,24 +135,43 @@ def test_a_blunder_is_named_by_its_line(capsys, tmp_path, twenty):
     assert '# left out: line 8' in (tmp_path / 'robot.yaml').read_text()
 
 
-def test_a_gauges_readings_leave_cells_empty(capsys, tmp_path):
+def test_a_gauge_design_leaves_the_readings_to_fill_in(capsys, tmp_path):
     poses_file = tmp_path / 'poses.csv'
     code, out, _ = run(capsys, 'calibration-poses', '--count', 40,
                        '--type', 'gauge', '--output', poses_file,
                        '--evaluations', 2000)
     assert code == 0 and '40 readings of one coordinate' in out
+    assert 'note' not in out
     rows = read_poses(poses_file)
-    assert list(rows[0]) == HEADER.split(',') + ['gauge']
+    assert list(rows[0]) == HEADER.split(',') + [
+        'gauge', 'nominal_x', 'nominal_y', 'nominal_z']
+    assert all(r['x'] == r['y'] == r['z'] == '' for r in rows)
     lam = np.array([[float(r[f'lambda_{leg}']) for leg in 'abc']
                     for r in rows])
+    nominal = np.array([[float(r[f'nominal_{c}']) for c in 'xyz']
+                        for r in rows])
+    assert np.allclose(mechanics.forward_kinematics(Robot(), lam), nominal,
+                       atol=1e-12)
+    # Unfilled, the file is refused, not read as the drawing's positions.
+    code, out, err = run(capsys, 'calibrate', '--input', poses_file,
+                         '--output', tmp_path / 'robot.yaml')
+    assert_bad_input(code, out, err, 'line 2, columns x, y, z: no '
+                     'coordinate measured')
+    # Each row's gauge cell filled in, the rest of the file as written.
     readings = measured(lam)
+    with open(poses_file) as stream:
+        lines = stream.read().splitlines()
     for k, r in enumerate(rows):
-        readings[k, ['x', 'y', 'z'] != np.array(r['gauge'])] = np.nan
-    path = write_measurements(tmp_path / 'm.csv', lam, readings)
-    code, out, _ = run(capsys, 'calibrate', '--input', path, '--output',
-                       tmp_path / 'robot.yaml')
+        cells = lines[k + 1].split(',')
+        cells[3 + 'xyz'.index(r['gauge'])] = repr(float(
+            readings[k, 'xyz'.index(r['gauge'])]))
+        lines[k + 1] = ','.join(cells)
+    poses_file.write_text('\n'.join(lines) + '\n')
+    code, out, _ = run(capsys, 'calibrate', '--input', poses_file,
+                       '--output', tmp_path / 'robot.yaml')
     assert code == 0
-    assert '40 readings (x ' in out and 'separate 18 of the 30' in out
+    assert '40 measurements, 40 readings (x ' in out
+    assert 'separate 18 of the 30' in out
 
 
 def test_an_instrument_frame_is_reported(capsys, tmp_path, twenty):
@@ -193,10 +216,23 @@ GOOD = '0.0,0.0,0.0,0.0,0.0,0.0\n'
      ("line 3, column 'lambda_", 'outside')),
     (HEADER + '\n' + GOOD + '0.0,0.7,0.8,0.0,0.0,0.0\n',
      ("line 3, column 'lambda_c'", 'nearer a singularity than the margin')),
-    (HEADER + '\n' + GOOD * 2, ('line 3', 'the same row as line 2')),
     (HEADER + '\n0.0,0.0,0.0,,,\n', ('line 2, columns x, y, z',
                                      'no coordinate measured')),
+    (HEADER + '\n' + GOOD + '0.01,0.0,0.0,-1e308,0.0,0.0\n',
+     ("line 3, column 'x'", '-1e+308 m is 1e+308 m from')),
+    (HEADER + '\n' + GOOD + '0.01,0.0,0.0,0.0,0.0,1e308\n',
+     ("line 3, column 'z'", 'beyond the 100 mm')),
+    (HEADER + '\n' + GOOD + '0.01,0.0,0.0,0.0,1e200,0.0\n',
+     ("line 3, column 'y'", 'beyond the 100 mm')),
+    (HEADER + '\n' + GOOD + '1e308,0.0,0.0,0.0,0.0,0.0\n',
+     ("line 3, column 'lambda_a'", 'outside')),
+    (HEADER + '\n' + GOOD + '0.0,-1e308,0.0,0.0,0.0,0.0\n',
+     ("line 3, column 'lambda_b'", 'outside')),
     (HEADER + '\n', ('no measurement',)),
+    (HEADER + '\n' + GOOD + '0.01,0.0,0.0,0.0,0.0\n',
+     ('data row 2 (line 3): 5 cells where the header has 6',)),
+    (HEADER + '\n0.01,0.0,0.0,0.0,0.0,0.0,0.0\n',
+     ('data row 1 (line 2): 7 cells where the header has 6',)),
     ('', ('empty file',)),
 ])
 def test_bad_measurements_are_refused_naming_line_and_column(
@@ -258,9 +294,13 @@ def test_an_unknown_option_is_refused_in_one_line(capsys, tmp_path, twenty,
 
 
 @pytest.mark.parametrize('argv, words', [
-    (['--count', '7'], ('--count 7: below 8',)),
+    (['--count', '7'], ('--count 7: below 8, the fewest whose readings '
+                        'identify the 18 separable values with 6 readings '
+                        'to spare',)),
     (['--count', '23', '--type', 'gauge'], ('--count 23: below 24',)),
     (['--count', '1001'], ('--count 1001: above 1000',)),
+    (['--count', '12', '--evaluations', '10000001'],
+     ('--evaluations: must be an integer in [1, 1e+07], got',)),
     (['--count', '12', '--type', 'laser'], ("invalid choice: 'laser'",)),
 ])
 def test_calibration_poses_refuses_bad_arguments(capsys, tmp_path, argv,
@@ -283,16 +323,148 @@ def test_a_file_beyond_the_measurement_limit_is_refused(capsys, tmp_path,
     assert csvfile.MAX_ROWS > 15
 
 
-@pytest.mark.parametrize('command', ['calibrate', 'calibration-poses'])
-def test_a_nominal_robot_whose_legs_do_not_assemble_is_refused(
-        capsys, tmp_path, twenty, command):
+def refused_nominal(capsys, tmp_path, twenty, command, rows):
+    """Run ``command`` with a --params robot of ``rows``: its error line."""
     params = tmp_path / 'nominal.yaml'
-    params.write_text('/**:\n  ros__parameters:\n    robot:\n'
-                      '      axis_direction_b: [0.9962, 0.0872, 0.0]\n')
+    params.write_text('/**:\n  ros__parameters:\n    robot:\n' + ''.join(
+        f'      {name}: {value}\n' for name, value in rows.items()))
     output = tmp_path / 'out.file'
     argv = (['--input', twenty[0]] if command == 'calibrate'
             else ['--count', '12'])
     code, out, err = run(capsys, command, *argv, '--params', params,
                          '--output', output)
-    assert_bad_input(code, out, err, 'robot.axis_direction_b')
+    assert_bad_input(code, out, err, f'{params}: robot.')
     assert not output.exists()
+    return err
+
+
+@pytest.mark.parametrize('command', ['calibrate', 'calibration-poses'])
+def test_a_nominal_robot_whose_legs_do_not_assemble_is_refused(
+        capsys, tmp_path, twenty, command):
+    # A small robot (bars of 0.1 m) whose leg A is shorter than its reach.
+    err = refused_nominal(capsys, tmp_path, twenty, command, {
+        'l3': '0.1', 'bar_length': '[0.05, 0.1, 0.1]',
+        'axis_point_a': '[0.0, 0.08, 0.0]'})
+    assert "robot.bar_length: leg A's bars (0.05 m) are shorter than its " \
+        'reach' in err
+
+
+@pytest.mark.parametrize('command', ['calibrate', 'calibration-poses'])
+def test_a_nominal_robot_with_parallel_axes_is_refused(capsys, tmp_path,
+                                                       twenty, command):
+    err = refused_nominal(capsys, tmp_path, twenty, command, {
+        'axis_direction_b': '[0.9962, 0.0872, 0.0]'})
+    assert 'robot.axis_direction_b: parallel to robot.axis_direction_a' in err
+
+
+def test_poses_on_standard_output_are_the_csv_alone(capsys):
+    code, out, err = run(capsys, 'calibration-poses', '--count', 8,
+                         '--output', '-', '--evaluations', 500)
+    assert code == 0
+    rows = list(csv.reader(out.splitlines()))
+    assert rows[0] == HEADER.split(',') and len(rows) == 9
+    assert all(len(row) == 6 for row in rows)
+    assert 'condition number' in err and 'written' not in out + err
+    assert 'note: 8 positions leave 6 readings to spare: too few to find a ' \
+        'blunder reliably; 12 or more do' in err
+
+
+def test_a_calibration_on_standard_output_is_the_yaml_alone(capsys, twenty):
+    code, out, err = run(capsys, 'calibrate', '--input', twenty[0],
+                         '--output', '-')
+    assert code == 0
+    document = yaml.safe_load(out)
+    assert not params_file.robot_from_parameters(
+        params_file.ParametersFile('-', document).section()).as_drawn
+    assert err.startswith('Calibration from ') and 'written' not in err
+
+
+def test_the_commands_pipe_into_each_other():
+    """``calibration-poses --output - | calibrate --input - --output -``."""
+    tool = os.path.join(os.path.dirname(sys.executable), 'orthoglide')
+    design = subprocess.Popen(
+        [tool, 'calibration-poses', '--count', '8', '--evaluations', '500',
+         '--output', '-'], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    fit = subprocess.run([tool, 'calibrate', '--input', '-', '--output', '-'],
+                         stdin=design.stdout, capture_output=True,
+                         timeout=60)
+    design.stdout.close()
+    assert design.wait(60) == 0, design.stderr.read()
+    assert 'condition number' in design.stderr.read().decode()
+    design.stderr.close()
+    assert fit.returncode == 0, fit.stderr
+    # The designed positions are the nominal robot's exactly: calibrated,
+    # the drawing again, within the rounding of the file's digits.
+    robot = params_file.robot_from_parameters(params_file.ParametersFile(
+        '-', yaml.safe_load(fit.stdout)).section())
+    assert np.allclose(np.array(robot.bar_length), Robot().l3, atol=1e-9)
+    assert fit.stderr.decode().startswith('Calibration from <stdin>: 8 ')
+
+
+@pytest.mark.parametrize('value', ['-1e308', '1e308'])
+def test_a_reading_near_the_largest_double_is_refused_in_any_frame(
+        capsys, tmp_path, twenty, value):
+    _, lam = twenty
+    path = write_measurements(tmp_path / 'm.csv', lam, measured(lam))
+    lines = path.read_text().splitlines()
+    cells = lines[5].split(',')
+    cells[4] = value
+    lines[5] = ','.join(cells)
+    path.write_text('\n'.join(lines) + '\n')
+    for frame in ('robot', 'instrument'):
+        code, out, err = run(capsys, 'calibrate', '--input', path,
+                             '--output', tmp_path / 'robot.yaml', '--frame',
+                             frame)
+        assert_bad_input(code, out, err, "line 6, column 'y'",
+                         f'{float(value):.6g} m is ', 'beyond the 100 mm')
+    assert not (tmp_path / 'robot.yaml').exists()
+
+
+def test_a_robot_that_reaches_too_little_is_refused_by_its_file(capsys,
+                                                                tmp_path):
+    params = tmp_path / 'short.yaml'
+    params.write_text('/**:\n  ros__parameters:\n    robot:\n'
+                      '      l3: 0.05\n')
+    output = tmp_path / 'poses.csv'
+    code, out, err = run(capsys, 'calibration-poses', '--count', 12,
+                         '--params', params, '--output', output)
+    assert_bad_input(code, out, err, f'error: {params}: the robot reaches '
+                     'too little of the workspace cube')
+    assert not output.exists()
+
+
+def test_a_fit_that_leaves_more_than_any_instruments_noise_is_refused(
+        capsys, tmp_path):
+    """A 5 mm blunder among 8 positions, absorbed: 0.47 mm per reading."""
+    from orthoglide_testing.robots_as_built import random_built
+    from orthoglide_ros.tools.calibration import poses
+    machine = Robot(**random_built(np.random.default_rng(0)))
+    lam = mechanics.solve_batch(Robot(), poses._workspace(
+        Robot(), np.random.default_rng(60), 8)).lambda_
+    readings = measured(lam, robot=machine)
+    readings[3, 1] += 5e-3
+    path = write_measurements(tmp_path / 'm.csv', lam, readings)
+    code, out, err = run(capsys, 'calibrate', '--input', path, '--output',
+                         tmp_path / 'robot.yaml')
+    assert_bad_input(code, out, err, 'um of noise per reading',
+                     'beyond any instrument a calibration uses (100 um)',
+                     'with 6 readings to spare a blunder may hide: measure '
+                     '12 more coordinates (4 more positions in x, y and z)')
+    assert not (tmp_path / 'robot.yaml').exists()
+
+
+def test_a_row_repeated_exactly_counts_twice_and_is_said(capsys, tmp_path,
+                                                         twenty):
+    """A quantised gauge and encoders may read a position again alike."""
+    lines = twenty[0].read_text().splitlines()
+    path = tmp_path / 'm.csv'
+    path.write_text('\n'.join(lines[:5] + [lines[3]] + lines[5:]) + '\n')
+    code, out, err = run(capsys, 'calibrate', '--input', path, '--output',
+                         tmp_path / 'robot.yaml')
+    assert (code, err) == (0, '')
+    assert '21 measurements, 63 readings' in out
+    note = ('note: line 6 repeats line 4 exactly: counted as two '
+            'measurements (a quantised instrument reads a position again '
+            'alike; a row pasted twice would count twice too)')
+    assert note in out.splitlines()
+    assert f'# {note}' in (tmp_path / 'robot.yaml').read_text()

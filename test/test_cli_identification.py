@@ -110,6 +110,9 @@ def test_identify_writes_a_parameters_file_the_tools_read(capsys, tmp_path):
     assert all(type(v) is float or all(type(c) is float for c in v)
                for v in values.values())
     assert len(values) == len(Robot.parameter_names())
+    # Under /**: every node's section, not the feedforward's alone.
+    assert params_file.load_parameters(out, 'mechanism_state_publisher') \
+        == values
     assert f'written: {out}' in stdout
     code, solved, _ = run(capsys, 'solve', '--position', 0, 0, 0, '--json',
                           '--params', out)

@@ -288,6 +288,9 @@ CSV = {
     'unterminated_quote': ('0,' * 3 + '"0\n' + '1,' * 3 + '0\n',
                            'is not a finite number'),
     'not_utf8': (b'0,0,0,\xff\n', 'not a UTF-8 text file'),
+    'a_cell_short': ('0,' * 2 + '0\n', 'data row 1 (line 2): '),
+    'a_cell_more': ('0,' * 4 + '0\n', 'cells where the header has '),
+    'a_trailing_comma': ('0,' * 4 + '\n', 'cells where the header has '),
 }
 HEADERS = {'batch': 't,x,y,z', 'animate': 't,x,y,z'}
 
@@ -312,6 +315,19 @@ def test_a_hostile_csv_is_refused_in_one_line(capsys, tmp_path, name,
                          tmp_path / output)
     assert_bad_input(code, out, err, words)
     assert not (tmp_path / output).exists()
+
+
+@pytest.mark.parametrize('row', ['0.1,0.0', '0.1,0.0,0.0,0.0'])
+def test_a_waypoint_row_of_another_cell_count_is_refused(capsys, tmp_path,
+                                                         row):
+    path = tmp_path / 'waypoints.csv'
+    path.write_text(f'x,y,z\n0.0,0.0,0.0\n{row}\n0.1,0.1,0.0\n')
+    code, out, err = run(capsys, 'plan', '--input', path, '--output',
+                         tmp_path / 'plan.yaml')
+    assert code == 2 and out == ''
+    assert f'{path}: data row 2 (line 3): {row.count(",") + 1} cells where ' \
+        'the header has 3' in err
+    assert not (tmp_path / 'plan.yaml').exists()
 
 
 def test_a_csv_beyond_the_row_limit_is_refused_without_reading_it_all(

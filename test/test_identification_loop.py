@@ -129,7 +129,7 @@ def test_identified_parameters_file_starts_the_feedforward(closed_loop,
     result, _ = identified
     path = tmp_path / 'identified.yaml'
     # Its own namespace, beside the loop's feedforward: the section's key
-    # is the node's full name (the tools write the plain 'feedforward').
+    # is the node's full name (the tools write '/**', every node's).
     path.write_text(params_file.robot_file_text(
         result.robot, node='/identified/feedforward'))
     proc = start_node_process(['--ros-args', '--params-file', str(path),

@@ -5,7 +5,8 @@ Each leg's geometry rows: defaults, the accessor, and what is refused.
 ``bar_length`` and ``attachment_*`` are the drawing's by default
 (``bar_length`` follows ``l3`` on each leg); ``Robot.legs`` gives each
 leg's point, direction, offset, length, attachment and frame, derived
-once. A value not finite, beyond 0.1 m of the drawing, a direction not a
+once. A value not finite, beyond 0.1 m of the drawing (a bar length of
+``l3``), a direction not a
 unit vector, tilted beyond 10 deg or parallel to another, and legs that
 do not assemble at home (no position, a leg shorter than its reach, too
 near a singularity) are refused when the robot is built, naming the row,
@@ -107,6 +108,9 @@ def test_rows_round_trip_through_parameters_and_files():
     ('attachment_c', 'x', '3-vector'),
     ('bar_length', (0.85, 0.0, 0.85), '[0.0001, 100] m'),
     ('bar_length', 0.85, '3-vector'),
+    ('bar_length', (0.85, 0.85, 0.05), 'within 0.1 m of robot.l3 (0.85 m)'),
+    ('bar_length', (0.001, 0.001, 0.001), 'within 0.1 m of robot.l3'),
+    ('bar_length', (0.96, 0.85, 0.85), 'got (0.96, 0.85, 0.85)'),
     ('axis_direction_a', (0.5, 0.0, 0.0), 'unit vector'),
     ('axis_direction_a', (math.nan, 0.0, 0.0), 'finite'),
     ('axis_direction_b', (0.0, math.cos(0.35), math.sin(0.35)),
@@ -118,8 +122,18 @@ def test_a_bad_row_is_refused_naming_it(name, value, words):
     assert words in refused(name, **{name: value})
 
 
+def test_bar_lengths_lie_within_a_tenth_of_a_metre_of_l3():
+    assert Robot(bar_length=(0.75, 0.95, 0.85)).legs[1].length == 0.95
+    assert Robot(l3=0.3, bar_length=(0.2, 0.4, 0.3)).legs[0].length == 0.2
+    assert 'got (0.2, 0.41, 0.3)' in refused('bar_length', l3=0.3,
+                                             bar_length=(0.2, 0.41, 0.3))
+    assert 'robot.l3 (0.3 m)' in refused('bar_length', l3=0.3,
+                                         bar_length=(0.85, 0.3, 0.3))
+
+
 def test_a_leg_shorter_than_its_reach_is_refused_as_its_bar_length():
-    message = refused('bar_length', bar_length=(0.05, 0.85, 0.85),
+    # A small robot (bars of 0.1 m), leg A's 0.05 m and 0.08 m off its axis.
+    message = refused('bar_length', l3=0.1, bar_length=(0.05, 0.1, 0.1),
                       axis_point_a=(0.0, 0.08, 0.0))
     assert "leg A's bars (0.05 m) are shorter than its reach" in message
     assert '0.08 m from its axis' in message
@@ -129,7 +143,7 @@ def test_legs_without_a_home_position_are_refused_naming_the_row_to_blame():
     # Short bars, sliders pulled back 0.1 m: three spheres of 0.05 m, each
     # about 0.21 m from the others, meet nowhere; the drawing's offsets
     # would put them all through the origin.
-    message = refused('joint_offset', bar_length=(0.05, 0.05, 0.05),
+    message = refused('joint_offset', l3=0.05,
                       joint_offset=(-0.1, -0.1, -0.1))
     assert 'the legs do not assemble: no platform position on the home ' \
         'branch' in message
@@ -145,10 +159,11 @@ def values_of(**changes):
 
 
 def test_legs_assembled_too_near_a_singularity_are_refused():
-    # Leg A's axis 0.05 m beside home, its bars 0.0525 m: the legs meet at
-    # lambda = 0 with alpha_A / L_A near 0.13 < the default margin 0.2.
-    changes = {'axis_point_a': (0.0, 0.05, 0.0),
-               'bar_length': (0.0525, 0.85, 0.85)}
+    # A small robot (bars of 0.1 m), leg A's axis 0.05 m beside home, its
+    # bars 0.0642 m: the legs meet at lambda = 0 with a singularity
+    # distance near 0.13 < the default margin 0.2.
+    changes = {'l3': 0.1, 'axis_point_a': (0.0, 0.05, 0.0),
+               'bar_length': (0.0642, 0.1, 0.1)}
     message = refused('axis_point_a', **changes)
     found = re.search(r'the legs assemble at lambda = \(0, 0, 0\) with the '
                       r'platform at \[(.*)\] m, too near a singularity '
@@ -168,7 +183,7 @@ def test_legs_assembled_too_near_a_singularity_are_refused():
                                              * np.linalg.det(jac)))
     assert float(found.group(2)) == float(f'{min(ratio, conditioning):.3g}')
     assert 0.1 < min(ratio, conditioning) < 0.2
-    Robot(axis_point_a=(0.0, 0.05, 0.0), bar_length=(0.06, 0.85, 0.85))
+    Robot(l3=0.1, axis_point_a=(0.0, 0.05, 0.0), bar_length=(0.066, 0.1, 0.1))
 
 
 @pytest.mark.parametrize('module', [
@@ -177,8 +192,8 @@ def test_legs_assembled_too_near_a_singularity_are_refused():
 def test_every_node_refuses_legs_that_do_not_assemble(module):
     table = importlib.import_module(f'orthoglide_ros.cores.{module}').PARAMETERS
     assert table.robot
-    values = {**table.defaults(),
-              'robot.bar_length': [0.05, 0.85, 0.85],
+    values = {**table.defaults(), 'robot.l3': 0.1,
+              'robot.bar_length': [0.05, 0.1, 0.1],
               'robot.axis_point_a': [0.0, 0.08, 0.0]}
     with pytest.raises(ParameterError) as error:
         table.parse(values)

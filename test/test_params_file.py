@@ -6,16 +6,17 @@ The node's section may be keyed ``feedforward``, ``/feedforward`` or
 nested or dotted, a double needs a decimal point or an exponent (``1e-3``
 is a double, as in rcl), arrays must not mix integers and doubles,
 booleans are not numbers, unknown ``robot.*`` names are refused and other
-names are ignored; a key given twice in one mapping is refused.
+names are ignored; a key given twice in one mapping is refused. A robot the
+tools write (``robot_file_text``, under ``/**``) is read by every node.
 """
 
 import math
 import os
 import textwrap
 
-from orthoglide_ros.formats.params_file import robot_from_parameters
 from orthoglide_ros.formats.params_file import (
-    load_parameters, load_robot, ParametersFileError)
+    load_parameters, load_robot, ParametersFileError, robot_file_text,
+    robot_from_parameters)
 from orthoglide_ros.model.robot import ParameterError, Robot
 import pytest
 
@@ -57,6 +58,14 @@ def test_section_keys(tmp_path, key):
     robot = load_robot(write(tmp_path, text))
     assert robot.l3 == 0.9 and robot.m5 == 18.0
     assert robot.m1 == Robot().m1
+
+
+@pytest.mark.parametrize('node', ['feedforward', 'simulator', 'planner',
+                                  'mechanism_state_publisher'])
+def test_a_robot_file_is_read_by_every_node(tmp_path, node):
+    robot = Robot(m5=18.0, bar_length=(0.851, 0.85, 0.849))
+    path = write(tmp_path, robot_file_text(robot, ['calibrated']))
+    assert robot_from_parameters(load_parameters(path, node)) == robot
 
 
 def test_node_section_overrides_wildcard(tmp_path):

@@ -254,7 +254,6 @@ def test_identify_recovers_the_amplitudes_of_a_synthetic_log():
         assert getattr(clean.robot, name) == pytest.approx(values,
                                                            abs=2e-3)
     noisy = identification.identify(NOMINAL, ripple_log(0.5))
-    print(noisy.law_chosen)
     assert 'ripple' in identification.law_name(noisy.law)
     for name, values in AMPLITUDES.items():
         assert getattr(noisy.robot, name) == pytest.approx(values, abs=0.05)

@@ -83,6 +83,18 @@ def test_gravity_accepts_finite_3_sequences_and_stores_floats():
     assert Robot(gravity=[0, 0, 0]).gravity == (0.0, 0.0, 0.0)
 
 
+@pytest.mark.parametrize('values, shown', [
+    ({'joint_offset': (np.float64(0.2), 0.0, 0.0)}, 'got (0.2, 0.0, 0.0)'),
+    ({'joint_offset': np.array([0.0, -0.25, 0.0])}, 'got [0.0, -0.25, 0.0]'),
+    ({'l3': np.float64(-1.0)}, 'got -1.0'),
+    ({'gravity': (np.float64(math.inf), 0.0, 0.0)}, 'got (inf, 0.0, 0.0)'),
+    ({'axis_direction_a': (np.float64(0.5), 0.0, 0.0)}, 'got (0.5, 0.0, 0.0)'),
+], ids=repr)
+def test_a_refusal_shows_numpy_numbers_as_numbers(values, shown):
+    error = refused(next(iter(values)), **values)
+    assert shown in str(error) and 'np.' not in str(error)
+
+
 @pytest.mark.parametrize('name', FRICTION)
 @pytest.mark.parametrize('value', [
     (0.0, -1e-9, 0.0), (0.0, 0.0), (1.0, 2.0, 3.0, 4.0), 5.0, None,

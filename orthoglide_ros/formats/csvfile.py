@@ -3,8 +3,9 @@ Read columns of numbers from a CSV file by their header names, without ROS.
 
 The one reader of the package's CSV inputs (``orthoglide batch``, the logs
 of ``orthoglide identify``): groups of columns by name, finite numbers
-only, read as a stream into arrays within MAX_ROWS rows, MAX_LINES lines
-and MAX_LINE characters a line. Its rules: doc/cli.md#batch and
+only, as many cells in every row as the header has, read as a stream
+into arrays within MAX_ROWS rows, MAX_LINES lines and MAX_LINE
+characters a line. Its rules: doc/cli.md#batch and
 doc/robustness.md#files-and-paths.
 """
 
@@ -125,8 +126,12 @@ def _read(reader, groups, name, blank=frozenset(), max_rows=None):
         if row > max_rows:
             raise CsvError(f'{name}: more than {max_rows} data rows: split '
                            'the file')
+        if len(cells) != len(header):
+            raise CsvError(f'{name}: data row {row} (line {line}): '
+                           f'{len(cells)} cells where the header has '
+                           f'{len(header)}: a comma missing or too many')
         for column, i in zip(wanted, cells_at):
-            cell = cells[i].strip() if i < len(cells) else ''
+            cell = cells[i].strip()
             if not cell and column in blank:
                 data.append(math.nan)
                 continue

@@ -22,6 +22,9 @@ from orthoglide_ros.model.robot import (is_vector, ParameterError, Robot,
 from orthoglide_ros.model.types import Path
 
 NODE_NAME = 'feedforward'     # the node whose robot the tools read
+# The section every node reads (rcl's wildcard): where the tools write a
+# robot, so that one file serves every node and command as is.
+EVERY_NODE = '/**'
 ROBOT_PREFIX = 'robot.'
 _SCALAR = {'double': float, 'integer': int, 'string': str, 'bool': bool}
 _ELEMENT = {'double_array': float, 'integer_array': int, 'string_array': str}
@@ -279,12 +282,12 @@ def _flatten(mapping, prefix, out):
 
 
 def robot_file_text(robot: Robot, comments: Sequence[str] = (),
-                    node: str = NODE_NAME) -> str:
+                    node: str = EVERY_NODE) -> str:
     """
     Return a parameters file holding every ``robot.*`` value of ``robot``.
 
-    One section for ``node`` (the ``feedforward``'s by default, which the
-    tools read too), the values nested under ``robot:`` in the order of
+    One section for ``node`` (by default ``/**``, which every node and
+    the tools read), the values nested under ``robot:`` in the order of
     :meth:`Robot.parameter_names`, each written as rcl types it: doubles
     by ``repr`` (always a decimal point or an exponent: ``15.0``,
     ``1e-06``), arrays of doubles in flow style; ``m4`` and ``m6``

@@ -58,6 +58,9 @@ def solve(k: 'KernelConstants', x: Any, y: Any, z: Any, vx: Any, vy: Any,
     qy = qy_a + qz_c
     qz = qz_a + qy_b
 
+    # Eq. (25)'s last step, written again in solve_legs: one function for
+    # both cost this path 0-5 %
+    # (doc/measurements.md#speed-of-the-mechanics).
     (c11, c12, c13, c21, c22, c23, c31, c32, c33), det, inverse_condition = \
         jacobian_cofactors(x, y, z, al_a, al_b, al_c, sqrt)
     rd = 1.0 / det

@@ -32,6 +32,8 @@ ZERO = (0.0, 0.0, 0.0)
 # coordinate), its axis within MAX_TILT_DEG of the drawing's, a unit vector
 # to UNIT_TOLERANCE: far beyond any built Orthoglide's errors.
 OFFSET_LIMITS = (-0.1, 0.1)
+# A leg's bars within this of the drawing's l3 (m), as its points are.
+MAX_LENGTH_DEVIATION = 0.1
 DIRECTION_LIMITS = (-1.001, 1.001)
 UNIT_TOLERANCE = 1e-3
 MAX_TILT_DEG = 10.0
@@ -54,8 +56,9 @@ GEOMETRY_ROWS = tuple(
         'offsets e of the joint readings of A, B, C: a slider\'s true '
         'position is its reading plus its offset'),
     Row('bar_length', None, 'm', LENGTH_LIMITS,
-        'length L of the parallelogram bars of legs A, B, C; defaults to l3 '
-        'on each leg', 'l3'),
+        'length L of the parallelogram bars of legs A, B, C, each within '
+        f'{MAX_LENGTH_DEVIATION:g} m of l3; defaults to l3 on each leg',
+        'l3'),
 ) + tuple(
     Row(f'attachment_{leg}', (0.0, 0.0, 0.0), 'm', OFFSET_LIMITS,
         f'leg {leg.upper()}\'s point r on the platform relative to its '
@@ -172,6 +175,7 @@ class Robot:
             _check_needs(row, getattr(self, row.name),
                          getattr(self, row.needs))
         _check_directions(self)
+        _check_lengths(self)
         # Derived once (not fields: no part of eq or repr): each leg as
         # built, whether they are the drawing's (then the mechanics take
         # the drawing's closed forms), the kernel's constants, the terms
@@ -291,6 +295,20 @@ def leg_constants(robot: Robot,
     return tuple(out)
 
 
+def _check_lengths(robot):
+    """
+    Refuse a bar length beyond MAX_LENGTH_DEVIATION of ``l3``.
+
+    To 1e-12 m, so that decimal ends (0.3 and 0.4) are within.
+    """
+    if any(abs(length - robot.l3) > MAX_LENGTH_DEVIATION + 1e-12
+           for length in robot.bar_length):
+        raise _bad(ROW['bar_length'], (
+            f'each component must lie within {MAX_LENGTH_DEVIATION:g} m of '
+            f'robot.l3 ({robot.l3:g} m), the drawing\'s, got '
+            f'{_shown(robot.bar_length)}'))
+
+
 def _check_directions(robot):
     """
     Refuse an axis direction not a unit vector, tilted or parallel.
@@ -307,7 +325,7 @@ def _check_directions(robot):
         norm = math.sqrt(sum(v * v for v in value))
         if abs(norm - 1.0) > UNIT_TOLERANCE:
             raise _bad(ROW[name], f'must be a unit vector (norm within '
-                       f'{UNIT_TOLERANCE:g} of 1), got {value!r} of norm '
+                       f'{UNIT_TOLERANCE:g} of 1), got {_shown(value)} of norm '
                        f'{norm:.6g}')
         direction = legs.unit(value)
         for other, earlier in seen:
@@ -320,7 +338,7 @@ def _check_directions(robot):
         if tilt > MAX_TILT_DEG:
             raise _bad(ROW[name], (
                 f'must lie within {MAX_TILT_DEG:g} deg of the drawing\'s '
-                f'axis {list(axis)}, got {value!r}, {tilt:.3g} deg from it'))
+                f'axis {list(axis)}, got {_shown(value)}, {tilt:.3g} deg from it'))
         seen.append((name, direction))
 
 
@@ -397,20 +415,20 @@ def _checked(row, value):
         try:
             values = tuple(value)
         except TypeError:
-            raise _bad(row, f'must be a 3-vector, got {value!r}') from None
+            raise _bad(row, f'must be a 3-vector, got {_shown(value)}') from None
         if len(values) != 3 or not all(_number(v) for v in values):
-            raise _bad(row, f'must be a 3-vector of numbers, got {value!r}')
+            raise _bad(row, f'must be a 3-vector of numbers, got {_shown(value)}')
         if not all(math.isfinite(v) for v in values):
-            raise _bad(row, f'must be finite, got {value!r}')
+            raise _bad(row, f'must be finite, got {_shown(value)}')
         if not all(within(v) for v in values):
-            raise _bad(row, f'each component must {place}, got {value!r}')
+            raise _bad(row, f'each component must {place}, got {_shown(value)}')
         return tuple(float(v) for v in values)
     if not _number(value):
-        raise _bad(row, f'must be a number, got {value!r}')
+        raise _bad(row, f'must be a number, got {_shown(value)}')
     if not math.isfinite(value):
-        raise _bad(row, f'must be finite, got {value!r}')
+        raise _bad(row, f'must be finite, got {_shown(value)}')
     if not within(value):
-        raise _bad(row, f'must {place}, got {value!r}')
+        raise _bad(row, f'must {place}, got {_shown(value)}')
     return float(value)
 
 
@@ -435,6 +453,22 @@ def _bounds(row):
     ends = ', '.join('pi/2' if v == math.pi / 2 else f'{v:g}'
                      for v in row.limits)
     return f'({ends})' if row.open else f'[{ends}]'
+
+
+def _shown(value):
+    """
+    Return ``value`` as a refusal writes it: numpy's numbers as numbers.
+
+    ``(0.2, 0.0, 0.0)`` for a tuple of numpy floats, ``[0.0, 0.1, 0.0]``
+    for an array, ``repr`` otherwise.
+    """
+    if isinstance(value, (np.ndarray, np.generic)):
+        value = value.tolist()
+    if isinstance(value, (tuple, list)):
+        inner = ', '.join(map(_shown, value))
+        return (f'({inner}{"," if len(value) == 1 else ""})'
+                if isinstance(value, tuple) else f'[{inner}]')
+    return repr(value)
 
 
 def _number(value):

@@ -16,3 +16,16 @@ def script_parser(doc, *options):
         parser.add_argument(flag, type=type(default), default=default,
                             help=f'{text} (default %(default)s)')
     return parser
+
+
+def seeds(text):
+    """
+    Parse a ``--seeds`` option: ``0-9`` or ``0,3,5`` into a list of seeds.
+
+    >>> seeds('2-4'), seeds('0,3,5')
+    ([2, 3, 4], [0, 3, 5])
+    """
+    if '-' in text:
+        first, last = (int(v) for v in text.split('-'))
+        return list(range(first, last + 1))
+    return [int(v) for v in text.split(',')]

@@ -9,11 +9,13 @@ the positions worth measuring (:mod:`poses`); scipy is imported where used
 """
 
 from orthoglide_ros.tools.calibration.estimate import (  # noqa: F401
-    calibrate, Calibration, CalibrationError, MAX_DEVIATION)
+    calibrate, Calibration, CalibrationError, MAX_DEVIATION, MAX_NOISE,
+    SIGMA_FLOOR)
 from orthoglide_ros.tools.calibration.geometry import (  # noqa: F401
     Frame, IDENTITY, parameters, Parameter)
 from orthoglide_ros.tools.calibration.identifiability import (  # noqa: F401
-    combination_text, identifiable, Identifiability, MIN_REDUNDANCY,
+    BLUNDER_REDUNDANCY, combination_text, identifiable, Identifiability,
+    MIN_REDUNDANCY,
     RANK_TOLERANCE)
 from orthoglide_ros.tools.calibration.measurements import (  # noqa: F401
     COLUMNS, MAX_MEASUREMENTS, MeasurementError, Measurements, read)

@@ -25,9 +25,9 @@ import numpy as np
 from orthoglide_ros.model.robot import ParameterError
 from orthoglide_ros.tools.calibration import geometry
 from orthoglide_ros.tools.calibration.identifiability import (
-    identifiable, MIN_REDUNDANCY)
+    BLUNDER_REDUNDANCY, identifiable, MIN_REDUNDANCY)
 from orthoglide_ros.tools.calibration.measurements import (
-    COORDINATES, Measurements, where)
+    COORDINATES, Measurements, repeats, where)
 
 if TYPE_CHECKING:   # annotations only: no import cycle at run time
     from orthoglide_ros.model.robot import Robot
@@ -58,6 +58,17 @@ MAX_EVALUATIONS = 200
 MAX_REFITS = 5
 # The MAD's factor to the standard deviation of normal noise.
 MAD_TO_SIGMA = 1.4826
+# The least noise a reading is taken to have (m): 1 nm, a thousand times
+# below a dial gauge's, a CMM's or a laser tracker's resolution (1-10 um)
+# and above what the least squares leaves of exact readings (1e-12 m).
+# The implied noise and the robust scale are at least this, so that
+# exact readings name no row a blunder for residuals of rounding.
+SIGMA_FLOOR = 1e-9
+# The most noise a calibration's instrument has (m): ten times a laser
+# tracker's or a dial gauge's (1-10 um). A fit that leaves more per
+# reading is no calibration (a blunder the readings to spare could not
+# find, the robot moved, another robot or frame): refused.
+MAX_NOISE = 100e-6
 # A reading whose leverage exceeds this is checked by no other: not judged.
 MAX_LEVERAGE = 0.99
 # How far off a reading is modelled where the legs tried do not assemble
@@ -81,7 +92,8 @@ per blunder; ``before`` and ``after`` (N, 3): each reading's residual
 (measured less modelled, m, NaN where not measured) of the nominal robot
 (with the instrument's frame fitted to it) and of the calibrated one;
 ``rms_before`` and ``rms_after`` (m) over the kept readings; ``sigma``:
-the noise the residuals imply, ``sqrt(RSS / (n - k))`` (m); ``readings``:
+the noise the residuals imply, ``sqrt(RSS / (n - k))``, at least
+SIGMA_FLOOR (m); ``readings``:
 the kept readings ``n``; ``notes``: what the data did not allow, as
 sentences.
 """
@@ -133,7 +145,10 @@ def calibrate(nominal: Robot, data: Measurements,
         _check_left_out(data, kept)
     residual = problem.residuals(deviation, kept)
     dof = len(residual) - len(problem.free)
-    sigma = math.sqrt(float(residual @ residual) / dof)
+    sigma = max(math.sqrt(float(residual @ residual) / dof), SIGMA_FLOOR)
+    after = problem.residual_table(deviation)
+    if sigma > MAX_NOISE:
+        raise CalibrationError(_too_noisy(data, after, kept, sigma, dof))
     std = np.full(len(params), math.nan)
     std[problem.free] = sigma * np.sqrt(np.diag(np.linalg.inv(
         _normal(problem, deviation, kept))))
@@ -143,12 +158,14 @@ def calibrate(nominal: Robot, data: Measurements,
         raise CalibrationError(f'{data.source}: the calibrated legs are no '
                                f'robot ({error})') from None
     before = problem.residual_table(np.zeros(len(params)))
-    after = problem.residual_table(deviation)
     left_out = tuple(
         (int(row), float(after[row, column]), column)
         for row in np.flatnonzero(~kept)
         for column in [int(np.nanargmax(np.abs(after[row])))])
-    notes = []
+    notes = [f'line {data.lines[row]} repeats line {data.lines[earlier]} '
+             'exactly: counted as two measurements (a quantised instrument '
+             'reads a position again alike; a row pasted twice would count '
+             'twice too)' for row, earlier in repeats(data)]
     if len(found.identified) < found.separable:
         notes.append(
             f'{found.readings} readings: {len(found.identified)} of the '
@@ -156,6 +173,10 @@ def calibrate(nominal: Robot, data: Measurements,
             f'(a fit keeps {MIN_REDUNDANCY} readings more than it '
             f'identifies); measure {found.separable - len(found.identified)}'
             ' more coordinates to identify all')
+    if dof < BLUNDER_REDUNDANCY:
+        notes.append(f'{dof} readings to spare: too few to find a blunder '
+                     f'reliably ({BLUNDER_REDUNDANCY} or more do); '
+                     f'{_more(dof)}')
     frame = geometry.instrument_map(problem.start, deviation[30:]) \
         if instrument else geometry.IDENTITY
     return Calibration(
@@ -252,10 +273,14 @@ def _check_deviations(problem, data):
         frame = ('the instrument\'s frame fitted to the rows' if
                  problem.start is not None else 'the base frame; '
                  'an instrument in its own frame needs --frame instrument')
+        # In m from 1 m on: a reading near the largest double (1e308)
+        # has no value in mm.
+        distance = abs(float(residual[row, column]))
         raise CalibrationError(
             f'{where(data, row, COORDINATES[column])}: '
             f'{data.readings[row, column]:.6g} m is '
-            f'{1e3 * abs(residual[row, column]):.4g} mm from where the '
+            + (f'{1e3 * distance:.4g} mm' if distance < 1.0
+               else f'{distance:.4g} m') + ' from where the '
             f'nominal robot puts the platform, beyond the '
             f'{1e3 * MAX_DEVIATION:g} mm geometric errors can explain '
             f'(units m; {frame})')
@@ -310,15 +335,16 @@ def _robust_candidates(problem, kept):
     rows = np.nonzero(problem.mask & kept[:, None])[0]
     if len(rows) - len(problem.free) < MIN_REDUNDANCY:
         return deviation, []
-    for _ in range(ROBUST_ROUNDS + 1):
+    for robust_round in range(ROBUST_ROUNDS + 1):
         jac = problem.free_columns(deviation, kept)
         leverage = np.einsum('ij,ij->i', jac @ np.linalg.inv(jac.T @ jac),
                              jac)
         judged = leverage < MAX_LEVERAGE
         studentized = np.abs(problem.residuals(deviation, kept))[judged] \
             / np.sqrt(1.0 - leverage[judged])
-        scale = max(MAD_TO_SIGMA * float(np.median(studentized)), 1e-12)
-        if _ == ROBUST_ROUNDS:
+        scale = max(MAD_TO_SIGMA * float(np.median(studentized)),
+                    SIGMA_FLOOR)
+        if robust_round == ROBUST_ROUNDS:
             break
         deviation = _fit(problem, deviation, kept, 'soft_l1', scale)
     order = np.argsort(-studentized)
@@ -361,7 +387,7 @@ def _predicted(problem, deviation, kept, rows):
     spare = len(residual) - len(problem.free)
     if spare < 1:
         return [0.0] * len(rows)
-    sigma2 = max(float(residual @ residual) / spare, 1e-300)
+    sigma2 = max(float(residual @ residual) / spare, SIGMA_FLOOR ** 2)
     inverse = np.linalg.inv(_normal(problem, deviation, kept))
     table = problem.residual_table(deviation)
     columns = problem.columns(deviation)
@@ -404,12 +430,41 @@ def _worst_row(problem, deviation, kept):
         if np.linalg.eigvalsh(rest)[0] < 1.0 - MAX_LEVERAGE or dof <= m:
             continue
         q = float(e @ np.linalg.solve(rest, e))
-        spread = (total - q) / (dof - m)
-        value = _beyond(q / m / spread, m, dof - m) if spread > 0.0 \
-            else math.inf
+        spread = max((total - q) / (dof - m), SIGMA_FLOOR ** 2)
+        value = _beyond(q / m / spread, m, dof - m)
         if value > score:
             worst, score = int(row), value
     return worst
+
+
+def _more(dof):
+    """Say how many more readings give BLUNDER_REDUNDANCY to spare."""
+    more = BLUNDER_REDUNDANCY - dof
+    return (f'measure {more} more coordinates ({math.ceil(more / 3)} more '
+            'positions in x, y and z)')
+
+
+def _too_noisy(data, after, kept, sigma, dof):
+    """
+    Say why a fit that leaves more than MAX_NOISE is refused.
+
+    With few readings to spare, a blunder the fit absorbed (its row's
+    residual no longer the largest); else the largest residual's row.
+    """
+    if dof < BLUNDER_REDUNDANCY:
+        why = f'with {dof} readings to spare a blunder may hide: {_more(dof)}'
+    else:
+        table = np.where(kept[:, None], np.abs(np.nan_to_num(after)), 0.0)
+        row, column = np.unravel_index(int(np.argmax(table)), table.shape)
+        why = ('measurements of another robot (--params), setup or frame '
+               '(--frame instrument), or a robot that moved; the largest '
+               f'residual: line {data.lines[row]}, column '
+               f'{COORDINATES[column]!r} ({1e3 * after[row, column]:+.4g} '
+               'mm)')
+    return (f'{data.source}: the calibrated robot leaves '
+            f'{1e6 * sigma:.4g} um of noise per reading (sqrt(RSS / (n - '
+            f'k))), beyond any instrument a calibration uses '
+            f'({1e6 * MAX_NOISE:g} um): {why}')
 
 
 def _check_left_out(data, kept):

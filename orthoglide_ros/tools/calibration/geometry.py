@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections import namedtuple
 import math
 from typing import Optional, Sequence, TYPE_CHECKING
+import warnings
 
 import numpy as np
 
@@ -157,18 +158,17 @@ def deviated_legs(nominal: Sequence[legs.Leg],
 
 
 def rotation(omega: Vector) -> Array:
-    """Return ``exp([omega]x)`` (3x3): Rodrigues' formula, omega in rad."""
-    w = np.asarray(omega, dtype=float)
-    angle = math.sqrt(float(w @ w))
-    k = _skew(w)
-    if angle < 1e-8:
-        return np.eye(3) + k + 0.5 * k @ k
-    return (np.eye(3) + math.sin(angle) / angle * k
-            + (1.0 - math.cos(angle)) / angle ** 2 * k @ k)
+    """Return ``exp([omega]x)`` (3x3), omega in rad (scipy's Rotation)."""
+    from scipy.spatial.transform import Rotation
+    return Rotation.from_rotvec(np.asarray(omega, dtype=float)).as_matrix()
 
 
 def _left_jacobian(omega):
-    """SO(3)'s left Jacobian: d exp(omega) x = -[exp(omega) x]x J dw."""
+    """
+    SO(3)'s left Jacobian: d exp(omega) x = -[exp(omega) x]x J dw.
+
+    In closed form (scipy's Rotation has no Jacobian of the exponential).
+    """
     w = np.asarray(omega, dtype=float)
     angle = math.sqrt(float(w @ w))
     k = _skew(w)
@@ -268,33 +268,46 @@ def rigid_fit(positions: Array, readings: Array) -> Frame:
     """
     Return the rigid map best taking ``positions`` onto ``readings``.
 
-    Kabsch's least squares (SVD of the centred points' covariance, no
-    reflection): ``readings ~ rotation positions + translation``; (N, 3)
-    each, N >= 3 not on a line.
+    Kabsch's least squares of the centred points (scipy's
+    ``Rotation.align_vectors``, a rotation, never a reflection):
+    ``readings ~ rotation positions + translation``; (N, 3) each, N >= 3
+    not on a line. Each set is scaled to at most 1 first (the rotation is
+    the same), so that a reading near the largest double (1e308) leaves
+    the finite numbers nowhere: the start is then poor, and the reading
+    refused as far from the nominal robot (scipy's warning that the
+    rotation is poorly defined is not shown).
     """
+    from scipy.spatial.transform import Rotation
     p0, m0 = positions.mean(0), readings.mean(0)
-    u, _, vt = np.linalg.svd((readings - m0).T @ (positions - p0))
-    sign = np.sign(np.linalg.det(u @ vt)) or 1.0
-    turn = u @ np.diag([1.0, 1.0, sign]) @ vt
-    return Frame(turn, m0 - turn @ p0)
+    centred = [points / max(float(np.abs(points).max()), 1e-300)
+               for points in (readings - m0, positions - p0)]
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', UserWarning)
+        turn = Rotation.align_vectors(*centred)[0]
+    return Frame(turn.as_matrix(), m0 - turn.apply(p0))
 
 
 def calibrated_robot(nominal: Robot, deviation: Vector) -> Robot:
     """
     Return ``nominal`` with its legs ``deviation`` away (validated).
 
-    Every other row (masses, friction, drives, terms) kept. Raises
-    :class:`robot.ParameterError` for legs the robot refuses.
+    Every other row (masses, friction, drives, terms) kept, the legs' as
+    floats. Raises :class:`robot.ParameterError` for legs the robot
+    refuses.
     """
     built = deviated_legs(nominal.legs, deviation[:30])
     rows = {}
     for leg, suffix in zip(built, 'abc'):
-        rows[f'axis_point_{suffix}'] = leg.point
-        rows[f'axis_direction_{suffix}'] = leg.direction
-        rows[f'attachment_{suffix}'] = leg.attachment
-    rows['joint_offset'] = tuple(leg.offset for leg in built)
-    rows['bar_length'] = tuple(leg.length for leg in built)
+        rows[f'axis_point_{suffix}'] = _floats(leg.point)
+        rows[f'axis_direction_{suffix}'] = _floats(leg.direction)
+        rows[f'attachment_{suffix}'] = _floats(leg.attachment)
+    rows['joint_offset'] = _floats(leg.offset for leg in built)
+    rows['bar_length'] = _floats(leg.length for leg in built)
     return nominal.replace(**rows)
+
+
+def _floats(values):
+    return tuple(float(v) for v in values)
 
 
 def rotation_vector(matrix: Array) -> Array:

@@ -7,8 +7,9 @@ and the platform centre G an instrument measured; an empty ``x``, ``y`` or
 ``z`` cell is a coordinate not measured (a dial gauge reads one).
 :func:`read` reads it within MAX_MEASUREMENTS rows and refuses, naming the
 line and the column, a cell that is not a finite number, a missing
-column, a row that measures nothing, a row pasted twice and joint readings
-that put the nominal robot's platform outside its workspace
+column, a row that measures nothing and joint readings that put the
+nominal robot's platform outside its workspace; :func:`repeats` finds the
+rows that repeat another exactly (counted twice, and said)
 (doc/calibration.md#what-to-measure-and-how).
 """
 
@@ -82,8 +83,24 @@ def where(data: Measurements, row: int, column: str) -> str:
     return f'{data.source}: line {data.lines[row]}, column {column!r}'
 
 
+def repeats(data: Measurements) -> list[tuple[int, int]]:
+    """
+    Return ``(row, earlier row)`` for each row that repeats another exactly.
+
+    Every cell alike, the empty ones too: a quantised instrument reading a
+    position again, or a row pasted twice; either counts twice.
+    """
+    table = np.column_stack((data.lambdas, np.nan_to_num(
+        data.readings, nan=np.inf)))
+    _, first, inverse = np.unique(table, axis=0, return_index=True,
+                                  return_inverse=True)
+    earliest = first[inverse.ravel()]
+    return [(int(row), int(earliest[row])) for row in np.flatnonzero(
+        earliest != np.arange(len(table)))]
+
+
 def _check_rows(data):
-    """Refuse a row that measures nothing, or one that repeats another."""
+    """Refuse a row that measures nothing."""
     empty = np.isnan(data.readings).all(1)
     if empty.any():
         row = int(np.argmax(empty))
@@ -91,19 +108,6 @@ def _check_rows(data):
             f'{data.source}: line {data.lines[row]}, columns x, y, z: no '
             'coordinate measured (an empty cell is one not measured; each '
             'row needs one at least)')
-    table = np.column_stack((data.lambdas, np.nan_to_num(
-        data.readings, nan=np.inf)))
-    _, first, inverse = np.unique(table, axis=0, return_index=True,
-                                  return_inverse=True)
-    repeated = np.flatnonzero(first[inverse.ravel()] != np.arange(len(table)))
-    if len(repeated):
-        row = int(repeated[0])
-        earlier = int(first[inverse.ravel()[row]])
-        raise MeasurementError(
-            f'{data.source}: line {data.lines[row]}, columns '
-            f'{",".join(COLUMNS)}: the same row as line '
-            f'{data.lines[earlier]} (pasted twice, it would count twice); '
-            'remove one, or measure the position again for a second reading')
 
 
 def _check_workspace(data, robot, margin):

@@ -14,7 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from orthoglide_ros.tools.calibration.estimate import Calibration
+from orthoglide_ros.tools.calibration.estimate import (
+    Calibration, SIGMA_FLOOR)
 from orthoglide_ros.tools.calibration.geometry import rotation_vector
 from orthoglide_ros.tools.calibration.identifiability import (
     combination_text, RANK_TOLERANCE)
@@ -61,7 +62,9 @@ def lines(data: Measurements, result: Calibration) -> list[str]:
         f'robot, {1e6 * result.rms_after:.4g} um calibrated, over '
         f'{result.readings} readings; the noise it implies, sqrt(RSS / '
         f'(n - k)) = {1e6 * result.sigma:.4g} um per reading '
-        f'(n = {result.readings}, k = {len(found.identified)})')
+        f'(n = {result.readings}, k = {len(found.identified)})'
+        + (' (its floor: the readings are exact to the nanometre)'
+           if result.sigma <= SIGMA_FLOOR else ''))
     out += [f'note: {note}' for note in result.notes]
     return out
 

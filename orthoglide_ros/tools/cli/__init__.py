@@ -7,6 +7,8 @@ input exits 2 with one line (doc/cli.md).
 """
 
 import argparse
+import os
+import signal
 import sys
 
 from orthoglide_ros.formats.params_file import ParametersFileError
@@ -42,13 +44,32 @@ def main(argv=None):
         if 'params' in args:
             args.parameters = read_params(args.params)
             robot = robot_of(args.parameters)
-        return args.run(robot, args)
+        code = args.run(robot, args)
+        sys.stdout.flush()      # a reader gone shows here, not at exit
+        return code
     except CliError as error:
         print_error(str(error))
         return error.code
     except (ParametersFileError, ParameterError) as error:
         print_error(str(error))
         return 2
+    except BrokenPipeError:
+        return _reader_gone()
+
+
+def _reader_gone():
+    """
+    End quietly when standard output's reader has gone (``| head -1``).
+
+    As a Unix tool killed by SIGPIPE: exit status 128 + SIGPIPE (141),
+    nothing on standard error. Standard output is pointed at /dev/null so
+    that Python's flush at exit raises nothing more (the recipe of
+    Python's documentation, library/signal.html#note-on-sigpipe).
+    """
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    os.close(devnull)
+    return 128 + signal.SIGPIPE
 
 
 class _Parser(argparse.ArgumentParser):

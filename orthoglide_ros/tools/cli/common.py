@@ -11,6 +11,7 @@ range and the options several subcommands take.
 
 import argparse
 from collections import namedtuple
+import contextlib
 import io
 import json
 import math
@@ -18,6 +19,7 @@ import os
 import stat
 import sys
 import tempfile
+import warnings
 
 import numpy as np
 
@@ -54,6 +56,28 @@ class CliError(Exception):
         """Keep ``message`` and the exit ``code``."""
         super().__init__(message)
         self.code = code
+
+
+@contextlib.contextmanager
+def refusals_in_one_line(source, refusals, meaning, numeric=()):
+    """
+    Run a tool's work on ``source``; its refusals become a CliError.
+
+    ``refusals``: the exception types whose message is the line. A numpy
+    warning (a computation that left the finite numbers), or one of
+    ``numeric`` (``np.linalg.LinAlgError``), is refused in one line too,
+    ``meaning`` saying what it means for the input, never shown as
+    warnings and figures of inf or nan.
+    """
+    with warnings.catch_warnings():
+        warnings.simplefilter('error', RuntimeWarning)
+        try:
+            yield
+        except refusals as error:
+            raise CliError(str(error)) from None
+        except (RuntimeWarning, *numeric) as warning:
+            raise CliError(f'{source}: the computation left the finite '
+                           f'numbers ({warning}): {meaning}') from None
 
 
 def option_flag(option):

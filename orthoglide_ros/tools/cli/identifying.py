@@ -4,11 +4,9 @@ Identify a robot: ``excitation``, ``record``, ``identify``, ``validate``.
 From the motion to the check of the result; see doc/identification.md.
 """
 
-import contextlib
 import math
 import re
 import sys
-import warnings
 
 import numpy as np
 
@@ -19,8 +17,8 @@ from orthoglide_ros.model.robot import ROW
 from orthoglide_ros.tools import excitation_design, identification
 from orthoglide_ros.tools.cli.common import (
     add_joint_names, CliError, count, drawn_png, finite_float, INPUT_GROUPS,
-    positive_count, positive_float, print_error, robot_range, Subcommand,
-    table_csv, table_row, write_output)
+    positive_count, positive_float, print_error, refusals_in_one_line,
+    robot_range, Subcommand, table_csv, table_row, write_output)
 from orthoglide_ros.tools.identification import DEFAULT_CUTOFF, report
 
 TOPIC_NAME = re.compile(r'/?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*')
@@ -248,7 +246,7 @@ def add_identify(parser):
     _add_log_options(parser)
     parser.add_argument('--output', required=True, metavar='FILE',
                         help='the identified robot as a ROS 2 parameters '
-                        'file (section feedforward, every robot.* '
+                        'file (section /**, every node\'s: every robot.* '
                         'parameter) for --params-file and --params')
     parser.add_argument('--report', metavar='FILE',
                         help='draw the measured and predicted forces (N) '
@@ -387,7 +385,6 @@ def run_validate(robot, args):
     return 0
 
 
-@contextlib.contextmanager
 def _refusals_in_one_line(source):
     """
     Run identification's work on a log; its refusals become a CliError.
@@ -395,20 +392,12 @@ def _refusals_in_one_line(source):
     The log's values, its motion and every option are checked in range
     before any arithmetic (formats.logs.LIMITS, motion.MOTION_LIMITS, the
     options' types), so no numpy warning is expected: one that still
-    comes (a computation that left the finite numbers) is refused in one
-    line too, never shown as warnings and inf or nan figures.
+    comes is refused in one line too (:func:`refusals_in_one_line`).
     """
-    with warnings.catch_warnings():
-        warnings.simplefilter('error', RuntimeWarning)
-        try:
-            yield
-        except (identification.LogError,
-                identification.IdentificationError) as error:
-            raise CliError(str(error)) from None
-        except RuntimeWarning as warning:
-            raise CliError(f'{source}: the computation left the finite '
-                           f'numbers ({warning}): a value of the log or an '
-                           'option is beyond what it can use') from None
+    return refusals_in_one_line(
+        source, (identification.LogError,
+                 identification.IdentificationError),
+        'a value of the log or an option is beyond what it can use')
 
 
 SUBCOMMANDS = (
