@@ -129,7 +129,7 @@ def test_path_control_modes():
     ('X1', 'line 1: a move without a motion mode'),
     ('G1 X1', 'line 1: G1 without a feed rate (F)'),
     ('F0\nG1 X1', 'line 2: G1 at feed rate zero (F0 on line 1)'),
-    ('G1 X1 I1 F1', 'line 1: I only with G2 or G3'),
+    ('G1 X1 I1 F1', 'line 1: I only with G2, G3, G5 or G5.1'),
     ('G17 G2 X1 K1 F1', 'line 1: K is not an arc word of the G17 plane'),
     ('G2 X1 R1 I1 F1', 'line 1: an arc with both R and I J K'),
     ('G2 X1 F1', 'line 1: G2 needs I J K offsets or R'),

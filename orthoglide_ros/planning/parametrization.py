@@ -56,10 +56,13 @@ from orthoglide_ros.planning import reachability
 from orthoglide_ros.planning.path import Path
 
 # Intervals of the grid over the whole path, at least; each piece has at
-# least MIN_INTERVALS, and an arc at least one per MAX_ARC_STEP (rad).
+# least MIN_INTERVALS, and an arc at least one per MAX_ARC_STEP (rad); a
+# Bezier piece (a blend, a G5 spline, a run of chords) at least
+# BEZIER_INTERVALS, one per span and one per MAX_ARC_STEP of its turning.
 GRID_INTERVALS = 2000
 MIN_INTERVALS = 4
 MAX_ARC_STEP = math.radians(2.0)
+BEZIER_INTERVALS = 32
 # Gridpoints at these distances (m) either side of an actuator reversal.
 REVERSAL_OFFSETS = (2e-5, 2e-4)
 # A sample beyond a limit by this share tightens the limits and plans again;
@@ -241,7 +244,8 @@ def _grid_counts(path, intervals):
     Return the intervals of each piece: (pieces,) int, counted, not made.
 
     ``intervals`` over the whole path, at least MIN_INTERVALS a piece, one
-    per MAX_ARC_STEP of an arc, 32 on a Bezier.
+    per MAX_ARC_STEP of an arc; on a Bezier piece at least
+    BEZIER_INTERVALS, one per span and one per MAX_ARC_STEP of its turning.
     """
     table = path.table
     with np.errstate(over='ignore'):
@@ -250,7 +254,10 @@ def _grid_counts(path, intervals):
         arcs = table['helix'] & (table['radius'] > 0.0)
         counts = np.where(arcs, np.maximum(counts, np.ceil(
             np.abs(table['angle']) / MAX_ARC_STEP)), counts)
-    counts = np.where(table['helix'], counts, np.maximum(counts, 32))
+    curved = np.maximum.reduce((counts, np.full(len(counts), BEZIER_INTERVALS),
+                                table['spans'], np.ceil(
+                                    table['turning'] / MAX_ARC_STEP)))
+    counts = np.where(table['helix'], counts, curved)
     return np.minimum(counts, 2.0 ** 62).astype(np.int64)
 
 
