@@ -26,8 +26,11 @@ import numpy as np
 from orthoglide_ros.model.types import Array
 
 # Equal parts of a span's parameter, each integrated by Gauss-Legendre of
-# 8 points: the arc length to rounding (|B'| is smooth and above 0).
-SUBSPANS = 16
+# 8 points: the arc length to rounding where the span's least speed is
+# at least 0.7 of its largest (the path splits those that are not).
+SUBSPANS = 8
+# Spans whose tables are made at once.
+TABLE_BLOCK = 4096
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(8)
 # Newton steps on the arc length at most, and its agreement (a share of
 # the span's length).
@@ -73,15 +76,19 @@ def tables(control: Array) -> Array:
     Return the arc length (m) at ``tau = j / SUBSPANS`` of each span.
 
     ``control`` (m, 4, 3); returns (m, SUBSPANS + 1), from 0 to each
-    span's length.
+    span's length. TABLE_BLOCK spans at a time.
     """
     m = len(control)
+    out = np.zeros((m, SUBSPANS + 1))
     edges = np.arange(SUBSPANS + 1) / SUBSPANS
-    low = np.tile(edges[:-1], m)
-    high = np.tile(edges[1:], m)
-    parts = gauss_length(np.repeat(control, SUBSPANS, axis=0), low, high)
-    return np.concatenate((np.zeros((m, 1)), np.cumsum(
-        parts.reshape(m, SUBSPANS), axis=1)), axis=1)
+    for start in range(0, m, TABLE_BLOCK):
+        block = control[start:start + TABLE_BLOCK]
+        n = len(block)
+        parts = gauss_length(np.repeat(block, SUBSPANS, axis=0),
+                             np.tile(edges[:-1], n), np.tile(edges[1:], n))
+        out[start:start + n, 1:] = np.cumsum(parts.reshape(n, SUBSPANS),
+                                             axis=1)
+    return out
 
 
 def parameter(control: Array, table: Array, w: Array) -> Array:
@@ -177,6 +184,19 @@ def bulge(control: Array) -> Array:
         t = np.clip((q * ab).sum(-1)[:, None] / ab2, 0.0, 1.0)
         out = np.maximum(out, np.linalg.norm(q - t * ab, axis=1))
     return out
+
+
+def turning(control: Array) -> Array:
+    """
+    Return the angle (rad) between each span's end tangents (n,).
+
+    From ``P1 - P0`` to ``P3 - P2``: the span's turning where it does not
+    wind (all of a fitted run's, a blend's, a G5's but the wildest).
+    """
+    hodograph = np.diff(control, axis=-2)
+    a, c = hodograph[:, 0], hodograph[:, 2]
+    return np.arctan2(np.linalg.norm(np.cross(a, c), axis=1),
+                      (a * c).sum(1))
 
 
 def least_speed(control: Array) -> tuple[Array, Array]:

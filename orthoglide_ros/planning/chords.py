@@ -225,23 +225,21 @@ def _straight(points, feeds):
     joins = np.zeros(len(units), dtype=bool)       # with the chord before
     joins[1:] = (_turns(units[:-1], units[1:]) <= TANGENT) & (
         feeds[1:] == feeds[:-1])
-    if not joins.any():
-        return np.arange(len(points))
-    starts = [0]
-    k = 0
-    while True:
+    starts = np.flatnonzero(~joins)
+    more = []
+    for k in starts[joins[np.minimum(starts + 1, len(units) - 1)]]:
         stop = k + 1
         while stop < len(units) and joins[stop]:
             stop += 1
-        if stop > k + 1:    # against the line's first direction
+        while stop > k + 1:     # against the line's first direction
             off = _turns(np.broadcast_to(units[k], (stop - k - 1, 3)),
                          units[k + 1:stop]) > TANGENT
-            if off.any():
-                stop = k + 1 + int(np.argmax(off))
-        if stop >= len(units):
-            return np.array([*starts, len(units)])
-        starts.append(stop)
-        k = stop
+            if not off.any():
+                break
+            k = k + 1 + int(np.argmax(off))
+            more.append(k)
+    return np.unique(np.concatenate((starts, more, [len(units)]))
+                     ).astype(int)
 
 
 def _turns(first, second):
@@ -329,14 +327,7 @@ def _fit(points, slack, tolerance, start, end):
             bulge > np.minimum(BULGE_SHARE * steps,
                                2.0 * CHORD_SAGITTA)).any():
         return None
-    hodograph = np.diff(control, axis=1)
-    turning = float(_turns(_unit(hodograph[:, 0]),
-                           _unit(hodograph[:, 2])).sum())
-    return control, turning
-
-
-def _unit(vectors):
-    return vectors / np.linalg.norm(vectors, axis=1)[:, None]
+    return control, float(bezier.turning(control).sum())
 
 
 def smooth(points: Array, budget: Array, start: Optional[Array] = None,

@@ -57,7 +57,7 @@ ABOUT_TURN = blends.ABOUT_TURN
 # A Bezier span whose speed varies more (its least over its largest
 # below this) is halved, at most SPLIT_DEPTH times, so that its arc
 # length is exact to rounding.
-EVEN_SPEED = 0.3
+EVEN_SPEED = 0.7
 SPLIT_DEPTH = 10
 
 
@@ -278,14 +278,9 @@ def bezier_piece(control: Array, line: int, feed: float,
         control = spans
     table = bezier.tables(control)
     starts = np.concatenate(([0.0], np.cumsum(table[:, -1])))
-    hodograph = np.diff(control, axis=1)
-    ends = hodograph[:, [0, 2]] / np.linalg.norm(
-        hodograph[:, [0, 2]], axis=2)[..., None]
-    turning = float(np.arctan2(np.linalg.norm(
-        np.cross(ends[:, 0], ends[:, 1]), axis=1),
-        (ends[:, 0] * ends[:, 1]).sum(1)).sum())
     return Piece('bezier', float(starts[-1]), line, feed, control=control,
-                 table=table, starts=starts, turning=turning, lines=lines)
+                 table=table, starts=starts,
+                 turning=float(bezier.turning(control).sum()), lines=lines)
 
 
 def move_piece(move: Move) -> Piece:
@@ -384,8 +379,9 @@ class Path:
         ``angle``, ``rise``, ``length``, ``turning``, ``spans`` (n,), and the
         spans of the Bezier pieces, in order: ``control`` (S, 4, 3),
         ``tables`` (S, SUBSPANS + 1), ``span_start`` (S,) along its piece
-        and ``span_s`` along the path, ``span_first`` (n + 1,) each piece's
-        first, ``piece_s`` (n,) where each piece starts along the path.
+        and ``span_s`` along the path, ``span_turning`` (S,) rad,
+        ``span_first`` (n + 1,) each piece's first, ``piece_s`` (n,) where
+        each piece starts along the path.
         """
         table = self.__dict__.get('_cached_table')
         if table is None:
@@ -397,6 +393,8 @@ class Path:
             piece_s = np.concatenate(([0.0], np.cumsum(lengths)[:-1]))
             span_start = np.concatenate(
                 [p.starts[:-1] for p in curves] or [np.zeros(0)])
+            control = np.concatenate(
+                [p.control for p in curves] or [np.zeros((0, 4, 3))])
             table = {
                 'helix': np.array([p.kind == 'helix' for p in pieces]),
                 'origin': np.array([p.origin for p in pieces]),
@@ -408,12 +406,12 @@ class Path:
                 'length': lengths,
                 'turning': np.array([p.turning for p in pieces]),
                 'spans': spans,
-                'control': np.concatenate(
-                    [p.control for p in curves] or [np.zeros((0, 4, 3))]),
+                'control': control,
                 'tables': np.concatenate(
                     [p.table for p in curves]
                     or [np.zeros((0, bezier.SUBSPANS + 1))]),
                 'span_start': span_start,
+                'span_turning': bezier.turning(control),
                 'span_s': np.repeat(piece_s, spans) + span_start,
                 'span_first': np.concatenate(([0], np.cumsum(spans))),
                 'piece_s': piece_s}
