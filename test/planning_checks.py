@@ -219,23 +219,25 @@ def path_distance(points, dense, neighbours=8):
     return best
 
 
-def distance_to_path(path, points, per_piece=4001, candidates=4):
+def distance_to_path(path, points, spacing=1e-5, candidates=4):
     """
     Return the distance (m) of each of ``points`` (n, 3) to ``path``.
 
     ``path``: anything with ``pieces`` (their ``length``) and
-    ``evaluate(index, w)``. The ``candidates`` nearest of ``per_piece``
-    samples a piece, then a golden-section search of ``|p(w) - x|`` over
-    the sample's neighbourhood on its piece: the distance to the path
-    itself, not to a polyline through it.
+    ``evaluate(index, w)``. The ``candidates`` nearest of samples
+    ``spacing`` (m) apart at most (16 a piece at least), then a
+    golden-section search of ``|p(w) - x|`` over the sample's
+    neighbourhood on its piece: the distance to the path itself, not to a
+    polyline through it.
     """
     from scipy.spatial import cKDTree
     index, w, width = [], [], []
     for k, piece in enumerate(path.pieces):
-        ws = np.linspace(0.0, piece.length, per_piece)
-        index.append(np.full(per_piece, k))
+        count = max(16, math.ceil(piece.length / spacing)) + 1
+        ws = np.linspace(0.0, piece.length, count)
+        index.append(np.full(count, k))
         w.append(ws)
-        width.append(np.full(per_piece, ws[1] - ws[0]))
+        width.append(np.full(count, ws[1] - ws[0]))
     index, w, width = map(np.concatenate, (index, w, width))
     dense = path.evaluate(index, w)[0]
     _, nearest = cKDTree(dense).query(points, k=candidates)
@@ -249,7 +251,7 @@ def distance_to_path(path, points, per_piece=4001, candidates=4):
 
         def far(at):
             return np.linalg.norm(path.evaluate(k, at)[0] - points, axis=1)
-        for _ in range(60):
+        for _ in range(40):
             a = high - golden * (high - low)
             b = low + golden * (high - low)
             closer = far(a) < far(b)
