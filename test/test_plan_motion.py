@@ -39,8 +39,8 @@ from orthoglide_ros.planning.limits import limits_from_mapping
 from orthoglide_ros.planning.limits import paper_limits
 from orthoglide_ros.planning.parametrization import (ACCEPT_SHARE, plan,
                                                      PlanningError)
-from orthoglide_testing.chord_programs import (LOOP_RADIUS, loop_point,
-                                               loop_program)
+from orthoglide_testing.chord_programs import (bulge_points, LOOP_RADIUS,
+                                               loop_point, loop_program)
 
 RATE = 1000.0
 DRIVES = Robot(**DRIVES_ROBOT_VALUES)
@@ -536,11 +536,8 @@ def test_a_curve_that_bulges_out_of_the_workspace_is_refused():
     Chords 20 um inside the singular margin, the curve through them 20 um
     beyond: refused naming the chord's line; as lines (G64 P), planned.
     """
-    edge = 0.7869470848066686      # the margin's edge at y = z = 0 (m)
-    y = (np.arange(20) - 9.5) * 0.002
-    x = edge + 20e-6 - 0.1 * y - 40.0 * y ** 2     # along the tilted edge
     body = ''.join('G1 X%.6f Y%.6f\n' % (a * 1e3, b * 1e3)
-                   for a, b in zip(x, y))
+                   for a, b, _ in bulge_points())
     path = program_path('G21 G90 G64 F6000\n' + body)
     with pytest.raises(PlanningError) as error:
         plan(Robot(), path, paper_limits(), RATE)

@@ -93,18 +93,26 @@ class Chain:
 
     ``kept`` (k,): the indices of the points kept, the first and the last
     among them; ``slack`` (k,): the largest distance (m) of a point dropped
-    for each; ``pieces``: ``(first, last, control, turning)`` over kept
-    points, in order: a line from ``kept[first]`` to ``kept[last]`` where
-    ``control`` is None, else a run's curve, its spans' control points
-    (m, 4, 3) and its total turning (rad); ``corners``: the junctions
-    between two lines that will be blended (a count, for the bound on the
-    pieces).
+    for each; ``bounds`` (p + 1,): where each of its ``p`` pieces starts
+    and the last ends, over the kept points; ``curves``: the pieces that
+    are a run's curve, by their index: its spans' control points (m, 4,
+    3) and its total turning (rad), the others lines; ``corners``: the
+    junctions between two lines surely blended (a count, for the bound on
+    the pieces).
     """
 
     kept: Array
     slack: Array
-    pieces: list = field(default_factory=list)
+    bounds: Array = field(default_factory=lambda: np.zeros(1, dtype=int))
+    curves: dict = field(default_factory=dict)
     corners: int = 0
+
+    @property
+    def pieces(self) -> list:
+        """Return ``(first, last, control, turning)`` of each piece."""
+        return [(a, b, *self.curves.get(k, (None, 0.0))) for k, (a, b) in
+                enumerate(zip(self.bounds[:-1].tolist(),
+                              self.bounds[1:].tolist()))]
 
 
 def analyse(points: Array, feeds: Array, tolerance: float,
@@ -137,42 +145,40 @@ def analyse(points: Array, feeds: Array, tolerance: float,
     corner, broken = breaks(turns, lengths, chord_feeds[vertex[:-1]],
                             before is not None, after is not None)
     bounds = np.flatnonzero(broken)
-    runs = [(a, b) for a, b in zip(bounds[:-1], bounds[1:])
-            if b - a >= MIN_RUN]
+    runs = [(a, b) for a, b in zip(bounds[:-1].tolist(),
+                                   bounds[1:].tolist()) if b - a >= MIN_RUN]
     in_run = np.zeros(len(lengths), dtype=bool)
     for a, b in runs:
         in_run[a:b] = True
-    chain = Chain(kept, slack)
-    curves = {}
+    fitted = {}
     for a, b in runs:
         start = _end_tangent(a, corner, in_run, ends, units, before, True)
         end = _end_tangent(b, corner, in_run, ends, units, after, False)
-        fitted = _fit(q[vertex[a]:vertex[b] + 1],
-                      slack[vertex[a]:vertex[b] + 1], tolerance, start, end)
-        if fitted is not None:
-            curves[a] = (b, *fitted)
-    k = 0
-    while k < len(lengths):
-        if k in curves:
-            b, control, turning = curves[k]
-            chain.pieces.append((vertex[k], vertex[b], control, turning))
-            k = b
-        else:
-            chain.pieces.append((vertex[k], vertex[k + 1], None, 0.0))
-            if k > 0 and chain.pieces[-2][2] is None and _blended(
-                    turns[k], lengths[k - 1:k + 1],
-                    tolerance - slack[vertex[k]]):
-                chain.corners += 1
-            k += 1
+        curve = _fit(q[vertex[a]:vertex[b] + 1],
+                     slack[vertex[a]:vertex[b] + 1], tolerance, start, end)
+        if curve is not None:
+            fitted[a] = (b, curve)
+    # Every line's start, but those within a fitted run.
+    line = np.ones(len(lengths), dtype=bool)
+    for a, (b, _) in fitted.items():
+        line[a + 1:b] = False
+        line[a] = False
+    starts = np.flatnonzero(line | np.isin(np.arange(len(lengths)),
+                                           list(fitted)))
+    chain = Chain(kept, slack, vertex[np.append(starts, len(lengths))])
+    chain.curves = {int(np.searchsorted(starts, a)): curve
+                    for a, (_, curve) in fitted.items()}
+    # Junctions of two lines (vertex v between lines v - 1 and v) blended.
+    both = line[1:] & line[:-1]
+    v = np.flatnonzero(both) + 1
+    within = tolerance - slack[vertex[v]]
+    with np.errstate(divide='ignore'):
+        trim = np.minimum(0.5 * np.minimum(lengths[v - 1], lengths[v]),
+                          within / np.tan(0.25 * turns[v]))
+    blended = (turns[v] > TANGENT) & (turns[v] < math.pi - ABOUT_TURN) & (
+        within > 0.0) & (trim > ZERO_LENGTH * 1e3)
+    chain.corners = int(blended.sum())
     return chain
-
-
-def _blended(turn, lengths, within):
-    """Whether the corner of two lines is surely blended (a lower bound)."""
-    if not TANGENT < turn < math.pi - ABOUT_TURN or within <= 0.0:
-        return False
-    trim = min(0.5 * lengths.min(), within / math.tan(0.25 * turn))
-    return trim > ZERO_LENGTH * 1e3
 
 
 def decimate(points: Array, feeds: Array, distance: float

@@ -15,7 +15,10 @@ What the planner's chord-run fitting is measured and tested on
   ``bench_plan.py --spiral FILE`` measures it where a copy is at hand.
 - :func:`loop_program`: a closed 3D loop (a circle of 60 mm whose height
   is 15 mm sin 2 phi) as ``chords`` chords, 95 by default (sagitta up to
-  52 um), written to 0.1 um; :func:`loop_point` the true curve.
+  52 um), written to 0.1 um; :func:`loop_point` the true curve;
+- :func:`bulge_points`: 20 points 20 um inside the paper robot's singular
+  margin (0.2) whose curve bulges 20 um beyond it, between the 10th and
+  the 11th.
 """
 
 import math
@@ -28,6 +31,10 @@ SPIRAL_FEED = 999.0                 # in/min
 LOOP_RADIUS = 0.06                  # m
 LOOP_HEIGHT = 0.015                 # m
 LOOP_CHORDS = 95
+# Where the paper robot's singular margin (0.2) crosses y = z = 0 (m), and
+# its slope dx/dy there (bisection on solve_batch, 2026-12-06).
+MARGIN_EDGE = 0.7869470848066686
+MARGIN_SLOPE = -0.1
 
 
 def spiral_points(chords=SPIRAL_CHORDS):
@@ -77,3 +84,17 @@ def loop_program(chords=LOOP_CHORDS, feed=30000.0, mode='G64'):
     lines = [f'(3D loop of {chords} chords)', f'G21 G90 {mode} F{feed:g}']
     lines += ['G1 X{:.4f} Y{:.4f} Z{:.4f}'.format(*p) for p in points[1:]]
     return '\n'.join(lines + ['M2', '']), loop_point(np.zeros(1))[0][0]
+
+
+def bulge_points():
+    """
+    Return 20 points (m) along the singular margin, each 20 um inside it.
+
+    2 mm apart in y, on the parabola ``x = edge + 20 um + slope y - 40 y^2``
+    beside the margin's edge: the curve through them reaches 20 um beyond
+    it between the 10th and the 11th, the chord between them stays 20 um
+    within.
+    """
+    y = (np.arange(20) - 9.5) * 0.002
+    x = MARGIN_EDGE + 20e-6 + MARGIN_SLOPE * y - 40.0 * y ** 2
+    return np.stack((x, y, np.zeros(20)), 1)
