@@ -24,6 +24,15 @@ On the robot of doc/programs/drives.yaml (ball-screw drives, friction, a
   the circle and duration against the exact circle's optimum. Slow (a few
   minutes: the Lagrange model takes about 70 ms a sample).
 
+- chords as CAM writes them: a 3D loop of 95 chords under plain G64
+  against toppra's optimum along the true curve (``--acceptance``: and
+  the Lagrange model on every sample), its distance to that curve, its
+  points' to the path; the spiral of LinuxCNC's ``nc_files/spiral.ngc``
+  (:mod:`orthoglide_testing.chord_programs` reconstructs it; ``--spiral
+  FILE`` plans a copy of the file itself, read as plain G64) at the
+  default tolerance, at 1 mm and as lines blended within 10 um (the
+  planner before chords were fitted); the cost of planning it as 1000 to
+  30,000 chords (CPU, median of ``--repeat``, at most 3).
 - ``--node``: the ``planner`` node as a process, a 400-pose circle sent
   ``--repeat`` times (at least 10): its planning time (its diagnostics)
   and the time from publishing the path to receiving the motion.
@@ -35,7 +44,7 @@ On the robot of doc/programs/drives.yaml (ball-screw drives, friction, a
   GRIDPOINT_BYTES a gridpoint and SAMPLE_BYTES a sample).
 
 Usage: python benchmarks/bench_plan.py [--repeat N] [--acceptance] [--node]
-       [--memory]
+       [--memory] [--spiral FILE]
 """
 
 import argparse
@@ -50,7 +59,7 @@ import time
 import numpy as np
 
 from orthoglide_ros.formats.params_file import load_robot
-from orthoglide_testing import phase_plane, use_checkout
+from orthoglide_testing import chord_programs, phase_plane, use_checkout
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.planning import gcode, parametrization
 from orthoglide_ros.planning.limits import load_limits
@@ -165,10 +174,9 @@ def jerk_cost(robot, limits):
 
 def acceptance(robot, limits):
     """Independent checks: Lagrange on every sample, an independent optimum."""
-    sys.path.insert(0, os.path.join(ROOT, 'test'))
-    import mechanics_reference as reference
-    from planning_checks import (friction_reference, lagrange_check,
-                                 path_distance)
+    reference, check = checks()
+    friction_reference, lagrange_check, path_distance = (
+        check.friction_reference, check.lagrange_check, check.path_distance)
     print('\nAcceptance (independent model: test/mechanics_reference.py)')
     cases = programs()
     for name, optimum_path, reference_line in (
@@ -199,6 +207,122 @@ def acceptance(robot, limits):
         print(f'  largest distance to {what}: {distance * 1e6:.2f} um')
         print(f'  duration {motion.duration:.4f} s, independent optimum '
               f'{optimum:.4f} s: {motion.duration / optimum - 1:+.2%}')
+
+
+def checks():
+    """Return the modules of test/: the independent model and checks."""
+    sys.path.insert(0, os.path.join(ROOT, 'test'))
+    import mechanics_reference
+    import planning_checks
+    return mechanics_reference, planning_checks
+
+
+def chord_loop(robot, limits, lagrange):
+    """
+    The 3D loop as 95 chords (plain G64, 1 m/s): as fast as its curve?
+
+    On the robot without friction (toppra's problem): the plan against
+    toppra's optimum along the true curve (8000 intervals), the motion's
+    distance to that curve, the points' to the path, the same chords as
+    lines (G64 P0.01); ``lagrange``: every sample re-solved.
+    """
+    _, check = checks()
+    robot = robot.frictionless()
+    text, start = chord_programs.loop_program(feed=60000.0)
+    moves = gcode.read_gcode(text, start)
+    begin = time.process_time()
+    path = from_moves(moves, 1e-5)
+    motion = parametrization.plan(robot, path, limits, RATE)
+    cpu = time.process_time() - begin
+    curve = check.CurvePath(chord_programs.loop_point, 0.0, 2 * math.pi,
+                            chord_programs.LOOP_RADIUS, 1.0)
+    optimum = check.toppra_duration(robot, curve, limits, intervals=8000)
+    lines = parametrization.plan(robot, from_moves(gcode.read_gcode(
+        text.replace('G64', 'G64 P0.01'), start), 1e-5), limits, RATE)
+    points = np.array([m.end for m in moves])
+    print('\nChords: a 3D loop of 95 chords (60 mm, 15 mm sin 2 phi high; '
+          'sagitta up to 52 um), plain G64, 1 m/s, --tolerance 1e-5 m, the '
+          'robot without friction')
+    print(f'  planned {motion.duration:.4f} s in {cpu * 1e3:.0f} ms CPU; '
+          f'toppra along the true curve {optimum:.4f} s: '
+          f'{motion.duration / optimum - 1:+.2%}; as lines (G64 P0.01) '
+          f'{lines.duration:.4f} s ({lines.duration / motion.duration - 1:+.1%})')
+    print(f'  motion to the true curve: '
+          f'{check.distance_to_path(curve, motion.position).max() * 1e6:.2f}'
+          f' um at most; programmed points to the path: '
+          f'{check.distance_to_path(path, points).max() * 1e6:.2f} um at '
+          'most')
+    if lagrange:
+        worst = check.lagrange_check(robot, motion, limits,
+                                     range(len(motion.t)))
+        print(f'  every one of {len(motion.t)} samples, the Lagrange model: '
+              + ', '.join(f'{k} {v:.5f}' for k, v in worst.items()))
+
+
+def chord_spiral(robot, limits, spiral):
+    """
+    The spiral: default tolerance against 1 mm, and against lines.
+
+    ``spiral``: a copy of LinuxCNC's file (read as plain G64), or None:
+    the reconstruction.
+    """
+    _, check = checks()
+    if spiral is None:
+        text, name = chord_programs.spiral_program(), 'reconstructed'
+    else:
+        with open(spiral) as stream:
+            text, name = 'G64 ' + stream.read(), spiral
+    feed = chord_programs.SPIRAL_FEED * 0.0254 / 60.0
+    print(f'\nChords: the spiral of LinuxCNC\'s nc_files/spiral.ngc '
+          f'({name}), plain G64 (G20, F999: {feed:.4f} m/s)')
+    print(f'{"how":<34}{"duration s":>11}{"CPU ms":>8}{"points um":>11}'
+          f'{"least speed":>13}{"at feed":>9}')
+    results = {}
+    for how, program, tolerance in (
+            ('fitted, --tolerance 1e-5', text, 1e-5),
+            ('fitted, --tolerance 1e-3', text, 1e-3),
+            ('lines blended within 10 um', text.replace(
+                'G64', 'G64 P0.000394'), 1e-5)):
+        moves = gcode.read_gcode(program)
+        begin = time.process_time()
+        path = from_moves(moves, tolerance)
+        motion = parametrization.plan(robot, path, limits, RATE)
+        cpu = time.process_time() - begin
+        points = np.array([m.end for m in moves])
+        near = check.distance_to_path(path, points).max()
+        speed = np.linalg.norm(motion.velocity, axis=1)
+        inner = slice(len(speed) // 10, -len(speed) // 10)
+        print(f'{how:<34}{motion.duration:>11.4f}{cpu * 1e3:>8.0f}'
+              f'{near * 1e6:>11.2f}{speed[inner].min() / feed:>12.0%}'
+              f'{(speed >= 0.99 * feed).mean():>9.0%}')
+        results[how] = motion.duration
+    ratio = results['fitted, --tolerance 1e-5'] / results[
+        'fitted, --tolerance 1e-3']
+    print(f'  the default tolerance against 1 mm: {ratio - 1:+.2%} '
+          '(least speed: of the feed, the middle 80 % of the motion; at '
+          'feed: the share of samples within 1 % of it)')
+
+
+def chord_cost(robot, limits, repeat):
+    """CPU of reading and planning the spiral as 1000 to 30,000 chords."""
+    print('\nChords: the cost, the spiral sampled more densely (read, fitted,'
+          f' planned; CPU, median of {repeat})')
+    print(f'{"chords":>8}{"pieces":>8}{"grid":>8}{"CPU s":>8}'
+          f'{"us a chord":>12}')
+    with tempfile.TemporaryDirectory() as directory:
+        for chords in (1000, 3000, 10000, 30000):
+            name = os.path.join(directory, 'spiral.nc')
+            with open(name, 'w') as stream:
+                stream.write(chord_programs.spiral_program(chords))
+            times = []
+            for _ in range(repeat):
+                begin = time.process_time()
+                path = read_program(name, (0.0, 0.0, 0.0), 1e-5)
+                motion = parametrization.plan(robot, path, limits, RATE)
+                times.append(time.process_time() - begin)
+            cpu = float(np.median(times))
+            print(f'{chords:>8}{len(path.pieces):>8}{motion.gridpoints:>8}'
+                  f'{cpu:>8.2f}{cpu / chords * 1e6:>12.1f}')
 
 
 def independent_optimum(robot, path, limits, reference, friction):
@@ -458,6 +582,9 @@ def main():
                         help='also time the planner node (starts DDS)')
     parser.add_argument('--memory', action='store_true',
                         help='also the memory of plan and the node\'s core')
+    parser.add_argument('--spiral', metavar='FILE', help='a copy of '
+                        'LinuxCNC\'s nc_files/spiral.ngc to plan (default: '
+                        'its reconstruction)')
     parser.add_argument('--memory-child', nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.memory_child:
@@ -469,6 +596,9 @@ def main():
     plan_times(robot, limits, args.repeat)
     cycle_times(robot, limits)
     jerk_cost(robot, limits)
+    chord_loop(robot, limits, args.acceptance)
+    chord_spiral(robot, limits, args.spiral)
+    chord_cost(robot, limits, min(args.repeat, 3))
     if args.acceptance:
         acceptance(robot, limits)
     if args.node:

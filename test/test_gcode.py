@@ -109,6 +109,12 @@ def test_path_control_modes():
     assert moves[2].tolerance is None
 
 
+def test_units_apply_before_the_blend_tolerance_on_their_line():
+    """RS274NGC's order of execution: G20 before G64, however written."""
+    for text in ('G64 P0.001 G20 F10\nG1 X1', 'G20 G64 P0.001 F10\nG1 X1'):
+        assert read_gcode(text)[0].tolerance == pytest.approx(2.54e-5)
+
+
 @pytest.mark.parametrize('program, message', (
     ('G21\nG1 X1 F100\n\n\n\n\nG41 D1\n',
      'line 7: G41 (cutter compensation) is not supported'),

@@ -344,7 +344,9 @@ def _execute(number, words, state, moves):
     values.pop('N', None)
     motion = None
     blend_p = False
-    for code in g_codes:
+    # Units first, as RS274NGC orders a line's execution: G64 P on the
+    # line of a G20 is in inches.
+    for code in sorted(g_codes, key=lambda code: code not in (20, 21)):
         if code in (20, 21):
             state.scale = INCH if code == 20 else MM
         elif code in (17, 18, 19):
