@@ -29,7 +29,7 @@ On the robot of doc/programs/drives.yaml (ball-screw drives, friction, a
   the Lagrange model on every sample), its distance to that curve, its
   points' to the path; the spiral of LinuxCNC's ``nc_files/spiral.ngc``
   (:mod:`orthoglide_testing.chord_programs` reconstructs it; ``--spiral
-  FILE`` plans a copy of the file itself, read as plain G64) at the
+  FILE`` plans a copy of the file itself too, as plain G64) at the
   default tolerance, at 1 mm and as lines blended within 10 um (the
   planner before chords were fitted); the cost of planning it as 1000 to
   30,000 chords (CPU, median of ``--repeat``, at most 3).
@@ -421,6 +421,7 @@ MEMORY_CASES = (
     ('helix of 100,000 turns (refused)', 'cli', 'helix 100000'),
     ('200,000 G-code moves, corners (refused)', 'cli', 'moves 200000'),
     ('100,000 G-code moves under G61 (refused)', 'cli', 'stops 100000'),
+    ('100,000 chords of a 3D curve, plain G64', 'cli', 'chords 100000'),
     ('500,000 CSV waypoints, corners (refused)', 'cli', 'corners 500000'),
     ('Path: 400-pose circle', 'node', 'circle 400'),
     ('Path: 5,000-pose circle', 'node', 'circle 5000'),
@@ -428,7 +429,7 @@ MEMORY_CASES = (
     ('Path: 100,000 poses in a line', 'node', 'line 100000'),
     ('Path: 100,000 poses, sharp corners (refused)', 'node',
      'corners 100000'),
-    ('Path: 100,000-pose circle (refused)', 'node', 'circle 100000'),
+    ('Path: 100,000-pose circle (one curve)', 'node', 'circle 100000'),
 )
 
 
@@ -449,6 +450,11 @@ def memory_program(case, directory):
         text = f'G21 G1 F{words[1]} X10\n'
     elif kind == 'helix':
         text = f'G21 F60000\nG0 X10\nG2 X10 Y0 Z-1 I-10 J0 P{int(size)}\n'
+    elif kind == 'chords':      # five turns of a 3D curve
+        t = np.linspace(0.0, 10 * math.pi, int(size) + 1)
+        text = 'G21 G64 F6000\n' + ''.join(
+            'G1 X%.5f Y%.5f Z%.5f\n' % p for p in zip(
+                40 * np.cos(t), 40 * np.sin(t), 10 * np.sin(3 * t)))
     else:       # moves, stops: corners blended, stopped at
         points = rng.uniform(-100.0, 100.0, (int(size), 3)).tolist()
         mode = 'G64 P0.01' if kind == 'moves' else 'G61'
@@ -597,7 +603,9 @@ def main():
     cycle_times(robot, limits)
     jerk_cost(robot, limits)
     chord_loop(robot, limits, args.acceptance)
-    chord_spiral(robot, limits, args.spiral)
+    chord_spiral(robot, limits, None)
+    if args.spiral:
+        chord_spiral(robot, limits, args.spiral)
     chord_cost(robot, limits, min(args.repeat, 3))
     if args.acceptance:
         acceptance(robot, limits)

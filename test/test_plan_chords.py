@@ -278,3 +278,12 @@ def test_every_waypoint_within_the_tolerance_of_a_smooth_path():
     path = from_waypoints(points, None, list(range(1, 301)), TOLERANCE)
     assert kinds(path) == [299]
     assert distance_to_path(path, points).max() <= TOLERANCE
+
+
+def test_the_documented_chord_program_is_the_generators():
+    """doc/programs/loop.nc: the 3D loop at 1 m/s, from home."""
+    from pathlib import Path
+    from orthoglide_testing.chord_programs import loop_program
+    text = (Path(__file__).resolve().parents[1] / 'doc' / 'programs'
+            / 'loop.nc').read_text()
+    assert text == loop_program(feed=60000.0, approach=True)[0]

@@ -72,16 +72,22 @@ def loop_point(phi):
     return p, d1, d2
 
 
-def loop_program(chords=LOOP_CHORDS, feed=30000.0, mode='G64'):
+def loop_program(chords=LOOP_CHORDS, feed=30000.0, mode='G64',
+                 approach=False):
     """
     Return the loop as G-code (mm, 4 decimals) and its first point (m).
 
-    G starts at the first point (``--start``): ``chords`` G1 at ``feed``
-    (mm/min) around the loop, back to it.
+    G starts at the first point (``--start``), or with ``approach`` at
+    home, a G0 taking it there: ``chords`` G1 at ``feed`` (mm/min) around
+    the loop, back to it.
     """
     phi = np.linspace(0.0, 2.0 * math.pi, chords + 1)
     points = loop_point(phi)[0] * 1e3
-    lines = [f'(3D loop of {chords} chords)', f'G21 G90 {mode} F{feed:g}']
+    lines = [f'(a 3D loop as CAM writes it: {chords} chords, plain G64; '
+             'orthoglide_testing.chord_programs.loop_program)',
+             f'G21 G90 {mode} F{feed:g}']
+    if approach:
+        lines.append('G0 X{:.4f} Y{:.4f} Z{:.4f}'.format(*points[0]))
     lines += ['G1 X{:.4f} Y{:.4f} Z{:.4f}'.format(*p) for p in points[1:]]
     return '\n'.join(lines + ['M2', '']), loop_point(np.zeros(1))[0][0]
 
