@@ -55,10 +55,9 @@ from orthoglide_ros.planning.limits import Limits
 from orthoglide_ros.planning import reachability
 from orthoglide_ros.planning.path import Path
 
-# Intervals of the grid over the whole path, at least; each piece has at
-# least MIN_INTERVALS, an arc one per MAX_ARC_STEP (rad), a Bezier piece
-# (a blend, a spline, a run of chords) one per MAX_ARC_STEP of its turning
-# more and BEZIER_INTERVALS at least.
+# Intervals of the grid over the whole path, at least; each piece at least
+# MIN_INTERVALS, an arc one per MAX_ARC_STEP (rad), a Bezier piece one per
+# MAX_ARC_STEP of its turning more and BEZIER_INTERVALS at least.
 GRID_INTERVALS = 2000
 MIN_INTERVALS = 4
 MAX_ARC_STEP = math.radians(2.0)
@@ -244,9 +243,8 @@ def _grid_counts(path, intervals):
     Return the intervals of each piece: (pieces,) int, counted, not made.
 
     ``intervals`` over the whole path, at least MIN_INTERVALS a piece, one
-    per MAX_ARC_STEP of an arc; on a Bezier piece (:func:`_grid`) its
-    share of ``intervals`` and one per MAX_ARC_STEP of its turning, at
-    least BEZIER_INTERVALS.
+    per MAX_ARC_STEP of an arc; a Bezier piece its share and one per
+    MAX_ARC_STEP of its turning, BEZIER_INTERVALS at least (:func:`_grid`).
     """
     table = path.table
     with np.errstate(over='ignore'):
@@ -265,22 +263,21 @@ def _grid(path, counts, intervals):
     """
     Gridpoints of every piece, both ends included, ends shared twice.
 
-    Evenly along a helix; along a Bezier piece evenly in its length's
-    share of ``intervals`` plus its turning over MAX_ARC_STEP, span by
-    span: dense where it bends.
+    Even along a helix; along a Bezier piece, even in its share of
+    ``intervals`` plus its turning over MAX_ARC_STEP: dense where it bends.
     """
     sizes = counts + 1
     last = np.cumsum(sizes) - 1
     first = last - counts
     table = path.table
-    lengths = table['length']
+    lengths, per_metre = table['length'], intervals / path.length
     index = np.repeat(np.arange(len(counts)), sizes)
     w = (np.arange(last[-1] + 1) - first[index]) * (lengths / counts)[index]
     for k in np.flatnonzero(~table['helix']):
         spans = slice(table['span_first'][k], table['span_first'][k + 1])
         bounds = np.append(table['span_start'][spans], lengths[k])
-        cost = bounds * (intervals / path.length) + np.concatenate((
-            [0.0], np.cumsum(table['span_turning'][spans]))) / MAX_ARC_STEP
+        cost = bounds * per_metre + np.r_[0.0, np.cumsum(
+            table['span_turning'][spans])] / MAX_ARC_STEP
         w[first[k]:last[k] + 1] = np.interp(
             np.linspace(0.0, cost[-1], counts[k] + 1), cost, bounds)
     w[last] = lengths

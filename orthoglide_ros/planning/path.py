@@ -137,10 +137,11 @@ class Piece:
         """
         Return how much a blend may trim at the piece's start (or end), m.
 
-        Half the piece; of a fitted run, half its first (last) span: a
-        blend takes no programmed point but the corner's.
+        Half the piece; of a fitted run (a Bezier piece of several moves),
+        half its first (last) span: a blend takes no programmed point but
+        the corner's.
         """
-        if self.kind == 'bezier' and len(self.control) > 1:
+        if self.kind == 'bezier' and self.lines is not None:
             spans = np.diff(self.starts)
             return 0.5 * float(spans[0] if start else spans[-1])
         return 0.5 * self.length
