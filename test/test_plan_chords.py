@@ -11,6 +11,7 @@ on the fitting's own numbers.
 
 import math
 
+from hypothesis import given, HealthCheck, settings, strategies as st
 import numpy as np
 from planning_checks import distance_to_path, path_distance
 import pytest
@@ -287,3 +288,50 @@ def test_the_documented_chord_program_is_the_generators():
     text = (Path(__file__).resolve().parents[1] / 'doc' / 'programs'
             / 'loop.nc').read_text()
     assert text == loop_program(feed=60000.0, approach=True)[0]
+
+
+@st.composite
+def sampled_curves(draw):
+    """Draw a 3D curve (sums of sines, mm) as rounded chords; a tolerance."""
+    rng = np.random.default_rng(draw(st.integers(0, 2 ** 32 - 1)))
+    count = draw(st.integers(4, 300))
+    t = np.linspace(0.0, 1.0, count + 1)
+    points = np.zeros((count + 1, 3))
+    for _ in range(draw(st.integers(1, 4))):
+        amplitude = rng.uniform(-30.0, 30.0, 3)
+        points += amplitude * np.sin(rng.uniform(0.5, 12.0) * t
+                                     + rng.uniform(0, 2 * math.pi))[:, None]
+    if draw(st.booleans()):         # a corner somewhere
+        k = int(rng.integers(1, count))
+        points[k:] += rng.uniform(-5.0, 5.0, 3) * (t[k:, None] - t[k])
+    decimals = draw(st.sampled_from((6, 4, 3)))
+    tolerance = draw(st.sampled_from((1e-6, 1e-5, 1e-4)))
+    return np.round(points, decimals), tolerance
+
+
+@pytest.mark.slow     # 8-15 s of CPU, one process, 2026-12-06
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(sampled_curves())
+def test_every_point_of_random_chord_programs_is_within_the_tolerance(
+        curve):
+    """
+    Random smooth curves with corners, rounded as CAM writes them.
+
+    Every programmed point within the tolerance of the path, measured on
+    the path; the pieces chained, tangent where G does not stop.
+    """
+    points, tolerance = curve
+    text = chords_of(points)
+    try:
+        path = path_of(text, tolerance, start=points[0] * 1e-3)
+    except gcode.ProgramError:          # every point within the tolerance
+        return
+    near = distance_to_path(path, programmed(text, points[0] * 1e-3))
+    assert near.max() <= tolerance * (1 + 1e-9), near.max()
+    for k in range(1, len(path.pieces)):
+        before, after = path.pieces[k - 1], path.pieces[k]
+        assert np.allclose(before.point(before.length), after.point(0.0),
+                           rtol=0, atol=1e-12)
+        if not path.stops[k]:
+            assert turns(path)[k - 1] <= 1e-6

@@ -211,7 +211,7 @@ def _line_or_arc(draw, here):
 def programs(draw):
     """Draw a G-code program of 1-4 lines and arcs inside the workspace."""
     here = [0.0, 0.0, 0.0]
-    mode = draw(st.sampled_from(('G61', 'G61.1', 'G64 P0.01')))
+    mode = draw(st.sampled_from(('G61', 'G61.1', 'G64 P0.01', 'G64')))
     lines = [f'G21 G90 {mode} F{draw(st.floats(3000.0, 60000.0)):.1f}']
     for _ in range(draw(st.integers(1, 4))):
         line, target = _line_or_arc(draw, here)
