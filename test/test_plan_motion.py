@@ -98,6 +98,19 @@ def shares(motion, limits):
     return {k: float(v.max()) for k, v in out.items()}
 
 
+def nearest_samples(motion, limits, count=3):
+    """Return the samples nearest each limit (force, rate, acceleration)."""
+    sol = motion.solution
+    nearest = set()
+    for values, bound in ((sol.force, limits.effort),
+                          (sol.lambdadot, limits.velocity),
+                          (sol.lambdaddot, limits.acceleration)):
+        with np.errstate(divide='ignore'):
+            ratio = (np.abs(values) / bound).max(1)
+        nearest.update(np.argsort(ratio)[-count:].tolist())
+    return sorted(nearest)
+
+
 def assert_consistent(motion, path=None):
     """
     At rest at both ends; velocity and acceleration those of the positions.
@@ -257,16 +270,8 @@ def test_random_programs_keep_every_limit_on_the_path(program, limits):
     for name, share in shares(motion, limits).items():
         assert share <= 1.0 + ACCEPT_SHARE, (name, share)
     # The independent model on the samples nearest their limits.
-    sol = motion.solution
-    nearest = set()
-    for values, bound in ((sol.force, limits.effort),
-                          (sol.lambdadot, limits.velocity),
-                          (sol.lambdaddot, limits.acceleration)):
-        with np.errstate(divide='ignore'):
-            ratio = (np.abs(values) / bound).max(1)
-        nearest.update(np.argsort(ratio)[-3:].tolist())
     for name, share in lagrange_check(DRIVES, motion, limits,
-                                      sorted(nearest)).items():
+                                      nearest_samples(motion, limits)).items():
         assert share <= 1.0 + ACCEPT_SHARE + 1e-6, (name, share)
     assert path_distance(motion.position, dense(path)).max() <= 2e-6
     assert np.allclose(motion.position[0], 0.0, atol=1e-12)
@@ -443,19 +448,6 @@ def test_a_plan_past_its_time_is_refused():
              max_seconds=1e-9)
     assert error.value.reason == 'timeout'
     assert str(error.value) == 'planning took more than 1e-09 s'
-
-
-def nearest_samples(motion, limits, count=3):
-    """Return the samples nearest each limit (force, rate, acceleration)."""
-    sol = motion.solution
-    nearest = set()
-    for values, bound in ((sol.force, limits.effort),
-                          (sol.lambdadot, limits.velocity),
-                          (sol.lambdaddot, limits.acceleration)):
-        with np.errstate(divide='ignore'):
-            ratio = (np.abs(values) / bound).max(1)
-        nearest.update(np.argsort(ratio)[-count:].tolist())
-    return sorted(nearest)
 
 
 @pytest.mark.slow     # 1.8 s of CPU, one process, 2026-12-06
