@@ -30,7 +30,7 @@ from orthoglide_ros.model.types import Array
 # at least 0.7 of its largest (the path splits those that are not).
 SUBSPANS = 8
 # Spans whose tables are made at once.
-TABLE_BLOCK = 4096
+TABLE_BLOCK = 512
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(8)
 # Newton steps on the arc length at most, and its agreement (a share of
 # the span's length).

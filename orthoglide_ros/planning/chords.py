@@ -40,7 +40,8 @@ Every programmed point is within the tolerance of the curve, by
 construction: a run's point within ``budget`` of the point the spline
 passes through, a dropped point within ``slack`` more; a corner blended
 within ``tol - slack`` of its vertex (the path's blends). Time and memory
-are linear in the points (banded systems, one spline a run).
+are linear in the points (banded systems, one spline a run). scipy is
+imported where used: a path without runs does not load it.
 """
 
 from __future__ import annotations
@@ -50,8 +51,6 @@ import math
 from typing import Optional
 
 import numpy as np
-from scipy.interpolate import CubicSpline
-from scipy.linalg import solveh_banded
 
 from orthoglide_ros.model.types import Array
 from orthoglide_ros.planning import bezier
@@ -315,6 +314,7 @@ def _fit(points, slack, tolerance, start, end):
     ``points`` (N + 1, 3), ``slack`` (N + 1,) of each; ``start``, ``end``:
     the unit tangents at its ends, or None (not-a-knot).
     """
+    from scipy.interpolate import CubicSpline     # where used: 23 MB
     budget = np.minimum(SMOOTH_SHARE * tolerance, tolerance - slack)
     budget[[0, -1]] = 0.0
     q = smooth(points, budget, start, end)
@@ -351,6 +351,7 @@ def smooth(points: Array, budget: Array, start: Optional[Array] = None,
     SMOOTH_RANGE) that keeps every point within its budget and no chord
     shorter than half its length; ``points`` where none does.
     """
+    from scipy.linalg import solveh_banded       # where used: 29 MB
     n = len(points) - 1
     if n < 3:
         return points

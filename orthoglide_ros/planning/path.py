@@ -59,6 +59,8 @@ ABOUT_TURN = blends.ABOUT_TURN
 # length is exact to rounding.
 EVEN_SPEED = 0.7
 SPLIT_DEPTH = 10
+# Points of Bezier pieces evaluated at once.
+BEZIER_BLOCK = 4096
 
 
 @dataclass(frozen=True)
@@ -343,7 +345,8 @@ class Path:
         Return ``p``, ``dp/dw``, ``d2p/dw2`` ((n, 3)) at pieces ``index``, ``w``.
 
         Vectorised over the points: the helices in one formula, the spans
-        of every Bezier piece in another.
+        of every Bezier piece in another (BEZIER_BLOCK points at a time:
+        its Newton steps' work is larger).
         """
         index = np.asarray(index, dtype=int)
         w = np.asarray(w, dtype=float)
@@ -358,17 +361,19 @@ class Path:
                             table['length'][k], w[helix])
             for o, v in zip(out, values):
                 o[helix] = v
-        if not helix.all():
-            k, along = index[~helix], w[~helix]
-            first = table['span_first'][k]
+        rows = np.flatnonzero(~helix)
+        for start in range(0, len(rows), BEZIER_BLOCK):
+            at = rows[start:start + BEZIER_BLOCK]
+            k, along = index[at], w[at]
             span = np.clip(np.searchsorted(
                 table['span_s'], table['piece_s'][k] + along,
-                side='right') - 1, first, table['span_first'][k + 1] - 1)
+                side='right') - 1, table['span_first'][k],
+                table['span_first'][k + 1] - 1)
             values = bezier.by_length(table['control'][span],
                                       table['tables'][span],
                                       along - table['span_start'][span])
             for o, v in zip(out, values):
-                o[~helix] = v
+                o[at] = v
         return tuple(out)
 
     @property
