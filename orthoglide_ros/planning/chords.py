@@ -107,6 +107,11 @@ class Chain:
     corners: int = 0
 
     @property
+    def count(self) -> int:
+        """Return how many pieces the chain makes."""
+        return len(self.bounds) - 1
+
+    @property
     def pieces(self) -> list:
         """Return ``(first, last, control, turning)`` of each piece."""
         return [(a, b, *self.curves.get(k, (None, 0.0))) for k, (a, b) in

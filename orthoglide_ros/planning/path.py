@@ -458,8 +458,8 @@ def from_moves(moves: Sequence[Move], tolerance: float,
                 last += 1
             groups.append(_straight_runs(moves[k:last + 1]))
         k = last + 1
-    count = sum(len(g.chain.pieces) if isinstance(g, _Chain)
-                else len(g[0]) for g in groups)
+    count = sum(g.chain.count if isinstance(g, _Chain) else len(g[0])
+                for g in groups)
     if max_pieces is not None and count > max_pieces:
         raise ProgramError(None, f'{len(moves)} moves make a path of '
                            f'{count} pieces at least: more than '
@@ -477,8 +477,8 @@ def from_moves(moves: Sequence[Move], tolerance: float,
             merged = group.chain.slack if not made else group.chain.slack[:1]
             slack[-1] = max(slack[-1], float(merged.max()))
         pieces += made
-        ends += [group.modes[group.chain.kept[p[1]] - 1]
-                 for p in group.chain.pieces]
+        ends += [group.modes[k - 1]
+                 for k in group.chain.kept[group.chain.bounds[1:]]]
         slack += made_slack
     if not pieces:
         raise ProgramError(None, 'zero-length program: every point is '
@@ -708,8 +708,7 @@ def from_waypoints(points: Array, feeds: Optional[Array], lines: Sequence[int],
                           keep[:-1], keep[1:], chord_lines, chord_feeds)]
         return from_moves(moves, tolerance, lines[0] or None, max_pieces)
     chain = chords.analyse(points[keep], chord_feeds, tolerance)
-    _refuse_beyond(len(points), len(chain.pieces) + chain.corners,
-                   max_pieces)
+    _refuse_beyond(len(points), chain.count + chain.corners, max_pieces)
     pieces, slack = _chain_pieces(points[keep], chain, chord_feeds,
                                   chord_lines)
     if not pieces:
