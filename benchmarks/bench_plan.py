@@ -514,8 +514,10 @@ def memory_child(kind, case):
     """
     Run one case in this process; print its figures as JSON.
 
-    ``base``: the peak before the case, after a small plan of the same
-    kind (the interpreter, the package and numpy's first allocations).
+    ``base``: the peak before the case, after small plans of the same
+    kind (the interpreter, the package, numpy's first allocations and
+    scipy's modules, which the first curve fitted through chords imports:
+    a line and, beside it, doc/programs/loop.nc or a 100-pose circle).
     """
     from orthoglide_ros.cores import planner
     from orthoglide_ros.cores.inputs import Rejected
@@ -537,8 +539,9 @@ def memory_child(kind, case):
             os.mkdir(os.path.join(directory, 'small'))
             small, _ = memory_program('line 6000',
                                       os.path.join(directory, 'small'))
-            cli.main(['plan', '--input', small, '--output',
-                      os.path.join(directory, 'out'), *options])
+            for warm in (small, os.path.join(PROGRAMS, 'loop.nc')):
+                cli.main(['plan', '--input', warm, '--output',
+                          os.path.join(directory, 'out'), *options])
             seen.clear()
             base = high_water()
             start = time.process_time()
@@ -547,7 +550,7 @@ def memory_child(kind, case):
         outcome = 'planned' if code == 0 else 'refused'
     else:
         core = planner.Planner(planner.PARAMETERS.parse({}))
-        core.path('', (), node_poses('circle 40'), 0.0)
+        core.path('', (), node_poses('circle 100'), 0.0)
         seen.clear()
         poses = node_poses(case)
         base = high_water()
@@ -574,7 +577,7 @@ def memory():
     from orthoglide_ros.tools.cli.planning import PLAN_BYTES as CLI_BYTES
     print(f'\nMemory (peak resident set) and CPU, each case a process; '
           f'bound (planned): the interpreter\'s own (its peak before the '
-          f'case, after a small plan) + {MOVE_BYTES} B a move or pose + '
+          f'case, after small plans) + {MOVE_BYTES} B a move or pose + '
           f'{GRIDPOINT_BYTES} B a gridpoint + {SAMPLE_BYTES} B a sample; '
           f'the plan may take {CLI_BYTES / 1e6:g} MB (orthoglide plan), '
           f'{PLAN_BYTES / 1e6:g} MB (node)')
