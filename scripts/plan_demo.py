@@ -17,6 +17,15 @@ limit, the share of the pass the drives clipped, and the contour error
 measured; writes a PNG: the path coloured by speed, and the forces against
 the limits over time.
 
+First it plans a program as CAM writes curves: the spiral of LinuxCNC's
+``nc_files/spiral.ngc`` (reconstructed, :mod:`orthoglide_testing.
+chord_programs`), 1000 G1 chords under plain G64, followed as the curve
+they sample, against the same chords as lines blended within 10 um (G64
+P); prints both durations and writes a second PNG (``--chords-plot``,
+doc/planning_chords.png is one): a few chords beside the path followed,
+and G's speed along the spiral both ways. ``--chords-only`` stops there
+(no DDS, a few seconds).
+
 Run it through ``bash scripts/plan_demo.sh`` (sets up .venv, keeps DDS on
 this host, picks a ROS_DOMAIN_ID). Exit code 0 on success, 1 if a node
 failed or a pass did not complete, 2 on a usage error; the last line is
@@ -39,10 +48,14 @@ import numpy as np  # noqa: E402
 
 from orthoglide_ros.formats.params_file import load_robot  # noqa: E402
 from orthoglide_testing import closed_loop as harness  # noqa: E402
-from orthoglide_testing import phase_plane, use_checkout, verdicts  # noqa: E402
+from orthoglide_testing import (chord_programs, phase_plane,  # noqa: E402
+                                use_checkout, verdicts)
+from orthoglide_ros.planning import gcode  # noqa: E402
+from orthoglide_ros.planning.path import from_moves  # noqa: E402
 from orthoglide_ros.model import mechanics  # noqa: E402
 from orthoglide_ros.planning import parametrization  # noqa: E402
-from orthoglide_ros.planning.limits import limits_from_mapping  # noqa: E402
+from orthoglide_ros.planning.limits import (  # noqa: E402
+    limits_from_mapping, load_limits)
 from orthoglide_ros.planning.programs import read_program  # noqa: E402
 
 use_checkout(ROOT)
@@ -106,6 +119,87 @@ def picture(path_file, cases):
     figure.savefig(path_file, dpi=90)
 
 
+def chords(robot, limits, plot):
+    """
+    Plan the spiral of 1000 chords as its curve and as lines; draw both.
+
+    Returns the two durations (s); ``plot``: the PNG.
+    """
+    text = chord_programs.spiral_program()
+    moves = gcode.read_gcode(text)
+    points = np.array([m.end for m in moves])
+    fitted = from_moves(moves, 1e-5)
+    lines = from_moves(gcode.read_gcode(text.replace('G64', 'G64 P0.000394')),
+                       1e-5)
+    motions = {name: parametrization.plan(robot, path, limits, RATE)
+               for name, path in (('curve', fitted), ('lines', lines))}
+    chord_picture(plot, points, {'curve': fitted, 'lines': lines}, motions)
+    return motions['curve'].duration, motions['lines'].duration
+
+
+def chord_picture(path_file, points, paths, motions):
+    """
+    Draw a few chords beside the paths, and G's speed along each.
+
+    Left: six chords of the spiral's outer turn unrolled (along each chord,
+    and the offset across it in um): the programmed points, the chords,
+    the curve followed (plain G64), the lines blended within 10 um (G64
+    P). Right: G's speed along the spiral, both ways.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    figure = Figure(figsize=(13, 4.8), layout='constrained')
+    FigureCanvasAgg(figure)
+    left, right = figure.subplots(1, 2, width_ratios=(1.3, 1.0))
+    first = 200       # six chords of the outer turns, after the approach
+    corners = points[first:first + 7]
+    start = 0.0
+    for a, b in zip(corners[:-1], corners[1:]):
+        along = (b - a) / np.linalg.norm(b - a)
+        across = np.cross((0.0, 0.0, 1.0), along)
+        length = float(np.linalg.norm(b - a))
+        left.plot([start * 1e3, (start + length) * 1e3], [0.0, 0.0],
+                  color='grey', lw=0.8)
+        for name, colour in (('curve', 'tab:blue'), ('lines', 'tab:orange')):
+            path = paths[name]
+            dense = np.vstack([piece.evaluate(np.linspace(
+                0.0, piece.length, max(2, int(piece.length / 2e-5))))[0]
+                for piece in path.pieces])
+            u = (dense - a) @ along
+            inside = (u >= 0.0) & (u <= length) & (
+                np.abs((dense - a) @ across) < 2e-3)
+            order = np.argsort(u[inside])
+            left.plot((start + u[inside][order]) * 1e3,
+                      ((dense[inside] - a) @ across)[order] * 1e6,
+                      color=colour, lw=1.2)
+        start += length
+    left.plot(np.cumsum(np.r_[0.0, np.linalg.norm(np.diff(
+        corners, axis=0), axis=1)]) * 1e3, np.zeros(len(corners)), 'ko',
+        ms=4)
+    left.set_xlabel('along the chords (mm)')
+    left.set_ylabel('across them (um)')
+    left.set_title('six chords of the spiral (grey), its points (black): '
+                   'followed as the curve (blue), as lines (orange)',
+                   fontsize=9)
+    feed = chord_programs.SPIRAL_FEED * 0.0254 / 60.0
+    for name, colour, label in (
+            ('curve', 'tab:blue', 'the curve (plain G64)'),
+            ('lines', 'tab:orange', 'lines blended within 10 um (G64 P)')):
+        motion = motions[name]
+        travelled = np.concatenate(([0.0], np.cumsum(np.linalg.norm(
+            np.diff(motion.position, axis=0), axis=1))))
+        right.plot(travelled, np.linalg.norm(motion.velocity, axis=1)
+                   / feed, color=colour, lw=0.8,
+                   label=f'{label}: {motion.duration:.2f} s')
+    right.set_xlabel('along the spiral (m)')
+    right.set_ylabel('speed of G / the feed')
+    right.set_title('1000 chords, 999 in/min, drives of 160, 250, 520 N',
+                    fontsize=9)
+    right.legend(loc='lower left', fontsize=8)
+    path_file.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path_file, dpi=90)
+
+
 def main(argv=None):
     """Plan, time, track both; print, draw; return the exit code."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
@@ -115,8 +209,21 @@ def main(argv=None):
     parser.add_argument('--plot', default=str(ROOT / 'out' / 'plan_demo.png'),
                         metavar='FILE', help='the PNG (default '
                         'out/plan_demo.png)')
+    parser.add_argument('--chords-plot', metavar='FILE',
+                        default=str(ROOT / 'out' / 'plan_chords.png'),
+                        help='the chords\' PNG (default out/plan_chords.png)')
+    parser.add_argument('--chords-only', action='store_true',
+                        help='plan and draw the chords only (no DDS)')
     args = parser.parse_args(argv)
     robot = load_robot(ROOT / 'doc' / 'programs' / 'drives.yaml')
+    curve, lines = chords(robot, load_limits(
+        ROOT / 'doc' / 'programs' / 'drives_limits.yaml'),
+        Path(args.chords_plot))
+    print(f'spiral of 1000 chords (plain G64): {curve:.3f} s along its '
+          f'curve, {lines:.3f} s as lines blended within 10 um '
+          f'({lines / curve - 1:+.0%}); picture: {args.chords_plot}')
+    if args.chords_only:
+        return 0
     limits = limits_from_mapping({j: {'max_effort': PLANNED * LIMIT}
                                   for j in (
         'slider_a', 'slider_b', 'slider_c')})

@@ -9,11 +9,15 @@ Independent checks of planned motions, shared by the planning tests.
   model (``mechanics_reference``) and the friction law written from
   doc/model.md: the worst share of every limit.
 - :func:`path_distance`: each sample's distance to a path given as dense
-  points.
+  points; :func:`distance_to_path`: each point's distance to a Path, exact
+  (dense samples, then a golden-section search on the path itself);
+- :class:`CurvePath`: a smooth curve given by a formula as a one-piece
+  path, for toppra and the distances (a curve the planner never saw).
 """
 
 import logging
 import math
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -213,3 +217,68 @@ def path_distance(points, dense, neighbours=8):
             best = np.minimum(best, np.linalg.norm(
                 points - a - t[:, None] * ab, axis=1))
     return best
+
+
+def distance_to_path(path, points, spacing=1e-5, candidates=4):
+    """
+    Return the distance (m) of each of ``points`` (n, 3) to ``path``.
+
+    ``path``: anything with ``pieces`` (their ``length``) and
+    ``evaluate(index, w)``. The ``candidates`` nearest of samples
+    ``spacing`` (m) apart at most (16 a piece at least), then a
+    golden-section search of ``|p(w) - x|`` over the sample's
+    neighbourhood on its piece: the distance to the path itself, not to a
+    polyline through it.
+    """
+    from scipy.spatial import cKDTree
+    index, w, width = [], [], []
+    for k, piece in enumerate(path.pieces):
+        count = max(16, math.ceil(piece.length / spacing)) + 1
+        ws = np.linspace(0.0, piece.length, count)
+        index.append(np.full(count, k))
+        w.append(ws)
+        width.append(np.full(count, ws[1] - ws[0]))
+    index, w, width = map(np.concatenate, (index, w, width))
+    dense = path.evaluate(index, w)[0]
+    _, nearest = cKDTree(dense).query(points, k=candidates)
+    best = np.full(len(points), np.inf)
+    lengths = np.array([piece.length for piece in path.pieces])
+    golden = (math.sqrt(5.0) - 1.0) / 2.0
+    for column in np.atleast_2d(nearest.T):
+        k = index[column]
+        low = np.clip(w[column] - width[column], 0.0, lengths[k])
+        high = np.clip(w[column] + width[column], 0.0, lengths[k])
+
+        def far(at):
+            return np.linalg.norm(path.evaluate(k, at)[0] - points, axis=1)
+        for _ in range(40):
+            a = high - golden * (high - low)
+            b = low + golden * (high - low)
+            closer = far(a) < far(b)
+            high = np.where(closer, b, high)
+            low = np.where(closer, low, a)
+        best = np.minimum(best, far(0.5 * (low + high)))
+    return best
+
+
+class CurvePath:
+    """
+    A smooth curve ``p(phi)``, ``phi`` in [``start``, ``stop``], as a path.
+
+    ``curve(phi)`` returns ``p``, ``dp/dphi``, ``d2p/dphi2`` ((n, 3));
+    one piece, ``w = (phi - start) scale`` (about its length: the
+    parameter need not be the arc length, toppra's problem is the same),
+    at rest at both ends, G's speed within ``feed`` (m/s).
+    """
+
+    def __init__(self, curve, start, stop, scale, feed=math.inf):
+        """Keep the curve and its parameter's range."""
+        self.curve, self.first, self.scale = curve, start, scale
+        self.pieces = (SimpleNamespace(length=(stop - start) * scale,
+                                       feed=feed),)
+        self.stops = np.array([True, True])
+
+    def evaluate(self, index, w):
+        """Return ``p``, ``dp/dw``, ``d2p/dw2`` at ``w`` (the one piece)."""
+        p, d1, d2 = self.curve(self.first + np.asarray(w) / self.scale)
+        return p, d1 / self.scale, d2 / self.scale ** 2

@@ -8,12 +8,15 @@ section, else the paper robot's (with a note); every refusal is one line,
 exit 2, and leaves the output file as it was.
 """
 
+import math
 from pathlib import Path
 
 from cli_runs import assert_bad_input, read_csv, run
 import numpy as np
 import pytest
 import yaml
+
+from orthoglide_testing.chord_programs import bulge_points
 
 ROOT = Path(__file__).resolve().parents[1]
 PROGRAM = 'G21 G90 F12000\nG1 X40\nG3 X60 Y20 I0 J20\nG1 Y40\nM2\n'
@@ -204,3 +207,68 @@ def test_a_limits_file_with_a_key_twice_is_refused(capsys, files):
     assert_bad_input(*run(capsys, 'plan', '--input', path, '--output',
                           output, '--limits', limits),
                      "the key 'slider_a' appears twice")
+
+
+def cam_program(kind):
+    """
+    Return a program CAM might write badly, and its last point (m).
+
+    ``reverse``: chords out along an arc and back; ``zero``: every chord
+    followed by one of 0.1 nm; ``micro``: 30,000 chords of 1 um;
+    ``many``: 100,000 chords of a 3D curve; ``bulge``: a curve beyond the
+    workspace through points within it.
+    """
+    if kind == 'bulge':
+        points = bulge_points() * 1e3
+    elif kind == 'many':
+        t = np.linspace(0.0, 10 * math.pi, 100_001)
+        points = np.stack((40 * np.cos(t), 40 * np.sin(t),
+                           10 * np.sin(3 * t)), 1)
+    else:
+        count, sweep = (30_000, 1.5) if kind == 'micro' else (30, math.pi)
+        a = np.linspace(0.0, sweep, count + 1)
+        points = np.stack((20 * np.cos(a), 20 * np.sin(a), 0 * a), 1)
+        if kind == 'reverse':
+            points = np.vstack((points, points[::-1][1:]))
+        if kind == 'zero':
+            points = np.repeat(points, 2, axis=0)
+            points[1::2, 0] += 1e-7
+    text = 'G21 G90 G64 F6000\n' + ''.join(
+        'G1 X{:.7f} Y{:.7f} Z{:.7f}\n'.format(*p) for p in points)
+    return text + 'M2\n', points[-1] * 1e-3
+
+
+@pytest.mark.parametrize('kind', ('reverse', 'zero', 'micro', pytest.param(
+    'many', marks=pytest.mark.slow), 'bulge'))
+def test_chord_programs_plan_or_are_refused_in_one_line(capsys, files,
+                                                        kind):
+    """
+    Chords at their worst: a plan, or one line naming the program's line.
+
+    A reversal stops where it turns; chords of 0.1 nm and of 1 um are
+    merged into points within the tolerance; 10^5 chords plan (about 12 s
+    of CPU, 2026-12-06); the curve that leaves the workspace between two
+    points is refused naming the second's line, nothing written.
+    """
+    path, limits, output = files
+    text, last = cam_program(kind)
+    path.write_text(text)
+    result = run(capsys, 'plan', '--input', path, '--output', output,
+                 '--limits', limits)
+    if kind == 'bulge':
+        assert_bad_input(*result, 'part.nc: line 12: the path at [',
+                         'too near a singularity')
+        assert not output.exists()
+        return
+    code, out, err = result
+    assert code == 0 and err == '', err
+    _, rows = read_csv(output.read_text())
+    end = [float(rows[-1][k]) for k in 'xyz']
+    assert end == pytest.approx(last.tolist(), abs=1e-10)   # as written
+    if kind == 'reverse':       # at rest where it turns about, between two
+        speed = np.linalg.norm([[float(r[k]) for k in ('vx', 'vy', 'vz')]
+                                for r in rows], axis=1)
+        turn = np.linalg.norm(np.array([[float(r[k]) for k in 'xy']
+                                        for r in rows]) - (-0.02, 0.0),
+                              axis=1).argmin()
+        assert speed[turn - 1:turn + 2].min() <= 0.05 * speed.max()

@@ -109,6 +109,12 @@ def test_path_control_modes():
     assert moves[2].tolerance is None
 
 
+def test_units_apply_before_the_blend_tolerance_on_their_line():
+    """RS274NGC's order of execution: G20 before G64, however written."""
+    for text in ('G64 P0.001 G20 F10\nG1 X1', 'G20 G64 P0.001 F10\nG1 X1'):
+        assert read_gcode(text)[0].tolerance == pytest.approx(2.54e-5)
+
+
 @pytest.mark.parametrize('program, message', (
     ('G21\nG1 X1 F100\n\n\n\n\nG41 D1\n',
      'line 7: G41 (cutter compensation) is not supported'),
@@ -129,7 +135,7 @@ def test_path_control_modes():
     ('X1', 'line 1: a move without a motion mode'),
     ('G1 X1', 'line 1: G1 without a feed rate (F)'),
     ('F0\nG1 X1', 'line 2: G1 at feed rate zero (F0 on line 1)'),
-    ('G1 X1 I1 F1', 'line 1: I only with G2 or G3'),
+    ('G1 X1 I1 F1', 'line 1: I only with G2, G3, G5 or G5.1'),
     ('G17 G2 X1 K1 F1', 'line 1: K is not an arc word of the G17 plane'),
     ('G2 X1 R1 I1 F1', 'line 1: an arc with both R and I J K'),
     ('G2 X1 F1', 'line 1: G2 needs I J K offsets or R'),
@@ -215,3 +221,106 @@ def test_a_centre_rounded_moves_the_arc_by_rounding_only():
     moved = np.abs(np.linalg.norm(points - centre, axis=1) - 0.010)
     assert moved.max() <= 2e-6
     assert np.allclose(piece.point(piece.length), arc.end, atol=1e-12)
+
+
+def bernstein(control, tau, order=0):
+    """Return a cubic Bezier (or its derivative) at ``tau``, written out."""
+    t = np.asarray(tau, dtype=float)[:, None]
+    p = np.asarray(control)
+    if order == 1:
+        return 3 * ((1 - t) ** 2 * (p[1] - p[0]) + 2 * (1 - t) * t
+                    * (p[2] - p[1]) + t ** 2 * (p[3] - p[2]))
+    if order == 2:
+        return 6 * ((1 - t) * (p[2] - 2 * p[1] + p[0])
+                    + t * (p[3] - 2 * p[2] + p[1]))
+    return ((1 - t) ** 3 * p[0] + 3 * (1 - t) ** 2 * t * p[1]
+            + 3 * (1 - t) * t ** 2 * p[2] + t ** 3 * p[3])
+
+
+def on_curve(piece, control):
+    """
+    Return the largest distance (m) of the piece's points to the curve.
+
+    Each point's nearest ``tau`` by Newton's method on ``(B - p) . B'``
+    from the nearest of 2001 samples.
+    """
+    points = piece.evaluate(np.linspace(0.0, piece.length, 41))[0]
+    dense = bernstein(control, np.linspace(0.0, 1.0, 2001))
+    tau = np.linalg.norm(dense[None] - points[:, None], axis=2).argmin(1) \
+        / 2000.0
+    for _ in range(30):
+        offset = bernstein(control, tau) - points
+        d1, d2 = bernstein(control, tau, 1), bernstein(control, tau, 2)
+        tau = np.clip(tau - (offset * d1).sum(1) / (
+            (d1 * d1).sum(1) + (offset * d2).sum(1)), 0.0, 1.0)
+    return float(np.linalg.norm(bernstein(control, tau) - points,
+                                axis=1).max())
+
+
+def test_g5_is_linuxcncs_cubic_and_a_series_is_tangent():
+    """
+    The curvy N of LinuxCNC's manual: ``G5 I0 J3 P0 Q-3 X1 Y1``, then more.
+
+    ``G5 P0 Q-3 X2 Y2`` after it.
+
+    The first's control points are the start plus I J and the end plus P
+    Q; the second, without I J, starts along the first's end (its handle
+    the negation of P Q). Followed exactly, by its arc length.
+    """
+    moves = read_gcode('G21 G90 G17 F600\nG0 X0 Y0\n'
+                       'G5 I0 J3 P0 Q-3 X1 Y1\nG5 P0 Q-3 X2 Y2')
+    first, second = (m for m in moves if m.kind == 'spline')
+    mm = 1e-3
+    assert np.allclose(first.control, np.array(
+        [(0, 0, 0), (0, 3, 0), (1, -2, 0), (1, 1, 0)]) * mm, atol=1e-15)
+    assert np.allclose(second.control, np.array(
+        [(1, 1, 0), (1, 4, 0), (2, -1, 0), (2, 2, 0)]) * mm, atol=1e-15)
+    for move in (first, second):
+        piece = move_piece(move)
+        assert on_curve(piece, move.control) <= 1e-12
+        assert np.allclose(piece.point(piece.length), move.end, atol=1e-15)
+        dense = bernstein(move.control, np.linspace(0.0, 1.0, 200001))
+        length = np.linalg.norm(np.diff(dense, axis=0), axis=1).sum()
+        assert piece.length == pytest.approx(length, rel=1e-9)
+    a, b = move_piece(first), move_piece(second)
+    assert np.linalg.norm(np.cross(a.tangent(a.length), b.tangent(0.0))) \
+        <= 1e-12
+
+
+def test_g5_1_is_the_quadratic_through_its_control_point():
+    """The parabola of LinuxCNC's manual: ``G5.1 X2 I2 J-8`` is y = x^2."""
+    move = read_gcode('G21 G90 G17 F600\nG0 X-2 Y4\nG5.1 X2 I2 J-8')[-1]
+    piece = move_piece(move)
+    p = piece.evaluate(np.linspace(0.0, piece.length, 1001))[0] * 1e3
+    assert np.abs(p[:, 1] - p[:, 0] ** 2).max() <= 1e-9
+    assert np.allclose(p[[0, -1], :2], [(-2, 4), (2, 4)], atol=1e-12)
+    # One of I J may be left out (0): only both zero is refused.
+    assert read_gcode('G21 F600\nG5.1 X2 J1')[0].kind == 'spline'
+
+
+@pytest.mark.parametrize('program, message', (
+    ('G21 F600 G18\nG5 I1 J1 P1 Q1 X2', 'line 2: G5 only in the XY plane '
+     '(G17), not G18'),
+    ('G21 F600\nG5 I1 J1 P1 X2', 'line 2: G5 needs both P and Q'),
+    ('G21 F600\nG5 I1 P1 Q1 X2', 'line 2: G5 needs both I and J, or neither'),
+    ('G21 F600\nG5 P1 Q1 X2', 'line 2: the first G5 of a series needs I and '
+     'J'),
+    ('G21 F600\nG5 I0 J1 P0 Q1 X2\nG1 X3\nG5 P1 Q1 X4',
+     'line 4: the first G5 of a series needs I and J'),
+    ('G21 F600\nG5.1 X2', 'line 2: G5.1 needs I or J, not zero'),
+    ('G21 F600\nG5.1 X2 I0 J0', 'line 2: G5.1 needs I or J, not zero'),
+    ('G21 F600\nG5.1 X2 I1 P1', 'line 2: P is not a word of G5.1 (I J)'),
+    ('G21 F600\nG5 I1 J1 P1 Q1 X2 Z1', 'line 2: G5 moves X and Y only'),
+    ('G21 F600\nG5 I1 J1 K1 P1 Q1 X2', 'line 2: K is not a word of G5'),
+    ('G21 F600\nG1 X2 Q1', 'line 2: Q only with G5'),
+    ('G21 F600\nG5 I0 J0 P1 Q1 X2', 'line 2: the G5 spline stops where its '
+     'speed vanishes'),
+    ('G21 F600\nG64 P0.01 G5 I1 J1 Q1 X2', 'line 2: G64 P and G5 on one '
+     'line'),
+    ('G21\nG5 I1 J1 P1 Q1 X2', 'line 2: G5 without a feed rate (F)'),
+    ('G5.2 X1 Y1', 'line 1: G5.2 (NURBS blocks) is not supported'),
+))
+def test_spline_refusals_name_their_line(program, message):
+    with pytest.raises(ProgramError) as error:
+        read_gcode(program)
+    assert str(error.value).startswith(message), str(error.value)

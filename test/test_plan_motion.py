@@ -14,7 +14,11 @@ Planned motions: within every limit, on the path, at rest, optimal.
 - friction (viscous, Coulomb per direction, Stribeck) and jerk limits are
   kept;
 - a path out of the workspace, statics beyond a limit and nothing that
-  bounds the motion are refused, naming the line.
+  bounds the motion are refused, naming the line;
+- a chord program of a 3D loop moves as the loop itself would (toppra on
+  the true curve), G5 splines are followed exactly, a fitted curve that
+  leaves the workspace is refused naming its line, and G's velocity is
+  continuous through fitted curves.
 """
 
 import math
@@ -23,7 +27,8 @@ from hypothesis import assume, example, given, HealthCheck, settings, \
     strategies as st
 from mechanics_reference import DRIVES_ROBOT_VALUES
 import numpy as np
-from planning_checks import (friction_reference, lagrange_check,
+from planning_checks import (CurvePath, distance_to_path,
+                             friction_reference, lagrange_check,
                              path_distance, toppra_duration)
 import pytest
 
@@ -31,8 +36,11 @@ from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.planning import gcode, path as paths
 from orthoglide_ros.planning.limits import limits_from_mapping
+from orthoglide_ros.planning.limits import paper_limits
 from orthoglide_ros.planning.parametrization import (ACCEPT_SHARE, plan,
                                                      PlanningError)
+from orthoglide_testing.chord_programs import (bulge_points, LOOP_RADIUS,
+                                               loop_point, loop_program)
 
 RATE = 1000.0
 DRIVES = Robot(**DRIVES_ROBOT_VALUES)
@@ -88,6 +96,19 @@ def shares(motion, limits):
                 motion.t)[:, None]
             out['jerk'] = jerk / limits.jerk
     return {k: float(v.max()) for k, v in out.items()}
+
+
+def nearest_samples(motion, limits, count=3):
+    """Return the samples nearest each limit (force, rate, acceleration)."""
+    sol = motion.solution
+    nearest = set()
+    for values, bound in ((sol.force, limits.effort),
+                          (sol.lambdadot, limits.velocity),
+                          (sol.lambdaddot, limits.acceleration)):
+        with np.errstate(divide='ignore'):
+            ratio = (np.abs(values) / bound).max(1)
+        nearest.update(np.argsort(ratio)[-count:].tolist())
+    return sorted(nearest)
 
 
 def assert_consistent(motion, path=None):
@@ -203,7 +224,7 @@ def _line_or_arc(draw, here):
 def programs(draw):
     """Draw a G-code program of 1-4 lines and arcs inside the workspace."""
     here = [0.0, 0.0, 0.0]
-    mode = draw(st.sampled_from(('G61', 'G61.1', 'G64 P0.01')))
+    mode = draw(st.sampled_from(('G61', 'G61.1', 'G64 P0.01', 'G64')))
     lines = [f'G21 G90 {mode} F{draw(st.floats(3000.0, 60000.0)):.1f}']
     for _ in range(draw(st.integers(1, 4))):
         line, target = _line_or_arc(draw, here)
@@ -249,16 +270,8 @@ def test_random_programs_keep_every_limit_on_the_path(program, limits):
     for name, share in shares(motion, limits).items():
         assert share <= 1.0 + ACCEPT_SHARE, (name, share)
     # The independent model on the samples nearest their limits.
-    sol = motion.solution
-    nearest = set()
-    for values, bound in ((sol.force, limits.effort),
-                          (sol.lambdadot, limits.velocity),
-                          (sol.lambdaddot, limits.acceleration)):
-        with np.errstate(divide='ignore'):
-            ratio = (np.abs(values) / bound).max(1)
-        nearest.update(np.argsort(ratio)[-3:].tolist())
     for name, share in lagrange_check(DRIVES, motion, limits,
-                                      sorted(nearest)).items():
+                                      nearest_samples(motion, limits)).items():
         assert share <= 1.0 + ACCEPT_SHARE + 1e-6, (name, share)
     assert path_distance(motion.position, dense(path)).max() <= 2e-6
     assert np.allclose(motion.position[0], 0.0, atol=1e-12)
@@ -348,6 +361,17 @@ def velocity_steps(motion):
     return (change - 0.5 * jump)[:-1]
 
 
+def assert_continuous_at_100_khz(path):
+    """Planned at 100 kHz: every velocity change its accelerations', no stop."""
+    motion = plan(Robot(), path, efforts({'slider_a': 650.0, 'slider_b':
+                                          650.0, 'slider_c': 650.0}),
+                  100000.0)
+    largest = np.abs(motion.acceleration).max()
+    assert velocity_steps(motion).max() <= 1e-6 * largest
+    speed = np.linalg.norm(motion.velocity, axis=1)
+    assert (speed[1:-1] > 0.0).all()
+
+
 def test_g_velocity_is_continuous_through_bezier_blends():
     """
     At 100 kHz every change of G's velocity is its accelerations'.
@@ -359,13 +383,7 @@ def test_g_velocity_is_continuous_through_bezier_blends():
     path = program_path('G21 G64 P0.5 F6000\nG1 X20\nG3 X40 Y0 I10 J0\n'
                         'G1 Y20')
     assert 'bezier' in [piece.kind for piece in path.pieces]
-    motion = plan(Robot(), path, efforts({'slider_a': 650.0, 'slider_b':
-                                          650.0, 'slider_c': 650.0}),
-                  100000.0)
-    largest = np.abs(motion.acceleration).max()
-    assert velocity_steps(motion).max() <= 1e-6 * largest
-    speed = np.linalg.norm(motion.velocity, axis=1)
-    assert (speed[1:-1] > 0.0).all()
+    assert_continuous_at_100_khz(path)
 
 
 @pytest.mark.parametrize('text', (
@@ -435,3 +453,111 @@ def test_a_plan_past_its_time_is_refused():
              max_seconds=1e-9)
     assert error.value.reason == 'timeout'
     assert str(error.value) == 'planning took more than 1e-09 s'
+
+
+@pytest.mark.slow     # 1.8 s of CPU, one process, 2026-12-06
+def test_a_chord_program_of_a_3d_loop_moves_as_its_curve_does():
+    """
+    A 3D loop as 95 chords (sagitta up to 52 um), plain G64, 1 m/s feed.
+
+    Within 1 % of toppra's optimum along the true curve (which the planner
+    never sees), the motion within 15 um of that curve and every
+    programmed point within the tolerance; every limit kept (the Lagrange
+    model on the samples nearest them). The chords as lines (G64 P0.01)
+    take a fifth longer at least: G slows at every vertex.
+    """
+    text, start = loop_program(feed=60000.0)
+    path = program_path(text, start=start)
+    limits = efforts()
+    motion = plan(DRIVES, path, limits, RATE)
+    curve = CurvePath(loop_point, 0.0, 2 * math.pi, LOOP_RADIUS, 1.0)
+    optimum = toppra_duration(DRIVES, curve, limits, intervals=8000)
+    assert abs(motion.duration - optimum) <= 0.01 * optimum, (
+        motion.duration, optimum)
+    assert distance_to_path(curve, motion.position).max() <= 15e-6
+    points = np.array([m.end for m in gcode.read_gcode(text, start)])
+    assert distance_to_path(path, points).max() <= 1e-5
+    for name, share in shares(motion, limits).items():
+        assert share <= 1.0 + ACCEPT_SHARE, (name, share)
+    for name, share in lagrange_check(DRIVES, motion, limits,
+                                      nearest_samples(motion, limits)).items():
+        assert share <= 1.0 + ACCEPT_SHARE + 1e-6, (name, share)
+    assert_consistent(motion, path)
+    lines = plan(DRIVES, program_path(text.replace('G64', 'G64 P0.01'),
+                                      start=start), limits, RATE)
+    assert lines.duration >= 1.2 * motion.duration
+
+
+def test_g5_splines_are_followed_exactly_and_passed_at_speed():
+    """
+    A line, then two G5 tangent to it and to each other: no stop inside.
+
+    Every sample on the splines as LinuxCNC defines them (their control
+    points written here), velocity and acceleration those of the
+    positions.
+    """
+    text = ('G21 G90 G61 F6000\nG1 X10\nG5 I5 J0 P0 Q-10 X30 Y20\n'
+            'G5 P10 Q0 X50 Y0\nM2')
+    path = program_path(text)
+    motion = plan(DRIVES, path, efforts(), RATE)
+    speed = np.linalg.norm(motion.velocity, axis=1)
+    assert (speed[1:-1] > 0.0).all()
+    mm = 1e-3
+    curves = [np.array(c) * mm for c in (
+        [(10, 0, 0), (15, 0, 0), (30, 10, 0), (30, 20, 0)],
+        [(30, 20, 0), (30, 30, 0), (60, 0, 0), (50, 0, 0)])]
+
+    def cubic(control):
+        def curve(t):
+            t = np.asarray(t, dtype=float)[:, None]
+            u = 1 - t
+            p = (u ** 3 * control[0] + 3 * u * u * t * control[1]
+                 + 3 * u * t * t * control[2] + t ** 3 * control[3])
+            d1 = 3 * (u * u * (control[1] - control[0]) + 2 * u * t * (
+                control[2] - control[1]) + t * t * (control[3] - control[2]))
+            d2 = 6 * (u * (control[2] - 2 * control[1] + control[0])
+                      + t * (control[3] - 2 * control[2] + control[1]))
+            return p, d1, d2
+        return CurvePath(curve, 0.0, 1.0, 0.05)
+    on = motion.position[:, 0] >= 0.010 + 1e-9
+    near = np.min([distance_to_path(cubic(c), motion.position[on])
+                   for c in curves], axis=0)
+    assert near.max() <= 1e-9
+    assert_consistent(motion, path)
+
+
+def test_a_curve_that_bulges_out_of_the_workspace_is_refused():
+    """
+    A curve through chords within the workspace, itself beyond: refused.
+
+    Chords 20 um inside the singular margin, the curve through them 20 um
+    beyond: refused naming the chord's line; as lines (G64 P), planned.
+    """
+    body = ''.join('G1 X%.6f Y%.6f\n' % (a * 1e3, b * 1e3)
+                   for a, b, _ in bulge_points())
+    path = program_path('G21 G90 G64 F6000\n' + body)
+    with pytest.raises(PlanningError) as error:
+        plan(Robot(), path, paper_limits(), RATE)
+    assert str(error.value).startswith('line 12: the path at [')
+    assert 'too near a singularity' in str(error.value)
+    lines = program_path('G21 G90 G64 P0.001 F6000\n' + body)
+    assert plan(Robot(), lines, paper_limits(), RATE).duration > 0.0
+
+
+def test_g_velocity_is_continuous_through_fitted_curves():
+    """
+    At 100 kHz every change of G's velocity is its accelerations'.
+
+    Chords of an arc, a long line tangent to it, chords of another arc:
+    the curves' parameter their arc length, their ends tangent to the line.
+    """
+    first = np.array([(20 * math.cos(a), 20 * math.sin(a), 0.0)
+                      for a in np.linspace(-math.pi / 2, 0.0, 21)])
+    second = np.array([(20 * math.cos(a), 40 + 20 * math.sin(a), 0.0)
+                       for a in np.linspace(0.0, math.pi / 2, 21)])
+    text = 'G21 G90 G64 F6000\n' + ''.join(
+        'G1 X{:.6f} Y{:.6f}\n'.format(*p[:2]) for p in np.vstack((
+            first[1:], second)))
+    path = program_path(text, start=first[0] * 1e-3)
+    assert [p.kind for p in path.pieces] == ['bezier', 'helix', 'bezier']
+    assert_continuous_at_100_khz(path)

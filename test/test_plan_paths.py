@@ -12,7 +12,7 @@ nothing stops.
 import math
 
 import numpy as np
-from planning_checks import path_distance
+from planning_checks import distance_to_path, path_distance
 import pytest
 
 from orthoglide_ros.planning import gcode
@@ -89,11 +89,22 @@ def test_blends_between_arcs_stay_within_their_tolerance():
         <= 0.05e-3 * 1.001
 
 
-def test_g64_without_p_blends_within_the_planner_tolerance():
+def test_g64_without_p_keeps_every_corner_within_the_planner_tolerance():
+    """
+    Plain G64: the corners are points of the program, kept within it.
+
+    The square's corners are blended so that each passes within the
+    tolerance of the blend (``trim tan(turn / 4)``), the blends within
+    ``cos(turn / 2)`` of it of the lines.
+    """
     text = SQUARE.format(mode='G64')
     path = path_of(text, tolerance=2e-5)
+    corners = np.array([(0.04, 0.0, 0.0), (0.04, 0.04, 0.0),
+                        (0.0, 0.04, 0.0)])
+    near = distance_to_path(path, corners)
+    assert (near <= 2e-5 * (1 + 1e-9)).all() and (near >= 1.98e-5).all()
     distance = path_distance(dense(path), dense_programmed(text)).max()
-    assert 1.8e-5 <= distance <= 2e-5 * 1.001
+    assert distance <= 2e-5 * math.cos(math.pi / 4) * 1.001
 
 
 def test_a_kink_of_rounding_is_smoothed_within_a_micrometre():
@@ -109,21 +120,22 @@ def test_an_about_turn_stops_even_when_blending():
 
 
 def test_a_circle_as_a_dense_polyline_becomes_the_circle():
+    """
+    400 poses of a circle: one smooth curve, on the circle within 0.5 um.
+
+    Not the polyline's 3.1 um (its chords' sagitta): the curve through the
+    poses, each kept within the tolerance.
+    """
     radius = 0.1
     angles = np.linspace(0.0, 2 * math.pi, 400)
     points = radius * np.stack((np.cos(angles), np.sin(angles),
                                 np.zeros_like(angles)), 1)
     path = from_waypoints(points, None, list(range(1, 401)), 1e-5)
-    assert_chained(path)
-    assert not path.stops[1:-1].any()
-    # Half a segment of line at each end (where G rests), arcs between.
-    radii = [piece.radius for piece in path.pieces]
-    assert radii[0] == radii[-1] == 0.0
-    assert np.allclose(radii[1:-1], radius * math.cos(math.pi / 399),
-                       rtol=1e-9)
+    assert [p.kind for p in path.pieces] == ['bezier']
+    assert path.stops.tolist() == [True, True]
     circle = np.linalg.norm(dense(path)[:, :2], axis=1)
-    assert np.abs(circle - radius).max() <= radius * (1 - math.cos(
-        math.pi / 399)) * 1.001
+    assert np.abs(circle - radius).max() <= 0.5e-6
+    assert distance_to_path(path, points).max() <= 1e-5
 
 
 def test_a_polyline_with_a_tight_tolerance_keeps_its_lines():

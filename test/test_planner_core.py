@@ -19,6 +19,7 @@ from orthoglide_ros.cores.inputs import Rejected
 from orthoglide_ros.cores.planner import limits_of, PARAMETERS, Planner
 from orthoglide_ros.model.robot import ParameterError
 from orthoglide_ros.planning.limits import paper_limits
+from orthoglide_testing.chord_programs import bulge_points
 
 LINE = np.array([(0.0, 0.0, 0.0), (0.02, 0.0, 0.0), (0.02, 0.02, 0.0)])
 
@@ -164,3 +165,50 @@ def test_a_plan_past_max_planning_time_is_refused_and_the_next_planned():
     assert str(error.value) == 'planning took more than 0.01 s'
     core.configure(PARAMETERS.parse({}))
     assert core.path('', (), circle, 0.0) is not None
+
+
+def planner_path(kind):
+    """
+    Return the poses (m) of a Path a planner might send at its worst.
+
+    ``reverse``: out along an arc and back; ``twice``: every pose sent
+    twice; ``micro``: 20,000 poses 1 um apart; ``dense``: a 10^5-pose
+    circle; ``bulge``: poses within the workspace whose curve is not.
+    """
+    if kind == 'bulge':
+        return bulge_points()
+    count, sweep = {'micro': (20_000, 1.0), 'dense': (100_000, 2 * math.pi)
+                    }.get(kind, (40, math.pi))
+    a = np.linspace(0.0, sweep, count + 1)
+    radius = 0.1 if kind == 'dense' else 0.02
+    points = radius * np.stack((np.cos(a), np.sin(a), 0 * a), 1)
+    if kind == 'reverse':
+        points = np.vstack((points, points[::-1][1:]))
+    if kind == 'twice':
+        points = np.repeat(points, 2, axis=0)
+    return points
+
+
+@pytest.mark.parametrize('kind', ('reverse', 'twice', 'micro', pytest.param(
+    'dense', marks=pytest.mark.slow), 'bulge'))
+def test_paths_as_planners_send_them_plan_or_are_refused(kind):
+    """
+    A plan from the first pose to the last, or a refusal naming a pose.
+
+    The dense circle plans in about 2 s of CPU (2026-12-06); the curve
+    that leaves the workspace between poses 10 and 11 is refused naming
+    pose 11 (``infeasible``), and the next path planned.
+    """
+    core = Planner(PARAMETERS.parse({}))
+    points = planner_path(kind)
+    if kind == 'bulge':
+        with pytest.raises(Rejected) as error:
+            core.path('', (), points, 0.0)
+        assert error.value.reason == 'infeasible'
+        assert str(error.value).startswith('pose 11: the path at [')
+        assert core.path('', (), LINE, 0.0) is not None
+        return
+    _, motion = core.path('', (), points, 0.0)
+    assert np.allclose(motion.position[[0, -1]], points[[0, -1]], rtol=0,
+                       atol=1e-12)
+    assert np.all(motion.velocity[[0, -1]] == 0.0)

@@ -8,8 +8,9 @@ becomes a ``cartesian_trajectory`` within 60 um of the circle, within 5 %
 of toppra's optimum on the exact circle (on its own fine grid), every
 force within its limit; the feedforward converts it. An infeasible or
 malformed path publishes nothing, is counted by reason, and the node goes
-on: a pose 1e300 m away and a path of 10^5 poses with corners (beyond the
-node's memory) too; a straight path of 100 poses is planned.
+on: a pose 1e300 m away, a path of 10^5 poses with corners (beyond the
+node's memory) and poses whose curve leaves the workspace too; a straight
+path of 100 poses is planned.
 """
 
 import math
@@ -21,6 +22,7 @@ from planning_checks import toppra_duration
 import pytest
 from trajectory_msgs.msg import JointTrajectory, MultiDOFJointTrajectory
 
+from orthoglide_testing.chord_programs import bulge_points
 from orthoglide_testing.hostile import Nodes, Peer
 from orthoglide_ros.model import mechanics
 from orthoglide_ros.model.robot import Robot
@@ -180,6 +182,8 @@ def test_a_circle_of_400_poses_is_planned_near_its_optimum(graph):
      'oversize'),
     (((0.0, 0.0, 0.0), (math.nan, 0.0, 0.0)), 'base_link', 'non_finite'),
     (((0.0, 0.0, 0.0), (0.01, 0.0, 0.0)), 'map', 'frame'),
+    # Poses within the workspace, the curve through them not.
+    (bulge_points(), 'base_link', 'infeasible'),
     (((0.0, 0.0, 0.0),), 'base_link', 'too_few_poses'),
 ))
 def test_bad_paths_publish_nothing_and_the_node_goes_on(graph, points,

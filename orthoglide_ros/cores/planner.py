@@ -2,7 +2,8 @@
 The planner node's logic without ROS: a path in, the fastest motion out.
 
 A ``nav_msgs/Path`` (poses of G in ``base_frame``, untimed) is a polyline
-followed as the smooth curve it samples, within ``path_tolerance``
+followed as the smooth curve it samples, within ``path_tolerance`` of
+every pose
 (:func:`orthoglide_ros.planning.path.from_waypoints`), and planned by
 :func:`orthoglide_ros.planning.parametrization.plan`: the fastest motion
 from rest at the first pose to rest at the last, within the
@@ -84,9 +85,9 @@ PARAMETERS = Table('PlannerSettings', (
          'largest speed of G (m/s); 0.0: none beside the limits',
          (0.0, 100.0)),
     Spec('path_tolerance', 'double', 1e-5,
-         'a path\'s polyline is followed as the smooth curve it samples, '
-         'its corners blended within this distance (m); 0.0: G stops at '
-         'every corner', (0.0, 0.01)),
+         'a path\'s polyline is followed as the smooth curve it samples '
+         'within this distance (m) of every pose, its corners blended '
+         'within it; 0.0: G stops at every corner', (0.0, 0.01)),
     Spec('rate_hz', 'double', 1000.0,
          'points per second of the published motion (Hz)',
          (100.0, 100000.0)),

@@ -47,6 +47,7 @@ import numpy as np
 
 from orthoglide_ros.formats.text import clip
 from orthoglide_ros.model.types import Array
+from orthoglide_ros.planning import bezier
 
 MM = 1e-3                   # m per program unit, G21
 INCH = 25.4e-3              # m per program unit, G20
@@ -69,6 +70,9 @@ ARC_RADIUS_SHARE = 1e-3
 FULL_TURN_TOLERANCE = 1e-9
 # A move shorter than this (m) moves nothing and is dropped.
 ZERO_LENGTH = 1e-12
+# A spline whose least speed is below this share of its largest stops (a
+# zero offset, a cusp): refused.
+SPLINE_REGULAR = 1e-9
 
 # The path control modes of a move's end.
 EXACT_STOP = 'exact_stop'       # G61.1
@@ -79,17 +83,18 @@ BLEND = 'blend'                 # G64
 # of x, y, z), and the offset letters of e1, e2.
 PLANES = {17: ((0, 1, 2), 'IJ'), 18: ((2, 0, 1), 'KI'), 19: ((1, 2, 0), 'JK')}
 
-MOTION = {0, 1, 2, 3}
-SUPPORTED_G = {0.0, 1.0, 2.0, 3.0, 17.0, 18.0, 19.0, 20.0, 21.0, 40.0,
-               49.0, 61.0, 61.1, 64.0, 80.0, 90.0, 91.0, 91.1, 94.0}
+MOTION = {0, 1, 2, 3, 5, 5.1}
+SUPPORTED_G = {0.0, 1.0, 2.0, 3.0, 5.0, 5.1, 17.0, 18.0, 19.0, 20.0, 21.0,
+               40.0, 49.0, 61.0, 61.1, 64.0, 80.0, 90.0, 91.0, 91.1, 94.0}
 # Modal groups of the supported codes (two of one group on a line: refused).
-GROUPS = {0: 'motion', 1: 'motion', 2: 'motion', 3: 'motion', 17: 'plane',
+GROUPS = {0: 'motion', 1: 'motion', 2: 'motion', 3: 'motion', 5: 'motion',
+          5.1: 'motion', 17: 'plane',
           18: 'plane', 19: 'plane', 20: 'units', 21: 'units',
           90: 'distance', 91: 'distance', 61: 'path control',
           61.1: 'path control', 64: 'path control'}
 # Why a code is refused, by family (RS274NGC's names).
 G_NAMES = (
-    ((4,), 'dwell'), ((5, 5.1, 5.2, 5.3), 'splines'),
+    ((4,), 'dwell'), ((5.2, 5.3), 'NURBS blocks'),
     ((7, 8), 'lathe diameter mode'), ((10,), 'data setting'),
     ((28, 28.1, 30, 30.1), 'return to a stored position'),
     ((33, 33.1, 76), 'threading'), ((38.2, 38.3, 38.4, 38.5), 'probing'),
@@ -112,11 +117,10 @@ WORD_NAMES = {'S': 'spindle speed', 'T': 'tool', 'H': 'tool length offset',
               'D': 'cutter compensation', 'A': 'rotary axis A',
               'B': 'rotary axis B', 'C': 'rotary axis C', 'U': 'axis U',
               'V': 'axis V', 'W': 'axis W', 'E': 'extruder axis E',
-              'Q': 'canned cycle or blending parameter Q',
               'L': 'loop count or data setting L', 'O': 'subroutines',
               '#': 'parameters', '[': 'expressions'}
 # The letters of the subset's words.
-WORDS = frozenset('GMFNXYZIJKRP')
+WORDS = frozenset('GMFNXYZIJKRPQ')
 NUMBER = re.compile(r'[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)\Z')
 NUMBER_CHARS = frozenset('0123456789.+-')
 # Where a refusal comes from, for callers that react to it (the node's
@@ -190,7 +194,8 @@ class Move:
     ``tolerance``: a blend's (m; None: the planner's). An arc also has
     ``centre`` (m, on the start's level along the normal), ``normal`` (the
     plane's unit normal e3), ``angle`` (rad, signed about ``normal``: a
-    full turn is 2 pi) and ``rise`` (m along ``normal``, a helix's).
+    full turn is 2 pi) and ``rise`` (m along ``normal``, a helix's); a
+    ``'spline'`` (G5, G5.1) its cubic Bezier's ``control`` points (4, 3).
     """
 
     kind: str
@@ -204,6 +209,7 @@ class Move:
     normal: Optional[Array] = None
     angle: float = 0.0
     rise: float = 0.0
+    control: Optional[Array] = None
 
 
 @dataclass
@@ -214,11 +220,13 @@ class _State:
     scale: float = MM                   # m per program unit
     absolute: bool = True
     plane: int = 17
-    motion: Optional[int] = None
+    motion: Optional[float] = None      # 0, 1, 2, 3, 5, 5.1
     feed: Optional[float] = None        # program units per minute
     feed_line: int = 0
     mode: str = EXACT_PATH
     tolerance: Optional[float] = None   # m
+    # The end's handle of the G5 before (m, in XY), None after any other.
+    handle: Optional[Array] = None
 
 
 def read_gcode(text: str,
@@ -335,7 +343,10 @@ def _execute(number, words, state, moves):
         state.feed, state.feed_line = feed, number
     values.pop('N', None)
     motion = None
-    for code in g_codes:
+    blend_p = False
+    # Units first, as RS274NGC orders a line's execution: G64 P on the
+    # line of a G20 is in inches.
+    for code in sorted(g_codes, key=lambda code: code not in (20, 21)):
         if code in (20, 21):
             state.scale = INCH if code == 20 else MM
         elif code in (17, 18, 19):
@@ -350,20 +361,22 @@ def _execute(number, words, state, moves):
             state.mode = BLEND
             state.tolerance = None if p_word is None else _tolerance(
                 number, p_word, state.scale)
-            p_word = None
+            blend_p, p_word = p_word is not None, None
         elif code in MOTION:
-            motion = int(code)
+            motion = code
     if motion is not None:
         state.motion = motion
     axes = {k: values.pop(k) for k in 'XYZ' if k in values}
-    arc_words = {k: values.pop(k) for k in 'IJKR' if k in values}
+    arc_words = {k: values.pop(k) for k in 'IJKRQ' if k in values}
     if not axes and not arc_words and motion is None:
         if p_word is not None:
             raise ProgramError(number, 'P without G64 or an arc')
         return end
     if state.motion is None:
         raise ProgramError(number, 'a move without a motion mode (G0, G1, '
-                           'G2 or G3)')
+                           'G2, G3, G5 or G5.1)')
+    if 'Q' in arc_words and state.motion != 5:
+        raise ProgramError(number, 'Q only with G5')
     target = state.position.copy()
     for axis, value in axes.items():
         k = 'XYZ'.index(axis)
@@ -372,16 +385,28 @@ def _execute(number, words, state, moves):
     if state.motion in (0, 1):
         if arc_words:
             raise ProgramError(number, ', '.join(arc_words)
-                               + ' only with G2 or G3')
+                               + ' only with G2, G3, G5 or G5.1')
         if p_word is not None:
             raise ProgramError(number, 'P without G64 or an arc')
         move = _line(number, state, target)
-    else:
+    elif state.motion in (2, 3):
         move = _arc(number, state, target, arc_words, p_word)
+    else:
+        if blend_p:
+            raise ProgramError(number, f'G64 P and {_code(state.motion)} '
+                               'on one line: whose is P?')
+        move = _spline(number, state, target, axes, arc_words, p_word)
+    if state.motion != 5:
+        state.handle = None
     if move is not None:
         moves.append(move)
         state.position = move.end
     return end
+
+
+def _code(motion):
+    """Return a motion code as written: G1, G5.1."""
+    return f'G{motion:g}'
 
 
 def _sort_words(number, words):
@@ -436,10 +461,11 @@ def _feed(number, state, rapid):
     if rapid:
         return math.inf
     if state.feed is None:
-        raise ProgramError(number, f'G{state.motion} without a feed rate (F)')
+        raise ProgramError(number, f'{_code(state.motion)} without a feed '
+                           'rate (F)')
     if state.feed <= 0.0:
-        raise ProgramError(number, f'G{state.motion} at feed rate zero (F0 '
-                           f'on line {state.feed_line})')
+        raise ProgramError(number, f'{_code(state.motion)} at feed rate '
+                           f'zero (F0 on line {state.feed_line})')
     return state.feed * state.scale / 60.0
 
 
@@ -463,7 +489,8 @@ def _arc(number, state, target, words, turns):
     if 'R' in words and len(words) > 1:
         raise ProgramError(number, 'an arc with both R and I J K')
     if not words:
-        raise ProgramError(number, f'G{state.motion} needs I J K offsets or R')
+        raise ProgramError(number, f'{_code(state.motion)} needs I J K '
+                           'offsets or R')
     if turns is not None and (turns < 1.0 or turns != int(turns)):
         raise ProgramError(number, f'P{turns:g}: the turns of an arc must be '
                            'a whole number of at least 1')
@@ -509,6 +536,66 @@ def _arc(number, state, target, words, turns):
     return Move('arc', start.copy(), end, number, feed, state.mode,
                 state.tolerance, centre3, normal, angle,
                 float(target[i3] - start[i3]))
+
+
+def _spline(number, state, target, axes, words, p_word):
+    """
+    Return the G5 (cubic) or G5.1 (quadratic) spline to ``target``.
+
+    LinuxCNC's reading, in the XY plane (G17) only, X and Y only: G5's
+    first control point is the start plus ``I J``, its second the end plus
+    ``P Q`` (both needed); ``I J`` both or neither, neither taking the
+    handle of the G5 just before (``-P -Q``: tangent to it), so the first
+    of a series needs them. G5.1's control point is the start plus ``I
+    J`` (one may be left out: 0), not both zero. As a cubic Bezier (G5.1
+    raised exactly); refused where its speed vanishes, where it could not
+    be followed by its arc length.
+    """
+    name = _code(state.motion)
+    if state.plane != 17:
+        raise ProgramError(number, f'{name} only in the XY plane (G17), not '
+                           f'G{state.plane}')
+    if 'Z' in axes:
+        raise ProgramError(number, f'{name} moves X and Y only, not Z')
+    wrong = [k for k in words if k not in ('IJQ' if state.motion == 5
+                                           else 'IJ')]
+    if wrong or (p_word is not None and state.motion != 5):
+        raise ProgramError(number, f'{(wrong or ["P"])[0]} is not a word of '
+                           f'{name} (' + ('I J P Q' if state.motion == 5
+                                          else 'I J') + ')')
+    feed = _feed(number, state, False)
+    start = state.position
+    scale = state.scale
+    first = np.array([words.get('I', 0.0), words.get('J', 0.0), 0.0]) * scale
+    if state.motion == 5:
+        if ('I' in words) != ('J' in words):
+            raise ProgramError(number, 'G5 needs both I and J, or neither')
+        if 'I' not in words:
+            if state.handle is None:
+                raise ProgramError(number, 'the first G5 of a series needs I '
+                                   'and J')
+            first = state.handle
+        if p_word is None or 'Q' not in words:
+            raise ProgramError(number, 'G5 needs both P and Q')
+        second = np.array([p_word, words['Q'], 0.0]) * scale
+        control = np.array([start, start + first, target + second, target])
+        state.handle = -second
+    else:
+        if not first.any():
+            raise ProgramError(number, 'G5.1 needs I or J, not zero: the '
+                               'control point\'s offset from the start')
+        middle = start + first
+        control = np.array([start, start + 2.0 / 3.0 * (middle - start),
+                            target + 2.0 / 3.0 * (middle - target), target])
+    if (np.abs(control - start) <= ZERO_LENGTH).all():
+        return None
+    least, most = bezier.least_speed(control[None])
+    if not least[0] > SPLINE_REGULAR * most[0]:
+        raise ProgramError(number, f'the {name} spline stops where its speed '
+                           'vanishes (an offset of zero, or a cusp): not a '
+                           'path G can follow by its length')
+    return Move('spline', start.copy(), target.copy(), number, feed,
+                state.mode, state.tolerance, control=control)
 
 
 def _centre_from_offsets(number, a, b, centre):

@@ -55,11 +55,13 @@ from orthoglide_ros.planning.limits import Limits
 from orthoglide_ros.planning import reachability
 from orthoglide_ros.planning.path import Path
 
-# Intervals of the grid over the whole path, at least; each piece has at
-# least MIN_INTERVALS, and an arc at least one per MAX_ARC_STEP (rad).
+# Intervals of the grid over the whole path, at least; each piece at least
+# MIN_INTERVALS, an arc one per MAX_ARC_STEP (rad), a Bezier piece one per
+# MAX_ARC_STEP of its turning more and BEZIER_INTERVALS at least.
 GRID_INTERVALS = 2000
 MIN_INTERVALS = 4
 MAX_ARC_STEP = math.radians(2.0)
+BEZIER_INTERVALS = 32
 # Gridpoints at these distances (m) either side of an actuator reversal.
 REVERSAL_OFFSETS = (2e-5, 2e-4)
 # A sample beyond a limit by this share tightens the limits and plans again;
@@ -221,7 +223,7 @@ def plan(robot: Robot, path: Path, limits: Limits, rate: float,
             f'the path of {len(path.pieces)} pieces and {path.length:.6g} m '
             'needs' + (f', its grid refined {refinement} times,'
                        if refinement else '')))
-        grid = _grid(path, counts)
+        grid = _grid(path, counts, intervals)
         dyn = models.dynamics(path, grid.index, grid.w, bounds)
         grid, dyn = _add_reversals(models, path, grid, dyn, bounds)
         _check_rest(path, grid, dyn, limits)
@@ -241,27 +243,43 @@ def _grid_counts(path, intervals):
     Return the intervals of each piece: (pieces,) int, counted, not made.
 
     ``intervals`` over the whole path, at least MIN_INTERVALS a piece, one
-    per MAX_ARC_STEP of an arc, 32 on a Bezier.
+    per MAX_ARC_STEP of an arc; a Bezier piece its share and one per
+    MAX_ARC_STEP of its turning, BEZIER_INTERVALS at least (:func:`_grid`).
     """
     table = path.table
     with np.errstate(over='ignore'):
-        counts = np.maximum(MIN_INTERVALS, np.ceil(
-            table['length'] * (intervals / path.length)))
+        share = table['length'] * (intervals / path.length)
+        counts = np.maximum(MIN_INTERVALS, np.ceil(share))
         arcs = table['helix'] & (table['radius'] > 0.0)
         counts = np.where(arcs, np.maximum(counts, np.ceil(
             np.abs(table['angle']) / MAX_ARC_STEP)), counts)
-    counts = np.where(table['helix'], counts, np.maximum(counts, 32))
+        curved = np.maximum(BEZIER_INTERVALS, np.ceil(
+            share + table['turning'] / MAX_ARC_STEP))
+    counts = np.where(table['helix'], counts, curved)
     return np.minimum(counts, 2.0 ** 62).astype(np.int64)
 
 
-def _grid(path, counts):
-    """Gridpoints of every piece, both ends included, ends shared twice."""
+def _grid(path, counts, intervals):
+    """
+    Gridpoints of every piece, both ends included, ends shared twice.
+
+    Even along a helix; along a Bezier piece, even in its share of
+    ``intervals`` plus its turning over MAX_ARC_STEP: dense where it bends.
+    """
     sizes = counts + 1
     last = np.cumsum(sizes) - 1
     first = last - counts
-    lengths = path.table['length']
+    table = path.table
+    lengths, per_metre = table['length'], intervals / path.length
     index = np.repeat(np.arange(len(counts)), sizes)
     w = (np.arange(last[-1] + 1) - first[index]) * (lengths / counts)[index]
+    for k in np.flatnonzero(~table['helix']):
+        spans = slice(table['span_first'][k], table['span_first'][k + 1])
+        bounds = np.append(table['span_start'][spans], lengths[k])
+        cost = bounds * per_metre + np.r_[0.0, np.cumsum(
+            table['span_turning'][spans])] / MAX_ARC_STEP
+        w[first[k]:last[k] + 1] = np.interp(
+            np.linspace(0.0, cost[-1], counts[k] + 1), cost, bounds)
     w[last] = lengths
     stop = np.zeros(len(w), dtype=bool)
     stop[first] = path.stops[:-1]

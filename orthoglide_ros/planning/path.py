@@ -1,5 +1,5 @@
 """
-The geometric path of G: lines, exact arcs and helices, corner blends.
+The geometric path of G: lines, exact arcs, helices and splines, blends.
 
 A :class:`Path` is a chain of pieces, each parametrised by its arc length
 ``w`` from 0 to its length (m), with the junctions where G must stop.
@@ -8,37 +8,39 @@ junction:
 
 - a straight run (consecutive lines of one feed, each within TANGENT rad
   of the run's first direction, no exact stop between) is one line;
+- a run of chords under plain G64 (and CSV waypoints and a
+  nav_msgs/Path) is followed as the curve it samples, within the
+  tolerance of every programmed point (:mod:`chords`); its corners and
+  long moves stay what they are;
 - a tangent junction (tangents within TANGENT rad) is passed at speed;
 - an exact stop (G61.1) stops at every move's end;
 - exact path (G61, the default) stops at a corner, and smooths a kink of at
   most KINK rad (CAM output rounded to the micrometre) within
   KINK_TOLERANCE: a tangent junction in all but its rounding;
-- a blend (G64 P, CSV waypoints, a nav_msgs/Path) replaces the corner by
-  the fastest curve within the tolerance of the programmed path: a
-  circular arc tangent to two lines (trimming each by at most half its
-  length; a circle sampled as a polyline becomes the circle again), a
-  cubic Bezier tangent to any other pair, its distance to the programmed
-  path proven within the tolerance (:func:`_proven_within`); an about-turn
-  stops.
+- a blend (G64, CSV waypoints, a nav_msgs/Path) replaces the corner by the
+  fastest curve within the tolerance (:mod:`blends`): of the programmed
+  path (G64 P), and of the corner's point too where that is a programmed
+  point the path keeps (plain G64, waypoints); an about-turn stops.
 
 :meth:`Path.evaluate` gives ``p``, ``dp/dw`` and ``d2p/dw2`` of any points,
 vectorised: one formula serves lines and helices (a line is a helix of
 radius zero), written from the piece's start so that a huge radius (a
-nearly straight blend) loses no precision. A Bezier is followed by its arc
-length too (Newton's method on its Gauss-Legendre length), so ``|dp/dw|``
-is 1 everywhere and G's velocity is continuous wherever its speed is.
+nearly straight blend) loses no precision; another every span of every
+Bezier piece (blends, G5 splines, fitted runs), each followed by its arc
+length too (:mod:`bezier`), so ``|dp/dw|`` is 1 everywhere and G's
+velocity is continuous wherever its speed is.
 """
 
 from __future__ import annotations
 
-import bisect
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import math
 from typing import Optional, Sequence
 
 import numpy as np
 
 from orthoglide_ros.model.types import Array
+from orthoglide_ros.planning import bezier, blends, chords
 from orthoglide_ros.planning.gcode import (BLEND, EMPTY, EXACT_PATH,
                                            EXACT_STOP, Move, NUMBER_BOUND,
                                            ProgramError, TOO_LARGE,
@@ -51,22 +53,14 @@ TANGENT = 1e-9
 KINK = 1e-3
 KINK_TOLERANCE = 1e-6
 # A turn nearer than this to an about-turn (rad) is not blended: G stops.
-ABOUT_TURN = 1e-6
-# A Bezier's arc length: Gauss-Legendre of 8 points on each of
-# BEZIER_SPANS equal spans of its parameter and on the part of a span up
-# to a point (|B'| is smooth and above 0 there: exact to rounding).
-BEZIER_SPANS = 64
-_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(8)
-# The proof that a Bezier blend is within its tolerance: the programmed
-# path as at most PROOF_SEGMENTS chords a piece, the curve split in halves
-# at most PROOF_DEPTH times into at most PROOF_CURVES parts.
-PROOF_SEGMENTS = 64
-PROOF_DEPTH = 16
-PROOF_CURVES = 64
-# A Bezier's trim is first found on its points at these parameters, then
-# shortened until proven, at most PROOF_TRIES times.
-_SAMPLES = np.linspace(0.0, 1.0, 33)
-PROOF_TRIES = 12
+ABOUT_TURN = blends.ABOUT_TURN
+# A Bezier span whose speed varies more (its least over its largest
+# below this) is halved, at most SPLIT_DEPTH times, so that its arc
+# length is exact to rounding.
+EVEN_SPEED = 0.7
+SPLIT_DEPTH = 10
+# Points of Bezier pieces evaluated at once.
+BEZIER_BLOCK = 4096
 
 
 @dataclass(frozen=True)
@@ -78,10 +72,12 @@ class Piece:
     rise (phi / angle) e3`` with ``e2 = e3 x e1``, ``phi = angle w /
     length`` for ``w`` in [0, length] (``e1`` points from the axis to the
     start); a line has radius 0, angle 1, rise its length and e3 its
-    direction. A Bezier: ``control`` (4, 3) and ``table``, the arc length
-    at each of BEZIER_SPANS + 1 equally spaced parameters. ``line``: the
-    program's line (from 1); ``feed``: G's speed cap (m/s); ``lines``: a
-    straight run's ``((w, line), ...)``, where each of its moves starts.
+    direction. A Bezier: its spans' ``control`` points (m, 4, 3), each
+    span's arc length ``table`` (:func:`bezier.tables`), ``starts`` (m + 1,)
+    where each span starts along the piece and its total ``turning``
+    (rad). ``line``: the program's line (from 1); ``feed``: G's speed cap
+    (m/s); ``lines``: ``(k, 2)``, where each of the moves a straight run
+    or a fitted run is made of starts (``w``, its line).
     """
 
     kind: str
@@ -96,15 +92,24 @@ class Piece:
     rise: float = 0.0
     control: Optional[Array] = None
     table: Optional[Array] = None
-    lines: Optional[tuple] = None
+    starts: Optional[Array] = None
+    turning: float = 0.0
+    lines: Optional[Array] = None
 
     def evaluate(self, w: Array) -> tuple[Array, Array, Array]:
         """Return ``p``, ``dp/dw``, ``d2p/dw2`` at ``w`` ((n,) m): (n, 3)."""
         w = np.asarray(w, dtype=float)
         if self.kind == 'bezier':
-            return _bezier_by_length(self.control, self.table, w)
+            j = self._span(w)
+            return bezier.by_length(self.control[j], self.table[j],
+                                    w - self.starts[j])
         return _helix(self.origin[None], self.e1[None], self.e3[None],
                       self.radius, self.angle, self.rise, self.length, w)
+
+    def _span(self, w):
+        """Return the span of each ``w`` of a Bezier piece."""
+        return np.clip(np.searchsorted(self.starts, w, side='right') - 1, 0,
+                       len(self.control) - 1)
 
     def point(self, w: float) -> Array:
         """Return ``p(w)`` (3,): the helix formula on one point."""
@@ -130,20 +135,56 @@ class Piece:
                 * self.e3
         return d1 / math.sqrt(float(d1 @ d1))
 
+    def room(self, start: bool) -> float:
+        """
+        Return how much a blend may trim at the piece's start (or end), m.
+
+        Half the piece; of a fitted run (a Bezier piece of several moves),
+        half its first (last) span: a blend takes no programmed point but
+        the corner's.
+        """
+        if self.kind == 'bezier' and self.lines is not None:
+            spans = np.diff(self.starts)
+            return 0.5 * float(spans[0] if start else spans[-1])
+        return 0.5 * self.length
+
     def line_at(self, w: float) -> int:
         """Return the program's line of the point at ``w``."""
         if self.lines is None:
             return self.line
-        k = bisect.bisect_right([start for start, _ in self.lines], w) - 1
-        return self.lines[max(k, 0)][1]
+        k = int(np.searchsorted(self.lines[:, 0], w, side='right')) - 1
+        return int(self.lines[max(k, 0), 1])
+
+    def _lines_within(self, a, b):
+        """Return ``lines`` from ``w = a`` to ``b``, from 0 at ``a``."""
+        if self.lines is None:
+            return None
+        keep = self.lines[:, 0] < b
+        part = self.lines[keep].copy()
+        part[:, 0] = np.maximum(part[:, 0] - a, 0.0)
+        return part
 
     def sub(self, a: float, b: float) -> 'Piece':
-        """Return the part from ``w = a`` to ``b`` of a helix, as a piece."""
+        """Return the part from ``w = a`` to ``b``, as a piece."""
+        lines = self._lines_within(a, b)
+        if self.kind == 'bezier':
+            first = int(self._span(np.array([a]))[0])
+            last = int(np.clip(np.searchsorted(self.starts, b) - 1, first,
+                               len(self.control) - 1))
+            taus = bezier.parameter(
+                self.control[[first, last]], self.table[[first, last]],
+                np.array([a, b]) - self.starts[[first, last]])
+            control = self.control[first:last + 1].copy()
+            if first == last:
+                control[0] = bezier.part(control[:1], taus[:1], taus[1:])[0]
+            else:
+                control[0] = bezier.part(control[:1], taus[:1],
+                                         np.ones(1))[0]
+                control[-1] = bezier.part(control[-1:], np.zeros(1),
+                                          taus[1:])[0]
+            return bezier_piece(control, self.line_at(a), self.feed, lines)
         phi = self.angle * a / self.length
         e2 = _cross3(self.e3, self.e1)
-        lines = None if self.lines is None else tuple(
-            (max(start - a, 0.0), line) for start, line in self.lines
-            if start < b)
         return Piece('helix', b - a, self.line_at(a), self.feed,
                      self.point(a), math.cos(phi) * self.e1
                      + math.sin(phi) * e2, self.e3, self.radius,
@@ -198,69 +239,8 @@ def _helix(origin, e1, e3, radius, angle, rise, length, w):
     return p, d1, d2
 
 
-def _bezier(control, tau):
-    """Return a cubic Bezier and its derivatives by ``tau`` at ``tau`` (n,)."""
-    t = tau[:, None]
-    u = 1.0 - t
-    p0, p1, p2, p3 = control
-    p = u ** 3 * p0 + 3 * u * u * t * p1 + 3 * u * t * t * p2 + t ** 3 * p3
-    d1 = 3 * (u * u * (p1 - p0) + 2 * u * t * (p2 - p1) + t * t * (p3 - p2))
-    d2 = 6 * (u * (p2 - 2 * p1 + p0) + t * (p3 - 2 * p2 + p1))
-    return p, d1, d2
-
-
-def _speed(control, tau):
-    """Return ``|B'(tau)|`` of a cubic Bezier, ``tau`` of any shape."""
-    a, m, c = (3.0 * np.diff(control, axis=0))[..., None, None]
-    u = 1.0 - tau
-    d1 = u * u * a + 2.0 * u * tau * m + tau * tau * c
-    return np.sqrt((d1 * d1).sum(0))
-
-
-def _gauss_length(control, low, high):
-    """Length (m) of the Bezier from ``low`` to ``high`` (each (n,))."""
-    half = 0.5 * (high - low)
-    nodes = (low + half)[:, None] + half[:, None] * _GAUSS_X[None]
-    return half * (_speed(control, nodes) @ _GAUSS_W)
-
-
-def _bezier_table(control):
-    """Return the arc length at ``tau = j / BEZIER_SPANS``, j = 0..SPANS."""
-    edges = np.arange(BEZIER_SPANS + 1) / BEZIER_SPANS
-    return np.concatenate(([0.0], np.cumsum(_gauss_length(
-        control, edges[:-1], edges[1:]))))
-
-
-def _bezier_by_length(control, table, w):
-    """
-    Return ``p``, ``dp/dw``, ``d2p/dw2`` of a Bezier at arc lengths ``w``.
-
-    ``tau(w)`` by Newton's method on the span's length (``table``), from
-    its linear interpolation; then ``dp/dw = B' / |B'|`` (the unit
-    tangent) and ``d2p/dw2 = (B'' - (B''.T) T) / |B'|^2`` (the curvature
-    vector).
-    """
-    spans = len(table) - 1
-    j = np.clip(np.searchsorted(table, w, side='right') - 1, 0, spans - 1)
-    low = j / spans
-    tau = low + (w - table[j]) / np.maximum(table[j + 1] - table[j],
-                                            1e-300) / spans
-    tau = np.clip(tau, low, low + 1.0 / spans)
-    for _ in range(8):
-        error = table[j] + _gauss_length(control, low, tau) - w
-        if np.abs(error).max(initial=0.0) <= 1e-14 * table[-1]:
-            break
-        tau = np.clip(tau - error / _speed(control, tau[None])[0], low,
-                      low + 1.0 / spans)
-    p, d1, d2 = _bezier(control, tau)
-    speed = np.linalg.norm(d1, axis=1)[:, None]
-    unit = d1 / speed
-    normal = d2 - (d2 * unit).sum(1)[:, None] * unit
-    return p, unit, normal / (speed * speed)
-
-
 def line_piece(start: Array, end: Array, line: int, feed: float,
-               lines: Optional[tuple] = None) -> Piece:
+               lines: Optional[Array] = None) -> Piece:
     """Return the straight piece from ``start`` to ``end`` (m)."""
     start = np.asarray(start, dtype=float)
     delta = np.asarray(end, dtype=float) - start
@@ -275,10 +255,43 @@ def line_piece(start: Array, end: Array, line: int, feed: float,
 _AXES = np.eye(3)
 
 
+def bezier_piece(control: Array, line: int, feed: float,
+                 lines: Optional[Array] = None) -> Piece:
+    """
+    Return the piece of Bezier spans ``control`` ((m, 4, 3) or (4, 3), m).
+
+    A span whose speed varies by more than EVEN_SPEED is halved (de
+    Casteljau), at most SPLIT_DEPTH times: the same curve, its arc length
+    exact to rounding on each part.
+    """
+    control = np.asarray(control, dtype=float).reshape(-1, 4, 3)
+    for _ in range(SPLIT_DEPTH):
+        least, most = bezier.least_speed(control)
+        uneven = least < EVEN_SPEED * most
+        if not uneven.any():
+            break
+        left, right = bezier.split(control[uneven], np.full(
+            int(uneven.sum()), 0.5))
+        spans = np.empty((len(control) + len(left), 4, 3))
+        at = np.flatnonzero(uneven) + np.arange(len(left))
+        spans[at], spans[at + 1] = left, right
+        keep = np.ones(len(spans), dtype=bool)
+        keep[at] = keep[at + 1] = False
+        spans[keep] = control[~uneven]
+        control = spans
+    table = bezier.tables(control)
+    starts = np.concatenate(([0.0], np.cumsum(table[:, -1])))
+    return Piece('bezier', float(starts[-1]), line, feed, control=control,
+                 table=table, starts=starts,
+                 turning=float(bezier.turning(control).sum()), lines=lines)
+
+
 def move_piece(move: Move) -> Piece:
-    """Return a program move as a piece (a line, an arc or a helix)."""
+    """Return a program move as a piece (a line, an arc, a helix, a spline)."""
     if move.kind == 'line':
         return line_piece(move.start, move.end, move.line, move.feed)
+    if move.kind == 'spline':
+        return bezier_piece(move.control, move.line, move.feed)
     e3 = move.normal
     offset = move.start - move.centre
     offset = offset - e3 * float(offset @ e3)
@@ -331,8 +344,9 @@ class Path:
         """
         Return ``p``, ``dp/dw``, ``d2p/dw2`` ((n, 3)) at pieces ``index``, ``w``.
 
-        Vectorised over the points: the helices in one formula, the Beziers
-        in another.
+        Vectorised over the points: the helices in one formula, the spans
+        of every Bezier piece in another (BEZIER_BLOCK points at a time:
+        its Newton steps' work is larger).
         """
         index = np.asarray(index, dtype=int)
         w = np.asarray(w, dtype=float)
@@ -347,9 +361,17 @@ class Path:
                             table['length'][k], w[helix])
             for o, v in zip(out, values):
                 o[helix] = v
-        for k in np.unique(index[~helix]):
-            at = index == k
-            values = self.pieces[k].evaluate(w[at])
+        rows = np.flatnonzero(~helix)
+        for start in range(0, len(rows), BEZIER_BLOCK):
+            at = rows[start:start + BEZIER_BLOCK]
+            k, along = index[at], w[at]
+            span = np.clip(np.searchsorted(
+                table['span_s'], table['piece_s'][k] + along,
+                side='right') - 1, table['span_first'][k],
+                table['span_first'][k + 1] - 1)
+            values = bezier.by_length(table['control'][span],
+                                      table['tables'][span],
+                                      along - table['span_start'][span])
             for o, v in zip(out, values):
                 o[at] = v
         return tuple(out)
@@ -360,11 +382,25 @@ class Path:
         Return the pieces' fields as arrays, made once.
 
         ``helix`` (bool), ``origin``, ``e1``, ``e3`` (n, 3), ``radius``,
-        ``angle``, ``rise``, ``length`` (n,).
+        ``angle``, ``rise``, ``length``, ``turning``, ``spans`` (n,), and the
+        spans of the Bezier pieces, in order: ``control`` (S, 4, 3),
+        ``tables`` (S, SUBSPANS + 1), ``span_start`` (S,) along its piece
+        and ``span_s`` along the path, ``span_turning`` (S,) rad,
+        ``span_first`` (n + 1,) each piece's first, ``piece_s`` (n,) where
+        each piece starts along the path.
         """
         table = self.__dict__.get('_cached_table')
         if table is None:
             pieces = self.pieces
+            curves = [p for p in pieces if p.kind == 'bezier']
+            spans = np.array([0 if p.control is None else len(p.control)
+                              for p in pieces])
+            lengths = np.array([p.length for p in pieces])
+            piece_s = np.concatenate(([0.0], np.cumsum(lengths)[:-1]))
+            span_start = np.concatenate(
+                [p.starts[:-1] for p in curves] or [np.zeros(0)])
+            control = np.concatenate(
+                [p.control for p in curves] or [np.zeros((0, 4, 3))])
             table = {
                 'helix': np.array([p.kind == 'helix' for p in pieces]),
                 'origin': np.array([p.origin for p in pieces]),
@@ -373,7 +409,18 @@ class Path:
                 'radius': np.array([p.radius for p in pieces]),
                 'angle': np.array([p.angle for p in pieces]),
                 'rise': np.array([p.rise for p in pieces]),
-                'length': np.array([p.length for p in pieces])}
+                'length': lengths,
+                'turning': np.array([p.turning for p in pieces]),
+                'spans': spans,
+                'control': control,
+                'tables': np.concatenate(
+                    [p.table for p in curves]
+                    or [np.zeros((0, bezier.SUBSPANS + 1))]),
+                'span_start': span_start,
+                'span_turning': bezier.turning(control),
+                'span_s': np.repeat(piece_s, spans) + span_start,
+                'span_first': np.concatenate(([0], np.cumsum(spans))),
+                'piece_s': piece_s}
             object.__setattr__(self, '_cached_table', table)
         return table
 
@@ -385,77 +432,134 @@ def from_moves(moves: Sequence[Move], tolerance: float,
     Return the path of a program's moves, every junction decided.
 
     ``tolerance`` (m): the blends' where a move's own is None (G64 without
-    P, waypoints); ``start_line``: the line of the first point (None: not
-    the program's). See the module's docstring for the rules. Raises
-    :class:`ProgramError` (TOO_LARGE) where the moves make more than
-    ``max_pieces`` pieces before any corner is blended.
+    P, waypoints), and the distance of the programmed points to the curves
+    runs of chords become there; ``start_line``: the line of the first
+    point (None: not the program's). See the module's docstring for the
+    rules. Raises :class:`ProgramError` (TOO_LARGE) where the moves make
+    more than ``max_pieces`` pieces before any corner is blended (counted
+    before the pieces of runs of chords are made).
     """
     if not moves:
         raise ProgramError(None, 'zero-length program: no move', EMPTY)
-    pieces, ends = _straight_runs(moves)
-    if max_pieces is not None and len(pieces) > max_pieces:
+
+    def chained(k):     # the junction after move k is within a chain
+        return k + 1 < len(moves) and _fitted(moves[k], tolerance) and \
+            moves[k].kind == moves[k + 1].kind == 'line'
+    groups = []         # straight runs' (pieces, ends), or chains
+    k = 0
+    while k < len(moves):
+        last = k
+        if chained(k):
+            while chained(last):
+                last += 1
+            groups.append(_chain(moves, k, last, tolerance))
+        else:
+            while last + 1 < len(moves) and not chained(last + 1):
+                last += 1
+            groups.append(_straight_runs(moves[k:last + 1]))
+        k = last + 1
+    count = sum(g.chain.count if isinstance(g, _Chain) else len(g[0])
+                for g in groups)
+    if max_pieces is not None and count > max_pieces:
         raise ProgramError(None, f'{len(moves)} moves make a path of '
-                           f'{len(pieces)} pieces at least: more than '
+                           f'{count} pieces at least: more than '
                            f'{max_pieces}', TOO_LARGE)
-    n = len(pieces)
-    trim = np.zeros((n, 2))         # taken off each piece's start, end
-    blends = [None] * (n - 1)
-    stops = np.zeros(n + 1, dtype=bool)
-    stops[0] = stops[n] = True
-    for k in range(n - 1):
-        first, second = pieces[k], pieces[k + 1]
-        turn = _turn(first.tangent(first.length), second.tangent(0.0))
-        move = ends[k]
-        within = move.tolerance if move.tolerance is not None else tolerance
-        if move.mode == EXACT_STOP:
-            stops[k + 1] = True
-        elif turn <= TANGENT:
+    pieces, ends, slack = [], [], []
+    for group in groups:
+        if not isinstance(group, _Chain):
+            pieces += group[0]
+            ends += group[1]
+            slack += [0.0] * len(group[0])
             continue
-        elif move.mode == EXACT_PATH or (move.mode == BLEND and within <= 0):
-            if turn <= KINK:
-                blends[k] = (KINK_TOLERANCE, turn)
-            else:
-                stops[k + 1] = True
-        elif turn >= math.pi - ABOUT_TURN:
-            stops[k + 1] = True
+        made, made_slack = _chain_pieces(group.points, group.chain,
+                                         group.feeds, group.lines)
+        if slack:   # points merged into the chain's start, or all of it
+            merged = group.chain.slack if not made else group.chain.slack[:1]
+            slack[-1] = max(slack[-1], float(merged.max()))
+        pieces += made
+        ends += [group.modes[k - 1]
+                 for k in group.chain.kept[group.chain.bounds[1:]]]
+        slack += made_slack
+    if not pieces:
+        raise ProgramError(None, 'zero-length program: every point is '
+                           'within the tolerance of the first', EMPTY)
+    return _join(pieces, ends, slack, tolerance, start_line, len(moves))
+
+
+def _fitted(move, tolerance):
+    """Whether the junction after ``move`` is plain G64's: runs are fitted."""
+    return move.mode == BLEND and move.tolerance is None and tolerance > 0.0
+
+
+@dataclass
+class _Chain:
+    """A chain of lines of plain G64 (:mod:`chords`), its moves' fields."""
+
+    points: Array       # (n + 1, 3) m
+    chain: chords.Chain
+    feeds: Array        # (n,) m/s
+    lines: Array        # (n,)
+    modes: list         # (n,) (mode, tolerance)
+
+
+def _chain(moves, first, last, tolerance):
+    """
+    Analyse the chain of lines ``moves[first:last + 1]`` (:mod:`chords`).
+
+    With the tangents of the moves before and after it where their
+    junction with it is plain G64's.
+    """
+    run = moves[first:last + 1]
+    points = np.array([run[0].start, *(m.end for m in run)])
+    feeds = np.array([m.feed for m in run])
+    before = after = None
+    if first > 0 and _fitted(moves[first - 1], tolerance):
+        previous = move_piece(moves[first - 1])
+        before = previous.tangent(previous.length)
+    if last + 1 < len(moves) and _fitted(run[-1], tolerance):
+        after = move_piece(moves[last + 1]).tangent(0.0)
+    return _Chain(points, chords.analyse(points, feeds, tolerance, before,
+                                         after), feeds,
+                  np.array([m.line for m in run]),
+                  [(m.mode, m.tolerance) for m in run])
+
+
+def _chain_pieces(points, chain, feeds, lines):
+    """
+    Return the pieces a chain of chords made and the slack after each.
+
+    ``points`` (n + 1, 3) of its chords, ``feeds`` and ``lines`` (n,) of
+    each; a piece's ``lines`` where each of its chords starts (by the
+    share of the chords' length).
+    """
+    kept = chain.kept
+    steps = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    along = np.concatenate(([0.0], np.cumsum(steps)))
+    pieces, slack = [], []
+    for first, last, control, _ in chain.pieces:
+        a, b = kept[first], kept[last]
+        if control is None:
+            piece = line_piece(points[a], points[b], int(lines[a]), feeds[a])
         else:
-            blends[k] = (within, turn)
-    for k, blend in enumerate(blends):
-        if blend is None:
-            continue
-        room = min(pieces[k].length, pieces[k + 1].length) * 0.5
-        made = _blend(pieces[k], pieces[k + 1], blend[0], blend[1], room)
-        if made is None:
-            stops[k + 1] = True
-            blends[k] = None
-        else:
-            blends[k] = made
-            trim[k, 1] = trim[k + 1, 0] = made[1]
-    out = []
-    out_stops = []
-    for k, piece in enumerate(pieces):
-        a, b = trim[k, 0], piece.length - trim[k, 1]
-        if b - a > ZERO_LENGTH * 1e3:
-            out.append(piece if a == 0.0 and b == piece.length
-                       else piece.sub(a, b))
-            out_stops.append(stops[k])
-        if k < n - 1 and blends[k] is not None:
-            out.append(blends[k][0])
-            out_stops.append(False)
-    out_stops.append(True)
-    out_stops[0] = True
-    return Path(tuple(out), np.array(out_stops), start_line, len(moves))
+            piece = bezier_piece(control, int(lines[a]), feeds[a])
+        if b - a > 1:
+            share = (along[a:b] - along[a]) / (along[b] - along[a])
+            piece = replace(piece, lines=np.stack(
+                (share * piece.length, lines[a:b]), 1))
+        pieces.append(piece)
+        slack.append(float(chain.slack[last]))
+    return pieces, slack
 
 
 def _straight_runs(moves):
     """
     Return the pieces of ``moves``, each straight run one line.
 
-    Returns ``(pieces, ends)``: ``ends[k]`` the move whose end is piece
-    k's (its path control mode decides the junction after it). A run:
-    lines of one feed, each within TANGENT of the run's first direction
-    (so every junction of the run is within TANGENT times its length of
-    the one line), no exact stop between.
+    Returns ``(pieces, ends)``: ``ends[k]`` the path control (mode,
+    tolerance) of the move whose end is piece k's (it decides the
+    junction after it). A run: lines of one feed, each within TANGENT of
+    the run's first direction (so every junction of the run is within
+    TANGENT times its length of the one line), no exact stop between.
     """
     pieces, ends = [], []
     k = 0
@@ -475,11 +579,11 @@ def _straight_runs(moves):
             pieces.append(move_piece(move))
         else:
             run = moves[k:last + 1]
-            lines = tuple((float((m.start - move.start) @ direction), m.line)
-                          for m in run)
+            lines = np.array([(float((m.start - move.start) @ direction),
+                               m.line) for m in run])
             pieces.append(line_piece(move.start, moves[last].end, move.line,
                                      move.feed, lines))
-        ends.append(moves[last])
+        ends.append((moves[last].mode, moves[last].tolerance))
         k = last + 1
     return pieces, ends
 
@@ -488,188 +592,93 @@ def _unit(vector):
     return vector / math.sqrt(float(vector @ vector))
 
 
-def _blend(first, second, tolerance, turn, room):
+def _join(pieces, ends, slack, tolerance, start_line, moves):
     """
-    Return ``(piece, trim)``: the corner's blend within ``tolerance``, or None.
+    Return the path of ``pieces``, every junction decided and blended.
+
+    ``ends[k]``: the path control (mode, tolerance) of piece k's end;
+    ``slack[k]``: how far programmed points merged into the junction after
+    piece k lie from it (m).
+    """
+    n = len(pieces)
+    trim = np.zeros((n, 2))         # taken off each piece's start, end
+    made = [None] * (n - 1)
+    stops = np.zeros(n + 1, dtype=bool)
+    stops[0] = stops[n] = True
+    for k in range(n - 1):
+        first, second = pieces[k], pieces[k + 1]
+        turn = _turn(first.tangent(first.length), second.tangent(0.0))
+        mode, own = ends[k]
+        within = own if own is not None else tolerance
+        vertex = within - slack[k] if own is None and mode == BLEND else None
+        if mode == EXACT_STOP:
+            stops[k + 1] = True
+        elif turn <= TANGENT:
+            continue
+        elif mode == EXACT_PATH or (mode == BLEND and within <= 0):
+            if turn <= KINK:
+                made[k] = _blend(first, second, KINK_TOLERANCE, turn, None)
+            stops[k + 1] = made[k] is None
+        elif turn >= math.pi - ABOUT_TURN or (
+                vertex is not None and vertex <= 0.0):
+            stops[k + 1] = True
+        else:
+            made[k] = _blend(first, second, within, turn, vertex)
+            stops[k + 1] = made[k] is None
+        if made[k] is not None:
+            trim[k, 1] = trim[k + 1, 0] = made[k][1]
+    out = []
+    out_stops = []
+    for k, piece in enumerate(pieces):
+        a, b = trim[k, 0], piece.length - trim[k, 1]
+        if b - a > ZERO_LENGTH * 1e3:
+            out.append(piece if a == 0.0 and b == piece.length
+                       else piece.sub(a, b))
+            out_stops.append(stops[k])
+        if k < n - 1 and made[k] is not None:
+            out.append(made[k][0])
+            out_stops.append(False)
+    out_stops.append(True)
+    out_stops[0] = True
+    return Path(tuple(out), np.array(out_stops), start_line, moves)
+
+
+def _blend(first, second, tolerance, turn, vertex):
+    """
+    Return ``(piece, trim)``: the corner's blend (:mod:`blends`), or None.
 
     ``trim`` (m) is taken off the end of ``first`` and the start of
-    ``second``, at most ``room``. A Bezier's trim: the largest (to 0.1 %,
-    by bisection) whose points at 33 parameters are within ``tolerance``,
-    then shortened by 2 % at a time until the whole curve is proven within
-    it (:func:`_proven_within`).
+    ``second``, at most what each has room for (:meth:`Piece.room`).
     """
-    if first.radius == 0.0 and second.radius == 0.0 and \
-            first.kind == second.kind == 'helix':
-        return _line_blend(first, second, tolerance, turn, room)
-
-    def sampled(trim):
-        control = _bezier_control(first, second, trim)
-        return control is not None and _near(
-            _bezier(control, _SAMPLES)[0], *_chords(first, second, trim,
-                                                    tolerance), tolerance)
-    low, high = (room, room) if sampled(room) else (0.0, room)
-    for _ in range(40):
-        if high - low <= 1e-3 * high:
-            break
-        trim = 0.5 * (low + high)
-        low, high = (trim, high) if sampled(trim) else (low, trim)
-    trim = low
-    for _ in range(PROOF_TRIES):
-        control = _bezier_control(first, second, trim)
-        if control is None:
+    room = min(first.room(False), second.room(True))
+    line = first.line_at(first.length)
+    feed = min(first.feed, second.feed)
+    if first.kind == second.kind == 'helix' and \
+            first.radius == second.radius == 0.0:
+        arc = blends.line_blend(first, second, tolerance, turn, room, vertex)
+        if arc is None:
             return None
-        if _proven_within(control, *_chords(first, second, trim, tolerance),
-                          tolerance):
-            table = _bezier_table(control)
-            return Piece('bezier', float(table[-1]),
-                         first.line_at(first.length),
-                         min(first.feed, second.feed), control=control,
-                         table=table), trim
-        trim *= 0.98
-    return None
-
-
-def _line_blend(first, second, tolerance, turn, room):
-    """
-    Return the circular arc tangent to two lines, within ``tolerance``.
-
-    Its frame from the first line's direction ``t1`` and the second's
-    component across it, so the arc leaves along ``t1`` and arrives along
-    ``t2`` to rounding however small the turn.
-    """
-    t1, t2 = first.e3, second.e3
-    # The arc's largest distance to the lines, at its middle, is
-    # trim tan(turn / 4) cos(turn / 2).
-    trim = min(room, tolerance / (math.tan(0.25 * turn)
-                                  * math.cos(0.5 * turn)))
-    if trim <= ZERO_LENGTH * 1e3:
+        origin, e1, e3, radius, trim = arc
+        return Piece('helix', radius * turn, line, feed, origin, e1, e3,
+                     radius, turn, 0.0), trim
+    curve = blends.curve_blend(first, second, tolerance, turn, room, vertex)
+    if curve is None:
         return None
-    corner = first.point(first.length)
-    radius = trim / math.tan(0.5 * turn)
-    inward = t2 - t1 * float(t1 @ t2)
-    inward = _unit(inward - t1 * float(t1 @ inward))
-    e1 = -inward
-    piece = Piece('helix', radius * turn, first.line_at(first.length),
-                  min(first.feed, second.feed), corner - trim * t1, e1,
-                  _cross3(e1, t1), radius, turn, 0.0)
-    return piece, trim
-
-
-def _bezier_control(first, second, trim):
-    """
-    Return the control points (4, 3) of the Bezier replacing the corner.
-
-    From ``trim`` before the corner to ``trim`` after it, tangent to both
-    pieces; None where it cannot be followed by its arc length (its
-    hodograph's control points not on one side of a plane, where ``|B'|``
-    might vanish) or turns about.
-    """
-    if trim <= ZERO_LENGTH * 1e3:
-        return None
-    a = first.point(first.length - trim)
-    b = second.point(trim)
-    ta = first.tangent(first.length - trim)
-    tb = second.tangent(trim)
-    chord = float(np.linalg.norm(b - a))
-    turn = _turn(ta, tb)
-    if chord <= 0.0 or turn >= math.pi - ABOUT_TURN:
-        return None
-    # Arms of the Bezier nearest a circular arc of that turn.
-    arm = (2.0 / 3.0) * chord * (math.tan(0.25 * turn) / math.sin(0.5 * turn)
-                                 if turn > 1e-8 else 0.5)
-    control = np.array([a, a + arm * ta, b - arm * tb, b])
-    if (np.diff(control, axis=0) @ _unit(ta + tb)).min() <= 1e-9 * chord:
-        return None
-    return control
-
-
-def _chords(first, second, trim, tolerance):
-    """
-    Return the programmed path beside a corner as chords, and their slack.
-
-    The last ``trim`` of ``first`` and the first of ``second`` as segments
-    ``(a, b)`` ((k, 3) each), each within ``slack`` (k,) of its part of a
-    helix: ``radius dphi^2 / 8``, the error of linear interpolation, at
-    most a hundredth of ``tolerance`` unless PROOF_SEGMENTS do not reach.
-    """
-    starts, ends, slack = [], [], []
-    for piece, low in ((first, first.length - trim), (second, 0.0)):
-        sweep = abs(piece.angle) * trim / piece.length
-        count = 1 if piece.radius == 0.0 else min(PROOF_SEGMENTS, max(
-            1, math.ceil(sweep * math.sqrt(piece.radius
-                                           / (0.08 * tolerance)))))
-        points = piece.evaluate(np.linspace(low, low + trim, count + 1))[0]
-        starts.append(points[:-1])
-        ends.append(points[1:])
-        slack.append(np.full(count, piece.radius * (sweep / count) ** 2 / 8))
-    return tuple(np.concatenate(v) for v in (starts, ends, slack))
-
-
-def _distances(points, a, b):
-    """Return the distance (m) of each of ``points`` (n, 3) to each segment."""
-    ab = b - a
-    ab2 = np.maximum((ab * ab).sum(1), 1e-300)
-    q = points[:, None]
-    t = np.clip(((q - a) * ab).sum(2) / ab2, 0.0, 1.0)
-    return np.linalg.norm(q - a - t[..., None] * ab, axis=2)
-
-
-def _near(points, a, b, slack, tolerance):
-    """Whether no point of the curve is surely beyond ``tolerance``."""
-    return not ((_distances(points, a, b) - slack).min(1) > tolerance).any()
-
-
-def _proven_within(control, a, b, slack, tolerance):
-    """
-    Whether the Bezier ``control`` is proven within ``tolerance`` of the path.
-
-    The programmed path as chords ``(a, b)`` (:func:`_chords`): the
-    distance of any point ``q`` to the path is at most ``dist(q, chord) +
-    slack``. The distance to a segment is convex, so over a part of the
-    curve, which lies in the convex hull of its control points, it is
-    largest at one of them: ``max_i dist(Q_i, chord) + slack`` of the best
-    chord bounds the whole part. The curve is halved (de Casteljau) until
-    every part's bound is within ``tolerance``; not proven (False) where a
-    point of the curve is beyond it, or after PROOF_DEPTH halvings or with
-    more than PROOF_CURVES parts.
-    """
-    curves = control[None]
-    for _ in range(PROOF_DEPTH):
-        distance = _distances(curves.reshape(-1, 3), a, b).reshape(
-            len(curves), 4, -1)
-        # The first control point of each part is on the curve.
-        if ((distance[:, 0] - slack).min(1) > tolerance).any():
-            return False
-        curves = curves[(distance.max(1) + slack).min(1) > tolerance]
-        if len(curves) == 0:
-            return True
-        if 2 * len(curves) > PROOF_CURVES:
-            return False
-        curves = _halves(curves)
-    return False
-
-
-def _halves(curves):
-    """Split each cubic Bezier (K, 4, 3) at its middle: (2K, 4, 3)."""
-    p0, p1, p2, p3 = (curves[:, k] for k in range(4))
-    m01, m12, m23 = (p0 + p1) / 2, (p1 + p2) / 2, (p2 + p3) / 2
-    m012, m123 = (m01 + m12) / 2, (m12 + m23) / 2
-    middle = (m012 + m123) / 2
-    left = np.stack((p0, m01, m012, middle), 1)
-    right = np.stack((middle, m123, m23, p3), 1)
-    return np.concatenate((left, right))
+    return bezier_piece(curve[0], line, feed), curve[1]
 
 
 def from_waypoints(points: Array, feeds: Optional[Array], lines: Sequence[int],
                    tolerance: float, max_pieces: Optional[int] = None
                    ) -> Path:
     """
-    Return the path through ``points`` (n, 3) m: lines, corners blended.
+    Return the path through ``points`` (n, 3) m: a smooth curve or lines.
 
     Segment k ends at ``points[k + 1]`` with that row's ``feeds`` (m/s, or
     none) and ``lines``; consecutive equal points are one; ``lines[0]``:
-    the first point's line (0: not the program's). Corners are blended
-    within ``tolerance`` (m), stopped where it is 0. Raises
+    the first point's line (0: not the program's). With ``tolerance``
+    (m) above 0, a chain of chords as plain G64's (:mod:`chords`: runs
+    followed as the curve they sample, within it of every point, corners
+    blended within it); at 0, G stops at every corner. Raises
     :class:`ProgramError` where a coordinate is beyond NUMBER_BOUND, where
     no point is away from the first, and (TOO_LARGE) where the path would
     have more than ``max_pieces`` pieces, counted before any is made.
@@ -688,40 +697,38 @@ def from_waypoints(points: Array, feeds: Optional[Array], lines: Sequence[int],
     if len(keep) < 2:
         raise ProgramError(None, 'zero-length program: no waypoint is away '
                            'from the first', EMPTY)
-    if max_pieces is not None:
-        count = _least_pieces(points[keep], tolerance)
-        if count > max_pieces:
-            raise ProgramError(None, f'{len(points)} points make a path of '
-                               f'{count} pieces at least (lines and corner '
-                               f'blends): more than {max_pieces}', TOO_LARGE)
-    moves = [Move('line', points[i], points[k], lines[k],
-                  math.inf if feeds is None else float(feeds[k]),
-                  BLEND if tolerance > 0.0 else EXACT_PATH, tolerance)
-             for i, k in zip(keep[:-1], keep[1:])]
-    return from_moves(moves, tolerance, lines[0] or None, max_pieces)
-
-
-def _least_pieces(points, tolerance):
-    """
-    Return a lower bound of the pieces of the polyline ``points``.
-
-    Its segments less those within TANGENT of the one before (a straight
-    run is one piece at least), plus a blend at each other corner that
-    :func:`from_moves` blends (``tolerance`` above 0, not an about-turn,
-    room for a trim): vectorised, before any piece is made.
-    """
-    step = np.diff(points, axis=0)
-    length = np.linalg.norm(step, axis=1)
-    unit = step / length[:, None]
-    cross = np.linalg.norm(_cross(unit[:-1], unit[1:]), axis=1)
-    turn = np.arctan2(cross, (unit[:-1] * unit[1:]).sum(1))
-    corner = turn > TANGENT
+    keep = np.array(keep)
+    chord_feeds = np.full(len(keep) - 1, math.inf) if feeds is None else \
+        np.asarray(feeds, dtype=float)[keep[1:]]
+    chord_lines = np.asarray(lines)[keep[1:]]
     if tolerance <= 0.0:
-        return 1 + int(corner.sum())
-    with np.errstate(divide='ignore'):
-        trim = np.minimum(0.5 * np.minimum(length[:-1], length[1:]),
-                          tolerance / (np.tan(0.25 * turn)
-                                       * np.cos(0.5 * turn)))
-    blended = corner & (turn < math.pi - ABOUT_TURN) & (
-        trim > ZERO_LENGTH * 1e3)
-    return 1 + int(corner.sum()) + int(blended.sum())
+        _refuse_beyond(len(points), _corners(points[keep]) + 1, max_pieces)
+        moves = [Move('line', points[i], points[k], int(line), feed,
+                      EXACT_PATH) for i, k, line, feed in zip(
+                          keep[:-1], keep[1:], chord_lines, chord_feeds)]
+        return from_moves(moves, tolerance, lines[0] or None, max_pieces)
+    chain = chords.analyse(points[keep], chord_feeds, tolerance)
+    _refuse_beyond(len(points), chain.count + chain.corners, max_pieces)
+    pieces, slack = _chain_pieces(points[keep], chain, chord_feeds,
+                                  chord_lines)
+    if not pieces:
+        raise ProgramError(None, 'zero-length program: every waypoint is '
+                           'within the tolerance of the first', EMPTY)
+    return _join(pieces, [(BLEND, None)] * len(pieces), slack, tolerance,
+                 lines[0] or None, len(keep) - 1)
+
+
+def _refuse_beyond(points, count, max_pieces):
+    if max_pieces is not None and count > max_pieces:
+        raise ProgramError(None, f'{points} points make a path of {count} '
+                           f'pieces at least (lines and corner blends): '
+                           f'more than {max_pieces}', TOO_LARGE)
+
+
+def _corners(points):
+    """Return the corners of the polyline ``points``: turns above TANGENT."""
+    step = np.diff(points, axis=0)
+    unit = step / np.linalg.norm(step, axis=1)[:, None]
+    cross = np.linalg.norm(_cross(unit[:-1], unit[1:]), axis=1)
+    return int((np.arctan2(cross, (unit[:-1] * unit[1:]).sum(1))
+                > TANGENT).sum())

@@ -59,9 +59,11 @@ def add_plan(parser):
                         'home 0 0 0)')
     parser.add_argument('--tolerance', type=_tolerance,
                         default=DEFAULT_TOLERANCE, metavar='M',
-                        help='corners of waypoints and of G64 without P are '
-                        'blended within this distance of the path (m, default '
-                        '%(default)g; 0: G stops at every corner)')
+                        help='runs of chords of waypoints and of G64 without '
+                        'P are followed as the curve they sample within this '
+                        'distance of every programmed point, their corners '
+                        'blended within it (m, default %(default)g; 0: G '
+                        'stops at every corner)')
     parser.add_argument('--max-speed', type=_speed, default=math.inf,
                         metavar='M/S', help='G\'s speed cap beside the '
                         'programmed feed (m/s; default none)')
@@ -136,9 +138,10 @@ SUBCOMMANDS = (
         'rest at its last point, within the actuators\' limits under the '
         'robot\'s own dynamics (masses, payload, armature, friction, '
         'gravity) and within the programmed feed. The program: G-code (the '
-        'subset of doc/planning.md: G0 G1 G2 G3, G17-G19, G20/G21, '
-        'G90/G91, G94, G61, G61.1, G64 P, F, N, comments, M2/M30; mm by '
-        'default, origin at home) or CSV waypoints (header x,y,z in m, '
+        'subset of doc/planning.md: G0 G1 G2 G3, G5 G5.1, G17-G19, '
+        'G20/G21, G90/G91, G94, G61, G61.1, G64 P, F, N, comments, M2/M30; '
+        'mm by default, origin at home; chords under plain G64 followed as '
+        'the curve they sample) or CSV waypoints (header x,y,z in m, '
         'optional feed in m/s). Limits: --limits FILE (ros2_control\'s '
         'joint_limits form), else the --params file\'s planner section, else '
         'the paper robot\'s. Output columns: ' + ','.join(PLAN_COLUMNS)
