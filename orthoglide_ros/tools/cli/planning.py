@@ -11,7 +11,8 @@ import sys
 
 import numpy as np
 
-from orthoglide_ros.formats.params_file import ParametersFileError
+from orthoglide_ros.formats.params_file import (ParametersFile,
+                                                ParametersFileError)
 from orthoglide_ros.planning import parametrization
 from orthoglide_ros.planning.gcode import ProgramError
 from orthoglide_ros.planning.limits import (limits_from_params_file,
@@ -121,7 +122,8 @@ def _limits(args, names):
         if args.limits is not None:
             return load_limits(args.limits, names), True
         if args.params is not None:
-            found = limits_from_params_file(args.params, 'planner', names)
+            found = limits_from_params_file(ParametersFile.read(args.params),
+                                            'planner', names)
             if found is not None:
                 return found, True
     except (LimitsError, ParametersFileError) as error:
