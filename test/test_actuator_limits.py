@@ -70,14 +70,15 @@ def test_the_defaults_keep_each_nodes_bound():
         assert joint_limit(defaults[node], 'max_effort') == (1000.0,) * 3
 
 
-@pytest.mark.parametrize('node', sorted(NODES))
+@pytest.mark.parametrize('node', sorted(NODES) + ['planner'])
 def test_a_flag_without_its_limit_is_refused(node):
+    """One rule for every node's rows, the planner's too: one message."""
     values = joint_limit_values('max_effort', 100.0)
     values['joint_limits.slider_b.max_effort'] = 0.0
     with pytest.raises(ValueError, match=(
             r'^joint_limits\.slider_b\.max_effort: must be above 0 where '
             'has_effort_limits is true, got 0.0$')):
-        NODES[node].PARAMETERS.parse(values)
+        dict(NODES, planner=planner)[node].PARAMETERS.parse(values)
 
 
 @pytest.mark.parametrize('node, old, value, new', RETIRED)

@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from orthoglide_ros.formats.params_file import ParametersFile
@@ -468,15 +469,83 @@ def test_batch_writes_a_joint_trajectory_ros_reads(tmp_path, capsys):
         assert ns == round(times[k] * 1e9)
 
 
-@pytest.mark.parametrize('command', [
-    ['solve', '--position', '0', '0', '0', '--json'],
-    ['batch', '--format', 'joint_trajectory', '--input', 'IN', '--output',
-     'OUT'],
-    ['urdf', '--output', 'OUT'],
-])
+# Every command that takes --params, run on a small valid input: each
+# reads the file once, whatever it takes from it (robot, joint_names, the
+# planner's joint_limits). WORDS: inputs written by params_once_inputs.
+PARAMS_COMMANDS = {
+    'paper': ['--samples', '3'],
+    'solve': ['--position', '0', '0', '0', '--json'],
+    'batch': ['--format', 'joint_trajectory', '--input', 'TRAJECTORY',
+              '--output', 'OUT'],
+    'plan': ['--format', 'joint_trajectory', '--input', 'PROGRAM',
+             '--output', 'OUT'],
+    'excitation': ['--duration', '2', '--rate', '50', '--output', 'OUT'],
+    'identify': ['--input', 'LOG', '--output', 'OUT'],
+    'validate': ['--input', 'LOG'],
+    'calibration-poses': ['--count', '12', '--evaluations', '1',
+                          '--output', 'OUT'],
+    'calibrate': ['--input', 'MEASUREMENTS', '--output', 'OUT'],
+    'urdf': ['--output', 'OUT'],
+    'mjcf': ['--output', 'OUT'],
+    'draw': ['--position', '0', '0', '0', '--size', '100', '100', '--output',
+             'OUT.png'],
+    'animate': ['--frames', '2', '--size', '100', '100', '--output',
+                'OUT.gif'],
+    # render: MuJoCo's OpenGL context stays out of the test's process
+    # (test_mjcf runs it as a process); it takes the robot main read.
+}
+
+
+def params_once_inputs(tmp_path):
+    """Write the inputs PARAMS_COMMANDS names; return ``{word: path}``."""
+    from orthoglide_ros.model.mechanics import (forward_kinematics,
+                                                solve_batch)
+    from cli_runs import identification_log
+    program = tmp_path / 'part.nc'
+    program.write_text('G21 G90 F6000\nG1 X20\nM2\n')
+    positions = np.random.default_rng(3).uniform(-0.2, 0.2, (12, 3))
+    lam = solve_batch(Robot(), positions).lambda_
+    measurements = tmp_path / 'measurements.csv'
+    measurements.write_text('lambda_a,lambda_b,lambda_c,x,y,z\n' + ''.join(
+        ','.join(map(repr, row)) + '\n' for row in np.column_stack(
+            (lam, forward_kinematics(Robot(), lam))).tolist()))
+    return {'TRAJECTORY': write_trajectory(tmp_path / 'in.csv',
+                                           ('t', 'x', 'y', 'z'),
+                                           [(0.0, 0.0, 0.0, 0.0)]),
+            'PROGRAM': program,
+            'LOG': identification_log(tmp_path, duration=6.0)[0],
+            'MEASUREMENTS': measurements,
+            'OUT': tmp_path / 'out', 'OUT.png': tmp_path / 'out.png',
+            'OUT.gif': tmp_path / 'out.gif'}
+
+
+def test_every_command_with_params_is_checked_for_one_reading():
+    from orthoglide_ros.tools import cli
+    commands = {c.name for module in (
+        cli.solving, cli.planning, cli.identifying, cli.calibrating,
+        cli.models, cli.pictures) for c in module.SUBCOMMANDS if c.robot}
+    assert commands - set(PARAMS_COMMANDS) == {'render'}
+    assert set(PARAMS_COMMANDS) <= commands
+
+
+def test_command_modules_share_helpers_through_common_alone():
+    """A command module imports from cli.common, never from another's."""
+    import ast
+    folder = ROOT / 'orthoglide_ros' / 'tools' / 'cli'
+    for path in sorted(folder.glob('*.py')):
+        if path.name in ('__init__.py', '__main__.py', 'common.py'):
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and \
+                    node.module.startswith('orthoglide_ros.tools.cli'):
+                assert node.module == 'orthoglide_ros.tools.cli.common', \
+                    f'{path.name} imports {node.module}'
+
+
+@pytest.mark.parametrize('command', sorted(PARAMS_COMMANDS))
 def test_params_is_read_once_per_command(tmp_path, capsys, monkeypatch,
                                          command):
-    """The robot, the joint names: one reading of the --params file."""
+    """The robot, the joint names, the limits: one reading of --params."""
     reads = []
     read = ParametersFile.read.__func__
 
@@ -487,15 +556,18 @@ def test_params_is_read_once_per_command(tmp_path, capsys, monkeypatch,
     params = tmp_path / 'params.yaml'
     params.write_text('feedforward:\n  ros__parameters:\n'
                       '    joint_names: [ja, jb, jc]\n'
-                      '    robot: {m5: 16.0}\n')
-    files = {'IN': write_trajectory(tmp_path / 'in.csv', ('t', 'x', 'y', 'z'),
-                                    [(0.0, 0.0, 0.0, 0.0)]),
-             'OUT': tmp_path / 'out'}
-    code, _, err = run(capsys, *[files.get(word, word) for word in command],
-                       '--params', params)
+                      '    robot: {m5: 16.0}\n'
+                      'planner:\n  ros__parameters:\n'
+                      '    joint_limits:\n'
+                      '      ja: {has_effort_limits: true, '
+                      'max_effort: 400.0}\n')
+    files = params_once_inputs(tmp_path)
+    code, _, err = run(capsys, command, *[
+        files.get(word, word) for word in PARAMS_COMMANDS[command]],
+        '--params', params)
     assert code == 0, err
     assert reads == [str(params)]
-    if command[0] == 'batch':
+    if command in ('batch', 'plan'):
         assert 'joint_names: ["ja", "jb", "jc"]' in files['OUT'].read_text()
 
 

@@ -16,6 +16,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from orthoglide_ros.formats.params_file import (NO_SECTION, NOT_PARAMETERS,
+                                                ParametersFile,
+                                                ParametersFileError)
 from orthoglide_ros.planning.limits import (limits_from_mapping,
                                             limits_from_parameters,
                                             limits_from_params_file,
@@ -43,28 +46,71 @@ def test_what_bounds_and_what_does_not():
         'max_position': 0.2}}).bounding
 
 
-@pytest.mark.parametrize('entries, words', (
-    ({'slider_d': {}}, 'joint_limits.slider_d: not an actuator joint'),
-    ({'slider_a': {'max_efort': 1.0}}, 'joint_limits.slider_a.max_efort: '
+@pytest.mark.parametrize('entries, key, words', (
+    ({'slider_d': {}}, 'joint_limits.slider_d', 'not an actuator joint'),
+    ({'slider_a': {'max_efort': 1.0}}, 'joint_limits.slider_a.max_efort',
      'not a joint limit'),
     ({'slider_a': {'has_effort_limits': True}},
-     'joint_limits.slider_a.has_effort_limits is true without max_effort'),
-    ({'slider_a': {'max_effort': -1.0}},
-     'joint_limits.slider_a.max_effort: must be above 0'),
+     'joint_limits.slider_a.max_effort',
+     'needed where has_effort_limits is true'),
+    ({'slider_a': {'max_effort': -1.0}}, 'joint_limits.slider_a.max_effort',
+     'must be above 0'),
     ({'slider_a': {'max_effort': 'a lot'}},
-     'joint_limits.slider_a.max_effort: must be a number'),
+     'joint_limits.slider_a.max_effort', 'must be a number'),
     ({'slider_a': {'max_effort': math.inf}},
-     'joint_limits.slider_a.max_effort: must be finite'),
+     'joint_limits.slider_a.max_effort', 'must be finite'),
     ({'slider_a': {'has_effort_limits': 'yes', 'max_effort': 1.0}},
-     'joint_limits.slider_a.has_effort_limits: must be true or false'),
-    ({'slider_a': {'min_position': 0.1}},
+     'joint_limits.slider_a.has_effort_limits', 'must be true or false'),
+    ({'slider_a': {'min_position': 0.1}}, 'joint_limits.slider_a',
      'position limits need both min_position and max_position'),
-    ({'slider_a': 5}, 'joint_limits.slider_a: must be a mapping'),
+    ({'slider_a': 5}, 'joint_limits.slider_a', 'must be a mapping'),
 ))
-def test_refusals_name_the_key(entries, words):
+def test_refusals_name_the_key(entries, key, words):
+    """The key a field of the error, the message ``key: detail``."""
     with pytest.raises(LimitsError) as error:
         limits_from_mapping(entries)
-    assert words in str(error.value)
+    assert error.value.key == key
+    assert error.value.detail.startswith(words)
+    assert str(error.value) == f'{key}: {error.value.detail}'
+
+
+def test_a_refusal_says_where_the_limits_were_read(tmp_path):
+    path = tmp_path / 'joint_limits.yaml'
+    path.write_text('joint_limits:\n  slider_b: {max_jerk: -2.0}\n')
+    with pytest.raises(LimitsError) as error:
+        load_limits(path)
+    assert (error.value.source, error.value.key) == (
+        str(path), 'joint_limits.slider_b.max_jerk')
+    assert str(error.value) == f'{path}: joint_limits.slider_b.max_jerk: ' \
+        + error.value.detail
+    path.write_text('a: [')
+    with pytest.raises(LimitsError) as error:
+        load_limits(path)
+    assert (error.value.source, error.value.key) == (str(path), '')
+    assert error.value.detail.startswith('not valid YAML')
+    path.write_text('planner:\n  ros__parameters:\n    joint_limits:\n'
+                    '      slider_b: {max_jerk: -2.0}\n')
+    with pytest.raises(LimitsError) as error:
+        limits_from_params_file(ParametersFile.read(path))
+    assert (error.value.source, error.value.key) == (
+        f'{path}: planner', 'joint_limits.slider_b.max_jerk')
+
+
+@pytest.mark.parametrize('reason, words, found', (
+    (NO_SECTION, 'nothing for this node', True),
+    (NOT_PARAMETERS, 'no section for the node', False)))
+def test_a_missing_section_is_told_by_its_reason(monkeypatch, reason, words,
+                                                 found):
+    """No section: no limits from the file, whatever the message's words."""
+    def section(self, node):
+        raise ParametersFileError(self.path, reason, words)
+    monkeypatch.setattr(ParametersFile, 'section', section)
+    parameters = ParametersFile(CONFIG, {})
+    if found:
+        assert limits_from_params_file(parameters) is None
+    else:
+        with pytest.raises(ParametersFileError):
+            limits_from_params_file(parameters)
 
 
 def test_a_file_of_joint_limits(tmp_path):
@@ -93,14 +139,16 @@ def test_parameters_and_the_config_file_give_the_paper_robots_limits():
             for key, value in entry.items()}
     flat['robot.m5'] = 15.0
     assert limits_from_parameters(flat).effort[0] == 650.0
-    from_config = limits_from_params_file(CONFIG, 'planner')
+    config = ParametersFile.read(CONFIG)
+    from_config = limits_from_params_file(config, 'planner')
     paper = paper_limits()
     for field in ('effort', 'velocity', 'acceleration', 'jerk'):
         assert np.array_equal(getattr(from_config, field),
                               getattr(paper, field)), field
-    assert limits_from_params_file(CONFIG, 'mechanism_state_publisher') is None
+    assert limits_from_params_file(config, 'mechanism_state_publisher') \
+        is None
     # The simulator's drives: the same form, their own values.
-    drives = limits_from_params_file(CONFIG, 'simulator')
+    drives = limits_from_params_file(config, 'simulator')
     assert list(drives.effort) == [1000.0] * 3
     assert not np.isfinite(drives.velocity).any()
 

@@ -15,8 +15,8 @@ import os
 import textwrap
 
 from orthoglide_ros.formats.params_file import (
-    load_parameters, load_robot, ParametersFileError, robot_file_text,
-    robot_from_parameters)
+    load_parameters, load_robot, NO_SECTION, NOT_PARAMETERS, NOT_YAML,
+    ParametersFileError, robot_file_text, robot_from_parameters, UNREADABLE)
 from orthoglide_ros.model.robot import ParameterError, Robot
 import pytest
 
@@ -84,18 +84,24 @@ def test_node_section_overrides_wildcard(tmp_path):
     assert robot.m1 == 0.5
 
 
-def test_other_nodes_and_missing_sections(tmp_path):
-    text = """
-    some_other_node:
-      ros__parameters:
-        robot.l3: 0.8
-    """
-    with pytest.raises(ParametersFileError):
-        load_parameters(write(tmp_path, text))
-    with pytest.raises(ParametersFileError):
-        load_parameters(str(tmp_path / 'missing.yaml'))
-    with pytest.raises(ParametersFileError):
-        load_parameters(write(tmp_path, 'feedforward: [1, 2\n'))
+@pytest.mark.parametrize('text, reason, words', (
+    ('some_other_node:\n  ros__parameters:\n    robot.l3: 0.8\n',
+     NO_SECTION, 'no section for the node'),
+    (None, UNREADABLE, 'No such file'),
+    ('feedforward: [1, 2\n', NOT_YAML, 'not valid YAML'),
+    ('- feedforward\n', NOT_PARAMETERS, 'not a ROS 2 parameters file'),
+    ('feedforward: {robot: 1}\n', NOT_PARAMETERS,
+     'has no ros__parameters mapping'),
+))
+def test_other_nodes_and_missing_sections(tmp_path, text, reason, words):
+    """Each refusal's reason a field (NO_SECTION...), the path one too."""
+    path = (str(tmp_path / 'missing.yaml') if text is None
+            else write(tmp_path, text))
+    with pytest.raises(ParametersFileError) as error:
+        load_parameters(path)
+    assert (error.value.reason, error.value.path) == (reason, path)
+    assert words in error.value.detail
+    assert str(error.value) == f'{path}: {error.value.detail}'
 
 
 def test_nested_and_dotted_keys_mix(tmp_path):

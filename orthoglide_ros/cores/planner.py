@@ -36,14 +36,15 @@ from orthoglide_ros.cores import realtime
 from orthoglide_ros.cores.core import Core
 from orthoglide_ros.cores.inputs import Rejected
 from orthoglide_ros.cores.parameters import (base_frame_spec, field,
-                                             joint_limit_specs, Spec, Table)
+                                             joint_limit_specs,
+                                             joint_limits_rule, Spec, Table)
 from orthoglide_ros.cores.inputs import CARTESIAN_TRAJECTORY_BYTES
 from orthoglide_ros.cores.status import OK
 from orthoglide_ros.formats import cdr
-from orthoglide_ros.model.robot import JOINT_NAMES, ParameterError
+from orthoglide_ros.model.robot import JOINT_NAMES
 from orthoglide_ros.planning.gcode import EMPTY, ProgramError, TOO_LARGE
 from orthoglide_ros.planning.limits import (KINDS, limits_from_parameters,
-                                            LimitsError, PAPER_LIMITS)
+                                            PAPER_LIMITS)
 from orthoglide_ros.planning.parametrization import (most_pieces, plan,
                                                      TIMEOUT)
 from orthoglide_ros.planning.path import from_waypoints
@@ -70,15 +71,6 @@ def max_points(frame):
         // cdr.MULTI_DOF_POINT_BYTES
 
 
-def _limits_rule(settings):
-    """Refuse limits that ros2_control's form refuses (a flag without a value)."""
-    try:
-        limits_of(settings)
-    except LimitsError as error:
-        name = str(error).split(' ', 1)[0].rstrip(':')
-        raise ParameterError(name, str(error).split(' ', 1)[1]) from None
-
-
 PARAMETERS = Table('PlannerSettings', (
     base_frame_spec('frame of the path\'s poses and of the published motion'),
     Spec('max_speed', 'double', 0.0,
@@ -96,7 +88,7 @@ PARAMETERS = Table('PlannerSettings', (
          (0.01, 600.0)),
     *joint_limit_specs(PAPER_LIMITS),
     *realtime.SPECS,
-), rules=(_limits_rule,), robot=True)
+), rules=(joint_limits_rule,), robot=True)
 
 
 # The node's reason for a refusal of the planner's.

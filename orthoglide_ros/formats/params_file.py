@@ -34,8 +34,29 @@ MAX_FILE_BYTES = 1024 * 1024
 MAX_DEPTH = 32
 
 
+# Why a parameters file is refused (ParametersFileError.reason): for
+# callers that react to one (a node's section may be absent: NO_SECTION).
+UNREADABLE = 'unreadable'           # not a readable UTF-8 file in the bound
+NOT_YAML = 'not_yaml'               # not YAML, or a value YAML cannot hold
+NOT_PARAMETERS = 'not_parameters'   # YAML, not rcl's form
+NO_SECTION = 'no_section'           # no section for the node asked for
+
+
 class ParametersFileError(ValueError):
-    """A parameters file that cannot be read; the message says why."""
+    """
+    A parameters file that cannot be read: ``reason`` is why.
+
+    ``path``: the file; ``reason``: UNREADABLE, NOT_YAML, NOT_PARAMETERS
+    or NO_SECTION; ``detail``: the message without the path. The message
+    is ``path: detail``.
+    """
+
+    def __init__(self, path: Path, reason: str, detail: str) -> None:
+        """Keep the ``path``, the ``reason`` and the ``detail``."""
+        super().__init__(f'{path}: {detail}')
+        self.path = path
+        self.reason = reason
+        self.detail = detail
 
 
 class _RclLoader(yaml.SafeLoader):
@@ -113,29 +134,30 @@ _DecimalLoader.add_implicit_resolver(
                        r'(?:[eE][-+]?[0-9]+)?$'), list('-+0123456789.'))
 
 
-def read_yaml(path: Path, error: type = ParametersFileError,
-              decimal: bool = False) -> Any:
+def read_yaml(path: Path, decimal: bool = False) -> Any:
     """
     Return the YAML document in ``path``, read as a parameters file is.
 
     UTF-8, at most MAX_FILE_BYTES, no aliases, nested at most MAX_DEPTH
     deep, no key twice in a mapping, ``1e-3`` a double; ``decimal``:
-    numbers only in decimal (:class:`_DecimalLoader`). Raises ``error`` (a
-    ValueError) naming the path: the parameters file's or another YAML
-    file's (joint limits).
+    numbers only in decimal (:class:`_DecimalLoader`). Raises
+    :class:`ParametersFileError` (UNREADABLE, NOT_YAML) naming the path:
+    the parameters file's or another YAML file's (joint limits).
     """
     try:
         text = read_text(path, MAX_FILE_BYTES)
     except ValueError as failure:
-        raise error(f'{path}: {failure}') from None
+        raise ParametersFileError(path, UNREADABLE, str(failure)) from None
     try:
         return yaml.load(text, Loader=_DecimalLoader if decimal
                          else _RclLoader)
     except yaml.YAMLError as failure:
-        raise error(f'{path}: not valid YAML: '
-                    f'{" ".join(str(failure).split())}') from None
+        raise ParametersFileError(
+            path, NOT_YAML,
+            f'not valid YAML: {" ".join(str(failure).split())}') from None
     except ValueError as failure:   # e.g. an integer of over 4300 digits
-        raise error(f'{path}: a value cannot be read: {failure}') from None
+        raise ParametersFileError(
+            path, NOT_YAML, f'a value cannot be read: {failure}') from None
 
 
 class ParametersFile:
@@ -160,7 +182,8 @@ class ParametersFile:
         """
         document = read_yaml(path)
         if not isinstance(document, dict):
-            raise ParametersFileError(f'{path}: not a ROS 2 parameters file')
+            raise ParametersFileError(path, NOT_PARAMETERS,
+                                      'not a ROS 2 parameters file')
         return cls(path, document)
 
     def section(self, node: str = NODE_NAME) -> dict[str, Any]:
@@ -176,15 +199,16 @@ class ParametersFile:
                     if key in self.document]
         if not sections:
             raise ParametersFileError(
-                f'{self.path}: no section for the node: expected one of '
-                + ', '.join(repr(k) for k in keys))
+                self.path, NO_SECTION, 'no section for the node: expected '
+                'one of ' + ', '.join(repr(k) for k in keys))
         params: dict[str, Any] = {}
         for section in sections:
             values = section.get('ros__parameters') if isinstance(
                 section, dict) else None
             if not isinstance(values, dict):
-                raise ParametersFileError(f'{self.path}: the node section '
-                                          'has no ros__parameters mapping')
+                raise ParametersFileError(
+                    self.path, NOT_PARAMETERS,
+                    'the node section has no ros__parameters mapping')
             _flatten(values, '', params)
         return params
 

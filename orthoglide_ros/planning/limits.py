@@ -38,7 +38,7 @@ from typing import Any, Mapping, Optional, Sequence
 
 import numpy as np
 
-from orthoglide_ros.formats.params_file import (load_parameters,
+from orthoglide_ros.formats.params_file import (NO_SECTION, ParametersFile,
                                                 ParametersFileError,
                                                 read_yaml)
 from orthoglide_ros.formats.text import clip
@@ -73,7 +73,22 @@ PAPER_LIMITS = {name: {'has_velocity_limits': True, 'max_velocity': 1.0,
 
 
 class LimitsError(ValueError):
-    """Limits that cannot be used: the message names the key."""
+    """
+    Limits that cannot be used: ``key`` names the key, ``detail`` says why.
+
+    ``key``: ``joint_limits.slider_a.max_effort`` (a joint's or the whole
+    mapping's where no one key is to blame; '' where the file is);
+    ``detail``: the message without it; ``source``: where the limits were
+    read ('', a file, ``file: node``). The message: ``source: key: detail``.
+    """
+
+    def __init__(self, key: str, detail: str, source: str = '') -> None:
+        """Keep the ``key``, the ``detail`` and the ``source``."""
+        super().__init__(': '.join(part for part in (source, key, detail)
+                                   if part))
+        self.key = key
+        self.detail = detail
+        self.source = source
 
 
 @dataclass(frozen=True)
@@ -118,11 +133,11 @@ def limits_from_mapping(entries: Any, names: Sequence[str] = JOINT_NAMES,
     :class:`LimitsError` naming the key (``joint_limits.slider_a.max_effort``).
     """
     if not isinstance(entries, Mapping):
-        raise LimitsError(f'{where}: must be a mapping of joints to their '
+        raise LimitsError(where, 'must be a mapping of joints to their '
                           f'limits, got {type(entries).__name__}')
     unknown = [str(k) for k in entries if k not in names]
     if unknown:
-        raise LimitsError(f'{where}.{unknown[0]}: not an actuator joint; '
+        raise LimitsError(f'{where}.{unknown[0]}', 'not an actuator joint; '
                           'known: ' + ', '.join(names))
     values = {key: np.full(3, math.inf) for key, *_ in KINDS}
     position = np.tile([-math.inf, math.inf], (3, 1))
@@ -132,13 +147,14 @@ def limits_from_mapping(entries: Any, names: Sequence[str] = JOINT_NAMES,
             continue
         prefix = f'{where}.{name}'
         if not isinstance(entry, Mapping):
-            raise LimitsError(f'{prefix}: must be a mapping of limits')
+            raise LimitsError(prefix, 'must be a mapping of limits')
         known = {k for kind in KINDS for k in kind[:2]} | set(
             POSITION_KEYS) | set(UNUSED_KEYS)
         for key in entry:
             if key not in known:
-                raise LimitsError(f'{prefix}.{key}: not a joint limit; known: '
-                                  + ', '.join(sorted(known - set(UNUSED_KEYS))))
+                raise LimitsError(f'{prefix}.{key}', 'not a joint limit; '
+                                  'known: ' + ', '.join(
+                                      sorted(known - set(UNUSED_KEYS))))
         for key, has, unit, _ in KINDS:
             value = _bound(entry, prefix, key, has, unit)
             if value is not None:
@@ -149,55 +165,56 @@ def limits_from_mapping(entries: Any, names: Sequence[str] = JOINT_NAMES,
                   values['max_effort'], position, tuple(names))
 
 
-def _flag(entry, prefix, key):
+def _flag(entry: Mapping, prefix: str, key: str) -> Optional[bool]:
     flag = entry.get(key)
     if flag is not None and not isinstance(flag, bool):
-        raise LimitsError(f'{prefix}.{key}: must be true or false, got '
+        raise LimitsError(f'{prefix}.{key}', 'must be true or false, got '
                           f'{flag!r}')
     return flag
 
 
-def _number(entry, prefix, key):
+def _number(entry: Mapping, prefix: str, key: str) -> Optional[float]:
     value = entry.get(key)
     if value is None:
         return None
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise LimitsError(f'{prefix}.{key}: must be a number (decimal), got '
-                          f'{clip(repr(value), 80)}')
+        raise LimitsError(f'{prefix}.{key}', 'must be a number (decimal), '
+                          f'got {clip(repr(value), 80)}')
     if isinstance(value, float) and not math.isfinite(value):
-        raise LimitsError(f'{prefix}.{key}: must be finite, got {value!r}')
+        raise LimitsError(f'{prefix}.{key}', f'must be finite, got {value!r}')
     if not abs(value) <= LIMIT_BOUND:     # an int of any size too
-        raise LimitsError(f'{prefix}.{key}: must be at most '
+        raise LimitsError(f'{prefix}.{key}', 'must be at most '
                           f'{LIMIT_BOUND:,.0f} in magnitude, got '
                           f'{clip(repr(value), 40)}')
     return float(value)
 
 
-def _bound(entry, prefix, key, has, unit):
+def _bound(entry: Mapping, prefix: str, key: str, has: str,
+           unit: str) -> Optional[float]:
     """Return one limit's value, or None where it does not bound."""
     flag = _flag(entry, prefix, has)
     value = _number(entry, prefix, key)
     if flag is False or (flag is None and value is None):
         return None
     if value is None:
-        raise LimitsError(f'{prefix}.{has} is true without {key}')
+        raise LimitsError(f'{prefix}.{key}', f'needed where {has} is true')
     if not 0.0 < value <= LIMIT_BOUND:
-        raise LimitsError(f'{prefix}.{key}: must be above 0 and at most '
+        raise LimitsError(f'{prefix}.{key}', 'must be above 0 and at most '
                           f'{LIMIT_BOUND:g} {unit}, got {value!r}')
     return value
 
 
-def _position(entry, prefix):
+def _position(entry: Mapping, prefix: str) -> tuple[float, float]:
     flag = _flag(entry, prefix, 'has_position_limits')
     low = _number(entry, prefix, 'min_position')
     high = _number(entry, prefix, 'max_position')
     if flag is False or (flag is None and low is None and high is None):
         return (-math.inf, math.inf)
     if low is None or high is None:
-        raise LimitsError(f'{prefix}: position limits need both min_position '
+        raise LimitsError(prefix, 'position limits need both min_position '
                           'and max_position')
     if not low < high:
-        raise LimitsError(f'{prefix}.min_position: must be below '
+        raise LimitsError(f'{prefix}.min_position', 'must be below '
                           f'max_position, got {low!r} and {high!r}')
     return (low, high)
 
@@ -210,13 +227,16 @@ def load_limits(path: Path, names: Sequence[str] = JOINT_NAMES) -> Limits:
     most 1 MiB, no aliases, nested at most 32 deep, no key twice), its
     numbers decimal only. Raises :class:`LimitsError`.
     """
-    document = read_yaml(path, LimitsError, decimal=True)
+    try:
+        document = read_yaml(path, decimal=True)
+    except ParametersFileError as error:
+        raise LimitsError('', error.detail, str(path)) from None
     if not isinstance(document, dict) or 'joint_limits' not in document:
-        raise LimitsError(f'{path}: no top-level joint_limits: mapping')
+        raise LimitsError('', 'no top-level joint_limits: mapping', str(path))
     try:
         return limits_from_mapping(document['joint_limits'], names)
     except LimitsError as error:
-        raise LimitsError(f'{path}: {error}') from None
+        raise LimitsError(error.key, error.detail, str(path)) from None
 
 
 def limits_from_parameters(params: Mapping[str, Any],
@@ -232,23 +252,27 @@ def limits_from_parameters(params: Mapping[str, Any],
             continue
         parts = key.split('.')
         if len(parts) != 3:
-            raise LimitsError(f'{key}: expected joint_limits.<joint>.<key>')
+            raise LimitsError(key, 'expected joint_limits.<joint>.<key>')
         entries.setdefault(parts[1], {})[parts[2]] = value
     return limits_from_mapping(entries, names)
 
 
-def limits_from_params_file(path: Path, node: str = 'planner',
+def limits_from_params_file(parameters: ParametersFile,
+                            node: str = 'planner',
                             names: Sequence[str] = JOINT_NAMES
                             ) -> Optional[Limits]:
     """
     Return the ``joint_limits.*`` of a parameters file's ``node`` section.
 
+    ``parameters``: the file, read once (:meth:`ParametersFile.read`).
     None where the file has no such section or no ``joint_limits`` in it.
+    Raises :class:`LimitsError` (its ``source`` the file and the node) or
+    :class:`ParametersFileError` (a section not in rcl's form).
     """
     try:
-        params = load_parameters(path, node)
+        params = parameters.section(node)
     except ParametersFileError as error:
-        if 'no section for the node' in str(error):
+        if error.reason == NO_SECTION:
             return None
         raise
     if not any(k.startswith('joint_limits.') for k in params):
@@ -256,7 +280,8 @@ def limits_from_params_file(path: Path, node: str = 'planner',
     try:
         return limits_from_parameters(params, names)
     except LimitsError as error:
-        raise LimitsError(f'{path}: {node}: {error}') from None
+        raise LimitsError(error.key, error.detail,
+                          f'{parameters.path}: {node}') from None
 
 
 def paper_limits() -> Limits:

@@ -351,8 +351,7 @@ def solve_trajectory(robot, where, times, lines, p, v, a):
         k = error.row
         at = (f' at t = {times[k]:.6g} s' if lines is None
               else f': data row {k + 1} (line {lines[k]})')
-        reason = str(error).removeprefix(f'sample {k}: ')
-        raise CliError(f'{where}{at}: {reason}') from None
+        raise CliError(f'{where}{at}: {error.detail}') from None
 
 
 def joint_trajectory_yaml(nanoseconds, sol, names):

@@ -19,10 +19,10 @@ from orthoglide_ros.planning.limits import (limits_from_params_file,
                                             paper_limits)
 from orthoglide_ros.planning.programs import read_program
 from orthoglide_ros.tools.cli.common import (CliError, finite_float,
-                                             INPUT_GROUPS, Subcommand,
+                                             INPUT_GROUPS,
+                                             joint_trajectory_yaml,
+                                             params_joint_names, Subcommand,
                                              table_csv, within, write_output)
-from orthoglide_ros.tools.cli.solving import (_joint_names,
-                                              _joint_trajectory_yaml)
 
 DEFAULT_RATE = 1000.0           # Hz
 # The memory the path and its plan may take (bytes): with the
@@ -76,7 +76,7 @@ def add_plan(parser):
 def run_plan(robot, args):
     """Plan the program; write CSV or a JointTrajectory."""
     name = '<stdin>' if args.input == '-' else args.input
-    names = _joint_names(args.params)
+    names = params_joint_names(args.parameters)
     limits, told = _limits(args, names)
     try:
         path = read_program(args.input, args.start, args.tolerance,
@@ -87,7 +87,7 @@ def run_plan(robot, args):
         raise CliError(f'{name}: {error}') from None
     if args.format == 'joint_trajectory':
         nanoseconds = np.round(motion.t * 1e9).astype(np.int64)
-        data = _joint_trajectory_yaml(nanoseconds, motion.solution, names)
+        data = joint_trajectory_yaml(nanoseconds, motion.solution, names)
     else:
         data = table_csv(PLAN_COLUMNS, motion.t, _Joined(
             motion.position, motion.velocity, motion.acceleration))
@@ -116,12 +116,16 @@ class _Joined:
 
 
 def _limits(args, names):
-    """Return ``(limits, given)``: --limits, --params' planner's, the paper's."""
+    """
+    Return ``(limits, given)``: --limits, --params' planner's, the paper's.
+
+    The ``--params`` file as the command read it (``args.parameters``).
+    """
     try:
         if args.limits is not None:
             return load_limits(args.limits, names), True
-        if args.params is not None:
-            found = limits_from_params_file(args.params, 'planner', names)
+        if args.parameters is not None:
+            found = limits_from_params_file(args.parameters, 'planner', names)
             if found is not None:
                 return found, True
     except (LimitsError, ParametersFileError) as error:

@@ -14,7 +14,7 @@ from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.tools.cli.common import (
     add_output, add_position, CliError, CSV_COLUMNS, csv_text,
     joint_trajectory_yaml, new_figure, params_joint_names, png_bytes, PROG,
-    QUANTITIES, read_params, read_trajectory, solve_trajectory, Subcommand,
+    QUANTITIES, read_trajectory, solve_trajectory, Subcommand,
     table_row, within, write_output)
 
 DEFAULT_SAMPLES = 201
@@ -178,16 +178,6 @@ def _time_from_start(times, lines, name):
                        't must be in [0, 2**31) s and increase from row to '
                        'row (to the nanosecond)')
     return nanoseconds
-
-
-# cli/planning.py imports these two names from here and reads --params
-# itself: they go once it takes args.parameters and common's helpers.
-_joint_trajectory_yaml = joint_trajectory_yaml
-
-
-def _joint_names(path):
-    """Return the ``joint_names`` of the ``--params`` file ``path``."""
-    return params_joint_names(read_params(path))
 
 
 SUBCOMMANDS = (
