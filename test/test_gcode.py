@@ -12,8 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from orthoglide_ros.planning.gcode import ProgramError, read_gcode
-from orthoglide_ros.planning.path import move_piece
+from orthoglide_ros.planning.gcode import read_gcode
+from orthoglide_ros.planning.moves import ProgramError
+from orthoglide_ros.planning.pieces import move_piece
 
 
 def midpoint(move):

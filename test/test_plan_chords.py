@@ -17,6 +17,7 @@ from planning_checks import distance_to_path, path_distance
 import pytest
 
 from orthoglide_ros.planning import chords, gcode
+from orthoglide_ros.planning.moves import ProgramError
 from orthoglide_ros.planning.path import from_moves, from_waypoints, TANGENT
 from orthoglide_testing.chord_programs import spiral_program
 
@@ -325,7 +326,7 @@ def test_every_point_of_random_chord_programs_is_within_the_tolerance(
     text = chords_of(points)
     try:
         path = path_of(text, tolerance, start=points[0] * 1e-3)
-    except gcode.ProgramError:          # every point within the tolerance
+    except ProgramError:          # every point within the tolerance
         return
     near = distance_to_path(path, programmed(text, points[0] * 1e-3))
     assert near.max() <= tolerance * (1 + 1e-9), near.max()

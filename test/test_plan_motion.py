@@ -37,6 +37,7 @@ from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.planning import gcode, path as paths
 from orthoglide_ros.planning.limits import limits_from_mapping
 from orthoglide_ros.planning.limits import paper_limits
+from orthoglide_ros.planning.moves import ProgramError, TOO_LARGE
 from orthoglide_ros.planning.parametrization import (ACCEPT_SHARE, plan,
                                                      PlanningError)
 from orthoglide_testing.chord_programs import (bulge_points, LOOP_RADIUS,
@@ -264,7 +265,7 @@ def limit_sets(draw):
 def test_random_programs_keep_every_limit_on_the_path(program, limits):
     try:
         path = program_path(program)
-    except gcode.ProgramError:      # moves nothing; an arc end off its circle
+    except ProgramError:      # moves nothing; an arc end off its circle
         assume(False)
     motion = plan(DRIVES, path, limits, RATE)
     for name, share in shares(motion, limits).items():
@@ -442,7 +443,7 @@ def test_memory_is_bounded_before_anything_is_made(text, words):
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert error.value.reason == gcode.TOO_LARGE
+    assert error.value.reason == TOO_LARGE
     assert words in str(error.value), str(error.value)
     assert peak < 20e6
 

@@ -16,6 +16,7 @@ from planning_checks import distance_to_path, path_distance
 import pytest
 
 from orthoglide_ros.planning import gcode
+from orthoglide_ros.planning.moves import ProgramError, TOO_LARGE
 from orthoglide_ros.planning.path import from_moves, from_waypoints
 
 SQUARE = 'G21 F600 {mode}\nG1 X40\nG1 Y40\nG1 X0\nG1 Y0'
@@ -278,18 +279,18 @@ def test_pieces_beyond_a_bound_are_refused_before_they_are_made():
     """Counted from the moves, and from the points before any move."""
     moves = gcode.read_gcode('G21 F600 G64 P0.01\nG1 X10\nG1 Y10\nG1 X0')
     assert len(from_moves(moves, 1e-5, max_pieces=5).pieces) == 5
-    with pytest.raises(gcode.ProgramError) as error:
+    with pytest.raises(ProgramError) as error:
         from_moves(moves, 1e-5, max_pieces=2)
-    assert error.value.reason == gcode.TOO_LARGE
+    assert error.value.reason == TOO_LARGE
     assert str(error.value) == ('3 moves make a path of 3 pieces at least: '
                                 'more than 2')
     points = np.array([(0, 0, 0), (0.01, 0, 0), (0.01, 0.01, 0),
                        (0, 0.01, 0)])
     assert len(from_waypoints(points, None, [1, 2, 3, 4], 1e-5,
                               max_pieces=5).pieces) == 5
-    with pytest.raises(gcode.ProgramError) as error:
+    with pytest.raises(ProgramError) as error:
         from_waypoints(points, None, [1, 2, 3, 4], 1e-5, max_pieces=4)
-    assert error.value.reason == gcode.TOO_LARGE
+    assert error.value.reason == TOO_LARGE
     # Collinear points are one piece: counted so.
     line = np.linspace((0, 0, 0), (0.01, 0.02, 0.03), 1000)
     assert len(from_waypoints(line, None, list(range(1000)), 1e-5,

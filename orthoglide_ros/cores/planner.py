@@ -42,7 +42,7 @@ from orthoglide_ros.cores.inputs import CARTESIAN_TRAJECTORY_BYTES
 from orthoglide_ros.cores.status import OK
 from orthoglide_ros.formats import cdr
 from orthoglide_ros.model.robot import JOINT_NAMES
-from orthoglide_ros.planning.gcode import EMPTY, ProgramError, TOO_LARGE
+from orthoglide_ros.planning.moves import EMPTY, ProgramError, TOO_LARGE
 from orthoglide_ros.planning.limits import (KINDS, limits_from_parameters,
                                             PAPER_LIMITS)
 from orthoglide_ros.planning.parametrization import (most_pieces, plan,

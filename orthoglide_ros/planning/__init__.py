@@ -1,13 +1,17 @@
 """
 Planning: the fastest motion of G along a path, under the robot's dynamics.
 
-No ROS. :mod:`gcode` reads the G-code subset into moves, :mod:`path` makes
-them a path of lines, exact arcs and helices and corner blends (and a
-polyline of waypoints a smooth one), :mod:`limits` reads the actuators'
-limits in ros2_control's ``joint_limits`` form, :mod:`programs` reads a
-program file (G-code or CSV waypoints), and :mod:`parametrization` finds
-the time-optimal motion along the path (TOPP-RA's reachability analysis,
-its passes in :mod:`reachability`, on the package's inverse dynamics,
+No ROS. At its bottom, :mod:`moves`: the moves a program is made of (a
+line, an arc, a spline), the path control modes and :class:`ProgramError`
+with its reasons. :mod:`gcode` reads the G-code subset into moves (a
+line's words: :mod:`gcode_words`); :mod:`path` makes a path of moves, or
+of waypoints: its pieces (:mod:`pieces`: helices and Bezier curves), runs
+of chords followed as the curve they sample (:mod:`chords`), corners
+blended (:mod:`blends`). :mod:`limits` reads the actuators' limits in
+ros2_control's ``joint_limits`` form, :mod:`programs` reads a program file
+(G-code or CSV waypoints), and :mod:`parametrization` finds the
+time-optimal motion along the path (TOPP-RA's reachability analysis, its
+passes in :mod:`reachability`, on the package's inverse dynamics,
 friction and all) and checks every sample of it with
 :func:`orthoglide_ros.model.mechanics.solve_batch`.
 """

@@ -18,10 +18,10 @@ point, where the corner is a programmed point the path must keep
 (plain G64, waypoints: within the tolerance less the slack of points
 merged there); G64 P bounds only the distance to the path.
 
-The pieces are read through their ``point``, ``tangent``, ``evaluate``,
-``sub`` (a part of the piece) and their fields ``length``, ``radius``,
-``angle``, ``kind`` and ``control``; what this module returns, the path
-makes pieces of.
+The pieces (:mod:`pieces`) are read through their ``point``, ``tangent``,
+``evaluate``, ``sub`` (a part of the piece) and their fields ``length``,
+and a helix's ``radius`` and ``angle``, a Bezier's ``control``; what this
+module returns, the path makes pieces of.
 """
 
 from __future__ import annotations
@@ -33,6 +33,7 @@ import numpy as np
 
 from orthoglide_ros.model.types import Array
 from orthoglide_ros.planning import bezier
+from orthoglide_ros.planning.pieces import BezierPiece, HelixPiece, Piece
 
 # A turn nearer than this to an about-turn (rad) is not blended: G stops.
 ABOUT_TURN = 1e-6
@@ -50,8 +51,9 @@ _SAMPLES = np.linspace(0.0, 1.0, 33)
 PROOF_TRIES = 12
 
 
-def line_blend(first, second, tolerance: float, turn: float, room: float,
-               vertex: Optional[float] = None):
+def line_blend(first: HelixPiece, second: HelixPiece, tolerance: float,
+               turn: float, room: float, vertex: Optional[float] = None
+               ) -> Optional[tuple[Array, Array, Array, float, float]]:
     """
     Return the circular arc tangent to two lines, within ``tolerance``.
 
@@ -77,8 +79,9 @@ def line_blend(first, second, tolerance: float, turn: float, room: float,
     return corner - trim * t1, e1, np.cross(e1, t1), radius, trim
 
 
-def curve_blend(first, second, tolerance: float, turn: float, room: float,
-                vertex: Optional[float] = None):
+def curve_blend(first: Piece, second: Piece, tolerance: float, turn: float,
+                room: float, vertex: Optional[float] = None
+                ) -> Optional[tuple[Array, float]]:
     """
     Return ``(control, trim)``: a Bezier blend proven within ``tolerance``.
 
@@ -122,7 +125,8 @@ def curve_blend(first, second, tolerance: float, turn: float, room: float,
     return None
 
 
-def bezier_control(first, second, trim: float) -> Optional[Array]:
+def bezier_control(first: Piece, second: Piece, trim: float
+                   ) -> Optional[Array]:
     """
     Return the control points (4, 3) of the Bezier replacing the corner.
 
@@ -150,7 +154,7 @@ def bezier_control(first, second, trim: float) -> Optional[Array]:
     return control
 
 
-def path_chords(first, second, trim: float, tolerance: float
+def path_chords(first: Piece, second: Piece, trim: float, tolerance: float
                 ) -> tuple[Array, Array, Array]:
     """
     Return the path beside a corner as chords, and their slack.
@@ -164,7 +168,7 @@ def path_chords(first, second, trim: float, tolerance: float
     """
     starts, ends, slack = [], [], []
     for piece, low in ((first, first.length - trim), (second, 0.0)):
-        if piece.kind == 'bezier':
+        if isinstance(piece, BezierPiece):
             curves = piece.sub(low, low + trim).control
             while 2 * len(curves) <= PROOF_SEGMENTS and (
                     bezier.bulge(curves) > 0.01 * tolerance).any():
@@ -181,7 +185,8 @@ def path_chords(first, second, trim: float, tolerance: float
         starts.append(points[:-1])
         ends.append(points[1:])
         slack.append(np.full(count, piece.radius * (sweep / count) ** 2 / 8))
-    return tuple(np.concatenate(v) for v in (starts, ends, slack))
+    return (np.concatenate(starts), np.concatenate(ends),
+            np.concatenate(slack))
 
 
 def _near(points, a, b, slack, tolerance):

@@ -51,10 +51,11 @@ import math
 from typing import Optional
 
 import numpy as np
+import numpy.typing as npt
 
 from orthoglide_ros.model.types import Array
 from orthoglide_ros.planning import bezier
-from orthoglide_ros.planning.gcode import ZERO_LENGTH
+from orthoglide_ros.planning.moves import ZERO_LENGTH
 
 # Turns that make a corner (rad), see the module's docstring.
 CORNER_ANGLE = math.radians(30.0)
@@ -100,9 +101,9 @@ class Chain:
     the pieces).
     """
 
-    kept: Array
+    kept: npt.NDArray[np.intp]
     slack: Array
-    bounds: Array = field(default_factory=lambda: np.zeros(1, dtype=int))
+    bounds: npt.NDArray[np.intp] = field(default_factory=lambda: np.zeros(1, dtype=int))
     curves: dict = field(default_factory=dict)
     corners: int = 0
 
@@ -186,7 +187,7 @@ def analyse(points: Array, feeds: Array, tolerance: float,
 
 
 def decimate(points: Array, feeds: Array, distance: float
-             ) -> tuple[Array, Array]:
+             ) -> tuple[npt.NDArray[np.intp], Array]:
     """
     Return the points kept, as indices, and each one's ``slack`` (m).
 
@@ -260,7 +261,8 @@ def _turns(first, second):
 
 
 def breaks(turns: Array, lengths: Array, feeds: Array, before: bool,
-           after: bool) -> tuple[Array, Array]:
+           after: bool) -> tuple[npt.NDArray[np.bool_],
+                                 npt.NDArray[np.bool_]]:
     """
     Return where a chain's lines make a corner and where a run breaks.
 

@@ -1,10 +1,11 @@
 r"""
 The G-code subset a CAM post-processor for a 3-axis mill emits, read into moves.
 
-:func:`read_gcode` turns the text of a program into :class:`Move` rows
-(straight lines, exact arcs and helices), each with the line of the file it
-came from (counted from 1), its feed and the path control mode of its end.
-Nothing is linearised: an arc stays its centre, plane and angle.
+:func:`read_gcode` turns the text of a program into moves (:mod:`moves`:
+straight lines, exact arcs and helices, splines), each with the line of
+the file it came from (counted from 1), its feed and the path control
+mode of its end. Nothing is linearised: an arc stays its centre, plane
+and angle.
 
 The subset (doc/planning.md has the table):
 
@@ -30,24 +31,28 @@ The subset (doc/planning.md has the table):
 Anything else is refused with :class:`ProgramError` naming the line:
 ``line 7: G41 (cutter compensation) is not supported``. Lines are ended by
 ``\n``, ``\r\n`` or ``\r`` only, as an editor counts them. Every number
-follows one rule (:func:`read_number`): ASCII digits with at most one
-point and a sign, no exponent, at most NUMBER_BOUND in magnitude.
-Coordinates are those of G in the base frame, origin at home;
-:class:`Move` holds them in m, feeds in m/s.
+follows one rule (:func:`gcode_words.read_number`): ASCII digits with
+at most one point and a sign, no exponent, at most NUMBER_BOUND in
+magnitude. Coordinates are those of G in the base frame, origin at home;
+the moves hold them in m, feeds in m/s. :mod:`gcode_words` reads a line
+into its words; this module does what they say.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-import re
 from typing import Optional, Sequence
 
 import numpy as np
 
-from orthoglide_ros.formats.text import clip
 from orthoglide_ros.model.types import Array
 from orthoglide_ros.planning import bezier
+from orthoglide_ros.planning.gcode_words import (lines_of, read_words,
+                                                 sort_words)
+from orthoglide_ros.planning.moves import (Arc, BLEND, EXACT_PATH, EXACT_STOP,
+                                           Line, Move, ProgramError, Spline,
+                                           ZERO_LENGTH)
 
 MM = 1e-3                   # m per program unit, G21
 INCH = 25.4e-3              # m per program unit, G20
@@ -55,9 +60,6 @@ INCH = 25.4e-3              # m per program unit, G20
 MAX_LINE = 1024
 # Most moves in one program.
 MAX_MOVES = 200_000
-# Largest magnitude of any number (a word's, in program units; a waypoint's
-# and a limit's): far beyond any machine, it keeps every square finite.
-NUMBER_BOUND = 1e9
 # An I J K arc is refused where its end's distance to the centre differs
 # from its start's by more than ARC_RADIUS_TOLERANCE (m) or by more than
 # ARC_RADIUS_SHARE of the radius: both must hold (LinuxCNC's rule, its
@@ -68,148 +70,15 @@ ARC_RADIUS_TOLERANCE = 2e-6
 ARC_RADIUS_SHARE = 1e-3
 # In-plane distance (m) below which an arc's end is its start: a full turn.
 FULL_TURN_TOLERANCE = 1e-9
-# A move shorter than this (m) moves nothing and is dropped.
-ZERO_LENGTH = 1e-12
 # A spline whose least speed is below this share of its largest stops (a
 # zero offset, a cusp): refused.
 SPLINE_REGULAR = 1e-9
-
-# The path control modes of a move's end.
-EXACT_STOP = 'exact_stop'       # G61.1
-EXACT_PATH = 'exact_path'       # G61
-BLEND = 'blend'                 # G64
 
 # Planes: the in-plane axes (e1, e2) and the normal e3 = e1 x e2 (indices
 # of x, y, z), and the offset letters of e1, e2.
 PLANES = {17: ((0, 1, 2), 'IJ'), 18: ((2, 0, 1), 'KI'), 19: ((1, 2, 0), 'JK')}
 
 MOTION = {0, 1, 2, 3, 5, 5.1}
-SUPPORTED_G = {0.0, 1.0, 2.0, 3.0, 5.0, 5.1, 17.0, 18.0, 19.0, 20.0, 21.0,
-               40.0, 49.0, 61.0, 61.1, 64.0, 80.0, 90.0, 91.0, 91.1, 94.0}
-# Modal groups of the supported codes (two of one group on a line: refused).
-GROUPS = {0: 'motion', 1: 'motion', 2: 'motion', 3: 'motion', 5: 'motion',
-          5.1: 'motion', 17: 'plane',
-          18: 'plane', 19: 'plane', 20: 'units', 21: 'units',
-          90: 'distance', 91: 'distance', 61: 'path control',
-          61.1: 'path control', 64: 'path control'}
-# Why a code is refused, by family (RS274NGC's names).
-G_NAMES = (
-    ((4,), 'dwell'), ((5.2, 5.3), 'NURBS blocks'),
-    ((7, 8), 'lathe diameter mode'), ((10,), 'data setting'),
-    ((28, 28.1, 30, 30.1), 'return to a stored position'),
-    ((33, 33.1, 76), 'threading'), ((38.2, 38.3, 38.4, 38.5), 'probing'),
-    ((41, 41.1, 42, 42.1), 'cutter compensation'),
-    ((43, 43.1, 43.2), 'tool length offset'),
-    ((52, 92, 92.1, 92.2, 92.3), 'coordinate offsets'),
-    ((53,), 'machine coordinates'),
-    ((54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3), 'work offsets'),
-    ((73, 81, 82, 83, 84, 85, 86, 87, 88, 89), 'canned cycles'),
-    ((90.1,), 'absolute arc centres'), ((93,), 'inverse time feed'),
-    ((95,), 'feed per revolution'), ((96, 97), 'spindle speed mode'),
-    ((98, 99), 'canned cycle return'))
-M_NAMES = (
-    ((0, 1, 60), 'program pause'), ((3, 4, 5, 19), 'spindle'),
-    ((6, 61), 'tool change'), ((7, 8, 9), 'coolant'),
-    ((48, 49, 50, 51, 52, 53), 'override control'),
-    ((62, 63, 64, 65, 66, 67, 68), 'digital and analog outputs'),
-    ((98, 99), 'subprograms'))
-WORD_NAMES = {'S': 'spindle speed', 'T': 'tool', 'H': 'tool length offset',
-              'D': 'cutter compensation', 'A': 'rotary axis A',
-              'B': 'rotary axis B', 'C': 'rotary axis C', 'U': 'axis U',
-              'V': 'axis V', 'W': 'axis W', 'E': 'extruder axis E',
-              'L': 'loop count or data setting L', 'O': 'subroutines',
-              '#': 'parameters', '[': 'expressions'}
-# The letters of the subset's words.
-WORDS = frozenset('GMFNXYZIJKRPQ')
-NUMBER = re.compile(r'[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)\Z')
-NUMBER_CHARS = frozenset('0123456789.+-')
-# Where a refusal comes from, for callers that react to it (the node's
-# reasons): a program that moves nothing, one larger than a bound of the
-# planner, any other.
-EMPTY = 'empty'
-TOO_LARGE = 'too_large'
-INVALID = 'invalid'
-# Only these end a line (str.splitlines also breaks at form feeds, U+2028
-# and more, which an editor shows within a line).
-LINE_END = re.compile(r'\r\n|\r|\n')
-
-
-class ProgramError(ValueError):
-    """
-    A program the planner refuses: the message names the line (``line N``).
-
-    ``line``: the program's line (from 1), None where no line is to blame;
-    ``detail``: the message without it; ``reason``: EMPTY, TOO_LARGE,
-    INVALID (or a subclass's), for callers that react to it.
-    """
-
-    reason = INVALID
-
-    def __init__(self, line: Optional[int], message: str,
-                 reason: Optional[str] = None) -> None:
-        """Keep ``line`` (from 1, or None), the message without it, why."""
-        super().__init__(message if line is None
-                         else f'line {line}: {message}')
-        self.line = line
-        self.detail = message
-        if reason is not None:
-            self.reason = reason
-
-
-def read_number(text: str, what: str) -> float:
-    """
-    Return the value of a number written ``text``, by the one rule.
-
-    ASCII digits with at most one point and an optional sign (RS274NGC's
-    form: no exponent), at most NUMBER_BOUND in magnitude. Raises
-    ValueError naming ``what`` (``X1..2``) otherwise.
-
-    >>> read_number('-12.5', 'X-12.5')
-    -12.5
-    """
-    if not NUMBER.match(text):
-        raise ValueError(f'malformed number {clip(what, 40)}: a number is '
-                         'the digits 0-9 with at most one point')
-    value = float(text)
-    if not abs(value) <= NUMBER_BOUND:
-        raise ValueError(f'{clip(what, 40)}: beyond {NUMBER_BOUND:,.0f}, '
-                         'the largest magnitude a number may have')
-    return value
-
-
-def lines_of(text: str) -> list[str]:
-    """Return the lines of ``text`` as an editor counts them (LINE_END)."""
-    return LINE_END.split(text)
-
-
-@dataclass(frozen=True)
-class Move:
-    """
-    One move of the program, in the base frame (m, m/s).
-
-    ``kind``: ``'line'`` or ``'arc'``; ``start``, ``end``: (3,) arrays of G
-    (m); ``line``: the program's line (from 1); ``feed``: the speed cap of
-    G (m/s; ``math.inf`` for G0 and for waypoints without one); ``mode``:
-    the path control at its end (EXACT_STOP, EXACT_PATH, BLEND) and
-    ``tolerance``: a blend's (m; None: the planner's). An arc also has
-    ``centre`` (m, on the start's level along the normal), ``normal`` (the
-    plane's unit normal e3), ``angle`` (rad, signed about ``normal``: a
-    full turn is 2 pi) and ``rise`` (m along ``normal``, a helix's); a
-    ``'spline'`` (G5, G5.1) its cubic Bezier's ``control`` points (4, 3).
-    """
-
-    kind: str
-    start: Array
-    end: Array
-    line: int
-    feed: float
-    mode: str = EXACT_PATH
-    tolerance: Optional[float] = None
-    centre: Optional[Array] = None
-    normal: Optional[Array] = None
-    angle: float = 0.0
-    rise: float = 0.0
-    control: Optional[Array] = None
 
 
 @dataclass
@@ -247,7 +116,7 @@ def read_gcode(text: str,
     for number, raw in enumerate(lines_of(text), 1):
         if len(raw) > MAX_LINE:
             raise ProgramError(number, f'longer than {MAX_LINE} characters')
-        words = _words(number, raw)
+        words = read_words(number, raw)
         if words is None:
             continue
         if _execute(number, words, state, moves):
@@ -257,84 +126,9 @@ def read_gcode(text: str,
     return moves
 
 
-def _words(number, raw):
-    """
-    Return a line's words as ``[(letter, value, text)]``, None if none.
-
-    The words up to the first one not in the subset, that one last with
-    the value None and the reason it is refused as its text.
-    """
-    text = ''.join(_strip_comments(number, raw).split())
-    if not text or text == '%':
-        return None
-    if text.startswith('/'):
-        raise ProgramError(number, '/ (block delete) is not supported')
-    words = []
-    k = 0
-    while k < len(text):
-        letter = text[k].upper()
-        j = k + 1
-        while j < len(text) and text[j] in NUMBER_CHARS:
-            j += 1
-        digits = text[k + 1:j]
-        word = f'{letter}{digits}'
-        if letter not in WORDS:     # refused in its turn (a G code first)
-            words.append((letter, None, _unknown(text, k, j, words)))
-            return words
-        if j < len(text) and text[j].isdigit():     # not one of 0-9
-            raise ProgramError(number, f'malformed number {word}{text[j]}: '
-                               'a number is the digits 0-9 with at most one '
-                               'point')
-        try:
-            words.append((letter, read_number(digits, word), word))
-        except ValueError as error:
-            raise ProgramError(number, str(error)) from None
-        k = j
-    return words
-
-
-def _unknown(text, k, j, words):
-    """Say why the word at ``text[k:j]`` is not one of the subset's."""
-    letter = text[k].upper()
-    if letter == 'E' and words and k > 0 and text[k - 1] in NUMBER_CHARS:
-        before = words[-1][2]
-        return (f'{before}{text[k:j]}: a number with an exponent; a number '
-                'is the digits 0-9 with at most one point (and E, an '
-                'extruder axis, is not supported)')
-    name = WORD_NAMES.get(letter)
-    if name is not None:
-        word = letter + text[k + 1:j] if letter.isalpha() else letter
-        return f'{clip(word, 40)} ({name}) is not supported'
-    if letter.isalpha():
-        return f'{clip(text[k:j], 40)} (an unknown word) is not supported'
-    return (f'unexpected {text[k]!r} where a word (a letter and a number) '
-            'was expected')
-
-
-def _strip_comments(number, raw):
-    """Return ``raw`` without its ``( )`` and ``;`` comments."""
-    out = []
-    inside = False
-    for char in raw:
-        if inside:
-            if char == ')':
-                inside = False
-            elif char == '(':
-                raise ProgramError(number, 'nested comment')
-        elif char == '(':
-            inside = True
-        elif char == ';':
-            break
-        else:
-            out.append(char)
-    if inside:
-        raise ProgramError(number, 'comment not closed: ( without )')
-    return ''.join(out)
-
-
 def _execute(number, words, state, moves):
     """Apply one line to ``state``, append its move; True at M2/M30."""
-    g_codes, values, end = _sort_words(number, words)
+    g_codes, values, end = sort_words(number, words)
     p_word = values.pop('P', None)
     if 'F' in values:
         feed = values.pop('F')
@@ -409,47 +203,6 @@ def _code(motion):
     return f'G{motion:g}'
 
 
-def _sort_words(number, words):
-    """Split a line into its G codes, other words and whether it ends."""
-    g_codes = []
-    values = {}
-    groups = {}
-    end = False
-    for letter, value, text in words:
-        if value is None:
-            raise ProgramError(number, text)
-        if letter == 'G':
-            code = round(value, 1)
-            if code not in SUPPORTED_G or abs(value - code) > 1e-9:
-                raise ProgramError(number, f'{text} ({_name(G_NAMES, code)}) '
-                                   'is not supported')
-            group = GROUPS.get(code)
-            if group is not None:
-                if group in groups:
-                    raise ProgramError(number, f'{groups[group]} and {text} '
-                                       f'on one line: two {group} codes')
-                groups[group] = text
-            g_codes.append(code)
-        elif letter == 'M':
-            if value in (2.0, 30.0):
-                end = True
-            else:
-                raise ProgramError(number, f'{text} ({_name(M_NAMES, value)})'
-                                   ' is not supported')
-        else:   # one of FNXYZIJKRP (_words refuses the others)
-            if letter in values:
-                raise ProgramError(number, f'two {letter} words on one line')
-            values[letter] = value
-    return g_codes, values, end
-
-
-def _name(table, code):
-    for codes, name in table:
-        if code in codes:
-            return name
-    return 'not in the subset'
-
-
 def _tolerance(number, value, scale):
     if value < 0.0:
         raise ProgramError(number, f'negative blending tolerance P{value:g}')
@@ -473,8 +226,8 @@ def _line(number, state, target):
     if np.linalg.norm(target - state.position) <= ZERO_LENGTH:
         return None
     feed = _feed(number, state, state.motion == 0)
-    return Move('line', state.position.copy(), target, number, feed,
-                state.mode, state.tolerance)
+    return Line(state.position.copy(), target, number, feed, state.mode,
+                state.tolerance)
 
 
 def _arc(number, state, target, words, turns):
@@ -533,9 +286,8 @@ def _arc(number, state, target, words, turns):
     end = target.copy()
     if full:    # the end's in-plane coordinates are the start's, exactly
         end[i1], end[i2] = start[i1], start[i2]
-    return Move('arc', start.copy(), end, number, feed, state.mode,
-                state.tolerance, centre3, normal, angle,
-                float(target[i3] - start[i3]))
+    return Arc(start.copy(), end, number, feed, state.mode, state.tolerance,
+               centre3, normal, angle, float(target[i3] - start[i3]))
 
 
 def _spline(number, state, target, axes, words, p_word):
@@ -594,8 +346,8 @@ def _spline(number, state, target, axes, words, p_word):
         raise ProgramError(number, f'the {name} spline stops where its speed '
                            'vanishes (an offset of zero, or a cusp): not a '
                            'path G can follow by its length')
-    return Move('spline', start.copy(), target.copy(), number, feed,
-                state.mode, state.tolerance, control=control)
+    return Spline(start.copy(), target.copy(), number, feed, state.mode,
+                  state.tolerance, control)
 
 
 def _centre_from_offsets(number, a, b, centre):

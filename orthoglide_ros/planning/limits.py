@@ -44,7 +44,7 @@ from orthoglide_ros.formats.params_file import (NO_SECTION, ParametersFile,
 from orthoglide_ros.formats.text import clip
 from orthoglide_ros.model.robot import JOINT_NAMES
 from orthoglide_ros.model.types import Array, Path
-from orthoglide_ros.planning.gcode import NUMBER_BOUND
+from orthoglide_ros.planning.moves import NUMBER_BOUND
 
 # Every limit: (its key, the has_ key, unit, what it bounds).
 KINDS = (

@@ -50,7 +50,7 @@ import numpy as np
 from orthoglide_ros.model import mechanics, terms
 from orthoglide_ros.model.robot import Robot
 from orthoglide_ros.model.types import Array
-from orthoglide_ros.planning.gcode import ProgramError, TOO_LARGE
+from orthoglide_ros.planning.moves import ProgramError, TOO_LARGE
 from orthoglide_ros.planning.limits import Limits
 from orthoglide_ros.planning import reachability
 from orthoglide_ros.planning.path import Path

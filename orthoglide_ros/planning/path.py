@@ -27,13 +27,15 @@ vectorised: one formula serves lines and helices (a line is a helix of
 radius zero), written from the piece's start so that a huge radius (a
 nearly straight blend) loses no precision; another every span of every
 Bezier piece (blends, G5 splines, fitted runs), each followed by its arc
-length too (:mod:`bezier`), so ``|dp/dw|`` is 1 everywhere and G's
-velocity is continuous wherever its speed is.
+length too, so ``|dp/dw|`` is 1 everywhere and G's velocity is continuous
+wherever its speed is. The pieces and their formulas are :mod:`pieces`';
+the moves, :mod:`moves`' (:func:`from_waypoints` makes them of
+waypoints).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 import math
 from typing import Optional, Sequence
 
@@ -41,10 +43,13 @@ import numpy as np
 
 from orthoglide_ros.model.types import Array
 from orthoglide_ros.planning import bezier, blends, chords
-from orthoglide_ros.planning.gcode import (BLEND, EMPTY, EXACT_PATH,
-                                           EXACT_STOP, Move, NUMBER_BOUND,
-                                           ProgramError, TOO_LARGE,
-                                           ZERO_LENGTH)
+from orthoglide_ros.planning.moves import (BLEND, EMPTY, EXACT_PATH,
+                                           EXACT_STOP, Line, Move,
+                                           NUMBER_BOUND, ProgramError,
+                                           TOO_LARGE, ZERO_LENGTH)
+from orthoglide_ros.planning.pieces import (bezier_piece, columns, cross,
+                                            helix_values, HelixPiece,
+                                            line_piece, move_piece, Piece)
 
 # Tangents within this angle (rad) join smoothly: passed at speed.
 TANGENT = 1e-9
@@ -54,158 +59,8 @@ KINK = 1e-3
 KINK_TOLERANCE = 1e-6
 # A turn nearer than this to an about-turn (rad) is not blended: G stops.
 ABOUT_TURN = blends.ABOUT_TURN
-# A Bezier span whose speed varies more (its least over its largest
-# below this) is halved, at most SPLIT_DEPTH times, so that its arc
-# length is exact to rounding.
-EVEN_SPEED = 0.7
-SPLIT_DEPTH = 10
 # Points of Bezier pieces evaluated at once.
 BEZIER_BLOCK = 4096
-
-
-@dataclass(frozen=True)
-class Piece:
-    """
-    One smooth piece of the path: a helix (a line or an arc) or a Bezier.
-
-    A helix: ``p(phi) = origin + radius ((cos phi - 1) e1 + sin phi e2) +
-    rise (phi / angle) e3`` with ``e2 = e3 x e1``, ``phi = angle w /
-    length`` for ``w`` in [0, length] (``e1`` points from the axis to the
-    start); a line has radius 0, angle 1, rise its length and e3 its
-    direction. A Bezier: its spans' ``control`` points (m, 4, 3), each
-    span's arc length ``table`` (:func:`bezier.tables`), ``starts`` (m + 1,)
-    where each span starts along the piece and its total ``turning``
-    (rad). ``line``: the program's line (from 1); ``feed``: G's speed cap
-    (m/s); ``lines``: ``(k, 2)``, where each of the moves a straight run
-    or a fitted run is made of starts (``w``, its line).
-    """
-
-    kind: str
-    length: float
-    line: int
-    feed: float
-    origin: Array = field(default_factory=lambda: np.zeros(3))
-    e1: Array = field(default_factory=lambda: np.zeros(3))
-    e3: Array = field(default_factory=lambda: np.zeros(3))
-    radius: float = 0.0
-    angle: float = 1.0
-    rise: float = 0.0
-    control: Optional[Array] = None
-    table: Optional[Array] = None
-    starts: Optional[Array] = None
-    turning: float = 0.0
-    lines: Optional[Array] = None
-
-    def evaluate(self, w: Array) -> tuple[Array, Array, Array]:
-        """Return ``p``, ``dp/dw``, ``d2p/dw2`` at ``w`` ((n,) m): (n, 3)."""
-        w = np.asarray(w, dtype=float)
-        if self.kind == 'bezier':
-            j = self._span(w)
-            return bezier.by_length(self.control[j], self.table[j],
-                                    w - self.starts[j])
-        return _helix(self.origin[None], self.e1[None], self.e3[None],
-                      self.radius, self.angle, self.rise, self.length, w)
-
-    def _span(self, w):
-        """Return the span of each ``w`` of a Bezier piece."""
-        return np.clip(np.searchsorted(self.starts, w, side='right') - 1, 0,
-                       len(self.control) - 1)
-
-    def point(self, w: float) -> Array:
-        """Return ``p(w)`` (3,): the helix formula on one point."""
-        if self.kind == 'bezier':
-            return self.evaluate(np.array([w]))[0][0]
-        phi = self.angle * w / self.length
-        half = math.sin(0.5 * phi)
-        return self.origin + self.radius * (
-            -2.0 * half * half * self.e1 + math.sin(phi) * _cross3(
-                self.e3, self.e1)) + (self.rise * w / self.length) * self.e3
-
-    def tangent(self, w: float) -> Array:
-        """Return the unit tangent at ``w`` (3,)."""
-        if self.kind == 'bezier':
-            d1 = self.evaluate(np.array([w]))[1][0]
-        elif self.radius == 0.0:
-            return self.e3
-        else:
-            phi = self.angle * w / self.length
-            d1 = (self.angle * self.radius / self.length) * (
-                math.cos(phi) * _cross3(self.e3, self.e1)
-                - math.sin(phi) * self.e1) + (self.rise / self.length) \
-                * self.e3
-        return d1 / math.sqrt(float(d1 @ d1))
-
-    def room(self, start: bool) -> float:
-        """
-        Return how much a blend may trim at the piece's start (or end), m.
-
-        Half the piece; of a fitted run (a Bezier piece of several moves),
-        half its first (last) span: a blend takes no programmed point but
-        the corner's.
-        """
-        if self.kind == 'bezier' and self.lines is not None:
-            spans = np.diff(self.starts)
-            return 0.5 * float(spans[0] if start else spans[-1])
-        return 0.5 * self.length
-
-    def line_at(self, w: float) -> int:
-        """Return the program's line of the point at ``w``."""
-        if self.lines is None:
-            return self.line
-        k = int(np.searchsorted(self.lines[:, 0], w, side='right')) - 1
-        return int(self.lines[max(k, 0), 1])
-
-    def _lines_within(self, a, b):
-        """Return ``lines`` from ``w = a`` to ``b``, from 0 at ``a``."""
-        if self.lines is None:
-            return None
-        keep = self.lines[:, 0] < b
-        part = self.lines[keep].copy()
-        part[:, 0] = np.maximum(part[:, 0] - a, 0.0)
-        return part
-
-    def sub(self, a: float, b: float) -> 'Piece':
-        """Return the part from ``w = a`` to ``b``, as a piece."""
-        lines = self._lines_within(a, b)
-        if self.kind == 'bezier':
-            first = int(self._span(np.array([a]))[0])
-            last = int(np.clip(np.searchsorted(self.starts, b) - 1, first,
-                               len(self.control) - 1))
-            taus = bezier.parameter(
-                self.control[[first, last]], self.table[[first, last]],
-                np.array([a, b]) - self.starts[[first, last]])
-            control = self.control[first:last + 1].copy()
-            if first == last:
-                control[0] = bezier.part(control[:1], taus[:1], taus[1:])[0]
-            else:
-                control[0] = bezier.part(control[:1], taus[:1],
-                                         np.ones(1))[0]
-                control[-1] = bezier.part(control[-1:], np.zeros(1),
-                                          taus[1:])[0]
-            return bezier_piece(control, self.line_at(a), self.feed, lines)
-        phi = self.angle * a / self.length
-        e2 = _cross3(self.e3, self.e1)
-        return Piece('helix', b - a, self.line_at(a), self.feed,
-                     self.point(a), math.cos(phi) * self.e1
-                     + math.sin(phi) * e2, self.e3, self.radius,
-                     self.angle * (b - a) / self.length,
-                     self.rise * (b - a) / self.length, lines=lines)
-
-
-def _cross(a, b):
-    """Return ``a x b`` of (..., 3) arrays (np.cross is slow on small ones)."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2,
-                     a0 * b1 - a1 * b0), -1)
-
-
-def _cross3(a, b):
-    """Return ``a x b`` of two (3,) arrays, in Python floats (fast)."""
-    a0, a1, a2 = a.tolist()
-    b0, b1, b2 = b.tolist()
-    return np.array((a1 * b2 - a2 * b1, a2 * b0 - a0 * b2,
-                     a0 * b1 - a1 * b0))
 
 
 def _turn(t1, t2):
@@ -215,90 +70,6 @@ def _turn(t1, t2):
     return math.atan2(math.hypot(a1 * b2 - a2 * b1, a2 * b0 - a0 * b2,
                                  a0 * b1 - a1 * b0),
                       a0 * b0 + a1 * b1 + a2 * b2)
-
-
-def _helix(origin, e1, e3, radius, angle, rise, length, w):
-    """
-    Evaluate the helix formula on arrays (every argument per point).
-
-    ``cos phi - 1 = -2 sin^2(phi / 2)``: the offset from the start keeps
-    its precision whatever the radius.
-    """
-    e2 = _cross(e3, e1)
-    k = angle / length
-    phi = k * w
-    c, s = np.cos(phi)[:, None], np.sin(phi)[:, None]
-    half = np.sin(0.5 * phi)[:, None]
-    radius = np.reshape(radius, (-1, 1))
-    k = np.reshape(k, (-1, 1))
-    p = origin + radius * (-2.0 * half * half * e1 + s * e2) + np.reshape(
-        rise / length, (-1, 1)) * w[:, None] * e3
-    d1 = k * radius * (c * e2 - s * e1) + np.reshape(rise / length,
-                                                     (-1, 1)) * e3
-    d2 = -k * k * radius * (c * e1 + s * e2)
-    return p, d1, d2
-
-
-def line_piece(start: Array, end: Array, line: int, feed: float,
-               lines: Optional[Array] = None) -> Piece:
-    """Return the straight piece from ``start`` to ``end`` (m)."""
-    start = np.asarray(start, dtype=float)
-    delta = np.asarray(end, dtype=float) - start
-    length = math.sqrt(float(delta @ delta))
-    e3 = delta / length
-    e1 = _cross3(e3, _AXES[int(np.argmin(np.abs(e3)))])
-    return Piece('helix', length, line, feed, start,
-                 e1 / math.sqrt(float(e1 @ e1)), e3, 0.0, 1.0, length,
-                 lines=lines)
-
-
-_AXES = np.eye(3)
-
-
-def bezier_piece(control: Array, line: int, feed: float,
-                 lines: Optional[Array] = None) -> Piece:
-    """
-    Return the piece of Bezier spans ``control`` ((m, 4, 3) or (4, 3), m).
-
-    A span whose speed varies by more than EVEN_SPEED is halved (de
-    Casteljau), at most SPLIT_DEPTH times: the same curve, its arc length
-    exact to rounding on each part.
-    """
-    control = np.asarray(control, dtype=float).reshape(-1, 4, 3)
-    for _ in range(SPLIT_DEPTH):
-        least, most = bezier.least_speed(control)
-        uneven = least < EVEN_SPEED * most
-        if not uneven.any():
-            break
-        left, right = bezier.split(control[uneven], np.full(
-            int(uneven.sum()), 0.5))
-        spans = np.empty((len(control) + len(left), 4, 3))
-        at = np.flatnonzero(uneven) + np.arange(len(left))
-        spans[at], spans[at + 1] = left, right
-        keep = np.ones(len(spans), dtype=bool)
-        keep[at] = keep[at + 1] = False
-        spans[keep] = control[~uneven]
-        control = spans
-    table = bezier.tables(control)
-    starts = np.concatenate(([0.0], np.cumsum(table[:, -1])))
-    return Piece('bezier', float(starts[-1]), line, feed, control=control,
-                 table=table, starts=starts,
-                 turning=float(bezier.turning(control).sum()), lines=lines)
-
-
-def move_piece(move: Move) -> Piece:
-    """Return a program move as a piece (a line, an arc, a helix, a spline)."""
-    if move.kind == 'line':
-        return line_piece(move.start, move.end, move.line, move.feed)
-    if move.kind == 'spline':
-        return bezier_piece(move.control, move.line, move.feed)
-    e3 = move.normal
-    offset = move.start - move.centre
-    offset = offset - e3 * float(offset @ e3)
-    radius = float(np.linalg.norm(offset))
-    length = math.hypot(radius * move.angle, move.rise)
-    return Piece('helix', length, move.line, move.feed, move.start.copy(),
-                 offset / radius, e3, radius, move.angle, move.rise)
 
 
 @dataclass(frozen=True)
@@ -313,7 +84,7 @@ class Path:
     ``moves``: the moves (or segments of waypoints) it was made of.
     """
 
-    pieces: tuple
+    pieces: tuple[Piece, ...]
     stops: Array
     start_line: Optional[int] = None
     moves: int = 0
@@ -355,10 +126,10 @@ class Path:
         helix = table['helix'][index]
         if helix.any():
             k = index[helix]
-            values = _helix(table['origin'][k], table['e1'][k],
-                            table['e3'][k], table['radius'][k],
-                            table['angle'][k], table['rise'][k],
-                            table['length'][k], w[helix])
+            values = helix_values(table['origin'][k], table['e1'][k],
+                                  table['e3'][k], table['radius'][k],
+                                  table['angle'][k], table['rise'][k],
+                                  table['length'][k], w[helix])
             for o, v in zip(out, values):
                 o[helix] = v
         rows = np.flatnonzero(~helix)
@@ -374,53 +145,14 @@ class Path:
                                       along - table['span_start'][span])
             for o, v in zip(out, values):
                 o[at] = v
-        return tuple(out)
+        return out[0], out[1], out[2]
 
     @property
-    def table(self) -> dict:
-        """
-        Return the pieces' fields as arrays, made once.
-
-        ``helix`` (bool), ``origin``, ``e1``, ``e3`` (n, 3), ``radius``,
-        ``angle``, ``rise``, ``length``, ``turning``, ``spans`` (n,), and the
-        spans of the Bezier pieces, in order: ``control`` (S, 4, 3),
-        ``tables`` (S, SUBSPANS + 1), ``span_start`` (S,) along its piece
-        and ``span_s`` along the path, ``span_turning`` (S,) rad,
-        ``span_first`` (n + 1,) each piece's first, ``piece_s`` (n,) where
-        each piece starts along the path.
-        """
+    def table(self) -> dict[str, Array]:
+        """Return the pieces' fields as arrays, made once (:func:`columns`)."""
         table = self.__dict__.get('_cached_table')
         if table is None:
-            pieces = self.pieces
-            curves = [p for p in pieces if p.kind == 'bezier']
-            spans = np.array([0 if p.control is None else len(p.control)
-                              for p in pieces])
-            lengths = np.array([p.length for p in pieces])
-            piece_s = np.concatenate(([0.0], np.cumsum(lengths)[:-1]))
-            span_start = np.concatenate(
-                [p.starts[:-1] for p in curves] or [np.zeros(0)])
-            control = np.concatenate(
-                [p.control for p in curves] or [np.zeros((0, 4, 3))])
-            table = {
-                'helix': np.array([p.kind == 'helix' for p in pieces]),
-                'origin': np.array([p.origin for p in pieces]),
-                'e1': np.array([p.e1 for p in pieces]),
-                'e3': np.array([p.e3 for p in pieces]),
-                'radius': np.array([p.radius for p in pieces]),
-                'angle': np.array([p.angle for p in pieces]),
-                'rise': np.array([p.rise for p in pieces]),
-                'length': lengths,
-                'turning': np.array([p.turning for p in pieces]),
-                'spans': spans,
-                'control': control,
-                'tables': np.concatenate(
-                    [p.table for p in curves]
-                    or [np.zeros((0, bezier.SUBSPANS + 1))]),
-                'span_start': span_start,
-                'span_turning': bezier.turning(control),
-                'span_s': np.repeat(piece_s, spans) + span_start,
-                'span_first': np.concatenate(([0], np.cumsum(spans))),
-                'piece_s': piece_s}
+            table = columns(self.pieces)
             object.__setattr__(self, '_cached_table', table)
         return table
 
@@ -444,7 +176,7 @@ def from_moves(moves: Sequence[Move], tolerance: float,
 
     def chained(k):     # the junction after move k is within a chain
         return k + 1 < len(moves) and _fitted(moves[k], tolerance) and \
-            moves[k].kind == moves[k + 1].kind == 'line'
+            isinstance(moves[k], Line) and isinstance(moves[k + 1], Line)
     groups = []         # straight runs' (pieces, ends), or chains
     k = 0
     while k < len(moves):
@@ -566,10 +298,10 @@ def _straight_runs(moves):
     while k < len(moves):
         move = moves[k]
         last = k
-        if move.kind == 'line':
+        if isinstance(move, Line):
             direction = _unit(move.end - move.start)
             while (last + 1 < len(moves) and moves[last].mode != EXACT_STOP
-                   and moves[last + 1].kind == 'line'
+                   and isinstance(moves[last + 1], Line)
                    and moves[last + 1].feed == move.feed
                    and _turn(direction, _unit(moves[last + 1].end
                                               - moves[last + 1].start))
@@ -653,14 +385,14 @@ def _blend(first, second, tolerance, turn, vertex):
     room = min(first.room(False), second.room(True))
     line = first.line_at(first.length)
     feed = min(first.feed, second.feed)
-    if first.kind == second.kind == 'helix' and \
-            first.radius == second.radius == 0.0:
+    if isinstance(first, HelixPiece) and isinstance(second, HelixPiece) \
+            and first.radius == second.radius == 0.0:
         arc = blends.line_blend(first, second, tolerance, turn, room, vertex)
         if arc is None:
             return None
         origin, e1, e3, radius, trim = arc
-        return Piece('helix', radius * turn, line, feed, origin, e1, e3,
-                     radius, turn, 0.0), trim
+        return HelixPiece(radius * turn, line, feed, origin, e1, e3, radius,
+                          turn, 0.0), trim
     curve = blends.curve_blend(first, second, tolerance, turn, room, vertex)
     if curve is None:
         return None
@@ -689,22 +421,22 @@ def from_waypoints(points: Array, feeds: Optional[Array], lines: Sequence[int],
         k = int(np.argmax(far))
         raise ProgramError(lines[k] or None, f'the point {points[k].tolist()}'
                            f' m is beyond {NUMBER_BOUND:,.0f} m')
-    keep = [0]
+    kept = [0]
     for k in range(1, len(points)):
-        step = points[k] - points[keep[-1]]
+        step = points[k] - points[kept[-1]]
         if math.sqrt(float(step @ step)) > ZERO_LENGTH:
-            keep.append(k)
-    if len(keep) < 2:
+            kept.append(k)
+    if len(kept) < 2:
         raise ProgramError(None, 'zero-length program: no waypoint is away '
                            'from the first', EMPTY)
-    keep = np.array(keep)
+    keep = np.array(kept)
     chord_feeds = np.full(len(keep) - 1, math.inf) if feeds is None else \
         np.asarray(feeds, dtype=float)[keep[1:]]
     chord_lines = np.asarray(lines)[keep[1:]]
     if tolerance <= 0.0:
         _refuse_beyond(len(points), _corners(points[keep]) + 1, max_pieces)
-        moves = [Move('line', points[i], points[k], int(line), feed,
-                      EXACT_PATH) for i, k, line, feed in zip(
+        moves = [Line(points[i], points[k], int(line), feed, EXACT_PATH,
+                      None) for i, k, line, feed in zip(
                           keep[:-1], keep[1:], chord_lines, chord_feeds)]
         return from_moves(moves, tolerance, lines[0] or None, max_pieces)
     chain = chords.analyse(points[keep], chord_feeds, tolerance)
@@ -729,6 +461,6 @@ def _corners(points):
     """Return the corners of the polyline ``points``: turns above TANGENT."""
     step = np.diff(points, axis=0)
     unit = step / np.linalg.norm(step, axis=1)[:, None]
-    cross = np.linalg.norm(_cross(unit[:-1], unit[1:]), axis=1)
-    return int((np.arctan2(cross, (unit[:-1] * unit[1:]).sum(1))
+    sines = np.linalg.norm(cross(unit[:-1], unit[1:]), axis=1)
+    return int((np.arctan2(sines, (unit[:-1] * unit[1:]).sum(1))
                 > TANGENT).sum())

@@ -22,8 +22,9 @@ import numpy as np
 from orthoglide_ros.formats.csvfile import CsvError, read_columns
 from orthoglide_ros.formats.text import read_text
 from orthoglide_ros.model.types import Path as FilePath
-from orthoglide_ros.planning.gcode import (EMPTY, lines_of, ProgramError,
-                                           read_gcode)
+from orthoglide_ros.planning.gcode import read_gcode
+from orthoglide_ros.planning.gcode_words import lines_of
+from orthoglide_ros.planning.moves import EMPTY, ProgramError
 from orthoglide_ros.planning.path import from_moves, from_waypoints, Path
 
 # Largest program read (bytes).

@@ -13,7 +13,7 @@ import numpy as np
 
 from orthoglide_ros.formats.params_file import ParametersFileError
 from orthoglide_ros.planning import parametrization
-from orthoglide_ros.planning.gcode import ProgramError
+from orthoglide_ros.planning.moves import ProgramError
 from orthoglide_ros.planning.limits import (limits_from_params_file,
                                             LimitsError, load_limits,
                                             paper_limits)
