@@ -219,12 +219,13 @@ def checks():
 
 def chord_loop(robot, limits, lagrange):
     """
-    The 3D loop as 95 chords (plain G64, 1 m/s): as fast as its curve?
+    Print how fast a 3D loop of 95 chords is against its curve.
 
-    On the robot without friction (toppra's problem): the plan against
-    toppra's optimum along the true curve (8000 intervals), the motion's
-    distance to that curve, the points' to the path, the same chords as
-    lines (G64 P0.01); ``lagrange``: every sample re-solved.
+    Plain G64, 1 m/s, on the robot without friction (toppra's problem):
+    the plan against toppra's optimum along the true curve (8000
+    intervals), the motion's distance to that curve, the points' to the
+    path, the same chords as lines (G64 P0.01); ``lagrange``: every sample
+    re-solved.
     """
     _, check = checks()
     robot = robot.frictionless()
@@ -261,7 +262,7 @@ def chord_loop(robot, limits, lagrange):
 
 def chord_spiral(robot, limits, spiral):
     """
-    The spiral: the default tolerance against 1 mm, and against lines.
+    Print the spiral: the default tolerance against 1 mm, against lines.
 
     ``spiral``: a copy of LinuxCNC's file (read as plain G64), or None:
     the reconstruction. All of it (1000 chords, 5.1 mm to 0.05 mm) and its

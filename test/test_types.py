@@ -16,6 +16,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 TYPED = ('orthoglide_ros/model', 'orthoglide_ros/formats',
+         'orthoglide_ros/planning',
          'orthoglide_ros/tools/identification',
          'orthoglide_ros/tools/calibration')
 

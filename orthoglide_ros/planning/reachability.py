@@ -8,12 +8,20 @@ high`` per row, ``x = sdot^2``, ``u = sddot``. :func:`passes` runs the
 backward pass (the largest controllable ``x`` of each gridpoint, each
 stage's one-dimensional programme solved in closed form: ``u`` is bounded
 by affine functions of ``x``) and the forward pass (the largest ``u``
-keeping the next ``x`` controllable). The rows are made STAGE_BLOCK
-stages at a time and the loops run on Python floats LIST_BLOCK stages at
-a time, so the memory is a few arrays of the grid's size.
+keeping the next ``x`` controllable). The rows come as
+:class:`StageRows` (:class:`constraints.Rows`: the robot's dynamics), so
+that the passes know nothing of the robot, as toppra's solver wrapper and
+reachability algorithm know nothing of its constraints. The rows are made
+STAGE_BLOCK stages at a time and the loops run on Python floats
+LIST_BLOCK stages at a time, so the memory is a few arrays of the grid's
+size.
 """
 
+from typing import NamedTuple, Protocol
+
 import numpy as np
+
+from orthoglide_ros.model.types import Array
 
 # |coefficient of u| below this: a row bounds x alone.
 U_ZERO = 1e-10
@@ -24,6 +32,25 @@ STAGE_BLOCK = 16_384
 LIST_BLOCK = 8192
 
 
+class StageRows(Protocol):
+    """
+    The constraints of a grid's gridpoints, as the passes read them.
+
+    ``low <= alpha u + beta x <= high`` per row: ``alpha``, ``beta`` (M,
+    k), ``bounds(friction, part)`` ``(low, high)`` of the gridpoints
+    ``part`` with ``friction`` (N, (M, 3)); ``cap`` and ``cap_extra``
+    (M,): bounds on ``x`` alone.
+    """
+
+    alpha: Array
+    beta: Array
+    cap: Array
+    cap_extra: Array
+
+    def bounds(self, friction: Array, part: slice) -> tuple[Array, Array]:
+        """Return ``(low, high)`` of the gridpoints ``part``."""
+
+
 class StageFailure(Exception):
     """A stage without a solution on the first plan: the grid is refined."""
 
@@ -31,30 +58,64 @@ class StageFailure(Exception):
 class Unbounded(Exception):
     """Nothing bounds G's acceleration on ``stage``."""
 
-    def __init__(self, stage):
+    def __init__(self, stage: int) -> None:
         """Keep the stage (from its first gridpoint, from 0)."""
         super().__init__(stage)
         self.stage = stage
 
 
-def passes(rows, delta, friction, first):
+def passes(rows: StageRows, delta: Array, friction: Array,
+           first: bool) -> tuple[Array, Array]:
     """
     Run the backward and forward passes: ``x`` (M,) and ``u`` (M - 1,).
 
-    ``rows``: the gridpoints' constraints (``alpha``, ``beta`` (M, k),
-    ``bounds(friction, part)`` their ``low``, ``high``, ``cap`` and
-    ``cap_extra`` (M,) on ``x`` alone); ``delta`` (M - 1,) m, 0 at a
-    junction. ``first``: the first plan on this grid, where a stage
+    ``rows``: the gridpoints' constraints (:class:`StageRows`); ``delta``
+    (M - 1,) m, 0 at a junction; ``friction`` (N, (M, 3)) at each
+    gridpoint. ``first``: the first plan on this grid, where a stage
     without a solution means the grid is too coarse (:class:`StageFailure`);
     later (friction at other speeds) such a stage stops G. Raises
     :class:`Unbounded` where nothing bounds ``u``.
     """
-    low, high = rows.bounds(friction, slice(None))
-    # The families some gridpoint bounds, then both ends of each stage.
-    used = np.nonzero((np.isfinite(high) | np.isfinite(low)).any(0))[0]
-    del low, high
-    count = len(delta)
     cap = np.minimum(rows.cap, rows.cap_extra)
+    stages = _stages(rows, friction, delta, cap)
+    mvc = _settled(stages, first)
+    bound = _backward(delta, cap, mvc, stages.slope, stages.bottom)
+    return _forward(delta, bound, stages.top, stages.slope, stages.bottom)
+
+
+class _Stages(NamedTuple):
+    """
+    Each stage's programme in ``(u, x)``, and where it has no solution.
+
+    Per row ``bottom + slope x <= u <= top + slope x`` ((M - 1, k));
+    ``mvc`` (M - 1,): the largest ``x`` some ``u`` meets (negative: none);
+    ``failed``: the moving stages no ``x >= 0`` meets.
+    """
+
+    top: Array
+    slope: Array
+    bottom: Array
+    mvc: Array
+    failed: Array
+
+
+def _used(rows, friction):
+    """Return the columns of the rows some gridpoint bounds."""
+    low, high = rows.bounds(friction, slice(None))
+    return np.nonzero((np.isfinite(high) | np.isfinite(low)).any(0))[0]
+
+
+def _stages(rows, friction, delta, cap):
+    """
+    Return every stage's programme (:class:`_Stages`), STAGE_BLOCK at once.
+
+    Its rows from both its gridpoints (:func:`_stage_rows`), its largest
+    feasible ``x`` (:func:`_largest_feasible`) within ``cap`` (M,) and the
+    bounds of rows on ``x`` alone. Raises :class:`Unbounded` on the first
+    moving stage where nothing bounds ``u`` from above or below.
+    """
+    used = _used(rows, friction)
+    count = len(delta)
     top, slope, bottom = (np.empty((count, 2 * len(used)))
                           for _ in range(3))
     mvc = np.empty(count)
@@ -71,12 +132,22 @@ def passes(rows, delta, friction, first):
                                       slope[part], np.minimum(cap[part],
                                                               x_alone))
         failed[part] = ((mvc[part] < 0.0) | blocked) & (delta[part] > 0.0)
-    if failed.any():
+    return _Stages(top, slope, bottom, mvc, failed)
+
+
+def _settled(stages, first):
+    """
+    Return each stage's largest feasible ``x``, a failed stage's 0.
+
+    On the first plan a failed stage refines the grid
+    (:class:`StageFailure`); later G stops there (``x`` 0).
+    """
+    mvc = stages.mvc
+    if stages.failed.any():
         if first:
             raise StageFailure()
-        mvc[failed] = 0.0
-    bound = _backward(delta, cap, mvc, slope, bottom)
-    return _forward(delta, bound, top, slope, bottom)
+        mvc[stages.failed] = 0.0
+    return mvc
 
 
 def _stage_rows(rows, friction, used, delta, part, top, slope, bottom):
