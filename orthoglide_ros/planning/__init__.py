@@ -10,8 +10,13 @@ of chords followed as the curve they sample (:mod:`chords`), corners
 blended (:mod:`blends`). :mod:`limits` reads the actuators' limits in
 ros2_control's ``joint_limits`` form, :mod:`programs` reads a program file
 (G-code or CSV waypoints), and :mod:`parametrization` finds the
-time-optimal motion along the path (TOPP-RA's reachability analysis, its
-passes in :mod:`reachability`, on the package's inverse dynamics,
-friction and all) and checks every sample of it with
-:func:`orthoglide_ros.model.mechanics.solve_batch`.
+time-optimal motion along the path (TOPP-RA's reachability analysis on
+the package's inverse dynamics, friction and all), split as toppra
+splits it: the gridpoints (:mod:`grid`), the dynamics' rows along the
+path (:mod:`constraints`), the passes (:mod:`reachability`), the time
+law and its samples (:mod:`timing`), jerk limits (:mod:`smoothing`),
+every sample checked with
+:func:`orthoglide_ros.model.mechanics.solve_batch`
+(:mod:`verification`), and a plan's memory, time and refusals
+(:mod:`bounds`).
 """
