@@ -370,6 +370,9 @@ def _join(pieces, ends, slack, tolerance, start_line, moves):
         if k < n - 1 and made[k] is not None:
             out.append(made[k][0])
             out_stops.append(False)
+    if not out:
+        raise ProgramError(None, 'zero-length program: no piece of its path '
+                           f'is longer than {ZERO_LENGTH * 1e3:g} m', EMPTY)
     out_stops.append(True)
     out_stops[0] = True
     return Path(tuple(out), np.array(out_stops), start_line, moves)

@@ -320,7 +320,7 @@ def columns(pieces: Sequence[Piece]) -> dict[str, Array]:
     """
     curves = [p for p in pieces if isinstance(p, BezierPiece)]
     spans = np.array([len(p.control) if isinstance(p, BezierPiece) else 0
-                      for p in pieces])
+                      for p in pieces], dtype=np.int64)
     helices = [(p.origin, p.e1, p.e3, p.radius, p.angle, p.rise)
                if isinstance(p, HelixPiece) else _NOT_A_HELIX
                for p in pieces]
