@@ -19,7 +19,7 @@ import math
 import numpy as np
 from orthoglide_ros.model.bodies import elements
 from orthoglide_ros.model.mechanics import (
-    DEFAULT_SINGULARITY_MARGIN, REASONS, solve, solve_batch,
+    DEFAULT_SINGULARITY_MARGIN, format_vector, REASONS, solve, solve_batch,
     workspace_status, WorkspaceError)
 from orthoglide_ros.model.robot import Robot
 import pytest
@@ -217,6 +217,19 @@ def test_batch_error_names_the_first_bad_row(reason):
     assert error.value.reason == reason
     assert error.value.row == 5
     assert 'sample 5' in str(error.value)
+
+
+@pytest.mark.parametrize('position', ((0.5, 0.5, 0.5), (0.787, 0.0, 0.0)))
+def test_a_refused_position_is_a_field_beside_what_is_said_of_it(position):
+    """Callers name the point their own way: no message is parsed."""
+    with pytest.raises(WorkspaceError) as batch:
+        solve_batch(Robot(), np.array([[0.0, 0.0, 0.0], position]))
+    error = batch.value
+    assert error.position.tolist() == list(position)
+    assert error.finding.startswith(('is out of reach', 'is too near'))
+    assert error.detail == (f'position {format_vector(position)} m '
+                            f'{error.finding}')
+    assert str(error) == f'sample 1: {error.detail}'
 
 
 def test_no_nan_anywhere_around_the_reachable_region():

@@ -82,14 +82,20 @@ class WorkspaceError(ValueError):
     An input the mechanics refuse: ``reason`` is one of REASONS.
 
     ``row`` is the 0-based sample index for batch calls, else None;
-    ``detail`` the message without it.
+    ``detail`` the message without it; ``position`` the position refused
+    (m, or None) and ``finding`` what is said of it (``detail`` is
+    ``position [x, y, z] m`` and the finding where ``position`` is given).
     """
 
     def __init__(self, reason: str, message: str,
-                 row: Optional[int] = None) -> None:
+                 row: Optional[int] = None, position: Any = None) -> None:
+        detail = message if position is None else \
+            f'position {format_vector(position)} m {message}'
         where = '' if row is None else f'sample {row}: '
-        super().__init__(where + message)
-        self.detail = message
+        super().__init__(where + detail)
+        self.detail = detail
+        self.finding = message
+        self.position = position
         self.reason = reason
         self.row = row
 
@@ -173,9 +179,9 @@ def solve(robot: Robot, position: Vector, velocity: Vector = ZERO,
         power = (lamd[0] * force[0], lamd[1] * force[1], lamd[2] * force[2])
     if conditioning < margin or conditioning == 0.0:
         raise _beyond_j2(robot, position) or WorkspaceError('singular', (
-            f'position {format_vector(position)} m is too near a singularity of '
+            'is too near a singularity of '
             f'J2: 1/kappa_F(J_lambda) = {below(conditioning, margin)} < '
-            f'margin {margin:g}'))
+            f'margin {margin:g}'), position=position)
     if min(ratio) < margin:     # the leg test above, rounded apart
         raise _leg_error(robot, position, margin)
     if not math.isfinite(sum(lamdd) + sum(force) + sum(power)) and not all(
@@ -260,9 +266,9 @@ def solve_batch(robot: Robot, positions: Rows,
             raise _beyond_j2(robot, p[row], row) or _on_singularity(
                 p[row], row)
         raise WorkspaceError('singular', (
-            f'position {format_vector(p[row])} m is too near a singularity of J2: '
+            'is too near a singularity of J2: '
             f'1/kappa_F(J_lambda) = {below(conditioning[row], margin)} < '
-            f'margin {margin:g}'), row)
+            f'margin {margin:g}'), row, position=p[row])
     ratio = out[5] / lengths
     near = ratio.min(1) < margin    # the leg test above, rounded apart
     if near.any():
@@ -536,8 +542,8 @@ def platform_velocity(robot: Robot, position: Vector,
         velocity = np.full(3, math.nan)
     if not np.isfinite(velocity).all():
         raise WorkspaceError('singular', (
-            f'position {format_vector(position)} m is on a singularity of '
-            'J2: the platform velocity is undefined'))
+            'is on a singularity of J2: the platform velocity is '
+            'undefined'), position=position)
     return tuple(velocity.tolist())
 
 
@@ -689,15 +695,15 @@ def _beyond_j2(robot, position, row=None):
     if np.linalg.det(jacobians(robot, position)[1]) >= 0.0:   # J1 > 0
         return None
     return WorkspaceError('singular', (
-        f'position {format_vector(position)} m is beyond a singularity of '
+        'is beyond a singularity of '
         'J2 (det J_lambda < 0): the other assembly mode, which a robot '
-        'assembled as at home cannot reach'), row)
+        'assembled as at home cannot reach'), row, position=position)
 
 
 def _on_singularity(position, row=None):
     """Refuse a position exactly on a singularity (a WorkspaceError)."""
     return WorkspaceError('singular', (
-        f'position {format_vector(position)} m is on a singularity'), row)
+        'is on a singularity'), row, position=position)
 
 
 def _leg_fault(robot, position, margin, row=None):
@@ -718,15 +724,15 @@ def _leg_fault(robot, position, margin, row=None):
         rho = yq * yq + zq * zq
         if rho >= length * length:
             return WorkspaceError('unreachable', (
-                f'position {format_vector(position)} m is out of reach of leg {name}: '
+                f'is out of reach of leg {name}: '
                 f'its distance {math.sqrt(rho):.4g} m from the leg\'s axis '
-                f'is not below {what} = {length:g} m'), row)
+                f'is not below {what} = {length:g} m'), row, position=position)
         ratio = math.sqrt(1.0 - rho / (length * length))
         if ratio < margin:
             return WorkspaceError('singular', (
-                f'position {format_vector(position)} m is too near a singularity of '
+                'is too near a singularity of '
                 f'J1: leg {name} has alpha/{what} = {below(ratio, margin)} '
-                f'< margin {margin:g}'), row)
+                f'< margin {margin:g}'), row, position=position)
     return None
 
 
@@ -742,9 +748,9 @@ def _leg_error(robot, position, margin, row=None):
     leg = int(np.argmin(status.alpha_ratio))
     what = 'l3' if robot.as_drawn else f'L_{LEG_NAMES[leg]}'
     return WorkspaceError('singular', (
-        f'position {format_vector(position)} m is on the edge of the singularity '
+        'is on the edge of the singularity '
         f'margin {margin:g} of J1: leg {LEG_NAMES[leg]} has alpha/{what} = '
-        f'{status.alpha_ratio[leg]:.3g}'), row)
+        f'{status.alpha_ratio[leg]:.3g}'), row, position=position)
 
 
 def below(value: float, bound: float) -> str:

@@ -125,10 +125,9 @@ class Models:
             except mechanics.WorkspaceError as error:
                 row = start + (error.row or 0)
                 point = mechanics.format_vector(p[row - start])
-                detail = error.detail.removeprefix(f'position {point} m ')
                 line, what = point_words(path, index[row], w[row])
-                raise PlanningError(line, f'{what} at {point} m {detail}') \
-                    from None
+                raise PlanningError(line, f'{what} at {point} m '
+                                    f'{error.finding}') from None
             for name, value in zip(_FIELDS, (
                     p, along.force, curving.force, statics.force,
                     statics.lambda_, curving.lambdadot, curving.lambdaddot,
