@@ -495,3 +495,15 @@ def test_record_refuses_bad_and_repeated_topics_at_once(capsys, tmp_path,
                          '--duration', 1, *argv)
     assert_bad_input(code, out, err, *words)
     assert not (tmp_path / 'bag').exists()
+
+
+def test_a_csv_refusal_names_its_file_apart_from_where_and_why(tmp_path):
+    """Callers put the file's name their own way: no message is parsed."""
+    path = tmp_path / 'w.csv'
+    path.write_text('x,y\n0,0\n')
+    with pytest.raises(csvfile.CsvError) as error:
+        csvfile.read_columns(path, [('position', ('x', 'y', 'z'), True)],
+                             'waypoints')
+    assert error.value.source == 'waypoints'
+    assert error.value.detail.startswith("no 'z' column")
+    assert str(error.value) == 'waypoints: ' + error.value.detail

@@ -34,7 +34,17 @@ MAX_LINES = 2 * MAX_ROWS
 
 
 class CsvError(ValueError):
-    """A CSV file that cannot be read as asked; the message says where."""
+    """
+    A CSV file that cannot be read as asked: ``source: detail``.
+
+    ``source`` names the file, ``detail`` says where in it and why.
+    """
+
+    def __init__(self, source: str, detail: str) -> None:
+        """Keep the file's name and the message without it."""
+        super().__init__(f'{source}: {detail}')
+        self.source = source
+        self.detail = detail
 
 
 def read_columns(path: Path, groups: Sequence[tuple[str, Sequence[str], bool]],
@@ -64,12 +74,12 @@ def read_columns(path: Path, groups: Sequence[tuple[str, Sequence[str], bool]],
                 return _read(reader, groups, name, frozenset(blank),
                              max_rows)
             except csv.Error as error:
-                raise CsvError(f'{name}: line {reader.line_num}: '
+                raise CsvError(name, f'line {reader.line_num}: '
                                f'{error}') from None
     except OSError as error:
-        raise CsvError(f'cannot read {name}: {error.strerror}') from None
+        raise CsvError(name, f'cannot read: {error.strerror}') from None
     except UnicodeDecodeError:
-        raise CsvError(f'{name}: not a UTF-8 text file') from None
+        raise CsvError(name, 'not a UTF-8 text file') from None
 
 
 def _lines(stream, name, most=None):
@@ -86,11 +96,11 @@ def _lines(stream, name, most=None):
         if not line:
             return
         if len(line) > MAX_LINE and len(line.rstrip('\r\n')) > MAX_LINE:
-            raise CsvError(f'{name}: line {number}: longer than {MAX_LINE} '
+            raise CsvError(name, f'line {number}: longer than {MAX_LINE} '
                            'characters: not a CSV file of numbers')
         yield line
     if stream.readline(1):
-        raise CsvError(f'{name}: more than {most} lines: split the file')
+        raise CsvError(name, f'more than {most} lines: split the file')
 
 
 def _read(reader, groups, name, blank=frozenset(), max_rows=None):
@@ -98,21 +108,21 @@ def _read(reader, groups, name, blank=frozenset(), max_rows=None):
     header = next(reader, None)
     if not header:
         example = ','.join(c for _, columns, _ in groups for c in columns)
-        raise CsvError(f'{name}: empty file: expected a header line such '
+        raise CsvError(name, f'empty file: expected a header line such '
                        f'as {example}')
     header = [h.strip().lower() for h in header]
     known = {c for _, columns, _ in groups for c in columns}
     index = {}
     for i, column in enumerate(header):
         if column in index and column in known:
-            raise CsvError(f'{name}: column {column!r} appears twice')
+            raise CsvError(name, f'column {column!r} appears twice')
         index.setdefault(column, i)
     present = []
     for group, columns, required in groups:
         found = [c for c in columns if c in index]
         if found and len(found) < len(columns) or required and not found:
             missing = [c for c in columns if c not in index]
-            raise CsvError(f'{name}: no {missing[0]!r} column: the {group} '
+            raise CsvError(name, f'no {missing[0]!r} column: the {group} '
                            f'needs all of {", ".join(columns)}')
         present.append(columns if found else None)
     wanted = [c for columns in present if columns for c in columns]
@@ -124,10 +134,10 @@ def _read(reader, groups, name, blank=frozenset(), max_rows=None):
             continue        # blank line
         row, line = len(lines) + 1, reader.line_num
         if row > max_rows:
-            raise CsvError(f'{name}: more than {max_rows} data rows: split '
+            raise CsvError(name, f'more than {max_rows} data rows: split '
                            'the file')
         if len(cells) != len(header):
-            raise CsvError(f'{name}: data row {row} (line {line}): '
+            raise CsvError(name, f'data row {row} (line {line}): '
                            f'{len(cells)} cells where the header has '
                            f'{len(header)}: a comma missing or too many')
         for column, i in zip(wanted, cells_at):
@@ -141,7 +151,7 @@ def _read(reader, groups, name, blank=frozenset(), max_rows=None):
                 value = math.nan
             if not math.isfinite(value):
                 raise CsvError(
-                    f'{name}: data row {row} (line {line}), column '
+                    name, f'data row {row} (line {line}), column '
                     f'{column!r}: {cell!r} is not a finite number')
             data.append(value)
         lines.append(line)

@@ -73,8 +73,7 @@ def _waypoints(text):
         with _stdin(io.StringIO(text, newline='')):
             values, lines = read_columns('-', WAYPOINT_GROUPS, _NAME)
     except CsvError as error:
-        raise ProgramError(None, str(error).removeprefix(_NAME + ': ')) \
-            from None
+        raise ProgramError(None, error.detail) from None
     points = values['position']
     if len(points) == 0:
         raise ProgramError(None, 'zero-length program: no waypoint', EMPTY)
