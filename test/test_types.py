@@ -1,7 +1,8 @@
 """
-The public API of model/, formats/, identification and calibration is typed.
+The public API of model/, formats/, planning/ and two tools is typed.
 
-Every public function and method there has annotations on its parameters
+The tools: identification and calibration. Every public function and
+method there has annotations on its parameters
 and its return (checked from the source), and mypy, with the project's
 configuration (setup.cfg), finds them consistent with the code and its
 callers within those packages.
