@@ -146,6 +146,27 @@ def test_a_reversal_stops_between_two_curves():
                        out[-1] * 1e-3, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize('off', (2e-6, 1e-4, 0.05))
+def test_near_an_about_turn_g_stops_or_its_blend_keeps_its_tangents(off):
+    """
+    Two splines meeting in a hairpin, ``off`` (rad) short of an about-turn.
+
+    Where a blend's ends would lie nearer than a nanometre their tangents
+    are rounding (1e-6 rad at 3e-12 m): G stops; where it fits, the blend
+    is tangent to both, as every junction G passes at speed.
+    """
+    back = math.pi / 4 + off
+    text = ('G21 G90 G17 G64 F6000\nG5.1 X10 Y0 I5 J5\n'
+            'G5.1 X{:.9f} Y{:.9f} I{:.9f} J{:.9f}\n'.format(
+                10 - 20 * math.cos(back), 20 * math.sin(back),
+                -5 * math.cos(back), 5 * math.sin(back)))
+    path = path_of(text, 1e-6)
+    assert min(piece.length for piece in path.pieces) >= 1e-9
+    passed = ~path.stops[1:-1]
+    assert (turns(path)[passed] <= 1e-6).all(), turns(path)
+    assert path.stops[1:-1].any() == (off < 0.01)
+
+
 def test_a_long_move_beside_short_ones_stays_a_line_passed_at_speed():
     """
     Chords of an arc, a 40 mm line tangent to it, chords of another arc.

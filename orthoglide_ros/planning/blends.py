@@ -39,6 +39,10 @@ from orthoglide_ros.planning.pieces import BezierPiece, HelixPiece, Piece
 ABOUT_TURN = 1e-6
 # A trim shorter than this (m) blends nothing.
 SHORTEST_TRIM = 1e-9
+# A Bezier blend whose ends are nearer than this (m; a hairpin's, near an
+# about-turn) would have its tangents set by the rounding of its control
+# points (1e-6 rad at 3e-12 m): not made, G stops.
+SHORTEST_CHORD = 1e-9
 # The proof that a Bezier blend is within its tolerance: the programmed
 # path as at most PROOF_SEGMENTS chords a piece, the curve split in halves
 # at most PROOF_DEPTH times into at most PROOF_CURVES parts.
@@ -133,7 +137,7 @@ def bezier_control(first: Piece, second: Piece, trim: float
     From ``trim`` before the corner to ``trim`` after it, tangent to both
     pieces; None where it cannot be followed by its arc length (its
     hodograph's control points not on one side of a plane, where ``|B'|``
-    might vanish) or turns about.
+    might vanish), turns about, or would be shorter than SHORTEST_CHORD.
     """
     if trim <= SHORTEST_TRIM:
         return None
@@ -143,7 +147,7 @@ def bezier_control(first: Piece, second: Piece, trim: float
     tb = second.tangent(trim)
     chord = float(np.linalg.norm(b - a))
     turn = _turn(ta, tb)
-    if chord <= 0.0 or turn >= math.pi - ABOUT_TURN:
+    if chord <= SHORTEST_CHORD or turn >= math.pi - ABOUT_TURN:
         return None
     # Arms of the Bezier nearest a circular arc of that turn.
     arm = (2.0 / 3.0) * chord * (math.tan(0.25 * turn) / math.sin(0.5 * turn)
