@@ -196,12 +196,18 @@ def test_a_trajectory_flood_never_saturates_and_a_normal_one_follows():
     A new joint trajectory every millisecond to the controller.
 
     Alternating targets 0 and 10 mm, 50 ms ahead, with the simulator as
-    plant: no command at the effort limit, no slider faster than 0.5 m/s, and
-    the normal trajectory sent afterwards brings the robot home.
+    plant: the controller keeps commanding, at least a quarter as often
+    as after the flood in the same run (a starved one falls near zero;
+    the flood's own cost slows it on a loaded machine: 0.52-0.99 at load
+    5.5, where a count of 500 commands failed with 480, 2026-12-06),
+    no command at the effort limit, no slider faster than 0.5 m/s, and
+    the normal trajectory sent afterwards brings the robot home (within
+    6.5 s: its 1 s and the settling a loaded machine needs; 1.3 mm off
+    after 1.5 s at load 5.5, 2026-12-06).
     """
     result = harness.trajectory_flood()
     assert result.alive and result.sent > 1000, result
-    assert result.commands > 500 and result.saturated == 0, result
+    assert result.pace >= 0.25 and result.saturated == 0, result
     assert result.max_speed <= 0.5, result
     assert result.mode == 'following' and result.final_error < 1e-3, result
 

@@ -113,6 +113,7 @@ class Flood:
 
     sent: int                   # one-point trajectories published
     commands: int               # commands during the flood and after it
+    pace: float                 # command rate in the flood / after it
     saturated: int              # of them, a force at the effort limit
     max_force: float
     max_speed: float            # largest |lambdadot| measured
@@ -418,7 +419,8 @@ def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
     return result
 
 
-def trajectory_flood(flood=1.5, period=0.001, after=1.5):
+def trajectory_flood(flood=1.5, period=0.001, after=1.5, home=1e-3,
+                     settle=5.0):
     """
     Flood the tracking controller with one-point joint trajectories.
 
@@ -426,7 +428,9 @@ def trajectory_flood(flood=1.5, period=0.001, after=1.5):
     ``period`` s a new trajectory with one point 50 ms ahead, its target
     alternating between 0 and 10 mm on every slider (efforts zero, header
     stamp zero: "now"), for ``flood`` s; then one normal trajectory, home
-    in 1 s with the force that holds it there, followed for ``after`` s.
+    in 1 s with the force that holds it there, followed for ``after`` s
+    and up to ``settle`` s more until every slider is within ``home`` (m)
+    of it (a loaded machine's loop is late, not wrong).
     """
     with Nodes() as nodes, Peer() as peer:
         commands = peer.record('commands', Float64MultiArray)
@@ -457,15 +461,24 @@ def trajectory_flood(flood=1.5, period=0.001, after=1.5):
             wait = start + sent * period - time.monotonic()
             if wait > 0:
                 time.sleep(wait)
+        end = time.monotonic()
         pub.publish(one_point(0.0, HOLD, 1.0))
         time.sleep(after)
+        deadline = time.monotonic() + settle
+        while time.monotonic() < deadline and max(
+                abs(x) for x in states[-1][1].position) >= home:
+            time.sleep(0.05)
+        stop = time.monotonic()
         forces = [max(abs(f) for f in m.data) for _, m in commands[first:]]
+        during = sum(t < end for t, _ in commands[first:])
+        rate_after = (len(forces) - during) / (stop - end)
         speeds = [max(abs(v) for v in m.velocity)
                   for t, m in list(states) if t >= start and len(m.velocity)]
         status = peer.status('tracking_controller', timeout=3.0)
         values = status[2] if status else {}
         return Flood(
             sent=sent, commands=len(forces),
+            pace=during / (end - start) / rate_after if rate_after else 0.0,
             saturated=sum(f >= MAX_EFFORT for f in forces),
             max_force=max(forces, default=0.0),
             max_speed=max(speeds, default=0.0),
