@@ -146,6 +146,7 @@ def test_statics_beyond_max_effort_is_refused(capsys, files):
 @pytest.mark.parametrize('argv, words', (
     (['--rate', '0'], ['--rate', 'in [1, 100000] Hz']),
     (['--tolerance', '-1'], ['--tolerance']),
+    (['--tolerance=-1e-5'], ['--tolerance', 'in [0, 0.01] m']),
     (['--max-speed', 'nan'], ['--max-speed']),
     (['--start', '0', '0'], ['--start']),
 ))
@@ -156,6 +157,18 @@ def test_bad_options(capsys, files, argv, words):
     assert code == 2 and out == ''
     for word in words:
         assert word in err
+
+
+def test_a_tolerance_below_a_blend_of_1_nm_stops_at_corners_as_0(capsys,
+                                                                 files):
+    program, limits, output = files
+    program.write_text('G64\nG1 F600 X10\nG1 Y10\nG1 X20 Y12\nM2\n')
+    motions = []
+    for tolerance in ('1e-300', '0', '1e-5'):
+        assert run(capsys, 'plan', '--input', program, '--output', output,
+                   '--tolerance', tolerance)[0] == 0
+        motions.append(output.read_text())
+    assert motions[0] == motions[1] != motions[2]
 
 
 def test_limits_that_bound_nothing_are_refused(capsys, files, tmp_path):
