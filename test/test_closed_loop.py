@@ -22,11 +22,14 @@ platform centre's, measured minus the trajectory at the measurement's stamp
   is left of the error with the model told is timing, along the path
   (a latency, a descheduled process), and grows with the machine's load,
   while the unmodelled weight sags the platform across it too (figures:
-  doc/measurements.md, "Closed loop").
-- A process stalled longer than the command timeout spoils a real-time
-  pass now and then (the plant braked or skipped simulated time, or the
-  controller held): such a pass is run again, three passes at most
-  (``ClosedLoop.run_unspoiled``, the one home of that rule).
+  doc/measurements.md, "Closed loop"). It is measured from SETTLE after
+  both the plant and the model acknowledged the payload: the two are set
+  by two service calls, and the moments between them (25-40 ms here) are
+  a model not yet told.
+- A stalled process spoils a real-time pass now and then (the plant
+  braked, skipped simulated time or applied one force for half the command
+  timeout, or the controller held): such a pass is run again, three passes
+  at most (``ClosedLoop.run_unspoiled``, the one home of that rule).
 """
 
 import sys
@@ -39,8 +42,15 @@ from orthoglide_ros.model.trajectory import PAPER_TARGET
 pytest.importorskip('rclpy')
 harness = pytest.importorskip('orthoglide_testing.closed_loop')
 
-pytestmark = [pytest.mark.ros, needs_scripts(
+# serial: a second real-time loop beside (a parallel neighbour's nodes at the
+# same SCHED_FIFO priority) stalls this one; the pick-up's verdict failed on
+# a fresh clone in the parallel phase (told 0.41 mm off the path where a
+# pass alone measures 0.006-0.036 mm, CI 2026-12-06).
+pytestmark = [pytest.mark.ros, pytest.mark.serial, needs_scripts(
     'simulator', 'feedforward', 'tracking_controller', 'setpoint_publisher')]
+# s after the payload was acknowledged: the PD loop's transient, measured
+# to fade within 0.1 s (0.03 mm off the path at once, 0.008 after 0.1 s).
+SETTLE = 0.2
 
 
 def report(run):
@@ -101,7 +111,8 @@ def test_a_payload_picked_up_the_feedforward_is_told_tracks_5x_better(
         run = closed_loop.run_unspoiled('paper', feedforward=True,
                                         pickup=(at, 5.0, told))
         report(run)
-        off_path[told] = harness.off_path_mm(run, PAPER_TARGET, at)
+        off_path[told] = harness.off_path_mm(run, PAPER_TARGET,
+                                             run.told_s + SETTLE)
         after[told] = harness.rms_mm(run, at)
     print(f'after the pick-up, off the path: told {off_path[True]:.4f} mm, '
           f'not told {off_path[False]:.4f} mm (tracking error {after[True]:.4f}'

@@ -4,12 +4,14 @@ The demos' verdict: a run the machine spoiled is FAILED, named why.
 ``orthoglide_testing.verdicts``, without DDS: a stream with fewer
 setpoints than the rate promises, a gap of several periods, outputs lost
 (``scripts/demo.py``); a closed-loop pass with the plant braked, the
-controller held or simulated time skipped (the loop demos and tests).
+controller held, simulated time skipped or one force applied too long (the
+loop demos and tests).
 """
 
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from orthoglide_testing import verdicts
 
@@ -32,12 +34,13 @@ def test_no_word_from_the_publisher_is_spoiled():
         'the setpoint publisher did not say what it sent']
 
 
-def loop_pass(braked=0, joint_error=0.0, skipped_s=0.0):
+def loop_pass(braked=0, joint_error=0.0, skipped_s=0.0, same_command_s=0.004):
     return SimpleNamespace(braked=braked, skipped_s=skipped_s,
+                           same_command_s=same_command_s,
                            joint_error=np.full((10, 3), joint_error))
 
 
-def test_a_closed_loop_pass_is_spoiled_by_a_brake_a_hold_or_a_skip():
+def test_a_closed_loop_pass_is_spoiled_by_a_brake_a_hold_a_skip_a_stuck_force():
     tolerance = float(verdicts.PATH_TOLERANCE.max())
     assert verdicts.pass_spoiled_by(loop_pass()) is None
     assert verdicts.pass_spoiled_by(
@@ -49,3 +52,18 @@ def test_a_closed_loop_pass_is_spoiled_by_a_brake_a_hold_or_a_skip():
     assert verdicts.pass_spoiled_by(loop_pass(skipped_s=0.25)) == \
         'the plant skipped 0.250 s of simulated time'
     assert verdicts.pass_spoiled_by(loop_pass(skipped_s=0.1)) is None
+    assert verdicts.pass_spoiled_by(loop_pass(same_command_s=0.074)) == \
+        'the plant applied one force for 74 ms'
+    assert verdicts.pass_spoiled_by(loop_pass(same_command_s=0.05)) is None
+
+
+def test_the_longest_unchanged_force_is_timed_from_the_states():
+    """Two states per loop period, then one force over 5 states: 10 ms."""
+    harness = pytest.importorskip('orthoglide_testing.closed_loop')
+    period = 0.002
+    efforts = np.array([[0.0] * 3] * 4 + [[1.0, 2.0, 3.0]] * 2
+                       + [[1.5, 2.0, 3.0]] * 5 + [[1.0, 2.0, 3.0]] * 2)
+    times = np.arange(len(efforts)) * period
+    assert harness.longest_same_force(times, efforts, period) == \
+        pytest.approx(0.010)
+    assert harness.longest_same_force(times, np.zeros((5, 3)), period) == 0.0

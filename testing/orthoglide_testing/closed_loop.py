@@ -128,7 +128,8 @@ QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
 
 Run = namedtuple('Run', (
     'label', 'times', 'position_error', 'joint_error', 'rms_mm', 'max_mm',
-    'samples', 'start_ns', 'lambdas', 'efforts', 'braked', 'skipped_s'))
+    'samples', 'start_ns', 'lambdas', 'efforts', 'braked', 'skipped_s',
+    'told_s', 'same_command_s'))
 Run.__doc__ = """One pass of the closed loop.
 
 ``times`` (s since the pass's first setpoint), ``position_error`` (N, 3)
@@ -141,7 +142,12 @@ from (:func:`log_of`); ``braked``: states published while the plant was
 held after it had started (zero effort: no command for the simulator's
 ``command_timeout``, a process stalled), which spoil a pass; ``skipped_s``:
 the simulated time the plant skipped in the pass (s: a stalled simulator
-drops what it cannot catch up with, ``cores/simulator.py``).
+drops what it cannot catch up with, ``cores/simulator.py``); ``told_s``:
+with a pick-up, when the plant and (if told) the model had both
+acknowledged the payload (s since the first setpoint; None without);
+``same_command_s``: the longest the plant applied one unchanged nonzero
+force (s: the controller, at the loop rate, changes it every period
+unless a process of the loop stalled).
 """
 
 
@@ -232,6 +238,7 @@ class ClosedLoop:
         self.recorder = None
         self.executor = None
         self._realtime = None
+        self._told_ns = None
 
     def __enter__(self):
         """Start the nodes and wait until the recorder reaches them."""
@@ -332,6 +339,7 @@ class ClosedLoop:
         if not answer.success:
             raise LoopError(f'simulator reset refused: {answer.message}')
         self.recorder.clear()
+        self._told_ns = None
         duration = motion.duration * passes
         if mode == 'trajectory':
             self._send_trajectory(motion, duration)
@@ -345,7 +353,7 @@ class ClosedLoop:
                     f'feedforward {"told" if pickup[2] else "not told"}'
                     if pickup else ''))
         return _tracking(label, self.recorder, motion, duration,
-                         1.0 / self.plant_rate)
+                         1.0 / self.plant_rate, self._told_ns)
 
     def run_unspoiled(self, *args, report=None, case=None, **kwargs):
         """
@@ -415,6 +423,7 @@ class ClosedLoop:
                        if not r.successful]
             if refused:
                 raise LoopError(f'payload refused: {refused}')
+        self._told_ns = self.recorder.get_clock().now().nanoseconds
 
     def _send_trajectory(self, motion, duration, lead=2.0, hold=0.5):
         """
@@ -587,11 +596,12 @@ def robot_parameters(robot):
             for name, value in robot.as_parameters().items()]
 
 
-def _tracking(label, recorder, motion, duration, period):
+def _tracking(label, recorder, motion, duration, period, told_ns=None):
     """
     Compare the recorded pass with the motion: a :class:`Run`.
 
-    ``period``: the plant's step (s), for the time it skipped.
+    ``period``: the plant's step (s), for the time it skipped; ``told_ns``:
+    when a pick-up's payload was acknowledged (node clock, ns; None: none).
     """
     if recorder.first_setpoint is None:
         raise LoopError(f'{label}: no setpoint seen')
@@ -615,7 +625,20 @@ def _tracking(label, recorder, motion, duration, period):
                float(np.sqrt(np.mean(norm_mm ** 2))), float(norm_mm.max()),
                len(samples), start, lam, efforts,
                int(held[started:].sum()),
-               float(np.clip(np.diff(times) - period, 0.0, None).sum()))
+               float(np.clip(np.diff(times) - period, 0.0, None).sum()),
+               None if told_ns is None else (told_ns - start) * 1e-9,
+               longest_same_force(times, efforts, period))
+
+
+def longest_same_force(times, efforts, period):
+    """Return the longest stretch (s) of one unchanged nonzero effort row."""
+    first = np.flatnonzero(np.r_[True, (np.diff(efforts, axis=0) != 0).any(
+        axis=1)])
+    last = np.r_[first[1:], len(times)] - 1
+    applied = efforts[first].any(axis=1)
+    if not applied.any():
+        return 0.0
+    return float((times[last] - times[first])[applied].max() + period)
 
 
 def log_of(run):

@@ -22,6 +22,12 @@ PATH_TOLERANCE = np.array(next(s.default for s in PARAMETERS.specs
 # (s): the simulator's default command timeout, the stall the loop's other
 # processes are held to.
 SKIP_LIMIT = 0.1
+# A pass is spoiled when the plant applied one unchanged force for longer
+# than this (s): half the command timeout, a stall the plant did not brake
+# for. The loop changes it every period (4 ms at 250 Hz); one pass alone
+# held one for 8-18 ms, beside a second loop of real-time nodes up to 74 ms
+# (2026-12-06, test/test_closed_loop.py).
+SAME_COMMAND_LIMIT = 0.05
 ATTEMPTS = 3            # passes run before giving up on an unspoiled one
 # A stream is spoiled when fewer setpoints were sent than SENT_SHARE of
 # duration x rate, two were more than GAP_PERIODS periods apart, or more
@@ -35,13 +41,17 @@ def pass_spoiled_by(run):
     """
     Return what spoiled a pass of the closed loop (text), None if nothing.
 
-    ``run``: a :class:`closed_loop.Run` (its ``braked``, ``joint_error``
-    and ``skipped_s``). Spoiled: the plant was braked in it, a joint error
-    beyond the path tolerance (the controller held), or the plant skipped
-    more than SKIP_LIMIT of simulated time in all.
+    ``run``: a :class:`closed_loop.Run` (its ``braked``, ``joint_error``,
+    ``skipped_s`` and ``same_command_s``). Spoiled: the plant was braked in
+    it, a joint error beyond the path tolerance (the controller held), the
+    plant skipped more than SKIP_LIMIT of simulated time in all, or applied
+    one force longer than SAME_COMMAND_LIMIT.
     """
     if run.braked:
         return f'the plant was braked for {run.braked} states'
+    if run.same_command_s > SAME_COMMAND_LIMIT:
+        return (f'the plant applied one force for '
+                f'{run.same_command_s * 1e3:.0f} ms')
     if (np.abs(run.joint_error) > PATH_TOLERANCE).any():
         return 'a joint error beyond the path tolerance stopped the controller'
     if run.skipped_s > SKIP_LIMIT:
