@@ -191,6 +191,10 @@ def test_looping_setpoints_go_back_smoothly():
     assert result.jump_v <= result.jump_v_bound, result
 
 
+# serial: beside a parallel neighbour and the pure set (load 4-7), 2 of 585
+# commands reached the effort limit (a fresh clone, 2026-12-06); alone,
+# none in the runs of that day.
+@pytest.mark.serial
 def test_a_trajectory_flood_never_saturates_and_a_normal_one_follows():
     """
     A new joint trajectory every millisecond to the controller.
