@@ -3,9 +3,10 @@ The demos' verdict: a run the machine spoiled is FAILED, named why.
 
 ``orthoglide_testing.verdicts``, without DDS: a stream with fewer
 setpoints than the rate promises, a gap of several periods, outputs lost
-(``scripts/demo.py``); a closed-loop pass with the plant braked, the
-controller held, simulated time skipped or one force applied too long (the
-loop demos and tests).
+(``scripts/demo.py``); a reliable stream whose producer was late past the
+node's input history (``reliability``); a closed-loop pass with the plant
+braked, the controller held, simulated time skipped or one force applied
+too long (the loop demos and tests).
 """
 
 from types import SimpleNamespace
@@ -67,3 +68,14 @@ def test_the_longest_unchanged_force_is_timed_from_the_states():
     assert harness.longest_same_force(times, efforts, period) == \
         pytest.approx(0.010)
     assert harness.longest_same_force(times, np.zeros((5, 3)), period) == 0.0
+
+
+def test_a_reliable_run_is_stalled_when_its_producer_was_later_than_the_cover():
+    """Depth 100 at 1 kHz covers 100 ms: the producer 233 ms late is beyond."""
+    checks = pytest.importorskip('orthoglide_testing.reliability.checks')
+    run = dict(depth=100, rate=1000, late_max_ms=99.0)
+    assert checks.stalled_by(run) is None
+    assert checks.stalled_by(dict(run, late_max_ms=233.0)) == (
+        'the producer was 233 ms late, past the 100 ms the input history '
+        'covers')
+    assert checks.stalled_by(dict(run, depth=10, late_max_ms=11.0))

@@ -8,7 +8,10 @@ script; a recorder process keeps every output. With best-effort input
 keep its memory, and end on the newest setpoint; with reliable input and
 an input history that covers the stalls of a busy machine
 (``harness.LOSSLESS_DEPTH``, 100 ms at 1 kHz: doc/deployment.md's recipe for
-"nothing lost") every setpoint must give exactly one output. The runs and
+"nothing lost") every setpoint must give exactly one output; a run in which
+the producer, the run's highest priority, was itself late by more than that
+history covers measured a stalled machine and is run again
+(``harness.stalled_by``). The runs and
 the bounds
 are in ``orthoglide_testing.reliability`` (shared with
 ``scripts/reliability_report.py``); the soak versions last 10 s.

@@ -37,5 +37,6 @@ from orthoglide_testing.reliability.cases import (  # noqa: F401
     attack_payloads, ATTACKS, big_messages, flood, kill_restart,
     lossless_args, producer_restart, reliable_stream, stop_mid_stream)
 from orthoglide_testing.reliability.checks import (  # noqa: F401
-    check_outputs, in_epoch, match_stamps, problems, summary_lines)
+    check_outputs, in_epoch, match_stamps, problems, stalled_by,
+    summary_lines)
 from orthoglide_testing.reliability.runs import *  # noqa: F401,F403

@@ -97,6 +97,22 @@ STALL_LIMIT_MS = 500.0
 STOP_LIMIT = 5.0                # s from SIGINT/SIGTERM to exit
 
 
+def stalled_by(result):
+    """
+    Return how the machine stalled a reliable run (text), None if it did not.
+
+    The producer runs at the run's highest priority: late by more than the
+    node's input history covers (depth / rate), everything below it was
+    stalled as long, and what was lost then is the machine's, not the
+    node's (:func:`cases.reliable_stream` runs it again).
+    """
+    cover_ms = 1e3 * result['depth'] / result['rate']
+    if result['late_max_ms'] > cover_ms:
+        return (f'the producer was {result["late_max_ms"]:.0f} ms late, past '
+                f'the {cover_ms:.0f} ms the input history covers')
+    return None
+
+
 def problems(result, only=None, skip=()):
     """
     Return the expectations a run's result does not meet (strings).
@@ -206,7 +222,9 @@ def summary_lines(result):
                 f'input depth {r["depth"]}: '
                 f'{r["sent"]} sent, {r["outputs"]} outputs, missing '
                 f'{r["missing"]}, duplicates {r["duplicates"]}, extra '
-                f'{r["extra"]}; node CPU {r["node_cpu"]:.0%} of a core')
+                f'{r["extra"]}; node CPU {r["node_cpu"]:.0%} of a core; '
+                f'producer late up to {r["late_max_ms"]:.1f} ms, outputs '
+                f'silent up to {r["silence_ms"]:.1f} ms')
     elif case == 'kill_restart':
         r = result
         times = r['recovery_s']
