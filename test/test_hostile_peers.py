@@ -59,16 +59,22 @@ def late(result):
         result['latency_outside_max'] + 0.1
 
 
+ATTACKS_NEEDED = 4      # of the 8 the attacker's 2 s at 4 Hz would send
+
+
 def test_big_messages_do_not_starve_a_stream_on_the_same_input():
     result = reliability.big_messages()
     print(result)
-    if late(result):
+    if late(result) or result['attacks'] < ATTACKS_NEEDED:
         # A second pass when only the timing missed: on two busy cores a
-        # spike of the machine (not of the node) can pass 100 ms once.
+        # spike of the machine (not of the node) can pass 100 ms once, and
+        # the attacker, at normal scheduling, may send too few of its 3-16
+        # MB messages to test anything (2 beside a parallel neighbour and
+        # the pure set, a fresh clone, 2026-12-06).
         result = reliability.big_messages()
         print(result)
     assert result['crashes'] == 0 and result['internal_errors'] == 0
-    assert result['attacks'] >= 4
+    assert result['attacks'] >= ATTACKS_NEEDED
     assert result['missing'] == 0 and result['duplicates'] == 0, result
     assert not late(result), result
     assert int(result['rejected'].get('rejected oversize', 0)) >= 2, result

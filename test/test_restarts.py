@@ -40,6 +40,11 @@ def check(result):
     assert not harness.problems(result), harness.problems(result)
 
 
+# serial: a restart's start-up (imports, at normal scheduling until the node
+# takes its priority) shares the cores: 1.10, 2.16, 0.99 s beside a parallel
+# neighbour and the pure set, where 2 s is the bar (a fresh clone,
+# 2026-12-06); alone 1.0-1.1 s.
+@pytest.mark.serial
 @in_a_namespace
 def test_node_killed_mid_stream_resumes():
     """SIGKILL mid-stream, restart, three times: each within 2 s, right."""
