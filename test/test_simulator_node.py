@@ -162,9 +162,17 @@ def test_held_publishes_every_tick_until_the_first_command(graph):
     shared = pose_stamps.intersection(joint_stamps)
     assert len(shared) >= 0.9 * min(len(joints), len(poses)), len(shared)
     status = wait_diagnostics(g, lambda v: True)
-    assert status.level == DiagnosticStatus.OK
-    assert status.message == 'held: waiting for a command'
     v = values(status)
+    if status.level == DiagnosticStatus.WARN:
+        # The machine, not the node: on a loaded machine this in-process
+        # node may fall behind its grid, which it says, and nothing else
+        # (beside a parallel neighbour and the pure set, 2026-12-06).
+        assert float(v['time dropped (s)']) > 0.0
+        assert status.message.startswith('slower than real time'), \
+            status.message
+    else:
+        assert status.level == DiagnosticStatus.OK
+        assert status.message == 'held: waiting for a command'
     assert (v['state'], v['steps'], v['sim time (s)']) == ('held', '0', '0')
     assert g.node.core.plant.time == 0.0
 
