@@ -28,7 +28,7 @@ platform centre's, measured minus the trajectory at the measurement's stamp
   a model not yet told.
 - A stalled process spoils a real-time pass now and then (the plant
   braked, skipped simulated time or applied one force for half the command
-  timeout, or the controller held): such a pass is run again, three passes
+  timeout, or the controller held): such a pass is run again, five passes
   at most (``ClosedLoop.run_unspoiled``, the one home of that rule).
 """
 
