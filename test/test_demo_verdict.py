@@ -79,3 +79,15 @@ def test_a_reliable_run_is_stalled_when_its_producer_was_later_than_the_cover():
         'the producer was 233 ms late, past the 100 ms the input history '
         'covers')
     assert checks.stalled_by(dict(run, depth=10, late_max_ms=11.0))
+
+
+def test_a_spoiled_run_is_run_again_up_to_the_attempts_the_last_kept():
+    results, heard = iter([1, 2, 3, 4, 5, 6]), []
+    spoiled = lambda n: None if n == 3 else f'run {n} stalled'  # noqa: E731
+    assert verdicts.first_unspoiled(lambda: next(results), spoiled,
+                                    lambda *a: heard.append(a)) == 3
+    assert heard == [(1, 'run 1 stalled', 1), (2, 'run 2 stalled', 2)]
+    always = iter(range(10))
+    assert verdicts.first_unspoiled(lambda: next(always), str,
+                                    attempts=verdicts.ATTEMPTS) == \
+        verdicts.ATTEMPTS - 1

@@ -61,7 +61,8 @@ from orthoglide_testing.load import (busy_loops, REALTIME,
 from orthoglide_testing.messages import cartesian_message
 from orthoglide_testing.processes import (node_executable,
                                           start_node_process, stop_process)
-from orthoglide_testing.verdicts import ATTEMPTS, pass_spoiled_by
+from orthoglide_testing.verdicts import (ATTEMPTS, first_unspoiled,
+                                         pass_spoiled_by)
 
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import JOINT_NAMES, Robot
@@ -360,21 +361,16 @@ class ClosedLoop:
         :meth:`run` until a pass is not spoiled by a stall, ATTEMPTS at most.
 
         Spoiled (:func:`verdicts.pass_spoiled_by`): a process of the loop
-        stalled longer than the command timeout, which busy cores do now and
-        then, and the pass measured the stall, not the loop. Returns the first
+        stalled, which busy cores do now and then, and the pass measured the
+        stall, not the loop (:func:`verdicts.first_unspoiled`). Returns the first
         unspoiled pass, else the last. ``report(text)`` (optional) hears about
         every spoiled pass, named ``case`` (default the run's label).
         """
-        for attempt in range(1, ATTEMPTS + 1):
-            run = self.run(*args, **kwargs)
-            spoiled = pass_spoiled_by(run)
-            if spoiled is None:
-                return run
-            if report:
-                report(f'{case or run.label}: {spoiled} (a process stalled longer '
-                       f'than the command timeout), pass {attempt} of '
-                       f'{ATTEMPTS}')
-        return run
+        def heard(run, spoiled, attempt):
+            report(f'{case or run.label}: {spoiled} (a process stalled), '
+                   f'pass {attempt} of {ATTEMPTS}')
+        return first_unspoiled(lambda: self.run(*args, **kwargs),
+                               pass_spoiled_by, heard if report else None)
 
     def _stream(self, motion, duration, passes, pickup=None):
         """Stream the motion from a setpoint_publisher process."""

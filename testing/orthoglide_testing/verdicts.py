@@ -39,6 +39,25 @@ GAP_PERIODS = 10.0
 LOSS_SHARE = 0.005
 
 
+def first_unspoiled(make, spoiled_by, heard=None, attempts=ATTEMPTS):
+    """
+    Return ``make()``'s first result nothing spoiled, else its last.
+
+    The one home of the rule that a run the machine spoiled is run again:
+    ``make()`` runs once, ``spoiled_by(result)`` names what spoiled it
+    (None: nothing), ``attempts`` runs at most; ``heard(result, spoiled,
+    attempt)`` (optional) hears about every spoiled run.
+    """
+    for attempt in range(1, attempts + 1):
+        result = make()
+        spoiled = spoiled_by(result)
+        if spoiled is None:
+            break
+        if heard:
+            heard(result, spoiled, attempt)
+    return result
+
+
 def pass_spoiled_by(run):
     """
     Return what spoiled a pass of the closed loop (text), None if nothing.

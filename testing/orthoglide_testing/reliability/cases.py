@@ -19,7 +19,7 @@ from orthoglide_testing.reliability.runs import (
     BEST_EFFORT_INPUT, Child, DEEP_OUTPUT, drained, HarnessError,
     load_outputs, LOSSLESS_DEPTH, Monitor, ONE_HOST_PROFILE, producer_log,
     Run, START_TIMEOUT)
-from orthoglide_testing.verdicts import ATTEMPTS
+from orthoglide_testing.verdicts import ATTEMPTS, first_unspoiled
 
 
 def flood(duration, kind='trajectory', qos='best_effort', say=None):
@@ -136,15 +136,15 @@ def reliable_stream(rate, duration, kind='trajectory', depth=LOSSLESS_DEPTH,
     it is run again, ``attempts`` runs at most, the last returned.
     """
     say = say or (lambda text: None)
-    for attempt in range(1, attempts + 1):
+
+    def once():
         result = _reliable_once(rate, duration, kind, depth)
-        say(f'reliable {rate} Hz: {result["sent"]} sent, {result["missing"]} '
-            f'missing, {result["duplicates"]} duplicates')
-        stalled = stalled_by(result)
-        if stalled is None:
-            break
-        say(f'reliable {rate} Hz: {stalled}, run {attempt} of {attempts}')
-    return result
+        say(f'reliable {rate} Hz: {result["sent"]} sent, '
+            f'{result["missing"]} missing, {result["duplicates"]} duplicates')
+        return result
+    return first_unspoiled(once, stalled_by, lambda result, stalled, attempt: say(
+        f'reliable {rate} Hz: {stalled}, run {attempt} of {attempts}'),
+        attempts)
 
 
 def _reliable_once(rate, duration, kind, depth):
