@@ -14,15 +14,16 @@ import sys
 import pytest
 
 from orthoglide_ros.tools.cli import CSV_COLUMNS
+from orthoglide_testing.verdicts import first_unspoiled
 
-pytestmark = pytest.mark.ros  # DDS and node processes
+# DDS and node processes; a timing verdict (the stream's rate), so alone.
+pytestmark = [pytest.mark.ros, pytest.mark.serial]
 
 pytest.importorskip('rclpy')
 
 ROOT = Path(__file__).resolve().parents[1]
 PNG_MAGIC = b'\x89PNG\r\n\x1a\n'
 TIMEOUT = 90.0
-ATTEMPTS = 3
 
 
 def run_demo(plot, table):
@@ -30,18 +31,19 @@ def run_demo(plot, table):
     Run the demo at real-time priority; again if the machine spoiled it.
 
     A run the demo itself calls spoiled (rate, gaps, loss: another load on
-    the machine) says nothing of the package: up to ATTEMPTS runs.
+    the machine) says nothing of the package: run again by the suite's one
+    rule (:func:`verdicts.first_unspoiled`).
     """
-    for _ in range(ATTEMPTS):
-        result = subprocess.run(
+    return first_unspoiled(
+        lambda: subprocess.run(
             [sys.executable, str(ROOT / 'scripts' / 'demo.py'), '--duration',
              '0.5', '--realtime', '--plot', str(plot), '--csv', str(table)],
             stdin=subprocess.DEVNULL, capture_output=True, text=True,
-            timeout=TIMEOUT)
-        if 'the run was spoiled' not in result.stderr:
-            break
-        print(result.stderr, file=sys.stderr)
-    return result
+            timeout=TIMEOUT),
+        lambda result: ('spoiled' if 'the run was spoiled' in result.stderr
+                        else None),
+        lambda result, spoiled, attempt: print(result.stderr,
+                                               file=sys.stderr))
 
 
 def test_demo_runs_end_to_end(tmp_path):
