@@ -309,8 +309,9 @@ def _fast_simulator(r):
     return (r.received == r.sent and spurious == 0,
             'simulator rate_hz 10000, commands at 500 Hz: '
             f'{r.received}/{r.sent} taken, {spurious} spurious timeouts '
-            f'({r.stall_brakes} after its own stalls), {r.step_rate:.0f} '
-            f'steps/s, status {r.message!r}')
+            f'({r.stall_brakes} after its own stalls; the sender stalled '
+            f'{r.sender_stalls} times), {r.step_rate:.0f} steps/s, status '
+            f'{r.message!r}')
 
 
 def _setpoint_loop(r):

@@ -163,6 +163,9 @@ def test_a_client_that_cannot_take_replies_costs_no_one_else_theirs():
     assert result.dropped['feedforward'] >= 1, result
 
 
+# serial: the simulator at 10 kHz takes a core at real-time priority, and
+# its verdict counts brakes, which a neighbour's real-time work can cause.
+@pytest.mark.serial
 def test_simulator_at_10_khz_keeps_taking_commands_and_says_it_is_slow():
     """
     Steps it cannot keep up with never stop its commands, and it says so.
@@ -170,19 +173,21 @@ def test_simulator_at_10_khz_keeps_taking_commands_and_says_it_is_slow():
     The behaviour: no spurious timeout brake (one brake, after the last
     command, besides those of the simulator's own stalls longer than its
     command timeout, a drive's brake on a stalled cycle that a loaded
-    machine can cause), so commands kept coming in while the steps ran
-    late, and a
-    WARN whenever real time is not kept. How many of the 1,600 commands
-    one run takes is a figure of the machine's load (1557 with one core
-    busy): ``scripts/reliability_report.sh`` prints it.
+    machine can cause, and those of the sender's stalls), so commands kept
+    coming in while the steps ran late, and a WARN whenever real time is
+    not kept. How many of the 1,600 commands one run takes is a figure of
+    the machine's load (1557 with one core busy):
+    ``scripts/reliability_report.sh`` prints it.
     """
     result = harness.fast_simulator()
     print(result)
     assert result.alive
     assert result.received > 0, result
     assert result.stall_brakes >= 0, result
-    # The brake at the end, and one after each stall of its own.
-    assert result.timeouts == 1 + result.stall_brakes, result
+    # The brake at the end, and one after each stall of its own; one more
+    # at most for each of the sender's.
+    least = 1 + result.stall_brakes
+    assert least <= result.timeouts <= least + result.sender_stalls, result
     # Every run: real time kept, or a WARN that says it is not.
     slow = result.step_rate < 0.9 * 10000.0
     assert not slow or (result.level == 1 and 'slower than real time'

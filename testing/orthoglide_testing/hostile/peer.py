@@ -43,7 +43,8 @@ class Peer:
     """
     An rclpy node in this process, spun by a thread of its own.
 
-    ``record(topic, kind)`` keeps ``(monotonic s, message)`` of a topic;
+    ``record(topic, kind)`` keeps ``(monotonic s, message)`` of a topic
+    until ``forget(topic)``;
     ``diagnostics[name]`` the newest ``{key: value}`` and level per node.
     ``realtime``: this process at CLIENT_PRIORITY while it records (the
     timing cases). Use it as a context manager.
@@ -56,6 +57,7 @@ class Peer:
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.records = {}
+        self._subscriptions = {}
         self.diagnostics = {}
         self.lock = threading.Lock()
         self.node.create_subscription(DiagnosticArray, '/diagnostics',
@@ -92,9 +94,18 @@ class Peer:
 
         def on_message(msg):
             log.append((time.monotonic(), msg))
-        self.node.create_subscription(kind, topic, on_message,
-                                      qos_profile('reliable', depth))
+        self._subscriptions[topic] = self.node.create_subscription(
+            kind, topic, on_message, qos_profile('reliable', depth))
         return log
+
+    def forget(self, topic):
+        """
+        Stop recording ``topic`` (its log stays).
+
+        For a topic whose rate would keep this process busy (a simulator's
+        states at 10 kHz) once the case has what it needs of it.
+        """
+        self.node.destroy_subscription(self._subscriptions.pop(topic))
 
     def publisher(self, kind, topic, depth=10):
         """Return a reliable publisher of ``kind`` on ``topic``."""

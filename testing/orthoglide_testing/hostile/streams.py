@@ -26,12 +26,16 @@ from orthoglide_testing.load import REALTIME
 from orthoglide_testing.hostile.peer import (
     diagnostic_counter, handshake, HarnessError, HOLD, home_setpoint, NODES,
     Nodes, Peer, START_TIMEOUT, wait_running)
+from orthoglide_ros.cores.simulator import PARAMETERS as SIMULATOR
 from orthoglide_ros.cores.tracking_controller import DRIVES
 from orthoglide_ros.model import mechanics, trajectory
 from orthoglide_ros.model.robot import Robot
 
 # The tracking controller's effort limit, the same on each actuator (N).
 MAX_EFFORT = DRIVES['slider_a']['max_effort']
+# s: the simulator's default command timeout, past which it brakes.
+COMMAND_TIMEOUT = next(spec.default for spec in SIMULATOR.specs
+                       if spec.name == 'command_timeout')
 
 
 @dataclass
@@ -64,6 +68,7 @@ class FastSimulator:
     sent: int
     timeouts: int           # one is the brake after the last command
     stall_brakes: int       # timeouts after the simulator itself stood still
+    sender_stalls: int      # gaps between two commands sent > the timeout
     level: int
     message: str
     step_rate: float
@@ -245,10 +250,14 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
     ``received`` and the ``timeouts`` (one is the brake after the last
     command: more would be spurious, but for the ``stall_brakes`` of a
     simulator that itself stood still longer than its command timeout),
-    and the level, message and step rate
-    of a status made while it was commanded. The simulator and this
-    process run at real-time priority where the OS grants it: a stall
-    of the machine's other work is not a silence of the peer.
+    and the ``sender_stalls``, gaps between two commands this process sent
+    longer than the timeout (each a brake that is not the simulator's),
+    and the level, message and step rate of a status made while it was
+    commanded. The simulator and this process run at real-time priority
+    where the OS grants it: a stall of the machine's other work is not a
+    silence of the peer. The states (every step's) are recorded only
+    until the first command is seen in them: 10 kHz of them would keep
+    this process, and so its sender, busy.
     """
     with Nodes(REALTIME) as nodes, Peer(realtime=REALTIME) as peer:
         nodes.start('simulator', '-p', f'rate_hz:={rate_hz}')
@@ -259,14 +268,19 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
         # The first command starts the plant: its efforts are the command's.
         handshake(peer, lambda k: pub.publish(msg), lambda: any(
             any(state.effort) for _, state in list(states)))
+        peer.forget('joint_states')
         start = time.monotonic()
-        during = None
+        during, sent_at, sender_stalls = None, None, 0
         for i in range(commands):
             deadline = start + i / command_rate
             wait = deadline - time.monotonic()
             if wait > 0:
                 time.sleep(wait)
             pub.publish(msg)
+            now = time.monotonic()
+            if sent_at is not None and now - sent_at > COMMAND_TIMEOUT:
+                sender_stalls += 1
+            sent_at = now
             if during is None and i > commands // 2:
                 with peer.lock:     # the newest status, without waiting
                     found = peer.diagnostics.get('simulator')
@@ -284,6 +298,7 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
             received=int(values.get('commands received', -1)),
             sent=commands, timeouts=int(values.get('timeouts', -1)),
             stall_brakes=int(values.get('stall brakes', -1)),
+            sender_stalls=sender_stalls,
             level=level, message=message,
             step_rate=float(seen.get('step rate (Hz)', 'nan')),
             alive=nodes.alive('simulator'))
