@@ -7,7 +7,7 @@ script; a recorder process keeps every output. With best-effort input
 (overridden by ``qos_overrides``) the node must stay up and responsive,
 keep its memory, and end on the newest setpoint; with reliable input and
 an input history that covers the stalls of a busy machine
-(``harness.LOSSLESS_DEPTH``, 100 ms at 1 kHz: doc/deployment.md's recipe for
+(``harness.LOSSLESS_DEPTH``, 1 s at 1 kHz: doc/feedforward.md's recipe for
 "nothing lost") every setpoint must give exactly one output; a run in which
 the producer, the run's highest priority, was itself late by more than that
 history covers measured a stalled machine and is run again

@@ -137,6 +137,28 @@ def cpu_seconds(pid):
         (int(fields[11]) + int(fields[12])) / CLK_TCK
 
 
+def waited_ms(pid):
+    """
+    Return ``{thread id: ms}`` each thread of a process has waited, runnable.
+
+    The second field of ``/proc/<pid>/task/<tid>/schedstat``: time spent
+    on a run queue, ready but not run (the machine's, not the thread's
+    own); an empty dict if the process is gone.
+    """
+    waits = {}
+    try:
+        tids = os.listdir(f'/proc/{pid}/task')
+    except OSError:
+        return waits
+    for tid in tids:
+        try:
+            with open(f'/proc/{pid}/task/{tid}/schedstat') as f:
+                waits[int(tid)] = int(f.read().split()[1]) / 1e6
+        except (OSError, IndexError, ValueError):
+            pass
+    return waits
+
+
 def rss_mb(pid):
     """Return the resident set size of a process (MB), None if it is gone."""
     try:

@@ -12,7 +12,8 @@ import time
 import numpy as np
 
 from orthoglide_testing.messages import INPUT_TOPICS
-from orthoglide_testing.processes import cpu_seconds, rss_mb, stop_process
+from orthoglide_testing.processes import (cpu_seconds, rss_mb, stop_process,
+                                          waited_ms)
 from orthoglide_testing.reliability.checks import (
     check_outputs, in_epoch, match_stamps, percentile, slope, stalled_by)
 from orthoglide_testing.reliability.runs import (
@@ -157,9 +158,9 @@ def _reliable_once(rate, duration, kind, depth):
         producer = run.start_producer(kind, 'reliable', rate=rate, epoch=100,
                                       duration=duration)
         run.warm_up(producer, recorder)
-        cpu_start = cpu_seconds(node.pid)
+        cpu_start, waits_start = cpu_seconds(node.pid), waited_ms(node.pid)
         done = producer.expect('done', duration + START_TIMEOUT, (node,))
-        cpu_end = cpu_seconds(node.pid)
+        cpu_end, waits_end = cpu_seconds(node.pid), waited_ms(node.pid)
         drained(recorder, done, node)
         log = run.finish_producer(producer)
         outputs = load_outputs(recorder)
@@ -175,7 +176,9 @@ def _reliable_once(rate, duration, kind, depth):
             late_p99_ms=percentile(log[:, 3], 99) / 1e6,
             late_max_ms=float(log[:, 3].max(initial=0)) / 1e6,
             silence_ms=float(np.diff(received).max(initial=0)) / 1e6,
-            node_cpu=(cpu_end - cpu_start) / duration)
+            node_cpu=(cpu_end - cpu_start) / duration,
+            node_waited_ms=waits_end.get(node.pid, 0.0)
+            - waits_start.get(node.pid, 0.0))
     result.update(crashes=run.crashes(), exits=run.exits)
     return result
 

@@ -222,7 +222,9 @@ def summary_lines(result):
                 f'input depth {r["depth"]}: '
                 f'{r["sent"]} sent, {r["outputs"]} outputs, missing '
                 f'{r["missing"]}, duplicates {r["duplicates"]}, extra '
-                f'{r["extra"]}; node CPU {r["node_cpu"]:.0%} of a core; '
+                f'{r["extra"]}; node CPU {r["node_cpu"]:.0%} of a core, '
+                f'its main thread runnable but not run '
+                f'{r["node_waited_ms"]:.1f} ms; '
                 f'producer late up to {r["late_max_ms"]:.1f} ms, outputs '
                 f'silent up to {r["silence_ms"]:.1f} ms')
     elif case == 'kill_restart':
