@@ -397,6 +397,8 @@ def test_diagnostics(graph):
 
 
 # Fixed rate ------------------------------------------------------------------
+# serial: a rate verdict (the median gap between outputs at 50 Hz).
+@pytest.mark.serial
 def test_fixed_rate_stale_and_resume(graph):
     """rate_hz > 0: the newest result at the rate until setpoint_timeout."""
     rate, timeout = 50.0, 0.4

@@ -53,7 +53,9 @@ from rclpy.executors import SingleThreadedExecutor  # noqa: E402
 from rclpy.parameter_client import AsyncParameterClient  # noqa: E402
 from rcl_interfaces.msg import ParameterType  # noqa: E402
 
-pytestmark = [pytest.mark.ros, needs_scripts(
+# serial: a real-time closed loop for minutes, judged by its passes' timing
+# (the rule of test_closed_loop), and the largest load on a neighbour.
+pytestmark = [pytest.mark.ros, pytest.mark.serial, needs_scripts(
     'simulator', 'feedforward', 'tracking_controller', 'setpoint_publisher')]
 
 SEED, PERIOD, PASSES = 0, 6.0, 3

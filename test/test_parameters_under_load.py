@@ -449,6 +449,9 @@ def run_script(rig, changes, spacing):
     return figures
 
 
+# serial: it asserts the producer's rate and the share of setpoints answered
+# through the default keep-last 10, both the machine's figures too.
+@pytest.mark.serial
 @pytest.mark.parametrize('changes, spacing', [
     (6, 0.4),
     pytest.param(60, 0.5, marks=pytest.mark.soak, id='soak'),

@@ -196,6 +196,9 @@ def test_static_holding_force_keeps_the_platform_at_home(graph):
     assert g.node.core.clipped == 0
 
 
+# serial: a stall of this process past the 0.2 s command timeout brakes the
+# plant, and its step count is judged.
+@pytest.mark.serial
 def test_constant_command_follows_the_plant_step_for_step(graph):
     """
     A command held until the timeout = Plant.step with dt = 1 ms, N times.
