@@ -26,6 +26,7 @@ themselves are ``orthoglide_testing.hostile`` and
 import pytest
 
 from node_checks import needs_scripts
+from orthoglide_testing import netns
 
 pytestmark = [pytest.mark.ros, needs_scripts()]
 
@@ -88,7 +89,16 @@ def test_big_messages_do_not_starve_a_stream_on_the_same_input():
 # ros set with -n 2, three runs, 2026-12-05); alone, none.
 @pytest.mark.serial
 def test_stalled_process_never_makes_the_loop_saturate_or_race():
-    result = harness.stall_resume()
+    """
+    A 2 s SIGSTOP of each process: no saturated command, no race.
+
+    On the one-host profile in a network namespace where one can be made
+    (root), elsewhere on plain settings: on shared memory a stop this long
+    meets Fast DDS's port health check (robustness.md#stalls), a stall of
+    the transport, not the loop's.
+    """
+    result = (harness.stall_resume() if netns.unavailable()
+              else harness.stall_resume_one_host())
     print(result)
     assert all(result.alive.values()), result
     for name, stall in result.stalls.items():

@@ -19,9 +19,12 @@ script), a producer and a recorder, and plain readers (``bystand``).
   doc/deployment.md; latency and restart time.
 - ``kill_restart``: :func:`reliability.kill_restart` (the one-host
   profile is the default there).
+- :func:`stall_resume`: :func:`hostile.stall_resume` on the one-host
+  profile.
 """
 
 import argparse
+import dataclasses
 import json
 import os
 import subprocess
@@ -217,8 +220,23 @@ def two_hosts(settings, other, address, rate=500, duration=3.0,
     return result
 
 
+def stall_resume(**kwargs):
+    """
+    Run :func:`hostile.stall_resume` with every process on the one-host
+    profile; return its result as a dict.
+
+    Its processes are stopped for 2 s (SIGSTOP): on shared memory a port
+    whose listener stood still that long meets Fast DDS's health check
+    when it is next used (robustness.md#stalls), a stall of the transport
+    that is not the loop's; the one-host profile has no shared memory.
+    """
+    from orthoglide_testing import hostile
+    os.environ.update(profile_environment(ONE_HOST_PROFILE))
+    return dataclasses.asdict(hostile.stall_resume(**kwargs))
+
+
 CASES = {'joins': joins, 'discovery': discovery, 'two_hosts': two_hosts,
-         'kill_restart': rh.kill_restart}
+         'kill_restart': rh.kill_restart, 'stall_resume': stall_resume}
 
 
 def in_namespace(case, namespace=None, **kwargs):

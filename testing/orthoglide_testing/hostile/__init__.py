@@ -20,7 +20,9 @@ the tests assert on and the report prints:
 - :func:`isolated_clients`: a client whose reply reader can never match
   stays, fresh clients call beside it; 150 ms stalls while answering;
 - :func:`fast_simulator`: the simulator at 10 kHz with commands at 500 Hz;
-- :func:`stall_resume`: the closed loop, one process stopped for 2 s;
+- :func:`stall_resume`: the closed loop, one process stopped for 2 s
+  (:func:`stall_resume_one_host`: the same on the one-host profile, in a
+  network namespace);
 - :func:`setpoint_loop`: the looping setpoint publisher's way back;
 - :func:`trajectory_flood`: a new joint trajectory every millisecond to
   the tracking controller;
@@ -40,5 +42,5 @@ from orthoglide_testing.hostile.services import (  # noqa: F401
     absurd_parameters, departed_clients, isolated_clients, log_amplification,
     malformed_parameters, quiet, startup_signals)
 from orthoglide_testing.hostile.streams import (  # noqa: F401
-    absurd_values, fast_simulator, setpoint_loop, stall_resume, stamps,
-    trajectory_flood, trajectory_peak_speed)
+    absurd_values, fast_simulator, setpoint_loop, stall_resume,
+    stall_resume_one_host, stamps, trajectory_flood, trajectory_peak_speed)

@@ -434,6 +434,20 @@ def stall_resume(stalled=NODES, before=2.0, stall=2.0, after=3.0,
     return result
 
 
+def stall_resume_one_host(**kwargs):
+    """
+    Run :func:`stall_resume` in a network namespace on the one-host profile.
+
+    :func:`live_graph.stall_resume`: the loop's own behaviour through a
+    stall, without the shared-memory transport's (robustness.md#stalls).
+    Needs :func:`netns.unavailable` to be empty.
+    """
+    from orthoglide_testing import live_graph
+    found = live_graph.in_namespace('stall_resume', **kwargs)
+    return Stalls(**{**found, 'stalls': {
+        name: Stall(**stall) for name, stall in found['stalls'].items()}})
+
+
 def trajectory_flood(flood=1.5, period=0.001, after=1.5, home=1e-3,
                      settle=5.0):
     """
