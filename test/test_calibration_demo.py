@@ -20,10 +20,11 @@ import pytest
 
 from orthoglide_ros.formats import params_file
 
+# serial: a real-time closed loop, judged by its passes' timing (the rule
+# of test_closed_loop).
 pytestmark = [pytest.mark.ros,     # DDS and node processes
               pytest.mark.slow,    # about 70 s, 2026-12-06
-              pytest.mark.serial]  # a real-time closed loop, judged by its
-                                   # passes' timing (test_closed_loop's rule)
+              pytest.mark.serial]
 
 pytest.importorskip('rclpy')
 

@@ -222,8 +222,7 @@ def two_hosts(settings, other, address, rate=500, duration=3.0,
 
 def stall_resume(**kwargs):
     """
-    Run :func:`hostile.stall_resume` with every process on the one-host
-    profile; return its result as a dict.
+    Run :func:`hostile.stall_resume` on the one-host profile: a dict.
 
     Its processes are stopped for 2 s (SIGSTOP): on shared memory a port
     whose listener stood still that long meets Fast DDS's health check
