@@ -26,7 +26,9 @@ from orthoglide_ros.ros.managed_node import default_qos, ManagedNode
 
 pytestmark = pytest.mark.ros  # DDS and node processes
 
-SLOW = 0.1      # s spent in each callback
+# s spent in each callback: longer than this process is ever descheduled,
+# so that the later messages arrive within the first callback.
+SLOW = 0.5
 WAIT = 10.0     # s: generous, the machine is shared
 
 
