@@ -220,8 +220,8 @@ def test_joint_trajectory_followed_then_held_and_a_bad_one_refused(graph):
     assert values['trajectory'] == 'holding its last point'
     count = len(g.probe.commands)
     measure(g, ZERO)
-    spin_for(g.executor, 0.1)
-    assert len(g.probe.commands) > count
+    assert spin_until(g.executor, lambda: len(g.probe.commands) > count,
+                      WAIT), 'no command after the refused trajectory'
     assert_command(g.probe.commands[-1], end)
 
 
@@ -292,7 +292,9 @@ def test_clipping_counted(graph):
 # Timing ----------------------------------------------------------------------
 def test_missing_then_stale_measurement_commands_nothing(graph):
     """No measurement yet, or an old one: no command, counted, WARN."""
-    timeout = 0.5
+    # Longer than this process is ever descheduled between a measurement
+    # and the desired state that must find it fresh.
+    timeout = 2.0
     g = graph({**PATIENT, 'measurement_timeout': timeout})
     no_command(g, (0.01, 0.0, 0.0))
     msg = wait_diagnostics(g, lambda d: d['skipped no_measurement'] == '1')
