@@ -116,10 +116,11 @@ def values(status):
     return {kv.key: kv.value for kv in status.values}
 
 
-def send_for(g, command, seconds, period=0.02):
-    """Send ``command`` every ``period`` s for ``seconds``, spinning."""
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
+def send_until(g, command, until, timeout=WAIT, period=0.02):
+    """Send ``command`` every ``period`` s until ``until()``, ``timeout`` s."""
+    end = time.monotonic() + timeout
+    while not until():
+        assert time.monotonic() < end, 'not reached while sending'
         g.probe.send(command)
         spin_for(g.executor, period)
 
@@ -136,14 +137,14 @@ def plant_states(force, count, robot=None, start=ZERO, engine=Plant):
 
 # In-process ------------------------------------------------------------------
 def test_held_publishes_every_tick_until_the_first_command(graph):
-    """No command: joint states and pose at rest, same stamp, ~rate_hz."""
-    g = graph({'rate_hz': 200.0, 'base_frame': 'world',
+    """No command: joint states and pose at rest, same stamp, rate_hz grid."""
+    rate = 200.0
+    g = graph({'rate_hz': rate, 'base_frame': 'world',
                'initial_position': [0.05, -0.03, 0.02]})
     g.probe.clear()
-    spin_for(g.executor, 0.5)
     joints, poses = g.probe.joint_states, g.probe.poses
-    # 100 expected in 0.5 s at 200 Hz; a loaded machine may lose a few.
-    assert len(joints) >= 50, len(joints)
+    assert spin_until(g.executor, lambda: len(joints) >= 50
+                      and len(poses) >= 50, WAIT), (len(joints), len(poses))
     expected = mechanics.solve(Robot(), (0.05, -0.03, 0.02))
     for msg in joints:
         assert list(msg.name) == JOINT_NAMES
@@ -161,6 +162,17 @@ def test_held_publishes_every_tick_until_the_first_command(graph):
     assert len(set(joint_stamps)) == len(joint_stamps)
     shared = pose_stamps.intersection(joint_stamps)
     assert len(shared) >= 0.9 * min(len(joints), len(poses)), len(shared)
+    # The rate, from the stamps (each its tick's grid time): never two
+    # states within a period, and most one period apart (a stall past
+    # MAX_CATCH_UP ticks, time dropped, or a lost state leaves a longer gap).
+    # The first stamp is left out: the node's first clock offset is taken
+    # however long its clock read took.
+    period = 1e9 / rate
+    gaps = [(s2 - s1) * 10**9 + n2 - n1
+            for (s1, n1), (s2, n2) in zip(joint_stamps, joint_stamps[1:])]
+    assert min(gaps[1:]) >= period - STAMP_SLACK, gaps
+    on_grid = sum(abs(gap - period) <= STAMP_SLACK for gap in gaps)
+    assert on_grid > len(gaps) / 2, gaps
     status = wait_diagnostics(g, lambda v: True)
     v = values(status)
     if status.level == DiagnosticStatus.WARN:
@@ -187,10 +199,14 @@ def test_static_holding_force_keeps_the_platform_at_home(graph):
     carry anywhere near 1e-9 m; measured: exactly 0.
     """
     g = graph()
-    send_for(g, HOLD, 0.5)
+
+    def holding():
+        return [m for m in g.probe.joint_states if tuple(m.effort) == HOLD]
+    # 0.5 s of simulated time, however long this process takes to send it.
+    send_until(g, HOLD, lambda: g.node.core.steps >= 500
+               and len(holding()) > 100)
     wait_diagnostics(g, lambda v: int(v['steps']) > 100)
-    running = [m for m in g.probe.joint_states if tuple(m.effort) == HOLD]
-    assert len(running) > 100, len(running)
+    running = holding()
     worst = max(abs(c) for m in running for c in (*m.position, *m.velocity))
     assert worst <= 1e-9, worst
     assert g.node.core.clipped == 0
@@ -379,8 +395,7 @@ def test_stop_with_clear_error_then_reset(graph, capfd):
     assert tuple(g.probe.joint_states[-1].position) == ZERO
     assert core.plant.position == ZERO and core.plant.time == 0.0
     # It runs again.
-    send_for(g, HOLD, 0.1)
-    assert core.state == 'running'
+    send_until(g, HOLD, lambda: core.state == 'running')
 
 
 def test_bad_commands_rejected_by_reason(graph):
@@ -437,11 +452,11 @@ def test_parameter_changes_live_and_at_reset(graph):
                                    Parameter('robot.m5', value=20.0),
                                    Parameter('rate_hz', value=500.0)])
     assert all(r.successful for r in results)
-    send_for(g, HOLD, 0.1)
+    clipped = (0.0, 0.0, 100.0)
+    send_until(g, HOLD, lambda: any(tuple(m.effort) == clipped
+                                    for m in g.probe.joint_states))
     core = node.core
     assert core.plant.robot == Robot() and core.pending_reset
-    clipped = (0.0, 0.0, 100.0)
-    assert any(tuple(m.effort) == clipped for m in g.probe.joint_states)
     assert core.clipped > 0
     wait_diagnostics(g, lambda v: v['pending reset'] == 'true'
                      and v['rate_hz'] == '500')
