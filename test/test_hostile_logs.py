@@ -27,7 +27,8 @@ logs = pytest.importorskip('orthoglide_testing.hostile.logs')
 def check_throttled(result):
     print({k: v for k, v in vars(result).items() if k != 'stderr'})
     assert result.code == 0, result.stderr
-    assert result.answered >= 10 * (int(result.seconds) + 1), result
+    assert result.answered >= logs.ANSWERS_PER_SECOND * (
+        int(result.seconds) + 1), result
     assert 1 <= result.lines <= int(result.seconds) + 1, result.stderr
     # What the lines say they left out: the rest, but for the requests
     # after the last line.

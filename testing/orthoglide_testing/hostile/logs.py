@@ -31,6 +31,11 @@ LOG_LINE = re.compile(r'^\[(DEBUG|INFO|WARN|ERROR|FATAL)\] \[\d+\.\d+\] '
 FORGERY = ('x\n[FATAL] [1796000000.000000000] [feedforward]: FORGED\r'
            '\x1b[2J\u2028[ERROR] FORGED\u202e')
 CALL_TIMEOUT = 5.0   # s for one answer
+# Answers a hammering client gets per second of its run (one second more
+# than it lasted): ten per log line the node may write. A client slowed by
+# a busy host hammers on until it has them, at most HAMMER_LIMIT s.
+ANSWERS_PER_SECOND = 10
+HAMMER_LIMIT = 60.0
 
 
 @dataclass
@@ -69,19 +74,28 @@ def _call(client, request, timeout=CALL_TIMEOUT):
 
 def _hammer(client, requests, seconds, last):
     """
-    Send ``requests`` in turn for ``seconds``, then ``last``.
+    Send ``requests`` in turn for ``seconds`` at least, then ``last``.
 
     Each once the one before is answered (or CALL_TIMEOUT has passed): a
-    client as fast as the node answers it. Returns (the answers, None for
-    each unanswered, the time from the first request to the last answer).
-    The last answer is ``last``'s.
+    client as fast as the node answers it. Past ``seconds`` it goes on
+    until ANSWERS_PER_SECOND times (whole seconds so far + 2) are answered
+    (one second to spare for ``last``), or HAMMER_LIMIT s have passed.
+    Returns (the answers, None for each unanswered, the time from the
+    first request to the last answer). The last answer is ``last``'s.
     """
     if not client.wait_for_service(timeout_sec=START_TIMEOUT):
         raise HarnessError(f'{client.srv_name} never came')
     answers = []
+    answered = 0
     start = time.monotonic()
-    while time.monotonic() - start < seconds:
-        answers.append(_call(client, requests[len(answers) % len(requests)]))
+    while True:
+        elapsed = time.monotonic() - start
+        if elapsed >= HAMMER_LIMIT or elapsed >= seconds and (
+                answered >= ANSWERS_PER_SECOND * (int(elapsed) + 2)):
+            break
+        answer = _call(client, requests[len(answers) % len(requests)])
+        answers.append(answer)
+        answered += answer is not None
     answers.append(_call(client, last))
     if not any(answers):
         raise HarnessError(f'no answer from {client.srv_name}')
@@ -107,11 +121,11 @@ def _transition(label='', number=0):
 
 def refused_transitions(seconds=3.0):
     """
-    Ask an active feedforward for unavailable transitions for ``seconds``.
+    Ask an active feedforward for unavailable transitions, hammering.
 
-    By label (``configure``, ``cleanup``: not offered when active) and by
-    id, in turn, each answered before the next: one reason, "not
-    available". Then a transition it offers (``deactivate``) must still
+    For ``seconds`` or more (:func:`_hammer`), by label (``configure``,
+    ``cleanup``: not offered when active) and by id, in turn, each
+    answered before the next: one reason, "not available". Then a transition it offers (``deactivate``) must still
     succeed. Returns :class:`Hammered`; ``lines``: the WARN lines saying
     ``refused``.
     """
@@ -131,9 +145,9 @@ def refused_transitions(seconds=3.0):
 
 def resets(seconds=3.0):
     """
-    Call the simulator's ``~/reset`` as fast as it answers, ``seconds``.
+    Call the simulator's ``~/reset`` as fast as it answers.
 
-    Every call must still reset (success) and the last one too; returns
+    For ``seconds`` or more (:func:`_hammer`). Every call must still reset (success) and the last one too; returns
     :class:`Hammered` with the ``reset:`` lines of its log.
     """
     with Nodes() as nodes, Peer() as peer:
