@@ -125,9 +125,9 @@ def refused_transitions(seconds=3.0):
 
     For ``seconds`` or more (:func:`_hammer`), by label (``configure``,
     ``cleanup``: not offered when active) and by id, in turn, each
-    answered before the next: one reason, "not available". Then a transition it offers (``deactivate``) must still
-    succeed. Returns :class:`Hammered`; ``lines``: the WARN lines saying
-    ``refused``.
+    answered before the next: one reason, "not available". Then a
+    transition it offers (``deactivate``) must still succeed. Returns
+    :class:`Hammered`; ``lines``: the WARN lines saying ``refused``.
     """
     with Nodes() as nodes, Peer() as peer:
         nodes.start('feedforward')
@@ -147,8 +147,9 @@ def resets(seconds=3.0):
     """
     Call the simulator's ``~/reset`` as fast as it answers.
 
-    For ``seconds`` or more (:func:`_hammer`). Every call must still reset (success) and the last one too; returns
-    :class:`Hammered` with the ``reset:`` lines of its log.
+    For ``seconds`` or more (:func:`_hammer`). Every call must still
+    reset (success) and the last one too; returns :class:`Hammered` with
+    the ``reset:`` lines of its log.
     """
     with Nodes() as nodes, Peer() as peer:
         nodes.start('simulator')
