@@ -366,7 +366,7 @@ def test_stop_with_clear_error_then_reset(graph, capfd):
     status = wait_diagnostics(
         g, lambda v: v['commands ignored (stopped)'] == '2')
     assert status.level == DiagnosticStatus.ERROR
-    assert g.probe.joint_states
+    assert spin_until(g.executor, lambda: g.probe.joint_states, WAIT)
     lam = mechanics.solve(Robot(), frozen).lambda_
     for msg in g.probe.joint_states:
         assert tuple(msg.position) == lam
