@@ -2,7 +2,7 @@
 # Set up .venv (idempotent, see scripts/setup_venv.sh) and run pytest in it:
 # first on every core (pytest-xdist) without the tests marked `serial`,
 # then those alone (timing verdicts kept off a parallel neighbour, each
-# marked with its reason beside it), only if the selection holds any.
+# marked with its reason in a comment by it), only if the selection holds any.
 # Usage: scripts/test.sh [PYTEST_ARGS...]   (default: test/ -q)
 #        -n N among the arguments (-n 0: one process) runs pytest once, as given.
 # Env:   ORTHOGLIDE_TEST_WORKERS=N   workers (default: the cores, at most 4)

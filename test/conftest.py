@@ -16,7 +16,8 @@ README's test command:
 - scripts/test.sh's phases (PHASE): the tests marked ``serial`` apart.
 
 The marks ``slow`` and ``serial`` are on the tests themselves, each with
-its measured reason beside it (setup.cfg lists the markers).
+its reason (measured, or the kind of verdict) in a comment by it
+(setup.cfg lists the markers).
 
 It names the checkout the proving ground runs from
 (:func:`orthoglide_testing.use_checkout`, pytest's root directory).

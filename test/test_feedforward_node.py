@@ -193,7 +193,7 @@ def test_inputs_that_wait_together_are_handled_in_reception_order(graph):
     (every pose, then every twist, then every accel), s2 would complete
     first and drop s1 as unpaired; in reception order both complete.
     """
-    g = graph({'setpoint_timeout': 60.0, 'pairing_timeout': 60.0})
+    g = graph(PATIENT)
     (p1, v1, a1), (p2, v2, a2) = paper_sample(0.3), paper_sample(0.7)
     s1, s2 = stamp_of(10.0), stamp_of(10.0 + 1e-9)
     with g.node.lock:
@@ -241,7 +241,7 @@ def test_bad_inputs_rejected_counted_and_node_goes_on(graph):
     # No timeout in play: a stall of the machine between the parts of a good
     # setpoint must not drop them; the unpaired one is dropped when the next
     # setpoint completes.
-    g = graph({'setpoint_timeout': 60.0, 'pairing_timeout': 60.0})
+    g = graph(PATIENT)
     probe = g.probe
     sent = dict.fromkeys(('pose', 'twist', 'accel', 'trajectory'), 0)
     good_stamps = []
@@ -336,7 +336,7 @@ def test_malformed_trajectories_counted_received(graph):
 
 def test_diagnostics(graph):
     """Name, level, keys and values of /diagnostics, period by period."""
-    g = graph({'setpoint_timeout': 60.0, 'pairing_timeout': 60.0})
+    g = graph(PATIENT)
     probe = g.probe
     first = wait_diagnostics(g, lambda d: True, timeout=WAIT)
     assert len(first.status) == 1

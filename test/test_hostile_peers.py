@@ -86,7 +86,8 @@ def test_big_messages_do_not_starve_a_stream_on_the_same_input():
 
 
 # serial: the loop's stall verdicts failed beside a parallel neighbour (the
-# ros set with -n 2, three runs, 2026-12-05); alone, none.
+# ros set with -n 2, three runs, 2026-12-05); on plain settings alone too
+# (robustness.md#stalls).
 @pytest.mark.serial
 def test_stalled_process_never_makes_the_loop_saturate_or_race():
     """

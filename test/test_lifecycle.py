@@ -168,11 +168,13 @@ def test_feedforward_every_transition(managed):
 
     assert lc.transition(T.TRANSITION_DEACTIVATE)
     after = stream(lc, 2.0)
-    spin_for(lc.executor, 0.3)
-    assert not set(after) & set(probe.output_stamps())
+    # Once the node has taken them all, and an output of any would have
+    # come meanwhile:
     status, values = lc.diagnostics(
         lambda v: int(v['received trajectory']) >= 90)
     assert status.message.startswith('inactive'), status.message
+    spin_for(lc.executor, 0.3)
+    assert not set(after) & set(probe.output_stamps())
 
     assert lc.transition(T.TRANSITION_CLEANUP)
     assert lc.state() == 'unconfigured'
@@ -251,12 +253,14 @@ def test_tracking_controller_holds_when_deactivated(managed):
     count = len(commands)
     for _ in range(20):
         send((0.008, 0.0, 0.0))     # the stream moved on meanwhile
-    spin_for(lc.executor, 0.3)
-    assert len(commands) == count, 'commands while inactive'
+    # Once the node has taken them all, and a command for any would have
+    # come meanwhile:
     status, values = lc.diagnostics(
         lambda v: int(v['skipped inactive']) >= 20)
     assert status.message.startswith('inactive'), status.message
     assert 'deactivated; holds lambda' in status.message
+    spin_for(lc.executor, 0.3)
+    assert len(commands) == count, 'commands while inactive'
 
     assert lc.transition(T.TRANSITION_ACTIVATE)
     for _ in range(10):

@@ -38,8 +38,7 @@ QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000,
 TOLERANCE = 1e-12   # the same function of the same t: only rounding
 PROCESS_TIMEOUT = 20.0
 # s of one pass: the 10 setpoints the tests want at least come even if this
-# process is descheduled for a good part of it (a pass of 0.1 s at 1 kHz
-# gave fewer than 10 after a 100 ms stall).
+# process is descheduled for a good part of it.
 DURATION = 1.0
 
 

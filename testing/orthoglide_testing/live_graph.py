@@ -256,13 +256,27 @@ def in_namespace(case, namespace=None, **kwargs):
 
 
 def _run(command, env):
-    proc = subprocess.run(command, env=env, capture_output=True, text=True,
-                          timeout=CASE_TIMEOUT, cwd=checkout())
+    try:
+        proc = subprocess.run(command, env=env, capture_output=True,
+                              text=True, timeout=CASE_TIMEOUT,
+                              cwd=checkout())
+    except subprocess.TimeoutExpired as late:
+        raise rh.HarnessError(
+            f'{command[-2]} ran past {CASE_TIMEOUT:g} s:\n'
+            f'{_text(late.stdout)[-2000:]}\n{_text(late.stderr)[-4000:]}'
+        ) from None
     for line in reversed(proc.stdout.splitlines()):
         if line.startswith('result '):
             return json.loads(line[len('result '):])
     raise rh.HarnessError(f'{command[-2]} failed (exit {proc.returncode}):'
                           f'\n{proc.stdout[-2000:]}\n{proc.stderr[-4000:]}')
+
+
+def _text(output):
+    """Return a subprocess's output as text (bytes after a timeout, None)."""
+    if isinstance(output, bytes):
+        return output.decode(errors='replace')
+    return output or ''
 
 
 def _plain(value):

@@ -314,8 +314,7 @@ def log_amplification():
             state = JointState(name=[f'joint_{i}' for i in range(count)])
             measured.publish(state)
         # The big one must have reached the node and been taken before the
-        # flood, or the flood may push it out (a loaded machine took longer
-        # than 10 flood messages to send it, when the queues kept 10).
+        # flood, or the flood may push it out.
         measured.wait_for_all_acked(Duration(seconds=START_TIMEOUT))
         peer.wait(lambda: peer.diagnostics.get('tracking_controller', (
             None, None, {}))[2].get('rejected measured oversize', '0') != '0',

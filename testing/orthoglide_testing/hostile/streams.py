@@ -34,8 +34,7 @@ from orthoglide_ros.model.robot import Robot
 # The tracking controller's effort limit, the same on each actuator (N).
 MAX_EFFORT = DRIVES['slider_a']['max_effort']
 # s: the simulator's default command timeout, past which it brakes.
-COMMAND_TIMEOUT = next(spec.default for spec in SIMULATOR.specs
-                       if spec.name == 'command_timeout')
+COMMAND_TIMEOUT = SIMULATOR.defaults()['command_timeout']
 
 
 @dataclass
@@ -65,7 +64,7 @@ class FastSimulator:
     """:func:`fast_simulator`: commands taken and the status said."""
 
     received: int
-    sent: int
+    sent: int               # the handshake's commands and ``commands``
     timeouts: int           # one is the brake after the last command
     stall_brakes: int       # timeouts after the simulator itself stood still
     sender_stalls: int      # gaps between two commands sent > the timeout
@@ -286,7 +285,7 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
         wait_running(peer, ('simulator',))
         msg = Float64MultiArray(data=list(HOLD))
         # The first command starts the plant: its efforts are the command's.
-        handshake(peer, lambda k: pub.publish(msg), lambda: any(
+        shaken = handshake(peer, lambda k: pub.publish(msg), lambda: any(
             any(state.effort) for _, state in list(states)))
         peer.forget('joint_states')
         start = time.monotonic()
@@ -316,7 +315,7 @@ def fast_simulator(rate_hz=10000.0, commands=1600, command_rate=500.0):
         level, message, seen = during if during else (None, '', {})
         return FastSimulator(
             received=int(values.get('commands received', -1)),
-            sent=commands, timeouts=int(values.get('timeouts', -1)),
+            sent=shaken + commands, timeouts=int(values.get('timeouts', -1)),
             stall_brakes=int(values.get('stall brakes', -1)),
             sender_stalls=sender_stalls,
             level=level, message=message,

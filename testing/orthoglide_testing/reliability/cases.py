@@ -177,8 +177,9 @@ def _reliable_once(rate, duration, kind, depth):
             late_max_ms=float(log[:, 3].max(initial=0)) / 1e6,
             silence_ms=float(np.diff(received).max(initial=0)) / 1e6,
             node_cpu=(cpu_end - cpu_start) / duration,
-            node_waited_ms=waits_end.get(node.pid, 0.0)
-            - waits_start.get(node.pid, 0.0))
+            node_waited_ms=max((waits_end[tid] - waits_start[tid]
+                                for tid in waits_end.keys() & waits_start),
+                               default=None))
     result.update(crashes=run.crashes(), exits=run.exits)
     return result
 

@@ -223,8 +223,8 @@ def summary_lines(result):
                 f'{r["sent"]} sent, {r["outputs"]} outputs, missing '
                 f'{r["missing"]}, duplicates {r["duplicates"]}, extra '
                 f'{r["extra"]}; node CPU {r["node_cpu"]:.0%} of a core, '
-                f'its main thread runnable but not run '
-                f'{r["node_waited_ms"]:.1f} ms; '
+                f'a thread of it runnable but not run up to '
+                f'{_ms(r["node_waited_ms"])}; '
                 f'producer late up to {r["late_max_ms"]:.1f} ms, outputs '
                 f'silent up to {r["silence_ms"]:.1f} ms')
     elif case == 'kill_restart':

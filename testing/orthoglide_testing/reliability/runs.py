@@ -54,13 +54,11 @@ BEST_EFFORT_INPUT = '-p', (
 # a stall of the recorder (a test tool) cannot lose outputs the node made.
 DEEP_OUTPUT = ('-p', 'qos_overrides./feedforward/joint_states.publisher.'
                'depth:=1000')
-# History of the node's inputs for "nothing lost" under reliable QoS: 1000
-# setpoints cover a 1 s stall at 1 kHz. The default keep-last 10 covers
-# 10 ms, and a process on two busy cores is stalled that long now and then
-# (measured: 2-79 of 2001 lost in most 2 s runs at 1 kHz; 0 with 100); 100
-# did not cover Fast DDS's shared-memory stall when a participant joins,
-# 0.33-0.67 s (doc/robustness.md#stalls: 233 and 234 of 2,501 lost, the
-# outputs silent 334 ms with the producer on time, 2026-12-06).
+# History of the node's inputs for "nothing lost" under reliable QoS
+# (doc/feedforward.md's recipe): 1000 setpoints cover a 1 s stall at 1 kHz,
+# past the default keep-last 10 (10 ms, which a busy machine exceeds) and
+# the shared-memory transport's join stall of 0.33-0.67 s
+# (doc/robustness.md#stalls; figures in doc/measurements.md#reliability).
 LOSSLESS_DEPTH = 1000
 
 
